@@ -1,0 +1,292 @@
+//! Materials: a diffuse part (what radiosity reads), an optional non-diffuse lobe (what the ray
+//! tracer adds) and the ambient coefficient of the Phong shading form.
+
+use crate::{ComplexIor, ParamError, Rgb};
+
+/// Parameters of a Phong material (Phong 1975), as published or normalized.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PhongParams {
+    /// Diffuse reflectance rho per channel, in [0, 1). The Phong k_d (1/sr) is rho / pi.
+    pub diffuse: Rgb,
+    /// Specular coefficient k_s per channel, in [0, 1].
+    pub specular: Rgb,
+    /// Phong exponent n (dimensionless), in [0, 1e6].
+    pub exponent: f32,
+    /// Ambient coefficient k_a per channel, in [0, 1], used by the Whitted ambient term.
+    pub ambient: Rgb,
+    /// `false`: the published model, k_s cos^n(alpha) / cos(theta_i) (not reciprocal, not
+    /// energy conserving). `true`: normalized modified Phong (Lafortune & Willems 1994).
+    pub normalized: bool,
+}
+
+/// Parameters of a Blinn-Phong material (Blinn 1977), classic or normalized.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BlinnPhongParams {
+    /// Diffuse reflectance rho per channel, in [0, 1).
+    pub diffuse: Rgb,
+    /// Specular coefficient k_s per channel, in [0, 1].
+    pub specular: Rgb,
+    /// Exponent n' of (N.H)^n' (dimensionless), in [0, 1e6].
+    pub exponent: f32,
+    /// `false`: the classic shading form; `true`: the normalized, reciprocal form.
+    pub normalized: bool,
+}
+
+/// Which Fresnel reflectance a Cook-Torrance lobe evaluates.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum FresnelModel {
+    /// Exact unpolarized Fresnel for a complex index, (R_s + R_p) / 2.
+    #[default]
+    Exact,
+    /// Schlick's approximation from the normal-incidence reflectance of the same index.
+    Schlick,
+}
+
+/// Parameters of a Cook-Torrance material (Cook & Torrance 1981).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CookTorranceParams {
+    /// Diffuse reflectance rho per channel, in [0, 1).
+    pub diffuse: Rgb,
+    /// Weight s of the specular lobe per channel, in [0, 1].
+    pub specular: Rgb,
+    /// Beckmann RMS facet slope m (dimensionless), finite and > 0 (useful range 1e-4 to 2).
+    pub roughness: f32,
+    /// Complex relative index of refraction of the surface.
+    pub ior: ComplexIor,
+    /// Exact or Schlick Fresnel.
+    pub fresnel: FresnelModel,
+}
+
+/// The non-diffuse part of a material: a glossy lobe evaluated against emitters, or a delta
+/// lobe followed by the Whitted tracer.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub enum Lobe {
+    /// Phong specular lobe, published or normalized.
+    Phong {
+        /// Specular coefficient k_s per channel.
+        specular: Rgb,
+        /// Exponent n.
+        exponent: f32,
+        /// Normalized modified Phong instead of the published form.
+        normalized: bool,
+    },
+    /// Blinn-Phong specular lobe around the half vector.
+    BlinnPhong {
+        /// Specular coefficient k_s per channel.
+        specular: Rgb,
+        /// Exponent n'.
+        exponent: f32,
+        /// Normalized form instead of the classic one.
+        normalized: bool,
+    },
+    /// Cook-Torrance microfacet lobe.
+    CookTorrance {
+        /// Lobe weight s per channel.
+        specular: Rgb,
+        /// Beckmann RMS slope m.
+        roughness: f32,
+        /// Complex index of refraction.
+        ior: ComplexIor,
+        /// Fresnel evaluation.
+        fresnel: FresnelModel,
+    },
+    /// Perfect mirror with a per-channel reflectance.
+    Mirror {
+        /// Reflectance per channel, in [0, 1].
+        reflectance: Rgb,
+    },
+    /// Smooth dielectric interface (reflection and refraction, exact Fresnel).
+    Dielectric {
+        /// Real relative index of refraction, inside over outside.
+        ior: f32,
+    },
+    /// Smooth conductor: a mirror whose reflectance is the exact Fresnel of a complex index.
+    Conductor {
+        /// Complex index of refraction.
+        ior: ComplexIor,
+    },
+}
+
+/// A validated material: diffuse reflectance, optional non-diffuse lobe, ambient coefficient.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Material {
+    diffuse: Rgb,
+    ambient: Rgb,
+    lobe: Option<Lobe>,
+}
+
+const EXPONENT_MAX: f32 = 1e6;
+
+fn check_rgb(
+    name: &'static str,
+    v: Rgb,
+    ok: impl Fn(f32) -> bool,
+    expected: &'static str,
+) -> Result<(), ParamError> {
+    match v.to_array().into_iter().find(|&c| !(c.is_finite() && ok(c))) {
+        Some(c) => Err(ParamError::new(name, c.into(), expected)),
+        None => Ok(()),
+    }
+}
+
+fn check_diffuse(v: Rgb) -> Result<(), ParamError> {
+    check_rgb("diffuse", v, |c| (0.0..1.0).contains(&c), "in [0, 1)")
+}
+
+fn check_unit(name: &'static str, v: Rgb) -> Result<(), ParamError> {
+    check_rgb(name, v, |c| (0.0..=1.0).contains(&c), "in [0, 1]")
+}
+
+fn check_exponent(n: f32) -> Result<(), ParamError> {
+    if n.is_finite() && (0.0..=EXPONENT_MAX).contains(&n) {
+        Ok(())
+    } else {
+        Err(ParamError::new("exponent", n.into(), "in [0, 1e6]"))
+    }
+}
+
+/// A plausible model must not reflect more than it receives: diffuse + specular <= 1.
+fn check_sum(diffuse: Rgb, specular: Rgb) -> Result<(), ParamError> {
+    let sum = diffuse + specular;
+    check_rgb(
+        "specular",
+        sum,
+        |c| c <= 1.0,
+        "such that diffuse + specular <= 1 on every channel",
+    )
+}
+
+impl Material {
+    /// A Lambertian material of diffuse reflectance `diffuse` in [0, 1).
+    pub fn lambert(diffuse: Rgb) -> Result<Self, ParamError> {
+        check_diffuse(diffuse)?;
+        Ok(Self {
+            diffuse,
+            ambient: diffuse,
+            lobe: None,
+        })
+    }
+
+    /// A Phong material. The published form accepts any k_s in [0, 1]; the normalized form also
+    /// requires diffuse + specular <= 1.
+    pub fn phong(p: PhongParams) -> Result<Self, ParamError> {
+        check_diffuse(p.diffuse)?;
+        check_unit("specular", p.specular)?;
+        check_unit("ambient", p.ambient)?;
+        check_exponent(p.exponent)?;
+        if p.normalized {
+            check_sum(p.diffuse, p.specular)?;
+        }
+        Ok(Self {
+            diffuse: p.diffuse,
+            ambient: p.ambient,
+            lobe: nonzero(p.specular).then_some(Lobe::Phong {
+                specular: p.specular,
+                exponent: p.exponent,
+                normalized: p.normalized,
+            }),
+        })
+    }
+
+    /// A Blinn-Phong material; the normalized form requires diffuse + specular <= 1.
+    pub fn blinn_phong(p: BlinnPhongParams) -> Result<Self, ParamError> {
+        check_diffuse(p.diffuse)?;
+        check_unit("specular", p.specular)?;
+        check_exponent(p.exponent)?;
+        if p.normalized {
+            check_sum(p.diffuse, p.specular)?;
+        }
+        Ok(Self {
+            diffuse: p.diffuse,
+            ambient: p.diffuse,
+            lobe: nonzero(p.specular).then_some(Lobe::BlinnPhong {
+                specular: p.specular,
+                exponent: p.exponent,
+                normalized: p.normalized,
+            }),
+        })
+    }
+
+    /// A Cook-Torrance material; requires roughness > 0 and diffuse + specular <= 1.
+    pub fn cook_torrance(p: CookTorranceParams) -> Result<Self, ParamError> {
+        check_diffuse(p.diffuse)?;
+        check_unit("specular", p.specular)?;
+        check_sum(p.diffuse, p.specular)?;
+        if !(p.roughness.is_finite() && p.roughness > 0.0) {
+            return Err(ParamError::new(
+                "roughness",
+                p.roughness.into(),
+                "finite and > 0",
+            ));
+        }
+        let ior = ComplexIor::new(p.ior.n, p.ior.k)?;
+        Ok(Self {
+            diffuse: p.diffuse,
+            ambient: p.diffuse,
+            lobe: nonzero(p.specular).then_some(Lobe::CookTorrance {
+                specular: p.specular,
+                roughness: p.roughness,
+                ior,
+                fresnel: p.fresnel,
+            }),
+        })
+    }
+
+    /// A perfect mirror of per-channel `reflectance` in [0, 1].
+    pub fn mirror(reflectance: Rgb) -> Result<Self, ParamError> {
+        check_unit("reflectance", reflectance)?;
+        Ok(Self::delta(Lobe::Mirror { reflectance }))
+    }
+
+    /// A smooth dielectric of real relative index `ior` (finite, > 0).
+    pub fn dielectric(ior: f32) -> Result<Self, ParamError> {
+        ComplexIor::dielectric(ior)?;
+        Ok(Self::delta(Lobe::Dielectric { ior }))
+    }
+
+    /// A smooth conductor of complex index `ior`.
+    pub fn conductor(ior: ComplexIor) -> Result<Self, ParamError> {
+        let ior = ComplexIor::new(ior.n, ior.k)?;
+        Ok(Self::delta(Lobe::Conductor { ior }))
+    }
+
+    fn delta(lobe: Lobe) -> Self {
+        Self {
+            diffuse: Rgb::ZERO,
+            ambient: Rgb::ZERO,
+            lobe: Some(lobe),
+        }
+    }
+
+    /// The Lambertian reflectance rho per channel, in [0, 1): what radiosity reads.
+    pub fn diffuse_albedo(&self) -> Rgb {
+        self.diffuse
+    }
+
+    /// The ambient coefficient k_a per channel of the Phong shading form (equal to the diffuse
+    /// reflectance for models that do not name one).
+    pub fn ambient(&self) -> Rgb {
+        self.ambient
+    }
+
+    /// The non-diffuse lobe, if any.
+    pub fn lobe(&self) -> Option<&Lobe> {
+        self.lobe.as_ref()
+    }
+
+    /// Whether the material has any non-diffuse term: what the planner reads to skip the
+    /// specular pass.
+    pub fn has_non_diffuse(&self) -> bool {
+        self.lobe.is_some()
+    }
+
+    /// Whether the material reflects any light diffusely (any channel of rho above 0).
+    pub fn reflects_diffusely(&self) -> bool {
+        nonzero(self.diffuse)
+    }
+}
+
+fn nonzero(v: Rgb) -> bool {
+    v.max_element() > 0.0
+}
