@@ -1,1 +1,41 @@
-//! Scene.
+//! The scene layer of twopass: the scene file format (TOML, with OBJ/MTL meshes through tobj),
+//! validation once at load, the runtime [`Scene`] (indexed meshes, materials, objects,
+//! emitters, camera) and ray queries over an obvhs CWBVH.
+//!
+//! After [`load`] returns `Ok`, every position and normal is finite, every triangle has a
+//! non-zero area, every material parameter is in range and every emission is finite and
+//! non-negative: the passes downstream cannot fail on the scene's data.
+//!
+//! Units: positions in the scene's own units (the Cornell box is in millimetres), emitted
+//! radiance in W/(m^2 sr) per RGB channel with areas in scene units, angles in radians at
+//! run time (degrees in files).
+//!
+//! ```no_run
+//! let (scene, warnings) = twopass_scene::load("scenes/cornell-box.toml")?;
+//! for w in &warnings {
+//!     eprintln!("warning: {w}");
+//! }
+//! let ray = twopass_scene::Ray::new(scene.camera.position, scene.camera.forward);
+//! if let Some(hit) = scene.intersect(&ray) {
+//!     println!("hit object {} at distance {}", scene.objects[hit.object as usize].name, hit.t);
+//! }
+//! # Ok::<(), twopass_scene::SceneError>(())
+//! ```
+
+mod accel;
+mod camera;
+pub mod description;
+mod error;
+mod load;
+mod obj;
+mod scene;
+pub mod shape;
+mod transform;
+pub mod workload;
+
+pub use accel::{Accel, Ray, SurfacePoint, TriangleHit};
+pub use camera::Camera;
+pub use error::{CameraProblem, SceneError, Warning};
+pub use load::{SPHERE_TOLERANCE, load, load_toml};
+pub use scene::{Bounds, Emitter, Hit, Mesh, Object, Scene, SceneMaterial};
+pub use transform::Transform;

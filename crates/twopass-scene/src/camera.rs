@@ -1,0 +1,179 @@
+//! The pinhole camera: an orthonormal basis, a vertical field of view and an image size.
+
+use glam::{Vec2, Vec3};
+
+use crate::CameraProblem;
+
+/// A pinhole camera. Pixel (0, 0) is the top-left corner of the image; the camera looks along
+/// `forward` with `up` on top; `right = forward x up` (right-handed).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Camera {
+    /// Eye position, scene units.
+    pub position: Vec3,
+    /// Unit viewing direction.
+    pub forward: Vec3,
+    /// Unit image-right direction.
+    pub right: Vec3,
+    /// Unit image-up direction.
+    pub up: Vec3,
+    /// Vertical field of view, radians in (0, pi).
+    pub fov_y: f32,
+    /// Image width, pixels.
+    pub width: u32,
+    /// Image height, pixels.
+    pub height: u32,
+}
+
+impl Camera {
+    /// A camera at `position` looking at `look_at` with `up` on top, vertical field of view
+    /// `fov_y` (radians) and `width` x `height` pixels.
+    pub fn look_at(
+        position: Vec3,
+        look_at: Vec3,
+        up: Vec3,
+        fov_y: f32,
+        width: u32,
+        height: u32,
+    ) -> Result<Self, CameraProblem> {
+        if !(position.is_finite() && look_at.is_finite() && up.is_finite()) {
+            return Err(CameraProblem::NonFinite);
+        }
+        let view = look_at - position;
+        if view.length_squared() == 0.0 || !view.length_squared().is_finite() {
+            return Err(CameraProblem::NoViewDirection);
+        }
+        let forward = view.normalize();
+        let right = forward.cross(up);
+        // |forward x up| relative to |up|: the sine of the angle between them.
+        if !(right.length() > 1e-6 * up.length()) {
+            return Err(CameraProblem::UpParallelToView);
+        }
+        let right = right.normalize();
+        let fov_deg = fov_y.to_degrees();
+        if !(fov_deg > 0.0 && fov_deg < 180.0) {
+            return Err(CameraProblem::FieldOfView(fov_deg));
+        }
+        Ok(Self {
+            position,
+            forward,
+            right,
+            up: right.cross(forward),
+            fov_y,
+            width: width.max(1),
+            height: height.max(1),
+        })
+    }
+
+    /// The same camera at another resolution. Given one dimension alone, the other follows the
+    /// current aspect ratio (rounded, at least 1).
+    pub fn with_resolution(mut self, width: Option<u32>, height: Option<u32>) -> Self {
+        let aspect = self.width as f64 / self.height as f64;
+        let (w, h) = match (width, height) {
+            (Some(w), Some(h)) => (w, h),
+            (Some(w), None) => (w, (w as f64 / aspect).round().max(1.0) as u32),
+            (None, Some(h)) => ((h as f64 * aspect).round().max(1.0) as u32, h),
+            (None, None) => (self.width, self.height),
+        };
+        self.width = w.max(1);
+        self.height = h.max(1);
+        self
+    }
+
+    /// Unit direction through the continuous image position `pixel` (pixels from the top-left
+    /// corner; pixel centres at half-integers).
+    pub fn direction(&self, pixel: Vec2) -> Vec3 {
+        let tan = (self.fov_y * 0.5).tan();
+        let h = self.height as f32;
+        let sx = (2.0 * pixel.x - self.width as f32) / h * tan;
+        let sy = (h - 2.0 * pixel.y) / h * tan;
+        (self.forward + self.right * sx + self.up * sy).normalize()
+    }
+
+    /// The continuous image position where a world direction from the eye lands, or `None`
+    /// behind the camera. Inverse of [`Camera::direction`].
+    pub fn project(&self, dir: Vec3) -> Option<Vec2> {
+        let z = dir.dot(self.forward);
+        if z <= 0.0 {
+            return None;
+        }
+        let tan = (self.fov_y * 0.5).tan();
+        let h = self.height as f32;
+        let sx = dir.dot(self.right) / z / tan;
+        let sy = dir.dot(self.up) / z / tan;
+        Some(Vec2::new(
+            (sx * h + self.width as f32) * 0.5,
+            (h - sy * h) * 0.5,
+        ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cornell() -> Camera {
+        let fov = 2.0 * (12.5_f32 / 35.0).atan();
+        Camera::look_at(
+            Vec3::new(278.0, 273.0, -800.0),
+            Vec3::new(278.0, 273.0, 0.0),
+            Vec3::Y,
+            fov,
+            512,
+            512,
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn centre_pixel_looks_forward_and_corners_span_the_fov() {
+        let c = cornell();
+        assert!(
+            c.direction(Vec2::new(256.0, 256.0))
+                .abs_diff_eq(Vec3::Z, 1e-6)
+        );
+        // Top edge centre: 12.5 mm over 35 mm focal length.
+        let top = c.direction(Vec2::new(256.0, 0.0));
+        assert!((top.y / top.z - 12.5 / 35.0).abs() < 1e-6);
+        // Right-handed: looking +z with +y up, image right is -x.
+        assert!(c.right.abs_diff_eq(-Vec3::X, 1e-6));
+        assert!(c.direction(Vec2::new(512.0, 256.0)).x < 0.0);
+    }
+
+    #[test]
+    fn project_inverts_direction() {
+        let c = cornell();
+        for p in [
+            Vec2::new(0.5, 0.5),
+            Vec2::new(100.25, 400.0),
+            Vec2::new(511.5, 3.0),
+        ] {
+            assert!(c.project(c.direction(p)).unwrap().abs_diff_eq(p, 1e-3));
+        }
+        assert!(c.project(-Vec3::Z).is_none());
+    }
+
+    #[test]
+    fn one_dimension_keeps_aspect() {
+        let c = Camera::look_at(Vec3::ZERO, Vec3::Z, Vec3::Y, 1.0, 640, 480).unwrap();
+        let r = c.with_resolution(Some(320), None);
+        assert_eq!((r.width, r.height), (320, 240));
+        let r = c.with_resolution(None, Some(960));
+        assert_eq!((r.width, r.height), (1280, 960));
+    }
+
+    #[test]
+    fn bad_cameras_are_refused() {
+        assert_eq!(
+            Camera::look_at(Vec3::ZERO, Vec3::Y * 5.0, Vec3::Y, 1.0, 1, 1),
+            Err(CameraProblem::UpParallelToView)
+        );
+        assert_eq!(
+            Camera::look_at(Vec3::ONE, Vec3::ONE, Vec3::Y, 1.0, 1, 1),
+            Err(CameraProblem::NoViewDirection)
+        );
+        assert!(matches!(
+            Camera::look_at(Vec3::ZERO, Vec3::Z, Vec3::Y, 3.2, 1, 1),
+            Err(CameraProblem::FieldOfView(_))
+        ));
+    }
+}

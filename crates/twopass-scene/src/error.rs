@@ -1,0 +1,358 @@
+//! Errors and warnings of scene loading. Every variant carries the file and, where one exists,
+//! the line (TOML span or OBJ line), the object or material, and the offending value, as fields.
+
+use std::fmt;
+use std::path::PathBuf;
+
+use twopass_brdf::ParamError;
+
+/// A scene that cannot be loaded. Loading stops at the first error.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum SceneError {
+    /// The file is missing or unreadable.
+    #[error("{}: cannot read: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The operating system's error.
+        source: std::io::Error,
+    },
+    /// The file is neither a `.toml` scene nor an `.obj` mesh.
+    #[error("{}: not a scene: expected a .toml scene file or an .obj mesh", path.display())]
+    UnsupportedFormat {
+        /// The file.
+        path: PathBuf,
+    },
+    /// TOML syntax error, unknown key, missing key or wrong type.
+    #[error("{}:{line}:{column}: {message}", path.display())]
+    Toml {
+        /// The scene file.
+        path: PathBuf,
+        /// 1-based line.
+        line: usize,
+        /// 1-based column.
+        column: usize,
+        /// The parser's message (what is wrong and where in the structure).
+        message: String,
+    },
+    /// The scene's `version` is not one this build reads.
+    #[error("{}: scene version {found} is not supported (this build reads version {supported})", path.display())]
+    Version {
+        /// The scene file.
+        path: PathBuf,
+        /// The version the file declares.
+        found: u32,
+        /// The version this build reads.
+        supported: u32,
+    },
+    /// Two materials or two objects share a name.
+    #[error("{}:{line}: duplicate {kind} name `{name}`", path.display())]
+    DuplicateName {
+        /// The scene file.
+        path: PathBuf,
+        /// Line of the second definition.
+        line: usize,
+        /// `"material"` or `"object"`.
+        kind: &'static str,
+        /// The repeated name.
+        name: String,
+    },
+    /// An object refers to a material that no `[[material]]` defines.
+    #[error("{}:{line}: object `{object}` refers to unknown material `{material}`", path.display())]
+    UnknownMaterial {
+        /// The scene file.
+        path: PathBuf,
+        /// Line of the object.
+        line: usize,
+        /// The object's name.
+        object: String,
+        /// The missing material name.
+        material: String,
+    },
+    /// A material parameter is out of range (reflectance outside [0, 1), zero roughness, ...).
+    #[error("{}{}: material `{material}`: {source}", path.display(), line_suffix(*line))]
+    Material {
+        /// The scene or MTL file.
+        path: PathBuf,
+        /// Line of the material, when known.
+        line: Option<usize>,
+        /// The material's name.
+        material: String,
+        /// Which parameter and why.
+        source: ParamError,
+    },
+    /// A material is inconsistent as a whole (for example neither `conductor` nor `ior`).
+    #[error("{}:{line}: material `{material}`: {problem}", path.display())]
+    MaterialSpec {
+        /// The scene file.
+        path: PathBuf,
+        /// Line of the material.
+        line: usize,
+        /// The material's name.
+        material: String,
+        /// What is wrong.
+        problem: String,
+    },
+    /// The OBJ file could not be parsed.
+    #[error("{}{}: cannot load OBJ: {source}", path.display(), line_suffix(*line))]
+    Obj {
+        /// The OBJ file.
+        path: PathBuf,
+        /// The first offending line, when it could be found.
+        line: Option<usize>,
+        /// tobj's error.
+        source: tobj::LoadError,
+    },
+    /// The OBJ names an MTL library that is missing or broken, and the scene relies on it.
+    #[error("{}: material library {} cannot be loaded ({source}); give the object a `material` in the scene file or fix the library", path.display(), mtl.as_ref().map_or_else(|| "(unnamed)".to_owned(), |m| m.display().to_string()))]
+    MissingMtl {
+        /// The OBJ file.
+        path: PathBuf,
+        /// The MTL library it names, if any.
+        mtl: Option<PathBuf>,
+        /// tobj's error.
+        source: tobj::LoadError,
+    },
+    /// A NaN or infinite number in geometry, a transform or emission.
+    #[error("{}{}: object `{object}`: {what} {index} is not finite ({value})", path.display(), line_suffix(*line))]
+    NonFinite {
+        /// The scene or OBJ file.
+        path: PathBuf,
+        /// The line, when known.
+        line: Option<usize>,
+        /// The object.
+        object: String,
+        /// What holds the value (`"vertex"`, `"normal"`, `"emission channel"`, ...).
+        what: &'static str,
+        /// Index of the vertex, normal or channel.
+        index: usize,
+        /// The offending value.
+        value: f32,
+    },
+    /// Negative emitted radiance.
+    #[error("{}{}: object `{object}`: emission channel {channel} is negative ({value} W/(m^2 sr))", path.display(), line_suffix(*line))]
+    NegativeEmission {
+        /// The scene or MTL file.
+        path: PathBuf,
+        /// The line, when known.
+        line: Option<usize>,
+        /// The object (or MTL material).
+        object: String,
+        /// 0, 1 or 2 for R, G, B.
+        channel: usize,
+        /// The offending value.
+        value: f32,
+    },
+    /// Every triangle of an object is degenerate (zero area), so the object has no surface.
+    #[error("{}{}: object `{object}`: all {triangles} triangles are degenerate (zero area)", path.display(), line_suffix(*line))]
+    DegenerateObject {
+        /// The scene or OBJ file.
+        path: PathBuf,
+        /// The line, when known.
+        line: Option<usize>,
+        /// The object.
+        object: String,
+        /// How many triangles it had.
+        triangles: usize,
+    },
+    /// A built-in shape or transform with impossible parameters.
+    #[error("{}:{line}: object `{object}`: {problem}", path.display())]
+    Shape {
+        /// The scene file.
+        path: PathBuf,
+        /// Line of the object.
+        line: usize,
+        /// The object.
+        object: String,
+        /// What is wrong.
+        problem: String,
+    },
+    /// The camera cannot form an image.
+    #[error("{}{}: camera: {problem}", path.display(), line_suffix(*line))]
+    Camera {
+        /// The scene file.
+        path: PathBuf,
+        /// Line of `[camera]`, when known.
+        line: Option<usize>,
+        /// What is wrong.
+        problem: CameraProblem,
+    },
+    /// The scene has no triangles at all.
+    #[error("{}: the scene has no surfaces", path.display())]
+    EmptyScene {
+        /// The scene file.
+        path: PathBuf,
+    },
+}
+
+/// What is wrong with a camera.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub enum CameraProblem {
+    /// `up` is parallel to the viewing direction (or zero), so the image has no orientation.
+    UpParallelToView,
+    /// `position` equals `look_at`, so there is no viewing direction.
+    NoViewDirection,
+    /// The vertical field of view (degrees) is not in (0, 180).
+    FieldOfView(f32),
+    /// The focal length or film size (mm) is not finite and > 0.
+    Lens(f32),
+    /// Both `fov_y` and `focal_length` were given.
+    FovAndFocalLength,
+    /// A position, target or up vector has a NaN or infinite component.
+    NonFinite,
+}
+
+impl fmt::Display for CameraProblem {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::UpParallelToView => write!(f, "`up` is zero or parallel to the view direction"),
+            Self::NoViewDirection => write!(f, "`position` equals `look_at`"),
+            Self::FieldOfView(v) => write!(f, "`fov_y` = {v} degrees must be in (0, 180)"),
+            Self::Lens(v) => write!(
+                f,
+                "focal length and film size must be finite and > 0 mm, got {v}"
+            ),
+            Self::FovAndFocalLength => write!(f, "give either `fov_y` or `focal_length`, not both"),
+            Self::NonFinite => write!(f, "a position or direction is not finite"),
+        }
+    }
+}
+
+fn line_suffix(line: Option<usize>) -> String {
+    line.map_or_else(String::new, |l| format!(":{l}"))
+}
+
+/// A recoverable problem: the scene loads, and the caller decides how to show it.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum Warning {
+    /// Degenerate (zero-area) triangles were dropped from an object.
+    DegenerateTriangles {
+        /// The scene or OBJ file.
+        path: PathBuf,
+        /// The object.
+        object: String,
+        /// How many were dropped.
+        dropped: usize,
+        /// Index (within the object) of the first one dropped.
+        first: usize,
+    },
+    /// A bare OBJ's MTL library is missing or broken; its faces get the default grey.
+    MissingMtl {
+        /// The OBJ file.
+        path: PathBuf,
+        /// The MTL library it names, if any.
+        mtl: Option<PathBuf>,
+    },
+    /// An MTL value outside what the engine accepts was clamped.
+    MtlClamped {
+        /// The OBJ file whose library holds the material.
+        path: PathBuf,
+        /// The MTL material.
+        material: String,
+        /// The MTL key (`Kd`, `Ks`, ...).
+        key: &'static str,
+        /// The value as written.
+        from: f32,
+        /// The value used.
+        to: f32,
+    },
+    /// MTL keys this engine does not model (textures, transparency, ...) were ignored.
+    MtlIgnored {
+        /// The OBJ file whose library holds the material.
+        path: PathBuf,
+        /// The MTL material.
+        material: String,
+        /// The ignored keys.
+        keys: Vec<String>,
+    },
+    /// A material is defined but no object uses it.
+    UnusedMaterial {
+        /// The scene file.
+        path: PathBuf,
+        /// Line of the material.
+        line: usize,
+        /// Its name.
+        material: String,
+    },
+    /// The film's aspect ratio differs from the image's; the film height sets the field of view.
+    FilmAspect {
+        /// The scene file.
+        path: PathBuf,
+        /// Film width / height.
+        film: f32,
+        /// Image width / height.
+        image: f32,
+    },
+    /// Nothing in the scene emits light, so every render is black.
+    NoEmitters {
+        /// The scene file.
+        path: PathBuf,
+    },
+}
+
+impl fmt::Display for Warning {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::DegenerateTriangles {
+                path,
+                object,
+                dropped,
+                first,
+            } => write!(
+                f,
+                "{}: object `{object}`: dropped {dropped} degenerate (zero-area) triangle(s), the first is triangle {first}",
+                path.display()
+            ),
+            Self::MissingMtl { path, mtl } => write!(
+                f,
+                "{}: material library {} cannot be loaded; using the default grey Lambert material",
+                path.display(),
+                mtl.as_ref()
+                    .map_or_else(|| "(unnamed)".to_owned(), |m| m.display().to_string())
+            ),
+            Self::MtlClamped {
+                path,
+                material,
+                key,
+                from,
+                to,
+            } => write!(
+                f,
+                "{}: MTL material `{material}`: {key} = {from} clamped to {to}",
+                path.display()
+            ),
+            Self::MtlIgnored {
+                path,
+                material,
+                keys,
+            } => write!(
+                f,
+                "{}: MTL material `{material}`: ignored keys not modelled here: {}",
+                path.display(),
+                keys.join(", ")
+            ),
+            Self::UnusedMaterial {
+                path,
+                line,
+                material,
+            } => write!(
+                f,
+                "{}:{line}: material `{material}` is not used by any object",
+                path.display()
+            ),
+            Self::FilmAspect { path, film, image } => write!(
+                f,
+                "{}: film aspect {film:.3} differs from image aspect {image:.3}; the film height sets the field of view",
+                path.display()
+            ),
+            Self::NoEmitters { path } => write!(
+                f,
+                "{}: nothing in the scene emits light: every render will be black",
+                path.display()
+            ),
+        }
+    }
+}

@@ -1,0 +1,782 @@
+//! Loading: a TOML scene file or a bare OBJ, validated once, into a [`Scene`].
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+use toml::Spanned;
+use twopass_brdf::{
+    BlinnPhongParams, ComplexIor, CookTorranceParams, FresnelModel, Material, PhongParams, Rgb,
+};
+
+use crate::accel::triangle_normal;
+use crate::camera::Camera;
+use crate::description::{
+    CameraDesc, FresnelDesc, MaterialDesc, ObjectDesc, SceneFile, ShapeDesc, Triple, VERSION,
+};
+use crate::error::{CameraProblem, SceneError, Warning};
+use crate::obj;
+use crate::scene::{Bounds, Mesh, Object, Scene, SceneMaterial};
+use crate::shape::{self, ShapeMesh};
+use crate::transform::Transform;
+
+/// Chord error allowed when a sphere's tessellation is chosen from its size, as a fraction of
+/// the scene's bounding-box diagonal.
+pub const SPHERE_TOLERANCE: f32 = 2e-4;
+
+/// Loads a scene: a `.toml` scene file, or a bare `.obj` mesh (framed by a default camera, with
+/// its MTL materials or a default grey). Returns the scene and the recoverable problems found.
+pub fn load(path: impl AsRef<Path>) -> Result<(Scene, Vec<Warning>), SceneError> {
+    let path = path.as_ref();
+    match path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .as_deref()
+    {
+        Some("toml") => {
+            let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+                path: path.to_owned(),
+                source,
+            })?;
+            load_toml(&text, path)
+        }
+        Some("obj") => load_bare_obj(path),
+        _ => Err(SceneError::UnsupportedFormat {
+            path: path.to_owned(),
+        }),
+    }
+}
+
+/// Loads a TOML scene from `text`, as if read from `path` (relative mesh paths resolve against
+/// its folder; errors name it).
+pub fn load_toml(text: &str, path: &Path) -> Result<(Scene, Vec<Warning>), SceneError> {
+    let file: SceneFile = toml::from_str(text).map_err(|e| {
+        let (line, column) = e.span().map_or((1, 1), |s| line_col(text, s.start));
+        SceneError::Toml {
+            path: path.to_owned(),
+            line,
+            column,
+            message: e.message().to_owned(),
+        }
+    })?;
+    if file.version != VERSION {
+        return Err(SceneError::Version {
+            path: path.to_owned(),
+            found: file.version,
+            supported: VERSION,
+        });
+    }
+    let mut ld = Loader {
+        path: path.to_owned(),
+        text,
+        warnings: Vec::new(),
+        materials: Vec::new(),
+        material_ids: HashMap::new(),
+        used: Vec::new(),
+    };
+    let mut material_lines = Vec::new();
+    for m in &file.materials {
+        let line = ld.line(m);
+        let name = m.get_ref().name().to_owned();
+        if ld.material_ids.contains_key(&name) {
+            return Err(SceneError::DuplicateName {
+                path: ld.path.clone(),
+                line,
+                kind: "material",
+                name,
+            });
+        }
+        let material = ld.material(m.get_ref(), line)?;
+        ld.add_material(name, material);
+        material_lines.push(line);
+    }
+    let mut parts = Vec::new();
+    let mut names = HashMap::new();
+    for o in &file.objects {
+        let line = ld.line(o);
+        if names.insert(o.get_ref().name.clone(), line).is_some() {
+            return Err(SceneError::DuplicateName {
+                path: ld.path.clone(),
+                line,
+                kind: "object",
+                name: o.get_ref().name.clone(),
+            });
+        }
+        ld.object(o.get_ref(), line, &mut parts)?;
+    }
+    for (i, line) in material_lines.into_iter().enumerate() {
+        if !ld.used[i] {
+            ld.warnings.push(Warning::UnusedMaterial {
+                path: ld.path.clone(),
+                line,
+                material: ld.materials[i].name.clone(),
+            });
+        }
+    }
+    let camera = ld.camera(&file.camera)?;
+    ld.finish(parts, camera)
+}
+
+fn load_bare_obj(path: &Path) -> Result<(Scene, Vec<Warning>), SceneError> {
+    let mut ld = Loader {
+        path: path.to_owned(),
+        text: "",
+        warnings: Vec::new(),
+        materials: Vec::new(),
+        material_ids: HashMap::new(),
+        used: Vec::new(),
+    };
+    let file = obj::load(path)?;
+    let materials = match &file.materials {
+        Ok(m) => ld.mtl_materials(m, path)?,
+        Err(_) => {
+            if !file.mtllibs.is_empty() {
+                ld.warnings.push(Warning::MissingMtl {
+                    path: path.to_owned(),
+                    mtl: file.mtllibs.first().cloned(),
+                });
+            }
+            Vec::new()
+        }
+    };
+    let mut parts = Vec::new();
+    let mut seen: HashMap<String, usize> = HashMap::new();
+    for m in file.models {
+        let (material, emission) = match m.material.and_then(|i| materials.get(i)) {
+            Some(&(id, e)) => (id, e),
+            None => (ld.default_material(), Rgb::ZERO),
+        };
+        let count = seen.entry(m.name.clone()).or_default();
+        *count += 1;
+        let name = if *count == 1 {
+            m.name
+        } else {
+            format!("{}#{}", m.name, count)
+        };
+        parts.push(PlacedPart {
+            part: Part {
+                name,
+                line: None,
+                geometry: Geometry::Mesh(m.mesh),
+                material,
+                emission,
+            },
+            transform: Transform::default(),
+        });
+    }
+    // Frame the bounds: look down -z at the centre from far enough to see the bounding sphere.
+    let bounds = parts
+        .iter()
+        .fold(Bounds::EMPTY, |b, p| match &p.part.geometry {
+            Geometry::Mesh(m) => m.positions.iter().fold(b, |b, q| b.grow(*q)),
+            Geometry::Sphere { .. } => b,
+        });
+    let fov_y = 40f32.to_radians();
+    let radius = (bounds.diagonal() * 0.5).max(f32::MIN_POSITIVE);
+    let distance = radius / (fov_y * 0.5).sin() * 1.1;
+    let center = if bounds.diagonal() > 0.0 {
+        bounds.center()
+    } else {
+        Vec3::ZERO
+    };
+    let camera = Camera::look_at(
+        center + Vec3::Z * distance,
+        center,
+        Vec3::Y,
+        fov_y,
+        512,
+        512,
+    )
+    .map_err(|problem| SceneError::Camera {
+        path: path.to_owned(),
+        line: None,
+        problem,
+    })?;
+    ld.finish(parts, camera)
+}
+
+/// What an object becomes before meshing: spheres wait for the scene's size.
+enum Geometry {
+    Mesh(ShapeMesh),
+    Sphere {
+        center: Vec3,
+        radius: f32,
+        subdivisions: Option<u32>,
+    },
+}
+
+struct Part {
+    name: String,
+    line: Option<usize>,
+    geometry: Geometry,
+    material: u32,
+    emission: Rgb,
+}
+
+struct PlacedPart {
+    part: Part,
+    transform: Transform,
+}
+
+struct Loader<'a> {
+    path: PathBuf,
+    text: &'a str,
+    warnings: Vec<Warning>,
+    materials: Vec<SceneMaterial>,
+    material_ids: HashMap<String, u32>,
+    used: Vec<bool>,
+}
+
+fn line_col(text: &str, offset: usize) -> (usize, usize) {
+    let before = &text[..offset.min(text.len())];
+    let line = before.matches('\n').count() + 1;
+    let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
+    (line, column)
+}
+
+fn rgb(t: Triple) -> Rgb {
+    Rgb::from_array(t.get())
+}
+
+impl Loader<'_> {
+    fn line<T>(&self, s: &Spanned<T>) -> usize {
+        line_col(self.text, s.span().start).0
+    }
+
+    fn add_material(&mut self, name: String, material: Material) -> u32 {
+        let id = self.materials.len() as u32;
+        self.material_ids.insert(name.clone(), id);
+        self.materials.push(SceneMaterial { name, material });
+        self.used.push(false);
+        id
+    }
+
+    fn use_material(&mut self, id: u32) -> u32 {
+        self.used[id as usize] = true;
+        id
+    }
+
+    fn default_material(&mut self) -> u32 {
+        const NAME: &str = "(default grey)";
+        let id = match self.material_ids.get(NAME) {
+            Some(&id) => id,
+            None => {
+                let grey = Material::lambert(Rgb::splat(0.5)).expect("0.5 is a valid reflectance");
+                self.add_material(NAME.to_owned(), grey)
+            }
+        };
+        self.use_material(id)
+    }
+
+    fn material(&self, desc: &MaterialDesc, line: usize) -> Result<Material, SceneError> {
+        let name = desc.name();
+        let spec_err = |problem: &str| SceneError::MaterialSpec {
+            path: self.path.clone(),
+            line,
+            material: name.to_owned(),
+            problem: problem.to_owned(),
+        };
+        let ior_of = |conductor: &Option<String>, ior: &Option<Triple>, k: &Option<Triple>| match (
+            conductor, ior,
+        ) {
+            (Some(c), None) if k.is_none() => ComplexIor::conductor(c).ok_or_else(|| {
+                let known: Vec<&str> = twopass_brdf::ior::CONDUCTORS
+                    .iter()
+                    .map(|c| c.name)
+                    .collect();
+                spec_err(&format!(
+                    "unknown conductor `{c}` (known: {})",
+                    known.join(", ")
+                ))
+            }),
+            (None, Some(n)) => Ok(ComplexIor {
+                n: rgb(*n),
+                k: k.map_or(Rgb::ZERO, rgb),
+            }),
+            (Some(_), _) => Err(spec_err(
+                "give either `conductor` or `ior` (with `k`), not both",
+            )),
+            (None, None) => Err(spec_err(
+                "needs `conductor` (a measured metal) or `ior` (and `k`)",
+            )),
+        };
+        let built = match desc {
+            MaterialDesc::Lambert { diffuse, .. } => Material::lambert(rgb(*diffuse)),
+            MaterialDesc::Phong {
+                diffuse,
+                specular,
+                exponent,
+                ambient,
+                normalized,
+                ..
+            } => Material::phong(PhongParams {
+                diffuse: rgb(*diffuse),
+                specular: rgb(*specular),
+                exponent: *exponent,
+                ambient: ambient.map_or(rgb(*diffuse), rgb),
+                normalized: *normalized,
+            }),
+            MaterialDesc::BlinnPhong {
+                diffuse,
+                specular,
+                exponent,
+                normalized,
+                ..
+            } => Material::blinn_phong(BlinnPhongParams {
+                diffuse: rgb(*diffuse),
+                specular: rgb(*specular),
+                exponent: *exponent,
+                normalized: *normalized,
+            }),
+            MaterialDesc::CookTorrance {
+                diffuse,
+                specular,
+                roughness,
+                conductor,
+                ior,
+                k,
+                fresnel,
+                ..
+            } => Material::cook_torrance(CookTorranceParams {
+                diffuse: rgb(*diffuse),
+                specular: rgb(*specular),
+                roughness: *roughness,
+                ior: ior_of(conductor, ior, k)?,
+                fresnel: match fresnel {
+                    FresnelDesc::Exact => FresnelModel::Exact,
+                    FresnelDesc::Schlick => FresnelModel::Schlick,
+                },
+            }),
+            MaterialDesc::Mirror { reflectance, .. } => Material::mirror(rgb(*reflectance)),
+            MaterialDesc::Dielectric { ior, .. } => Material::dielectric(*ior),
+            MaterialDesc::Conductor {
+                conductor, ior, k, ..
+            } => Material::conductor(ior_of(conductor, ior, k)?),
+        };
+        built.map_err(|source| SceneError::Material {
+            path: self.path.clone(),
+            line: Some(line),
+            material: name.to_owned(),
+            source,
+        })
+    }
+
+    /// Converts every MTL material once; returns (material id, emission) per MTL index.
+    fn mtl_materials(
+        &mut self,
+        mtl: &[tobj::Material],
+        obj_path: &Path,
+    ) -> Result<Vec<(u32, Rgb)>, SceneError> {
+        let file = obj_path
+            .file_name()
+            .map_or_else(String::new, |f| f.to_string_lossy().into_owned());
+        let mut out = Vec::with_capacity(mtl.len());
+        for m in mtl {
+            let (material, emission) = obj::convert_material(m, obj_path, &mut self.warnings)?;
+            let name = format!("{file}:{}", m.name);
+            let id = match self.material_ids.get(&name) {
+                Some(&id) => id,
+                None => self.add_material(name, material),
+            };
+            out.push((id, emission));
+        }
+        Ok(out)
+    }
+
+    fn shape_err(&self, line: usize, object: &str, problem: String) -> SceneError {
+        SceneError::Shape {
+            path: self.path.clone(),
+            line,
+            object: object.to_owned(),
+            problem,
+        }
+    }
+
+    fn object(
+        &mut self,
+        o: &ObjectDesc,
+        line: usize,
+        parts: &mut Vec<PlacedPart>,
+    ) -> Result<(), SceneError> {
+        let name = o.name.as_str();
+        let t = &o.transform;
+        let transform = Transform::new(
+            t.scale.map_or(Vec3::ONE, |s| Vec3::from_array(s.get())),
+            &t.rotate
+                .iter()
+                .map(|r| (Vec3::from_array(r.axis), r.degrees))
+                .collect::<Vec<_>>(),
+            t.translate.map_or(Vec3::ZERO, Vec3::from_array),
+        )
+        .map_err(|p| self.shape_err(line, name, p))?;
+        let emission = match o.emission {
+            None => None,
+            Some(e) => Some(self.emission(rgb(e), name, Some(line))?),
+        };
+        let lookup = |ld: &mut Self, material: &str| match ld.material_ids.get(material) {
+            Some(&id) => Ok(ld.use_material(id)),
+            None => Err(SceneError::UnknownMaterial {
+                path: ld.path.clone(),
+                line,
+                object: name.to_owned(),
+                material: material.to_owned(),
+            }),
+        };
+        let fixed = |ld: &mut Self| match &o.material {
+            Some(m) => lookup(ld, m),
+            None => Err(ld.shape_err(line, name, "needs a `material`".into())),
+        };
+        let v3 = Vec3::from_array;
+        let geometry = match &o.shape {
+            ShapeDesc::Quad { origin, edge_u, edge_v } => shape::quad(v3(*origin), v3(*edge_u), v3(*edge_v)),
+            ShapeDesc::Polygon { vertices } => {
+                shape::polygon(&vertices.iter().map(|v| v3(*v)).collect::<Vec<_>>())
+            }
+            ShapeDesc::Box { min, max } => shape::cuboid(v3(*min), v3(*max)),
+            ShapeDesc::Sphere {
+                center,
+                radius,
+                subdivisions,
+            } => {
+                if !(radius.is_finite() && *radius > 0.0) || !v3(*center).is_finite() {
+                    return Err(self.shape_err(line, name, format!("sphere radius {radius} must be finite and > 0, centre finite")));
+                }
+                if let Some(s) = subdivisions.filter(|&s| s > shape::MAX_SUBDIVISIONS) {
+                    return Err(self.shape_err(line, name, format!("sphere subdivisions {s} must be at most {}", shape::MAX_SUBDIVISIONS)));
+                }
+                let material = fixed(self)?;
+                parts.push(PlacedPart {
+                    part: Part {
+                        name: name.to_owned(),
+                        line: Some(line),
+                        geometry: Geometry::Sphere {
+                            center: v3(*center),
+                            radius: *radius,
+                            subdivisions: *subdivisions,
+                        },
+                        material,
+                        emission: emission.unwrap_or(Rgb::ZERO),
+                    },
+                    transform,
+                });
+                return Ok(());
+            }
+            ShapeDesc::Obj { file } => {
+                let obj_path = self.path.parent().unwrap_or(Path::new(".")).join(file);
+                let loaded = obj::load(&obj_path)?;
+                let needs_mtl = o.material.is_none()
+                    && loaded.models.iter().any(|m| m.material.is_some())
+                    || !o.material_map.is_empty();
+                let mtl = match (&loaded.materials, needs_mtl) {
+                    (Ok(m), _) => self.mtl_materials(m, &obj_path)?,
+                    (Err(source), true) => {
+                        return Err(SceneError::MissingMtl {
+                            path: obj_path,
+                            mtl: loaded.mtllibs.first().cloned(),
+                            source: *source,
+                        });
+                    }
+                    (Err(_), false) => Vec::new(),
+                };
+                let single = loaded.models.len() == 1;
+                for m in loaded.models {
+                    let mtl_name = m.material.and_then(|i| loaded.materials.as_ref().ok()?.get(i)).map(|x| x.name.clone());
+                    let (material, mtl_emission) = match (&o.material, mtl_name.as_ref().and_then(|n| o.material_map.get(n))) {
+                        (Some(over), _) => (lookup(self, over)?, Rgb::ZERO),
+                        (None, Some(mapped)) => (lookup(self, mapped)?, Rgb::ZERO),
+                        (None, None) => match m.material.and_then(|i| mtl.get(i)) {
+                            Some(&(id, e)) => (self.use_material(id), e),
+                            None => {
+                                return Err(self.shape_err(line, name, format!(
+                                    "OBJ group `{}` in {} has no material (no usemtl); give the object a `material`",
+                                    m.name,
+                                    obj_path.display()
+                                )));
+                            }
+                        },
+                    };
+                    parts.push(PlacedPart {
+                        part: Part {
+                            name: if single { name.to_owned() } else { format!("{name}/{}", m.name) },
+                            line: Some(line),
+                            geometry: Geometry::Mesh(m.mesh),
+                            material,
+                            emission: emission.unwrap_or(mtl_emission),
+                        },
+                        transform,
+                    });
+                }
+                return Ok(());
+            }
+        }
+        .map_err(|p| self.shape_err(line, name, p))?;
+        let material = fixed(self)?;
+        parts.push(PlacedPart {
+            part: Part {
+                name: name.to_owned(),
+                line: Some(line),
+                geometry: Geometry::Mesh(geometry),
+                material,
+                emission: emission.unwrap_or(Rgb::ZERO),
+            },
+            transform,
+        });
+        Ok(())
+    }
+
+    fn emission(&self, e: Rgb, object: &str, line: Option<usize>) -> Result<Rgb, SceneError> {
+        for (channel, value) in e.to_array().into_iter().enumerate() {
+            if !value.is_finite() {
+                return Err(SceneError::NonFinite {
+                    path: self.path.clone(),
+                    line,
+                    object: object.to_owned(),
+                    what: "emission channel",
+                    index: channel,
+                    value,
+                });
+            }
+            if value < 0.0 {
+                return Err(SceneError::NegativeEmission {
+                    path: self.path.clone(),
+                    line,
+                    object: object.to_owned(),
+                    channel,
+                    value,
+                });
+            }
+        }
+        Ok(e)
+    }
+
+    fn camera(&mut self, c: &Spanned<CameraDesc>) -> Result<Camera, SceneError> {
+        let line = Some(self.line(c));
+        let err = |problem| SceneError::Camera {
+            path: self.path.clone(),
+            line,
+            problem,
+        };
+        let d = c.get_ref();
+        let [w, h] = d.resolution;
+        if w == 0 || h == 0 {
+            return Err(SceneError::Toml {
+                path: self.path.clone(),
+                line: line.unwrap_or(1),
+                column: 1,
+                message: format!("camera resolution {w} x {h} must be at least 1 x 1"),
+            });
+        }
+        let fov_y = match (d.fov_y, d.focal_length) {
+            (Some(_), Some(_)) => return Err(err(CameraProblem::FovAndFocalLength)),
+            (Some(f), None) => f.to_radians(),
+            (None, focal) => {
+                let focal = focal.unwrap_or(50.0);
+                let [fw, fh] = d.film_size.unwrap_or([36.0, 24.0]);
+                for v in [focal, fw, fh] {
+                    if !(v.is_finite() && v > 0.0) {
+                        return Err(err(CameraProblem::Lens(v)));
+                    }
+                }
+                let (film, image) = (fw / fh, w as f32 / h as f32);
+                if (film / image - 1.0).abs() > 0.01 {
+                    self.warnings.push(Warning::FilmAspect {
+                        path: self.path.clone(),
+                        film,
+                        image,
+                    });
+                }
+                2.0 * (0.5 * fh / focal).atan()
+            }
+        };
+        Camera::look_at(
+            Vec3::from_array(d.position),
+            Vec3::from_array(d.look_at),
+            Vec3::from_array(d.up),
+            fov_y,
+            w,
+            h,
+        )
+        .map_err(err)
+    }
+
+    /// Meshes the parts (spheres from the scene's size), validates the triangles, builds the scene.
+    fn finish(
+        mut self,
+        parts: Vec<PlacedPart>,
+        camera: Camera,
+    ) -> Result<(Scene, Vec<Warning>), SceneError> {
+        let mut bounds = Bounds::EMPTY;
+        for p in &parts {
+            match &p.part.geometry {
+                Geometry::Mesh(m) => {
+                    for q in &m.positions {
+                        bounds = bounds.grow(p.transform.point(*q));
+                    }
+                }
+                Geometry::Sphere { center, radius, .. } => {
+                    for corner in 0..8 {
+                        let s = Vec3::new(
+                            if corner & 1 == 0 { -1.0 } else { 1.0 },
+                            if corner & 2 == 0 { -1.0 } else { 1.0 },
+                            if corner & 4 == 0 { -1.0 } else { 1.0 },
+                        );
+                        bounds = bounds.grow(p.transform.point(*center + s * *radius));
+                    }
+                }
+            }
+        }
+        let tolerance = SPHERE_TOLERANCE * bounds.diagonal();
+        let mut mesh = Mesh::default();
+        let mut objects = Vec::with_capacity(parts.len());
+        for PlacedPart { part, transform } in parts {
+            let local = match part.geometry {
+                Geometry::Mesh(m) => m,
+                Geometry::Sphere {
+                    center,
+                    radius,
+                    subdivisions,
+                } => {
+                    // The world radius is at most the largest axis scale times the radius.
+                    let world_radius = radius
+                        * transform
+                            .matrix
+                            .to_scale_rotation_translation()
+                            .0
+                            .abs()
+                            .max_element();
+                    let level = subdivisions
+                        .unwrap_or_else(|| shape::sphere_subdivisions_for(world_radius, tolerance));
+                    shape::sphere(center, radius, level).map_err(|p| SceneError::Shape {
+                        path: self.path.clone(),
+                        line: part.line.unwrap_or(1),
+                        object: part.name.clone(),
+                        problem: p,
+                    })?
+                }
+            };
+            self.push(
+                &mut mesh,
+                &mut objects,
+                part.name,
+                part.line,
+                local,
+                &transform,
+                part.material,
+                part.emission,
+            )?;
+        }
+        if mesh.triangles.is_empty() {
+            return Err(SceneError::EmptyScene { path: self.path });
+        }
+        if objects
+            .iter()
+            .all(|o: &Object| o.emission.max_element() <= 0.0)
+        {
+            self.warnings.push(Warning::NoEmitters {
+                path: self.path.clone(),
+            });
+        }
+        Ok((
+            Scene::assemble(self.path, mesh, self.materials, objects, camera),
+            self.warnings,
+        ))
+    }
+
+    /// Appends one object: transforms it, checks every number, drops degenerate triangles.
+    #[allow(clippy::too_many_arguments)]
+    fn push(
+        &mut self,
+        mesh: &mut Mesh,
+        objects: &mut Vec<Object>,
+        name: String,
+        line: Option<usize>,
+        local: ShapeMesh,
+        transform: &Transform,
+        material: u32,
+        emission: Rgb,
+    ) -> Result<(), SceneError> {
+        let base = mesh.positions.len() as u32;
+        let tri_start = mesh.triangles.len() as u32;
+        for (index, p) in local.positions.iter().enumerate() {
+            let q = transform.point(*p);
+            if let Some(value) = p
+                .to_array()
+                .into_iter()
+                .chain(q.to_array())
+                .find(|c| !c.is_finite())
+            {
+                return Err(SceneError::NonFinite {
+                    path: self.path.clone(),
+                    line,
+                    object: name,
+                    what: "vertex",
+                    index,
+                    value,
+                });
+            }
+            mesh.positions.push(q);
+        }
+        let normal_base = mesh.normals.len() as u32;
+        let smooth = !local.normal_indices.is_empty();
+        mesh.normals
+            .extend(local.normals.iter().map(|n| transform.normal(*n)));
+        let object = objects.len() as u32;
+        let (mut dropped, mut first) = (0, 0);
+        for (i, tri) in local.triangles.iter().enumerate() {
+            let mut t = tri.map(|v| v + base);
+            let mut nt = if smooth {
+                local.normal_indices[i].map(|n| n + normal_base)
+            } else {
+                [0; 3]
+            };
+            if transform.flips {
+                t.swap(1, 2);
+                nt.swap(1, 2);
+            }
+            let Some((twice_area, n)) = triangle_normal(t.map(|v| mesh.positions[v as usize]))
+            else {
+                if dropped == 0 {
+                    first = i;
+                }
+                dropped += 1;
+                continue;
+            };
+            let n = n.as_vec3();
+            if !smooth {
+                nt = [mesh.normals.len() as u32; 3];
+                mesh.normals.push(n);
+            }
+            mesh.triangles.push(t);
+            mesh.normal_indices.push(nt);
+            mesh.geometric_normals.push(n);
+            mesh.areas.push((0.5 * twice_area) as f32);
+            mesh.triangle_object.push(object);
+        }
+        let kept = mesh.triangles.len() as u32 - tri_start;
+        if kept == 0 {
+            return Err(SceneError::DegenerateObject {
+                path: self.path.clone(),
+                line,
+                object: name,
+                triangles: local.triangles.len(),
+            });
+        }
+        if dropped > 0 {
+            self.warnings.push(Warning::DegenerateTriangles {
+                path: self.path.clone(),
+                object: name.clone(),
+                dropped,
+                first,
+            });
+        }
+        objects.push(Object {
+            name,
+            material,
+            emission,
+            triangles: tri_start..tri_start + kept,
+            vertices: base..mesh.positions.len() as u32,
+        });
+        Ok(())
+    }
+}

@@ -1,0 +1,315 @@
+//! The runtime scene: indexed triangle mesh, materials, objects, emitters, camera and the BVH,
+//! with the ray queries every pass uses. Built only by [`crate::load`], so its data is valid.
+
+use std::ops::Range;
+use std::path::PathBuf;
+
+use glam::{Vec2, Vec3};
+use rayon::prelude::*;
+use twopass_brdf::{Material, Rgb};
+
+use crate::accel::{Accel, Ray, SHADOW_EPSILON, SurfacePoint, TriangleHit};
+use crate::camera::Camera;
+
+/// An axis-aligned bounding box, scene units.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Bounds {
+    /// Minimum corner.
+    pub min: Vec3,
+    /// Maximum corner.
+    pub max: Vec3,
+}
+
+impl Bounds {
+    /// The empty box (grows with [`Bounds::grow`]).
+    pub const EMPTY: Self = Self {
+        min: Vec3::splat(f32::INFINITY),
+        max: Vec3::splat(f32::NEG_INFINITY),
+    };
+
+    /// The box grown to contain `p`.
+    pub fn grow(self, p: Vec3) -> Self {
+        Self {
+            min: self.min.min(p),
+            max: self.max.max(p),
+        }
+    }
+
+    /// Length of the diagonal (0 for the empty box).
+    pub fn diagonal(&self) -> f32 {
+        if self.min.cmple(self.max).all() {
+            (self.max - self.min).length()
+        } else {
+            0.0
+        }
+    }
+
+    /// The centre.
+    pub fn center(&self) -> Vec3 {
+        (self.min + self.max) * 0.5
+    }
+}
+
+/// The indexed triangle mesh of the whole scene. Vertices are shared within an object, so
+/// quantities stored per vertex (radiosity) are continuous across its triangles.
+#[derive(Debug, Clone, Default)]
+pub struct Mesh {
+    /// Vertex positions, scene units.
+    pub positions: Vec<Vec3>,
+    /// Shading normals (unit), indexed by [`Mesh::normal_indices`].
+    pub normals: Vec<Vec3>,
+    /// Vertex indices of each triangle, counter-clockwise seen from the front.
+    pub triangles: Vec<[u32; 3]>,
+    /// Shading-normal indices of each triangle's corners.
+    pub normal_indices: Vec<[u32; 3]>,
+    /// Unit geometric normal of each triangle (front side by winding).
+    pub geometric_normals: Vec<Vec3>,
+    /// Area of each triangle, scene units squared.
+    pub areas: Vec<f32>,
+    /// Object of each triangle (index into [`Scene::objects`]).
+    pub triangle_object: Vec<u32>,
+}
+
+impl Mesh {
+    /// The three corner positions of triangle `t`.
+    pub fn corners(&self, t: u32) -> [Vec3; 3] {
+        self.triangles[t as usize].map(|i| self.positions[i as usize])
+    }
+
+    /// The interpolated unit shading normal of triangle `t` at barycentrics `b`.
+    pub fn shading_normal(&self, t: u32, b: [f32; 3]) -> Vec3 {
+        let n = self.normal_indices[t as usize].map(|i| self.normals[i as usize]);
+        let s = n[0] * b[0] + n[1] * b[1] + n[2] * b[2];
+        s.try_normalize()
+            .unwrap_or(self.geometric_normals[t as usize])
+    }
+
+    /// The surface point of triangle `t` at barycentrics `b`.
+    pub fn surface_point(&self, t: u32, b: [f32; 3]) -> SurfacePoint {
+        SurfacePoint::on_triangle(self.corners(t), b, self.geometric_normals[t as usize], t)
+    }
+
+    /// A point uniformly distributed over triangle `t` for `u` in [0, 1)^2.
+    pub fn sample_triangle(&self, t: u32, u: Vec2) -> SurfacePoint {
+        let s = u.x.sqrt();
+        let (b1, b2) = (s * (1.0 - u.y), s * u.y);
+        self.surface_point(t, [1.0 - b1 - b2, b1, b2])
+    }
+}
+
+/// A material with its scene name.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SceneMaterial {
+    /// Name in the scene file (MTL materials: `file.obj:name`).
+    pub name: String,
+    /// The validated model parameters.
+    pub material: Material,
+}
+
+/// One object of the scene: a contiguous run of triangles and vertices with one material.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Object {
+    /// Name from the scene file (OBJ groups: `object/group`).
+    pub name: String,
+    /// Index into [`Scene::materials`].
+    pub material: u32,
+    /// Emitted radiance L_e per channel, W/(m^2 sr) in scene units, from the front side (zero
+    /// for non-emitters).
+    pub emission: Rgb,
+    /// Its triangles in [`Mesh::triangles`].
+    pub triangles: Range<u32>,
+    /// Its vertices in [`Mesh::positions`].
+    pub vertices: Range<u32>,
+}
+
+/// An emitting object: a one-sided Lambertian area light of constant radiance.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Emitter {
+    /// Index into [`Scene::objects`].
+    pub object: u32,
+    /// Radiance L_e per channel, W/(m^2 sr) in scene units.
+    pub radiance: Rgb,
+    /// Total area, scene units squared.
+    pub area: f32,
+    /// Emitted power per channel, pi * L_e * area (W in scene units).
+    pub power: Rgb,
+    /// Cumulative triangle areas over the object's triangles, for area sampling.
+    cdf: Vec<f32>,
+}
+
+impl Emitter {
+    /// A point uniformly distributed over the emitter's area (density 1 / `area`), from three
+    /// uniform numbers: `pick` chooses the triangle, `u` the point on it.
+    pub fn sample(&self, scene: &Scene, pick: f32, u: Vec2) -> SurfacePoint {
+        let target = pick * self.area;
+        let i = self
+            .cdf
+            .partition_point(|&c| c <= target)
+            .min(self.cdf.len() - 1);
+        let t = scene.objects[self.object as usize].triangles.start + i as u32;
+        scene.mesh.sample_triangle(t, u)
+    }
+}
+
+/// A closest hit with everything a shader needs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Hit {
+    /// Ray parameter of the hit (a distance for unit directions).
+    pub t: f32,
+    /// The hit point with its normal and error bound.
+    pub point: SurfacePoint,
+    /// Barycentric weights of the triangle's vertices.
+    pub barycentric: [f32; 3],
+    /// Interpolated unit shading normal (same side as the geometric normal).
+    pub shading_normal: Vec3,
+    /// Whether the ray arrived on the front side (against the geometric normal).
+    pub front_face: bool,
+    /// Index into [`Scene::objects`].
+    pub object: u32,
+    /// Index into [`Scene::materials`].
+    pub material: u32,
+}
+
+/// A loaded, validated scene.
+#[derive(Debug)]
+pub struct Scene {
+    /// The file it was loaded from.
+    pub path: PathBuf,
+    /// All geometry.
+    pub mesh: Mesh,
+    /// The material table.
+    pub materials: Vec<SceneMaterial>,
+    /// The objects, in file order.
+    pub objects: Vec<Object>,
+    /// The emitting objects.
+    pub emitters: Vec<Emitter>,
+    /// The camera.
+    pub camera: Camera,
+    /// Bounds of all geometry.
+    pub bounds: Bounds,
+    accel: Accel,
+}
+
+impl Scene {
+    /// Assembles a scene from validated parts and builds its BVH.
+    pub(crate) fn assemble(
+        path: PathBuf,
+        mesh: Mesh,
+        materials: Vec<SceneMaterial>,
+        objects: Vec<Object>,
+        camera: Camera,
+    ) -> Self {
+        let bounds = mesh.positions.iter().fold(Bounds::EMPTY, |b, p| b.grow(*p));
+        let emitters = objects
+            .iter()
+            .enumerate()
+            .filter(|(_, o)| o.emission.max_element() > 0.0)
+            .map(|(i, o)| {
+                let mut acc = 0.0_f64;
+                let cdf: Vec<f32> = o
+                    .triangles
+                    .clone()
+                    .map(|t| {
+                        acc += f64::from(mesh.areas[t as usize]);
+                        acc as f32
+                    })
+                    .collect();
+                let area = acc as f32;
+                Emitter {
+                    object: i as u32,
+                    radiance: o.emission,
+                    area,
+                    power: o.emission * (std::f32::consts::PI * area),
+                    cdf,
+                }
+            })
+            .collect();
+        let accel = Accel::build(&mesh.positions, &mesh.triangles);
+        Self {
+            path,
+            mesh,
+            materials,
+            objects,
+            emitters,
+            camera,
+            bounds,
+            accel,
+        }
+    }
+
+    /// The BVH (build statistics, raw queries).
+    pub fn accel(&self) -> &Accel {
+        &self.accel
+    }
+
+    /// The material of triangle `t`.
+    pub fn material_of(&self, t: u32) -> &Material {
+        let o = &self.objects[self.mesh.triangle_object[t as usize] as usize];
+        &self.materials[o.material as usize].material
+    }
+
+    /// Total area of the scene's surfaces, scene units squared.
+    pub fn total_area(&self) -> f64 {
+        self.mesh.areas.iter().map(|&a| f64::from(a)).sum()
+    }
+
+    fn hit_from(&self, ray: &Ray, h: TriangleHit) -> Hit {
+        let point = self.mesh.surface_point(h.triangle, h.barycentric);
+        let object = self.mesh.triangle_object[h.triangle as usize];
+        let mut shading_normal = self.mesh.shading_normal(h.triangle, h.barycentric);
+        if shading_normal.dot(point.normal) < 0.0 {
+            shading_normal = -shading_normal;
+        }
+        Hit {
+            t: h.t,
+            point,
+            barycentric: h.barycentric,
+            shading_normal,
+            front_face: ray.direction.dot(point.normal) < 0.0,
+            object,
+            material: self.objects[object as usize].material,
+        }
+    }
+
+    /// The closest hit along `ray` with `0 < t < ray.t_max`.
+    pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        self.accel
+            .closest(ray.origin, ray.direction, ray.t_max)
+            .map(|h| self.hit_from(ray, h))
+    }
+
+    /// The closest hit of a ray leaving surface point `from` in `direction`; the origin is
+    /// offset inside, so the ray never hits `from`'s own surface at its start.
+    pub fn intersect_from(&self, from: &SurfacePoint, direction: Vec3) -> Option<Hit> {
+        let ray = Ray::new(from.spawn_origin(direction), direction);
+        self.intersect(&ray)
+    }
+
+    /// Whether anything blocks the segment from surface point `from` to point `to` (a point in
+    /// space, e.g. a light position). The target itself never counts as a blocker.
+    pub fn occluded(&self, from: &SurfacePoint, to: Vec3) -> bool {
+        let o = from.spawn_origin(to - from.position);
+        self.accel.any_hit(o, to - o, 1.0 - SHADOW_EPSILON)
+    }
+
+    /// Whether anything blocks the segment between two surface points (visibility for shadow
+    /// rays to emitter samples and radiosity form factors). Both ends are offset.
+    pub fn occluded_between(&self, from: &SurfacePoint, to: &SurfacePoint) -> bool {
+        let o = from.spawn_origin(to.position - from.position);
+        let t = to.spawn_origin(o - to.position);
+        self.accel.any_hit(o, t - o, 1.0 - SHADOW_EPSILON)
+    }
+
+    /// [`Scene::intersect`] for many rays in parallel (rayon); results in input order.
+    pub fn intersect_batch(&self, rays: &[Ray]) -> Vec<Option<Hit>> {
+        rays.par_iter().map(|r| self.intersect(r)).collect()
+    }
+
+    /// [`Scene::occluded_between`] for many pairs in parallel (rayon); results in input order.
+    pub fn occluded_batch(&self, pairs: &[(SurfacePoint, SurfacePoint)]) -> Vec<bool> {
+        pairs
+            .par_iter()
+            .map(|(a, b)| self.occluded_between(a, b))
+            .collect()
+    }
+}

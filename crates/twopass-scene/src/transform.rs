@@ -1,0 +1,114 @@
+//! Object-to-world transforms: scale, then rotations in order, then translation.
+
+use glam::{Mat3, Mat4, Quat, Vec3};
+
+/// An affine object-to-world transform with its normal matrix.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Transform {
+    /// Point transform.
+    pub matrix: Mat4,
+    /// Normal transform: inverse transpose of the linear part.
+    pub normal: Mat3,
+    /// Whether the transform mirrors (negative determinant): triangle winding is flipped back.
+    pub flips: bool,
+}
+
+impl Default for Transform {
+    fn default() -> Self {
+        Self {
+            matrix: Mat4::IDENTITY,
+            normal: Mat3::IDENTITY,
+            flips: false,
+        }
+    }
+}
+
+impl Transform {
+    /// Builds `T * R_n * ... * R_1 * S`. Rotation axes need not be unit; angles in degrees.
+    /// Fails with a description when a value is not finite, an axis is zero or the scale is 0.
+    pub fn new(scale: Vec3, rotations: &[(Vec3, f32)], translate: Vec3) -> Result<Self, String> {
+        if !scale.is_finite() || !translate.is_finite() {
+            return Err("transform has a NaN or infinite scale or translation".into());
+        }
+        if scale.abs().min_element() == 0.0 {
+            return Err(format!("transform scale {scale} has a zero component"));
+        }
+        let mut rot = Quat::IDENTITY;
+        for &(axis, degrees) in rotations {
+            if !axis.is_finite() || !degrees.is_finite() || axis.length_squared() == 0.0 {
+                return Err(format!(
+                    "rotation axis {axis} by {degrees} degrees is zero or not finite"
+                ));
+            }
+            rot = Quat::from_axis_angle(axis.normalize(), degrees.to_radians()) * rot;
+        }
+        let matrix = Mat4::from_scale_rotation_translation(scale, rot, translate);
+        let linear = Mat3::from_mat4(matrix);
+        let det = linear.determinant();
+        if !(det.is_finite() && det != 0.0) {
+            return Err("transform is singular".into());
+        }
+        Ok(Self {
+            matrix,
+            normal: linear.inverse().transpose(),
+            flips: det < 0.0,
+        })
+    }
+
+    /// Transforms a point.
+    pub fn point(&self, p: Vec3) -> Vec3 {
+        self.matrix.transform_point3(p)
+    }
+
+    /// Transforms a unit normal and renormalizes it.
+    pub fn normal(&self, n: Vec3) -> Vec3 {
+        (self.normal * n).normalize_or_zero()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn order_is_scale_rotate_translate() {
+        let t = Transform::new(
+            Vec3::new(2.0, 1.0, 1.0),
+            &[(Vec3::Y, 90.0)],
+            Vec3::new(0.0, 0.0, 10.0),
+        )
+        .unwrap();
+        // x scaled to 2, rotated +90 deg about y (x -> -z), then moved by +10 z.
+        assert!(t.point(Vec3::X).abs_diff_eq(Vec3::new(0.0, 0.0, 8.0), 1e-5));
+        assert!(!t.flips);
+    }
+
+    #[test]
+    fn rotations_apply_in_order() {
+        let t = Transform::new(Vec3::ONE, &[(Vec3::Z, 90.0), (Vec3::X, 90.0)], Vec3::ZERO).unwrap();
+        // x -> y (about z), then y -> z (about x).
+        assert!(t.point(Vec3::X).abs_diff_eq(Vec3::Z, 1e-6));
+    }
+
+    #[test]
+    fn normals_stay_perpendicular_under_nonuniform_scale() {
+        let t = Transform::new(Vec3::new(1.0, 4.0, 1.0), &[(Vec3::Z, 30.0)], Vec3::ZERO).unwrap();
+        // A plane x + y = 0 has normal (1,1,0)/sqrt2 and contains the tangent (1,-1,0).
+        let n = t.normal(Vec3::new(1.0, 1.0, 0.0).normalize());
+        let tangent = t.point(Vec3::new(1.0, -1.0, 0.0)) - t.point(Vec3::ZERO);
+        assert!(n.dot(tangent).abs() < 1e-5);
+        assert!((n.length() - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn mirroring_and_bad_values() {
+        assert!(
+            Transform::new(Vec3::new(-1.0, 1.0, 1.0), &[], Vec3::ZERO)
+                .unwrap()
+                .flips
+        );
+        assert!(Transform::new(Vec3::new(0.0, 1.0, 1.0), &[], Vec3::ZERO).is_err());
+        assert!(Transform::new(Vec3::ONE, &[(Vec3::ZERO, 10.0)], Vec3::ZERO).is_err());
+        assert!(Transform::new(Vec3::ONE, &[], Vec3::new(f32::NAN, 0.0, 0.0)).is_err());
+    }
+}

@@ -1,0 +1,64 @@
+//! Options shared by every subcommand, and the progress bar they all use.
+
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+
+/// Options every subcommand accepts, so scripts can drive them the same way.
+#[derive(Debug, Clone, Args)]
+pub struct Context {
+    /// Output file, or directory for commands that write several files (created if missing).
+    #[arg(long, short, global = true)]
+    pub output: Option<PathBuf>,
+    /// Image width in pixels, overriding the scene's (alone: keeps the aspect ratio).
+    #[arg(long, global = true, value_parser = clap::value_parser!(u32).range(1..=65536))]
+    pub width: Option<u32>,
+    /// Image height in pixels, overriding the scene's (alone: keeps the aspect ratio).
+    #[arg(long, global = true, value_parser = clap::value_parser!(u32).range(1..=65536))]
+    pub height: Option<u32>,
+    /// Seed of every random sequence; the same seed gives the same result on any thread count.
+    #[arg(long, global = true, default_value_t = 0)]
+    pub seed: u64,
+    /// Worker threads (default: all cores).
+    #[arg(long, global = true, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    pub threads: Option<u32>,
+    /// Print nothing but errors (and the JSON summary with --json).
+    #[arg(long, short, global = true)]
+    pub quiet: bool,
+    /// Print a machine-readable JSON summary on stdout instead of the human report.
+    #[arg(long, global = true)]
+    pub json: bool,
+}
+
+impl Context {
+    /// The output path, or `default` when `--output` was not given.
+    pub fn output_or<'a>(&'a self, default: &'a Path) -> &'a Path {
+        self.output.as_deref().unwrap_or(default)
+    }
+
+    /// Whether human-readable progress and reports should be printed.
+    pub fn chatty(&self) -> bool {
+        !self.quiet && !self.json
+    }
+
+    /// A progress bar of `len` steps labelled `message`: drawn on a terminal, hidden when quiet,
+    /// with `--json`, in CI (`CI` set) or when stderr is not a terminal.
+    pub fn progress(&self, len: u64, message: &str) -> ProgressBar {
+        let visible =
+            self.chatty() && std::env::var_os("CI").is_none() && std::io::stderr().is_terminal();
+        if !visible {
+            return ProgressBar::hidden();
+        }
+        let bar = ProgressBar::new(len).with_message(message.to_owned());
+        bar.set_style(
+            ProgressStyle::with_template(
+                "{msg:>12} [{bar:40}] {pos}/{len} {elapsed_precise} eta {eta}",
+            )
+            .expect("static progress template is valid")
+            .progress_chars("=> "),
+        );
+        bar
+    }
+}

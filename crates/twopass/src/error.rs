@@ -1,0 +1,44 @@
+//! The CLI's error type: everything a subcommand can fail with, each naming its file.
+
+use std::path::PathBuf;
+
+use twopass_scene::SceneError;
+
+/// A failed subcommand. Every variant names the file or input it concerns; the process exits
+/// with code 1 and prints the message on stderr.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum CliError {
+    /// Loading or validating a scene failed.
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    /// Reading or writing a file failed.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file concerned.
+        path: PathBuf,
+        /// The operating system's error.
+        source: std::io::Error,
+    },
+    /// An output could not be encoded (PNG, JSON, ...).
+    #[error("{}: cannot encode: {message}", path.display())]
+    Encode {
+        /// The file that was being written.
+        path: PathBuf,
+        /// What went wrong.
+        message: String,
+    },
+    /// The command's arguments are valid syntax but make no sense together or for this input.
+    #[error("{0}")]
+    Input(String),
+}
+
+impl CliError {
+    /// An I/O error on `path`.
+    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Self::Io {
+            path: path.into(),
+            source,
+        }
+    }
+}

@@ -1,0 +1,150 @@
+//! `twopass info SCENE`: what a scene holds and which passes it requires.
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+use clap::Args;
+use serde::Serialize;
+
+use crate::context::Context;
+use crate::error::CliError;
+use crate::plan::{Plan, lobe_name, plan};
+
+/// Arguments of `twopass info`.
+#[derive(Debug, Args)]
+pub struct InfoArgs {
+    /// Scene file (.toml) or mesh (.obj).
+    pub scene: PathBuf,
+}
+
+#[derive(Serialize)]
+struct EmitterInfo {
+    object: String,
+    /// W/(m^2 sr) per channel.
+    radiance: [f32; 3],
+    /// Scene units squared.
+    area: f32,
+    /// pi * L_e * area per channel.
+    power: [f32; 3],
+}
+
+#[derive(Serialize)]
+struct Info {
+    scene: PathBuf,
+    triangles: usize,
+    vertices: usize,
+    objects: usize,
+    materials_by_type: BTreeMap<String, usize>,
+    emitters: Vec<EmitterInfo>,
+    bounds_min: [f32; 3],
+    bounds_max: [f32; 3],
+    total_area: f64,
+    resolution: [u32; 2],
+    bvh_nodes: usize,
+    bvh_build_ms: f64,
+    plan: Plan,
+    warnings: Vec<String>,
+}
+
+/// Loads the scene and prints its summary (text, or JSON with `--json`).
+pub fn run(args: &InfoArgs, ctx: &Context) -> Result<(), CliError> {
+    let (scene, warnings) = twopass_scene::load(&args.scene)?;
+    let camera = scene.camera.with_resolution(ctx.width, ctx.height);
+    let mut materials_by_type = BTreeMap::new();
+    for m in &scene.materials {
+        let kind = m.material.lobe().map_or("lambert", lobe_name);
+        *materials_by_type.entry(kind.to_owned()).or_insert(0) += 1;
+    }
+    let info = Info {
+        scene: args.scene.clone(),
+        triangles: scene.mesh.triangles.len(),
+        vertices: scene.mesh.positions.len(),
+        objects: scene.objects.len(),
+        materials_by_type,
+        emitters: scene
+            .emitters
+            .iter()
+            .map(|e| EmitterInfo {
+                object: scene.objects[e.object as usize].name.clone(),
+                radiance: e.radiance.to_array(),
+                area: e.area,
+                power: e.power.to_array(),
+            })
+            .collect(),
+        bounds_min: scene.bounds.min.to_array(),
+        bounds_max: scene.bounds.max.to_array(),
+        total_area: scene.total_area(),
+        resolution: [camera.width, camera.height],
+        bvh_nodes: scene.accel().node_count(),
+        bvh_build_ms: scene.accel().build_time().as_secs_f64() * 1e3,
+        plan: plan(&scene),
+        warnings: warnings.iter().map(ToString::to_string).collect(),
+    };
+    if ctx.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&info).expect("info serializes")
+        );
+        return Ok(());
+    }
+    for w in &info.warnings {
+        eprintln!("warning: {w}");
+    }
+    if ctx.quiet {
+        return Ok(());
+    }
+    println!("scene      {}", info.scene.display());
+    println!(
+        "geometry   {} triangles, {} vertices, {} objects, area {:.6e} units^2",
+        info.triangles, info.vertices, info.objects, info.total_area
+    );
+    let kinds: Vec<String> = info
+        .materials_by_type
+        .iter()
+        .map(|(k, n)| format!("{n} {k}"))
+        .collect();
+    println!("materials  {}", kinds.join(", "));
+    println!(
+        "bounds     [{:.1}, {:.1}, {:.1}] to [{:.1}, {:.1}, {:.1}]",
+        info.bounds_min[0],
+        info.bounds_min[1],
+        info.bounds_min[2],
+        info.bounds_max[0],
+        info.bounds_max[1],
+        info.bounds_max[2]
+    );
+    println!(
+        "camera     {} x {} pixels",
+        info.resolution[0], info.resolution[1]
+    );
+    println!(
+        "bvh        {} nodes, built in {:.2} ms",
+        info.bvh_nodes, info.bvh_build_ms
+    );
+    if info.emitters.is_empty() {
+        println!("emitters   none");
+    }
+    for e in &info.emitters {
+        println!(
+            "emitter    {}: radiance ({}, {}, {}) W/(m^2 sr), area {:.6e}, power ({:.6e}, {:.6e}, {:.6e})",
+            e.object,
+            e.radiance[0],
+            e.radiance[1],
+            e.radiance[2],
+            e.area,
+            e.power[0],
+            e.power[1],
+            e.power[2]
+        );
+    }
+    let say = |name: &str, d: &crate::plan::Decision| {
+        println!(
+            "{name} {}: {}",
+            if d.required { "required" } else { "skipped " },
+            d.reason
+        );
+    };
+    say("diffuse pass  ", &info.plan.diffuse);
+    say("specular pass ", &info.plan.specular);
+    Ok(())
+}

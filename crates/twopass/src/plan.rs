@@ -1,0 +1,101 @@
+//! The planner: which passes a scene requires and why, decided before anything is computed.
+
+use serde::Serialize;
+use twopass_brdf::Lobe;
+use twopass_scene::Scene;
+
+/// Whether a pass runs, and the reason in words.
+#[derive(Debug, Clone, Serialize, PartialEq, Eq)]
+pub struct Decision {
+    /// Whether the pass is required.
+    pub required: bool,
+    /// Why (or why not), for the user.
+    pub reason: String,
+}
+
+/// The passes a scene requires.
+#[derive(Debug, Clone, Serialize, PartialEq, Eq)]
+pub struct Plan {
+    /// Radiosity: needed when something reflects diffusely and something emits.
+    pub diffuse: Decision,
+    /// Ray-traced specular terms: needed when a used material has a non-diffuse lobe.
+    pub specular: Decision,
+}
+
+/// Decides the passes from the objects' materials and emission (unused materials don't count).
+pub fn plan(scene: &Scene) -> Plan {
+    let used = || {
+        scene
+            .objects
+            .iter()
+            .map(|o| (o, &scene.materials[o.material as usize]))
+    };
+    let diffuse_objects: Vec<&str> = used()
+        .filter(|(_, m)| m.material.reflects_diffusely())
+        .map(|(o, _)| o.name.as_str())
+        .collect();
+    let emitters = scene.emitters.len();
+    let diffuse = match (diffuse_objects.len(), emitters) {
+        (_, 0) => Decision {
+            required: false,
+            reason: "nothing emits light".into(),
+        },
+        (0, _) => Decision {
+            required: false,
+            reason: "no surface reflects diffusely".into(),
+        },
+        (n, e) => Decision {
+            required: true,
+            reason: format!("{n} diffusely reflecting object(s) lit by {e} emitter(s)"),
+        },
+    };
+    let mut lobes: Vec<String> = used()
+        .filter_map(|(_, m)| {
+            m.material
+                .lobe()
+                .map(|l| format!("{} ({})", m.name, lobe_name(l)))
+        })
+        .collect();
+    lobes.sort();
+    lobes.dedup();
+    let specular = if lobes.is_empty() {
+        Decision {
+            required: false,
+            reason: "every material is purely diffuse".into(),
+        }
+    } else if emitters == 0 {
+        Decision {
+            required: false,
+            reason: "nothing emits light".into(),
+        }
+    } else {
+        Decision {
+            required: true,
+            reason: format!("non-diffuse materials: {}", lobes.join(", ")),
+        }
+    };
+    Plan { diffuse, specular }
+}
+
+/// The scene-file name of a lobe's model.
+pub fn lobe_name(lobe: &Lobe) -> &'static str {
+    match lobe {
+        Lobe::Phong {
+            normalized: false, ..
+        } => "phong",
+        Lobe::Phong {
+            normalized: true, ..
+        } => "phong, normalized",
+        Lobe::BlinnPhong {
+            normalized: false, ..
+        } => "blinn_phong",
+        Lobe::BlinnPhong {
+            normalized: true, ..
+        } => "blinn_phong, normalized",
+        Lobe::CookTorrance { .. } => "cook_torrance",
+        Lobe::Mirror { .. } => "mirror",
+        Lobe::Dielectric { .. } => "dielectric",
+        Lobe::Conductor { .. } => "conductor",
+        _ => "other",
+    }
+}
