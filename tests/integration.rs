@@ -1,1 +1,21 @@
-//! Integration tests.
+//! Cross-crate integration tests: one binary, one link step.
+
+use std::path::{Path, PathBuf};
+
+mod accel;
+mod bad_input;
+mod scenes;
+
+/// A scene under the repository's `scenes/`.
+pub fn scene_path(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../scenes")
+        .join(name)
+}
+
+/// A fixture under `tests/data/`.
+pub fn data(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("data")
+        .join(name)
+}

@@ -7,10 +7,10 @@ use std::time::{Duration, Instant};
 
 use glam::{DVec3, Vec3, Vec3A};
 use obvhs::{
-    BvhBuildParams,
-    cwbvh::{CwBvh, builder::build_cwbvh_from_tris},
+    Boundable, BvhBuildParams,
+    aabb::Aabb,
+    cwbvh::{CwBvh, builder::build_cwbvh},
     ray::{Ray as BvhRay, RayHit},
-    triangle::Triangle,
 };
 
 /// `gamma(n)` of Higham / pbrt: a bound on the relative error of n chained f32 operations.
@@ -191,6 +191,56 @@ impl ShearedRay {
     }
 }
 
+/// obvhs's node test ignores boxes that end before t = 1e-4 in units of the ray direction.
+/// Directions handed to obvhs are scaled by this exact power of two (and t by its inverse), so
+/// that cut-off becomes 1e-4 / 65536 of a direction length: hits that close to the origin are
+/// still found. Power-of-two scaling is exact, so nothing else changes.
+const T_SCALE: f32 = 65536.0;
+const DIR_SCALE: f32 = 1.0 / T_SCALE;
+
+/// Largest inverse direction component: finite, so the slab test never forms 0 * inf.
+const MAX_INVERSE: f32 = 1e20;
+
+/// Relative padding of primitive bounds: obvhs's slab test can round a ray that passes exactly
+/// through a box's corner or edge (a triangle vertex on the box face) to a miss. Boxes grow by
+/// this fraction of the scene's extent, far above the few ulps of rounding.
+const BOX_PADDING: f32 = 1e-5;
+
+/// A triangle as the BVH builder sees it: its bounds, padded.
+struct Padded {
+    aabb: Aabb,
+}
+
+impl Boundable for Padded {
+    fn aabb(&self) -> Aabb {
+        self.aabb
+    }
+}
+
+/// The ray as obvhs traverses it: direction scaled by [`DIR_SCALE`] and the exact inverse
+/// direction (obvhs's own constructor clamps components below f32::EPSILON, which would cull
+/// boxes wrongly for the scaled direction). Negative zeros become positive: the node test
+/// orders each slab by `direction < 0` while a -0.0 component has a negative inverse, and the
+/// mismatch culls every box (an axis-aligned ray such as `-Vec3::Z` would hit nothing).
+fn bvh_ray(origin: Vec3, direction: Vec3, t_max: f32) -> BvhRay {
+    let d = Vec3A::from(direction) * DIR_SCALE + Vec3A::ZERO;
+    let inv = |x: f32| {
+        let i = 1.0 / x;
+        if i.abs() > MAX_INVERSE {
+            MAX_INVERSE.copysign(x)
+        } else {
+            i
+        }
+    };
+    BvhRay {
+        origin: origin.into(),
+        direction: d,
+        inv_direction: Vec3A::new(inv(d.x), inv(d.y), inv(d.z)),
+        tmin: 0.0,
+        tmax: t_max * T_SCALE,
+    }
+}
+
 /// The result of a closest-hit query: which triangle, where along the ray, barycentrics.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TriangleHit {
@@ -225,7 +275,7 @@ impl std::fmt::Debug for Accel {
 impl Accel {
     /// Builds the BVH over `triangles` (vertex indices into `positions`) with obvhs's
     /// `medium_build` preset. Triangles must be valid (finite, non-degenerate), as the loader
-    /// guarantees.
+    /// guarantees; an empty list gives an accelerator that hits nothing.
     pub fn build(positions: &[Vec3], triangles: &[[u32; 3]]) -> Self {
         Self::build_with(positions, triangles, BvhBuildParams::medium_build())
     }
@@ -233,23 +283,32 @@ impl Accel {
     /// Builds the BVH with explicit obvhs build parameters.
     pub fn build_with(positions: &[Vec3], triangles: &[[u32; 3]], params: BvhBuildParams) -> Self {
         let start = Instant::now();
-        let input: Vec<Triangle> = triangles
+        let corners: Vec<[Vec3A; 3]> = triangles
             .iter()
-            .map(|t| Triangle {
-                v0: positions[t[0] as usize].into(),
-                v1: positions[t[1] as usize].into(),
-                v2: positions[t[2] as usize].into(),
+            .map(|t| t.map(|i| Vec3A::from(positions[i as usize])))
+            .collect();
+        let (lo, hi) = corners.iter().flatten().fold(
+            (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY)),
+            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+        );
+        let extent = if corners.is_empty() {
+            0.0
+        } else {
+            (hi - lo).length() + lo.abs().max(hi.abs()).max_element()
+        };
+        let pad = Vec3A::splat(BOX_PADDING * extent);
+        let boxes: Vec<Padded> = corners
+            .iter()
+            .map(|c| Padded {
+                aabb: Aabb {
+                    min: c[0].min(c[1]).min(c[2]) - pad,
+                    max: c[0].max(c[1]).max(c[2]) + pad,
+                },
             })
             .collect();
-        let bvh = build_cwbvh_from_tris(&input, params, &mut Duration::default());
+        let bvh = build_cwbvh(&boxes, params, &mut Duration::default());
         let ids = bvh.primitive_indices.clone();
-        let tris = ids
-            .iter()
-            .map(|&i| {
-                let t = &input[i as usize];
-                [t.v0, t.v1, t.v2]
-            })
-            .collect();
+        let tris = ids.iter().map(|&i| corners[i as usize]).collect();
         Self {
             bvh,
             tris,
@@ -270,14 +329,18 @@ impl Accel {
 
     /// The closest hit with `0 < t < t_max`, if any.
     pub fn closest(&self, origin: Vec3, direction: Vec3, t_max: f32) -> Option<TriangleHit> {
+        if self.tris.is_empty() {
+            return None;
+        }
         let sheared = ShearedRay::new(origin, direction);
-        let ray = BvhRay::new(origin.into(), direction.into(), 0.0, t_max);
         let mut hit = RayHit::none();
-        let found = self.bvh.ray_traverse(ray, &mut hit, |r, slot| {
-            sheared
-                .intersect(&self.tris[slot], r.tmax)
-                .map_or(f32::INFINITY, |(t, _)| t)
-        });
+        let found =
+            self.bvh
+                .ray_traverse(bvh_ray(origin, direction, t_max), &mut hit, |r, slot| {
+                    sheared
+                        .intersect(&self.tris[slot], r.tmax * DIR_SCALE)
+                        .map_or(f32::INFINITY, |(t, _)| t * T_SCALE)
+                });
         if !found {
             return None;
         }
@@ -293,13 +356,17 @@ impl Accel {
 
     /// Whether anything is hit with `0 < t < t_max`; stops at the first hit found.
     pub fn any_hit(&self, origin: Vec3, direction: Vec3, t_max: f32) -> bool {
+        if self.tris.is_empty() {
+            return false;
+        }
         let sheared = ShearedRay::new(origin, direction);
-        let ray = BvhRay::new(origin.into(), direction.into(), 0.0, t_max);
-        !self.bvh.ray_traverse_miss(ray, |r, slot| {
-            sheared
-                .intersect(&self.tris[slot], r.tmax)
-                .map_or(f32::INFINITY, |(t, _)| t)
-        })
+        !self
+            .bvh
+            .ray_traverse_miss(bvh_ray(origin, direction, t_max), |r, slot| {
+                sheared
+                    .intersect(&self.tris[slot], r.tmax * DIR_SCALE)
+                    .map_or(f32::INFINITY, |(t, _)| t * T_SCALE)
+            })
     }
 
     /// Reference answer by testing every triangle, O(n): the oracle for BVH tests.

@@ -52,7 +52,9 @@ pub fn load(path: impl AsRef<Path>) -> Result<(Scene, Vec<Warning>), SceneError>
 /// its folder; errors name it).
 pub fn load_toml(text: &str, path: &Path) -> Result<(Scene, Vec<Warning>), SceneError> {
     let file: SceneFile = toml::from_str(text).map_err(|e| {
-        let (line, column) = e.span().map_or((1, 1), |s| line_col(text, s.start));
+        let start = e.span().map_or(0, |s| s.start);
+        let start = unknown_key_offset(text, start, e.message()).unwrap_or(start);
+        let (line, column) = line_col(text, start);
         SceneError::Toml {
             path: path.to_owned(),
             line,
@@ -226,6 +228,21 @@ struct Loader<'a> {
     materials: Vec<SceneMaterial>,
     material_ids: HashMap<String, u32>,
     used: Vec<bool>,
+}
+
+/// For "unknown field `k`" inside a typed table (whose span covers the whole table), the offset
+/// of the key `k` itself at or after `from`, so the error points at the offending line.
+fn unknown_key_offset(text: &str, from: usize, message: &str) -> Option<usize> {
+    let key = message.strip_prefix("unknown field `")?.split('`').next()?;
+    let rest = text.get(from..)?;
+    rest.match_indices(key)
+        .find(|&(i, _)| {
+            let before = rest[..i].chars().next_back();
+            let after = rest[i + key.len()..].trim_start();
+            before.is_none_or(|c| c.is_whitespace() || c == '{' || c == ',')
+                && after.starts_with('=')
+        })
+        .map(|(i, _)| from + i)
 }
 
 fn line_col(text: &str, offset: usize) -> (usize, usize) {
@@ -465,8 +482,8 @@ impl Loader<'_> {
             ShapeDesc::Obj { file } => {
                 let obj_path = self.path.parent().unwrap_or(Path::new(".")).join(file);
                 let loaded = obj::load(&obj_path)?;
-                let needs_mtl = o.material.is_none()
-                    && loaded.models.iter().any(|m| m.material.is_some())
+                let needs_mtl = (o.material.is_none()
+                    && (!loaded.mtllibs.is_empty() || loaded.models.iter().any(|m| m.material.is_some())))
                     || !o.material_map.is_empty();
                 let mtl = match (&loaded.materials, needs_mtl) {
                     (Ok(m), _) => self.mtl_materials(m, &obj_path)?,

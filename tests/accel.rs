@@ -1,0 +1,211 @@
+//! The BVH answers exactly what testing every triangle answers; spawned rays never re-hit their
+//! own surface; rays cannot slip between the triangles of a closed mesh.
+
+use glam::{Vec2, Vec3};
+use rand::Rng;
+use twopass_scene::workload::{self, rng};
+use twopass_scene::{Accel, Ray, Scene, load, load_toml};
+
+use crate::scene_path;
+
+/// Random directions, uniform on the sphere.
+fn random_dir(r: &mut impl Rng) -> Vec3 {
+    let z = 2.0 * r.random::<f32>() - 1.0;
+    let phi = std::f32::consts::TAU * r.random::<f32>();
+    let s = (1.0 - z * z).max(0.0).sqrt();
+    Vec3::new(s * phi.cos(), s * phi.sin(), z)
+}
+
+/// Rays of every awkward kind: random in the bounds, leaving surfaces, and aimed exactly at
+/// shared vertices and edge midpoints.
+fn awkward_rays(scene: &Scene, n: usize, seed: u64) -> Vec<Ray> {
+    let mut r = rng(seed);
+    let (lo, hi) = (scene.bounds.min, scene.bounds.max);
+    let mut rays: Vec<Ray> = (0..n)
+        .map(|_| {
+            let o = lo + (hi - lo) * Vec3::new(r.random(), r.random(), r.random());
+            Ray::new(o, random_dir(&mut r))
+        })
+        .collect();
+    rays.extend(workload::incoherent_rays(scene, n, seed + 1));
+    rays.extend(workload::camera_rays(scene).into_iter().step_by(97));
+    // Axis-aligned rays, with negative zeros in their other components (as `-Vec3::Z` has).
+    for axis in [Vec3::X, Vec3::Y, Vec3::Z, -Vec3::X, -Vec3::Y, -Vec3::Z] {
+        for _ in 0..n / 20 {
+            let o = lo + (hi - lo) * Vec3::new(r.random(), r.random(), r.random());
+            rays.push(Ray::new(o, axis));
+        }
+    }
+    let m = &scene.mesh;
+    for _ in 0..n {
+        let t = m.triangles[r.random_range(0..m.triangles.len())];
+        let [a, b] = [t[0], t[1]].map(|i| m.positions[i as usize]);
+        let target = if r.random::<bool>() { a } else { (a + b) * 0.5 };
+        let o = lo + (hi - lo) * Vec3::new(r.random(), r.random(), r.random());
+        if (target - o).length() > 1e-3 {
+            rays.push(Ray::new(o, (target - o).normalize()));
+        }
+    }
+    rays
+}
+
+fn assert_bvh_equals_brute_force(scene: &Scene, rays: &[Ray]) {
+    let m = &scene.mesh;
+    for ray in rays {
+        let fast = scene.accel().closest(ray.origin, ray.direction, ray.t_max);
+        let slow = Accel::closest_brute_force(
+            &m.positions,
+            &m.triangles,
+            ray.origin,
+            ray.direction,
+            ray.t_max,
+        );
+        match (fast, slow) {
+            (None, None) => {}
+            (Some(f), Some(s)) => {
+                // Same distance to the last bit but for ties between triangles sharing the point.
+                assert!(
+                    f.t == s.t || (f.t - s.t).abs() <= 1e-6 * s.t,
+                    "{ray:?}: bvh t {} vs {}",
+                    f.t,
+                    s.t
+                );
+                if f.triangle != s.triangle {
+                    // A tie at a shared edge or vertex: the BVH's triangle is hit there too.
+                    let own = [m.triangles[f.triangle as usize]];
+                    let alone = Accel::closest_brute_force(
+                        &m.positions,
+                        &own,
+                        ray.origin,
+                        ray.direction,
+                        ray.t_max,
+                    );
+                    assert!(
+                        alone.is_some_and(|a| (a.t - s.t).abs() <= 1e-6 * s.t),
+                        "{ray:?}: {f:?} is no tie with {s:?}"
+                    );
+                }
+            }
+            (f, s) => panic!("{ray:?}: bvh {f:?} vs brute force {s:?}"),
+        }
+        // Occlusion agrees with the closest hit.
+        let blocked = scene.accel().any_hit(ray.origin, ray.direction, ray.t_max);
+        assert_eq!(blocked, slow.is_some(), "{ray:?}");
+        if let Some(s) = slow {
+            assert!(
+                !scene
+                    .accel()
+                    .any_hit(ray.origin, ray.direction, s.t * (1.0 - 1e-4))
+                    || s.t < 1e-3
+            );
+        }
+    }
+}
+
+#[test]
+fn bvh_equals_brute_force_on_the_cornell_scenes() {
+    for name in [
+        "cornell-box.toml",
+        "cornell-spheres.toml",
+        "cornell-materials.toml",
+    ] {
+        let (scene, _) = load(scene_path(name)).unwrap();
+        assert_bvh_equals_brute_force(&scene, &awkward_rays(&scene, 700, 7));
+    }
+}
+
+#[test]
+fn bvh_equals_brute_force_on_a_generated_scene() {
+    let (scene, _) = workload::synthetic_scene(30_000, 3).unwrap();
+    assert!(scene.mesh.triangles.len() >= 30_000);
+    assert_bvh_equals_brute_force(&scene, &awkward_rays(&scene, 150, 11));
+}
+
+#[test]
+fn spawned_rays_never_rehit_their_own_surface() {
+    let (scene, _) = load(scene_path("cornell-spheres.toml")).unwrap();
+    let m = &scene.mesh;
+    let mut r = rng(5);
+    let coplanar = |a: u32, b: u32| {
+        let (na, nb) = (
+            m.geometric_normals[a as usize],
+            m.geometric_normals[b as usize],
+        );
+        let (pa, pb) = (m.corners(a)[0], m.corners(b)[0]);
+        na.dot(nb).abs() > 1.0 - 1e-6 && (na.dot(pb - pa)).abs() < 1e-3
+    };
+    for i in 0..20_000 {
+        let t = r.random_range(0..m.triangles.len()) as u32;
+        let p = m.sample_triangle(t, Vec2::new(r.random(), r.random()));
+        // Both sides, including directions within a hair of the surface.
+        let mut d = random_dir(&mut r);
+        if i % 4 == 0 {
+            d = (d - p.normal * d.dot(p.normal) * 0.999_99).normalize();
+        }
+        if let Some(hit) = scene.intersect_from(&p, d) {
+            assert!(
+                hit.point.triangle != t,
+                "ray {i} re-hit its own triangle {t} at t = {}",
+                hit.t
+            );
+            assert!(
+                !coplanar(hit.point.triangle, t),
+                "ray {i} hit a coplanar neighbour at t = {}",
+                hit.t
+            );
+        }
+        // A point on a surface sees itself unoccluded.
+        let q = m.sample_triangle(t, Vec2::new(r.random(), r.random()));
+        assert!(
+            !scene.occluded_between(&p, &q) || !coplanar(t, t),
+            "point to point on one triangle"
+        );
+    }
+}
+
+#[test]
+fn rays_from_inside_a_closed_mesh_never_escape() {
+    // An icosphere has shared vertices and edges everywhere: aim exactly at them.
+    let text = "version = 1\n[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\nfov_y = 40\n\
+                [[material]]\nname = \"w\"\ntype = \"lambert\"\ndiffuse = 0.5\n\
+                [[object]]\nname = \"s\"\nmaterial = \"w\"\nshape = { type = \"sphere\", center = [0.1, -0.2, 0.3], radius = 1.7, subdivisions = 4 }\n";
+    let (scene, _) = load_toml(text, std::path::Path::new("sphere.toml")).unwrap();
+    let m = &scene.mesh;
+    let mut r = rng(9);
+    let mut targets: Vec<Vec3> = m.positions.clone();
+    for t in &m.triangles {
+        for k in 0..3 {
+            targets.push((m.positions[t[k] as usize] + m.positions[t[(k + 1) % 3] as usize]) * 0.5);
+        }
+    }
+    for (i, target) in targets.iter().enumerate() {
+        let o = Vec3::new(0.1, -0.2, 0.3) + random_dir(&mut r) * r.random::<f32>() * 0.5;
+        let d = (*target - o).normalize();
+        assert!(
+            scene.intersect(&Ray::new(o, d)).is_some(),
+            "ray {i} to {target} escaped"
+        );
+    }
+}
+
+#[test]
+fn batch_queries_equal_single_queries() {
+    let (scene, _) = load(scene_path("cornell-box.toml")).unwrap();
+    let rays = workload::incoherent_rays(&scene, 5000, 1);
+    let batch = scene.intersect_batch(&rays);
+    for (ray, b) in rays.iter().zip(&batch) {
+        assert_eq!(*b, scene.intersect(ray));
+    }
+    let pairs = workload::occlusion_pairs(&scene, 5000, 2);
+    let blocked = scene.occluded_batch(&pairs);
+    for ((a, b), o) in pairs.iter().zip(&blocked) {
+        assert_eq!(*o, scene.occluded_between(a, b));
+    }
+    // Some pairs are blocked by the blocks, most see the light.
+    let n = blocked.iter().filter(|&&b| b).count();
+    assert!(
+        n > 0 && n < pairs.len() / 2,
+        "{n} of {} blocked",
+        pairs.len()
+    );
+}
