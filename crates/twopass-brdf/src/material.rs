@@ -1,6 +1,15 @@
 //! Materials: a diffuse part (what radiosity reads), an optional non-diffuse lobe (what the ray
 //! tracer adds) and the ambient coefficient of the Phong shading form.
 
+use glam::{Vec2, Vec3};
+
+use crate::blinn_phong::BlinnPhong;
+use crate::cook_torrance::CookTorrance;
+use crate::delta::DeltaLobe;
+use crate::lambert::Lambert;
+use crate::model::{Brdf, BrdfModel, BrdfSample};
+use crate::modified_phong::ModifiedPhong;
+use crate::phong::Phong;
 use crate::{ComplexIor, ParamError, Rgb};
 
 /// Parameters of a Phong material (Phong 1975), as published or normalized.
@@ -124,21 +133,25 @@ fn check_rgb(
     ok: impl Fn(f32) -> bool,
     expected: &'static str,
 ) -> Result<(), ParamError> {
-    match v.to_array().into_iter().find(|&c| !(c.is_finite() && ok(c))) {
+    match v
+        .to_array()
+        .into_iter()
+        .find(|&c| !(c.is_finite() && ok(c)))
+    {
         Some(c) => Err(ParamError::new(name, c.into(), expected)),
         None => Ok(()),
     }
 }
 
-fn check_diffuse(v: Rgb) -> Result<(), ParamError> {
+pub(crate) fn check_diffuse(v: Rgb) -> Result<(), ParamError> {
     check_rgb("diffuse", v, |c| (0.0..1.0).contains(&c), "in [0, 1)")
 }
 
-fn check_unit(name: &'static str, v: Rgb) -> Result<(), ParamError> {
+pub(crate) fn check_unit(name: &'static str, v: Rgb) -> Result<(), ParamError> {
     check_rgb(name, v, |c| (0.0..=1.0).contains(&c), "in [0, 1]")
 }
 
-fn check_exponent(n: f32) -> Result<(), ParamError> {
+pub(crate) fn check_exponent(n: f32) -> Result<(), ParamError> {
     if n.is_finite() && (0.0..=EXPONENT_MAX).contains(&n) {
         Ok(())
     } else {
@@ -147,7 +160,7 @@ fn check_exponent(n: f32) -> Result<(), ParamError> {
 }
 
 /// A plausible model must not reflect more than it receives: diffuse + specular <= 1.
-fn check_sum(diffuse: Rgb, specular: Rgb) -> Result<(), ParamError> {
+pub(crate) fn check_sum(diffuse: Rgb, specular: Rgb) -> Result<(), ParamError> {
     let sum = diffuse + specular;
     check_rgb(
         "specular",
@@ -236,22 +249,22 @@ impl Material {
     /// A perfect mirror of per-channel `reflectance` in [0, 1].
     pub fn mirror(reflectance: Rgb) -> Result<Self, ParamError> {
         check_unit("reflectance", reflectance)?;
-        Ok(Self::delta(Lobe::Mirror { reflectance }))
+        Ok(Self::with_delta(Lobe::Mirror { reflectance }))
     }
 
     /// A smooth dielectric of real relative index `ior` (finite, > 0).
     pub fn dielectric(ior: f32) -> Result<Self, ParamError> {
         ComplexIor::dielectric(ior)?;
-        Ok(Self::delta(Lobe::Dielectric { ior }))
+        Ok(Self::with_delta(Lobe::Dielectric { ior }))
     }
 
     /// A smooth conductor of complex index `ior`.
     pub fn conductor(ior: ComplexIor) -> Result<Self, ParamError> {
         let ior = ComplexIor::new(ior.n, ior.k)?;
-        Ok(Self::delta(Lobe::Conductor { ior }))
+        Ok(Self::with_delta(Lobe::Conductor { ior }))
     }
 
-    fn delta(lobe: Lobe) -> Self {
+    fn with_delta(lobe: Lobe) -> Self {
         Self {
             diffuse: Rgb::ZERO,
             ambient: Rgb::ZERO,
@@ -289,4 +302,123 @@ impl Material {
 
 fn nonzero(v: Rgb) -> bool {
     v.max_element() > 0.0
+}
+
+impl Lobe {
+    /// Whether the lobe is a delta lobe (mirror, smooth dielectric, smooth conductor), followed
+    /// by the Whitted tracer rather than evaluated against emitters.
+    pub fn is_delta(&self) -> bool {
+        matches!(
+            self,
+            Lobe::Mirror { .. } | Lobe::Dielectric { .. } | Lobe::Conductor { .. }
+        )
+    }
+
+    /// The glossy lobe alone as a BRDF (no diffuse part), or `None` for a delta lobe.
+    pub fn glossy(&self) -> Option<BrdfModel> {
+        self.model_with(Rgb::ZERO)
+    }
+
+    /// The delta lobe, or `None` for a glossy lobe.
+    pub fn delta(&self) -> Option<DeltaLobe> {
+        match *self {
+            Lobe::Mirror { reflectance } => Some(DeltaLobe::Mirror { reflectance }),
+            Lobe::Dielectric { ior } => Some(DeltaLobe::Dielectric { eta: ior }),
+            Lobe::Conductor { ior } => Some(DeltaLobe::Conductor { ior }),
+            _ => None,
+        }
+    }
+
+    /// The lobe plus a Lambertian part of reflectance `rho` as one BRDF (parameters were
+    /// validated by the material constructors).
+    fn model_with(&self, rho: Rgb) -> Option<BrdfModel> {
+        Some(match *self {
+            Lobe::Phong {
+                specular,
+                exponent,
+                normalized: false,
+            } => BrdfModel::Phong(Phong::new_unchecked(rho, specular, exponent)),
+            Lobe::Phong {
+                specular,
+                exponent,
+                normalized: true,
+            } => BrdfModel::ModifiedPhong(ModifiedPhong::new_unchecked(rho, specular, exponent)),
+            Lobe::BlinnPhong {
+                specular,
+                exponent,
+                normalized,
+            } => BrdfModel::BlinnPhong(BlinnPhong::new_unchecked(
+                rho, specular, exponent, normalized,
+            )),
+            Lobe::CookTorrance {
+                specular,
+                roughness,
+                ior,
+                fresnel,
+            } => BrdfModel::CookTorrance(CookTorrance::new_unchecked(
+                rho, specular, roughness, ior, fresnel,
+            )),
+            Lobe::Mirror { .. } | Lobe::Dielectric { .. } | Lobe::Conductor { .. } => return None,
+        })
+    }
+}
+
+/// Rendering with a material. Directions are local (+z = normal); values in 1/sr without the
+/// cosine, as for [`Brdf`]. The hybrid renderer adds only [`Material::eval_non_diffuse`] on top
+/// of radiosity, which already holds [`Material::eval_diffuse`]; a path tracer uses
+/// [`Material::sample`] and [`Material::eval`] for the whole material.
+impl Material {
+    /// The whole non-delta BRDF (diffuse part plus glossy lobe), or `None` for a material whose
+    /// lobe is a delta lobe.
+    pub fn model(&self) -> Option<BrdfModel> {
+        match &self.lobe {
+            None => Some(BrdfModel::Lambert(Lambert::new_unchecked(self.diffuse))),
+            Some(l) => l.model_with(self.diffuse),
+        }
+    }
+
+    /// The delta lobe, if the material has one.
+    pub fn delta(&self) -> Option<DeltaLobe> {
+        self.lobe.as_ref().and_then(Lobe::delta)
+    }
+
+    /// The diffuse part rho / pi (1/sr); zero below the horizon.
+    pub fn eval_diffuse(&self, wo: Vec3, wi: Vec3) -> Rgb {
+        Lambert::new_unchecked(self.diffuse).eval(wo, wi)
+    }
+
+    /// The non-diffuse glossy part (1/sr): the lobe without the diffuse term; zero for Lambert
+    /// and for delta lobes (which are followed with [`Material::delta`], not evaluated).
+    pub fn eval_non_diffuse(&self, wo: Vec3, wi: Vec3) -> Rgb {
+        match self.lobe.as_ref().and_then(Lobe::glossy) {
+            Some(m) => m.eval(wo, wi),
+            None => Rgb::ZERO,
+        }
+    }
+
+    /// The whole BRDF value, diffuse plus glossy (1/sr); delta lobes contribute nothing here.
+    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
+        match self.model() {
+            Some(m) => m.eval(wo, wi),
+            None => self.eval_diffuse(wo, wi),
+        }
+    }
+
+    /// Samples the whole material: the diffuse/glossy mixture, or the delta lobe (whose sample
+    /// `pdf` is a branch probability, see [`crate::SampleKind::is_delta`]).
+    pub fn sample(&self, wo: Vec3, u: Vec2) -> Option<BrdfSample> {
+        match self.delta() {
+            Some(d) => d.sample(wo, u),
+            None => self.model()?.sample(wo, u),
+        }
+    }
+
+    /// Solid-angle density of [`Material::sample`] for non-delta materials (1/sr); zero for
+    /// delta materials, whose directions have no density.
+    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        match self.model() {
+            Some(m) if self.delta().is_none() => m.pdf(wo, wi),
+            _ => 0.0,
+        }
+    }
 }
