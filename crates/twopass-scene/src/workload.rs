@@ -116,8 +116,9 @@ pub fn occlusion_pairs(
 /// Triangles of one generated sphere (icosphere level 4).
 const SPHERE_TRIANGLES: usize = 20 * 4usize.pow(4);
 
-/// A scene file (TOML text) of at least `triangles` triangles: an empty Cornell room filled
-/// with a jittered grid of level-4 icospheres of varied sizes. Deterministic for a `seed`.
+/// A scene file (TOML text) of at least `triangles` triangles: the Cornell room (five walls
+/// facing in, open toward the camera) filled with a jittered grid of level-4 icospheres of
+/// varied sizes. Deterministic for a `seed`.
 pub fn synthetic_scene_toml(triangles: usize, seed: u64) -> String {
     let spheres = triangles.div_ceil(SPHERE_TRIANGLES).max(1);
     let per_axis = (spheres as f64).cbrt().ceil() as usize;
@@ -137,11 +138,31 @@ name = "white"
 type = "lambert"
 diffuse = [0.725, 0.71, 0.68]
 
+# The room: five walls facing in, open toward the camera.
 [[object]]
-name = "room"
+name = "floor"
 material = "white"
-shape = { type = "box", min = [0, 0, 0], max = [556, 548.8, 559.2] }
-transform = { scale = [-1, 1, 1], translate = [556, 0, 0] }
+shape = { type = "quad", origin = [0, 0, 0], edge_u = [0, 0, 559.2], edge_v = [556, 0, 0] }
+
+[[object]]
+name = "ceiling"
+material = "white"
+shape = { type = "quad", origin = [0, 548.8, 0], edge_u = [556, 0, 0], edge_v = [0, 0, 559.2] }
+
+[[object]]
+name = "back"
+material = "white"
+shape = { type = "quad", origin = [0, 0, 559.2], edge_u = [0, 548.8, 0], edge_v = [556, 0, 0] }
+
+[[object]]
+name = "left"
+material = "white"
+shape = { type = "quad", origin = [556, 0, 0], edge_u = [0, 0, 559.2], edge_v = [0, 548.8, 0] }
+
+[[object]]
+name = "right"
+material = "white"
+shape = { type = "quad", origin = [0, 0, 0], edge_u = [0, 548.8, 0], edge_v = [0, 0, 559.2] }
 
 [[object]]
 name = "light"
