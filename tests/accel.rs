@@ -120,10 +120,18 @@ fn bvh_equals_brute_force_on_a_generated_scene() {
     assert!(scene.mesh.triangles.len() >= 30_000);
     // The room's walls face in, so rays leaving them stay inside but for the open front.
     let centre = scene.bounds.center();
-    for o in scene.objects.iter().filter(|o| !o.name.starts_with("sphere")) {
+    for o in scene
+        .objects
+        .iter()
+        .filter(|o| !o.name.starts_with("sphere"))
+    {
         let t = o.triangles.start as usize;
         let p = scene.mesh.positions[scene.mesh.triangles[t][0] as usize];
-        assert!(scene.mesh.geometric_normals[t].dot(centre - p) > 0.0, "{} faces out", o.name);
+        assert!(
+            scene.mesh.geometric_normals[t].dot(centre - p) > 0.0,
+            "{} faces out",
+            o.name
+        );
     }
     assert_bvh_equals_brute_force(&scene, &awkward_rays(&scene, 150, 11));
 }

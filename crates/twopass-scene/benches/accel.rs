@@ -14,7 +14,12 @@ fn scenes() -> Vec<(&'static str, Scene)> {
     let cornell = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell-box.toml");
     vec![
         ("cornell-box", load(cornell).expect("cornell box loads").0),
-        ("generated-100k", workload::synthetic_scene(100_000, 0).expect("generated scene loads").0),
+        (
+            "generated-100k",
+            workload::synthetic_scene(100_000, 0)
+                .expect("generated scene loads")
+                .0,
+        ),
     ]
 }
 
@@ -22,19 +27,38 @@ fn queries(c: &mut Criterion) {
     for (name, scene) in scenes() {
         let mut g = c.benchmark_group(name);
         g.throughput(Throughput::Elements(RAYS as u64));
-        let camera: Vec<_> = workload::camera_rays(&scene).into_iter().step_by(16).take(RAYS).collect();
+        let camera: Vec<_> = workload::camera_rays(&scene)
+            .into_iter()
+            .step_by(16)
+            .take(RAYS)
+            .collect();
         g.throughput(Throughput::Elements(camera.len() as u64));
         g.bench_function("camera", |b| {
-            b.iter(|| camera.iter().filter(|r| scene.intersect(black_box(r)).is_some()).count())
+            b.iter(|| {
+                camera
+                    .iter()
+                    .filter(|r| scene.intersect(black_box(r)).is_some())
+                    .count()
+            })
         });
         g.throughput(Throughput::Elements(RAYS as u64));
         let incoherent = workload::incoherent_rays(&scene, RAYS, 1);
         g.bench_function("incoherent", |b| {
-            b.iter(|| incoherent.iter().filter(|r| scene.intersect(black_box(r)).is_some()).count())
+            b.iter(|| {
+                incoherent
+                    .iter()
+                    .filter(|r| scene.intersect(black_box(r)).is_some())
+                    .count()
+            })
         });
         let pairs = workload::occlusion_pairs(&scene, RAYS, 2);
         g.bench_function("occlusion", |b| {
-            b.iter(|| pairs.iter().filter(|(a, p)| scene.occluded_between(black_box(a), p)).count())
+            b.iter(|| {
+                pairs
+                    .iter()
+                    .filter(|(a, p)| scene.occluded_between(black_box(a), p))
+                    .count()
+            })
         });
         g.finish();
     }

@@ -184,7 +184,7 @@ impl ShearedRay {
         let max_e = e0.abs().max(e1.abs()).max(e2.abs());
         let delta_t =
             3.0 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) * inv_det.abs();
-        if t <= delta_t || !(t < t_max) {
+        if t <= delta_t || t >= t_max || t.is_nan() {
             return None;
         }
         Some((t, [e0 * inv_det, e1 * inv_det, e2 * inv_det]))

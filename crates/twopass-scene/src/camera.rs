@@ -45,7 +45,8 @@ impl Camera {
         let forward = view.normalize();
         let right = forward.cross(up);
         // |forward x up| relative to |up|: the sine of the angle between them.
-        if !(right.length() > 1e-6 * up.length()) {
+        let sine = right.length();
+        if sine.is_nan() || sine <= 1e-6 * up.length() {
             return Err(CameraProblem::UpParallelToView);
         }
         let right = right.normalize();

@@ -456,7 +456,7 @@ impl Loader<'_> {
                 radius,
                 subdivisions,
             } => {
-                if !(radius.is_finite() && *radius > 0.0) || !v3(*center).is_finite() {
+                if !(radius.is_finite() && *radius > 0.0 && v3(*center).is_finite()) {
                     return Err(self.shape_err(line, name, format!("sphere radius {radius} must be finite and > 0, centre finite")));
                 }
                 if let Some(s) = subdivisions.filter(|&s| s > shape::MAX_SUBDIVISIONS) {
@@ -568,10 +568,10 @@ impl Loader<'_> {
     }
 
     fn camera(&mut self, c: &Spanned<CameraDesc>) -> Result<Camera, SceneError> {
-        let line = Some(self.line(c));
+        let line = self.line(c);
         let err = |problem| SceneError::Camera {
             path: self.path.clone(),
-            line,
+            line: Some(line),
             problem,
         };
         let d = c.get_ref();
@@ -579,7 +579,7 @@ impl Loader<'_> {
         if w == 0 || h == 0 {
             return Err(SceneError::Toml {
                 path: self.path.clone(),
-                line: line.unwrap_or(1),
+                line,
                 column: 1,
                 message: format!("camera resolution {w} x {h} must be at least 1 x 1"),
             });

@@ -89,6 +89,19 @@ impl Mesh {
         SurfacePoint::on_triangle(self.corners(t), b, self.geometric_normals[t as usize], t)
     }
 
+    /// The surface point of triangle `t` nearest to `position` (projected into the triangle's
+    /// plane, barycentrics from the projection), with its error bound: for points computed
+    /// elsewhere, such as the vertices of a finer mesh over the triangle.
+    pub fn surface_point_at(&self, t: u32, position: Vec3) -> SurfacePoint {
+        let [p0, p1, p2] = self.corners(t).map(|p| p.as_dvec3());
+        let (e1, e2, d) = (p1 - p0, p2 - p0, position.as_dvec3() - p0);
+        let (a, b, c) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+        let (r1, r2) = (d.dot(e1), d.dot(e2));
+        let det = a * c - b * b;
+        let (b1, b2) = ((c * r1 - b * r2) / det, (a * r2 - b * r1) / det);
+        self.surface_point(t, [(1.0 - b1 - b2) as f32, b1 as f32, b2 as f32])
+    }
+
     /// A point uniformly distributed over triangle `t` for `u` in [0, 1)^2.
     pub fn sample_triangle(&self, t: u32, u: Vec2) -> SurfacePoint {
         let s = u.x.sqrt();

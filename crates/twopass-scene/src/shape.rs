@@ -58,7 +58,8 @@ pub fn polygon(vertices: &[Vec3]) -> Result<ShapeMesh, String> {
     let extent = pts
         .iter()
         .fold(0.0_f64, |m, p| m.max((*p - pts[0]).length()));
-    if !(normal.length() > 1e-12 * extent * extent) {
+    let twice_area = normal.length();
+    if twice_area.is_nan() || twice_area <= 1e-12 * extent * extent {
         return Err("polygon has zero area (collinear or repeated vertices)".into());
     }
     let n = normal.normalize();

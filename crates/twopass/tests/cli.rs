@@ -4,7 +4,9 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 fn repo(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").join(rel)
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../..")
+        .join(rel)
 }
 
 fn twopass(args: &[&str]) -> Output {
@@ -19,12 +21,24 @@ fn twopass(args: &[&str]) -> Output {
 fn info_json_describes_the_cornell_box() {
     let scene = repo("scenes/cornell-box.toml");
     let out = twopass(&["info", scene.to_str().unwrap(), "--json", "--width", "256"]);
-    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["triangles"], 32);
-    assert_eq!(v["resolution"], serde_json::json!([256, 256]), "--width alone keeps the aspect");
+    assert_eq!(
+        v["resolution"],
+        serde_json::json!([256, 256]),
+        "--width alone keeps the aspect"
+    );
     assert_eq!(v["plan"]["diffuse"]["required"], true);
-    assert_eq!(v["plan"]["specular"]["required"], false, "an all-Lambertian scene needs no specular pass");
+    assert_eq!(
+        v["plan"]["specular"]["required"], false,
+        "an all-Lambertian scene needs no specular pass"
+    );
     assert_eq!(v["emitters"].as_array().unwrap().len(), 1);
 }
 
@@ -35,7 +49,10 @@ fn specular_pass_is_planned_only_for_non_diffuse_materials() {
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["plan"]["specular"]["required"], true);
     let reason = v["plan"]["specular"]["reason"].as_str().unwrap();
-    assert!(reason.contains("mirror") && reason.contains("glass"), "{reason}");
+    assert!(
+        reason.contains("mirror") && reason.contains("glass"),
+        "{reason}"
+    );
 }
 
 #[test]
@@ -44,7 +61,10 @@ fn bad_input_exits_1_naming_the_file() {
     let out = twopass(&["info", scene.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(1));
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("unknown-material.toml:") && err.contains("chalk"), "{err}");
+    assert!(
+        err.contains("unknown-material.toml:") && err.contains("chalk"),
+        "{err}"
+    );
     assert!(out.stdout.is_empty());
 }
 
@@ -52,14 +72,33 @@ fn bad_input_exits_1_naming_the_file() {
 fn usage_error_exits_2() {
     assert_eq!(twopass(&["info"]).status.code(), Some(2));
     assert_eq!(twopass(&["frobnicate"]).status.code(), Some(2));
-    assert_eq!(twopass(&["info", "x.toml", "--width", "0"]).status.code(), Some(2));
+    assert_eq!(
+        twopass(&["info", "x.toml", "--width", "0"]).status.code(),
+        Some(2)
+    );
 }
 
 #[test]
 fn bench_rays_reports_every_query_kind() {
     let scene = repo("scenes/cornell-box.toml");
-    let out = twopass(&["bench", "rays", scene.to_str().unwrap(), "--json", "--seconds", "0.01", "--rays", "1000", "--width", "32"]);
-    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = twopass(&[
+        "bench",
+        "rays",
+        scene.to_str().unwrap(),
+        "--json",
+        "--seconds",
+        "0.01",
+        "--rays",
+        "1000",
+        "--width",
+        "32",
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let rows = v["rows"].as_array().unwrap();
     assert_eq!(rows.len(), 3);

@@ -1,0 +1,18 @@
+//! The boundary between the radiosity solver and the ray tracer: diffuse light leaving a
+//! surface point, as a precomputed solution provides it. The tracer takes `&dyn
+//! DiffuseRadiance`; `twopass_radiosity::Solution` implements it.
+
+use twopass_brdf::Rgb;
+
+/// Diffuse (view-independent) light leaving the front side of scene surfaces.
+pub trait DiffuseRadiance: Sync {
+    /// Radiance L = B / pi, W/(m^2 sr) per channel, leaving triangle `triangle` at
+    /// `barycentric` toward any direction on its front side: emission plus all reflected
+    /// diffuse light, direct and indirect. Zero on triangles the solution does not cover.
+    fn radiance(&self, triangle: u32, barycentric: [f32; 3]) -> Rgb;
+
+    /// The indirect part only: diffuse light reflected after two or more bounces from the
+    /// emitters (no emission, no direct light). A renderer that computes direct light per pixel
+    /// adds this to avoid counting the direct light twice.
+    fn indirect_radiance(&self, triangle: u32, barycentric: [f32; 3]) -> Rgb;
+}
