@@ -1,0 +1,277 @@
+//! Form factors from a receiving point to a shooting polygon: the exact differential-area-to-
+//! polygon form factor (Lambert's contour integral over the polygon's edges) for the
+//! unoccluded part, times the visible fraction measured with stratified shadow rays.
+
+use std::f64::consts::PI;
+
+use glam::{DVec3, Vec2, Vec3};
+use twopass_scene::{Scene, SurfacePoint};
+
+/// Relative distance (height over distance) under which a point counts as lying in a plane:
+/// about 20 f32 ulps, the rounding of vertices computed in f32.
+const PLANE_TOLERANCE: f64 = 1e-6;
+
+/// The unoccluded form factor from a differential area at `x` with unit normal `n` to the
+/// polygon `poly` (vertices in order, any winding), seen from the front of the polygon only
+/// when `shooter_normal` is given (one-sided: zero when `x` is behind it).
+///
+/// The polygon is clipped to the receiver's upper hemisphere, then
+/// F = 1/(2 pi) |sum_k gamma_k n . (R_k x R_k+1) / |R_k x R_k+1||, where R_k are the vertices
+/// relative to `x` and gamma_k the angle between consecutive ones. It stays bounded where the
+/// receiver touches the polygon (an edge through `x` contributes nothing), unlike the disc
+/// approximation, and is exact for any distance.
+pub fn point_to_polygon(x: DVec3, n: DVec3, poly: &[DVec3], shooter_normal: Option<DVec3>) -> f64 {
+    let centroid = poly.iter().sum::<DVec3>() / poly.len() as f64;
+    let size = poly.iter().map(|p| (*p - centroid).length()).fold(0.0, f64::max);
+    if let Some(ns) = shooter_normal
+        && (x - centroid).dot(ns) <= PLANE_TOLERANCE * (size + (x - centroid).length())
+    {
+        return 0.0;
+    }
+    // Clip against the receiver's tangent plane (Sutherland-Hodgman, one plane). Heights within
+    // a hair of the plane count as on it: a polygon lying in the receiver's plane subtends no
+    // projected solid angle, but rounding would otherwise leave it a full 2 pi of winding.
+    let mut clipped: Vec<DVec3> = Vec::with_capacity(poly.len() + 2);
+    let h = |p: DVec3| {
+        let d = (p - x).dot(n);
+        if d.abs() <= PLANE_TOLERANCE * (p - x).length() { 0.0 } else { d }
+    };
+    for k in 0..poly.len() {
+        let (a, b) = (poly[k], poly[(k + 1) % poly.len()]);
+        let (ha, hb) = (h(a), h(b));
+        if ha > 0.0 {
+            clipped.push(a);
+        }
+        if (ha > 0.0) != (hb > 0.0) && ha != hb {
+            let t = ha / (ha - hb);
+            clipped.push(a + (b - a) * t);
+        }
+    }
+    if clipped.len() < 3 {
+        return 0.0;
+    }
+    let mut sum = 0.0;
+    for k in 0..clipped.len() {
+        let r0 = clipped[k] - x;
+        let r1 = clipped[(k + 1) % clipped.len()] - x;
+        let c = r0.cross(r1);
+        let len = c.length();
+        // Zero-length arms or an edge through x: no contribution (the bounded limit).
+        if len <= 1e-300 || r0.length_squared() == 0.0 || r1.length_squared() == 0.0 {
+            continue;
+        }
+        let gamma = len.atan2(r0.dot(r1));
+        sum += gamma * n.dot(c) / len;
+    }
+    (sum.abs() / (2.0 * PI)).min(1.0)
+}
+
+/// How many shadow rays a visibility estimate may use.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct VisibilityRays {
+    /// Rays of the first, coarse estimate (rounded to a square number), at least 1.
+    pub min: u32,
+    /// Rays when the coarse estimate is partial or the receiver is close (square), >= `min`.
+    pub max: u32,
+}
+
+impl Default for VisibilityRays {
+    fn default() -> Self {
+        Self { min: 4, max: 16 }
+    }
+}
+
+/// A small counter-based hash (SplitMix64 finalizer): random numbers from (seed, ids) that do
+/// not depend on thread scheduling.
+pub(crate) fn hash(mut x: u64) -> u64 {
+    x = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    x = (x ^ (x >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    x = (x ^ (x >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    x ^ (x >> 31)
+}
+
+fn unit(h: u64) -> f32 {
+    (h >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
+}
+
+/// A stratified point on a triangle (corners `p`) for stratum `(i, j)` of `k x k`, jittered by
+/// `h`; triangle-square warp of the stratum.
+fn stratified_point(p: [DVec3; 3], i: u32, j: u32, k: u32, h: u64) -> DVec3 {
+    let u = Vec2::new(
+        (i as f32 + unit(h)) / k as f32,
+        (j as f32 + unit(hash(h))) / k as f32,
+    );
+    let s = f64::from(u.x).sqrt();
+    let (b1, b2) = (s * (1.0 - f64::from(u.y)), s * f64::from(u.y));
+    p[0] * (1.0 - b1 - b2) + p[1] * b1 + p[2] * b2
+}
+
+/// The visible fraction of shooter triangle `shooter` (corners, scene triangle `shooter_tri`)
+/// from receiver `from`, by stratified shadow rays. Samples behind the receiver's plane do not
+/// count. Starts with `rays.min` rays and goes to `rays.max` when they disagree or when the
+/// receiver is closer than twice the shooter's size. Deterministic for a `seed`. Returns the
+/// fraction and the number of shadow rays cast.
+pub fn visibility(
+    scene: &Scene,
+    from: &SurfacePoint,
+    receiver_normal: Vec3,
+    shooter: [DVec3; 3],
+    shooter_tri: u32,
+    rays: VisibilityRays,
+    seed: u64,
+) -> (f64, u64) {
+    let x = from.position.as_dvec3();
+    let size = (shooter[1] - shooter[0])
+        .length()
+        .max((shooter[2] - shooter[0]).length())
+        .max((shooter[2] - shooter[1]).length());
+    let centroid = (shooter[0] + shooter[1] + shooter[2]) / 3.0;
+    let near = (centroid - x).length() < 2.0 * size;
+    let estimate = |count: u32, salt: u64| {
+        let k = (f64::from(count).sqrt().round() as u32).max(1);
+        let (mut seen, mut total) = (0u32, 0u32);
+        for i in 0..k {
+            for j in 0..k {
+                let h = hash(seed ^ salt ^ (u64::from(i) << 32 | u64::from(j)));
+                let p = stratified_point(shooter, i, j, k, h);
+                if (p - x).dot(receiver_normal.as_dvec3()) <= 0.0 {
+                    continue;
+                }
+                total += 1;
+                let target = scene.mesh.surface_point_at(shooter_tri, p.as_vec3());
+                if !scene.occluded_between(from, &target) {
+                    seen += 1;
+                }
+            }
+        }
+        (seen, total)
+    };
+    let (seen, total) = estimate(rays.min, 0);
+    let cast = u64::from(total);
+    if total > 0 && !near && (seen == 0 || seen == total) {
+        return (f64::from(seen) / f64::from(total), cast);
+    }
+    let (seen, total) = estimate(rays.max.max(rays.min), 0x5151_5151);
+    let cast = cast + u64::from(total);
+    if total == 0 {
+        // Only a sliver is above the receiver's horizon: one ray to the shooter's centroid.
+        let target = scene.mesh.surface_point_at(shooter_tri, centroid.as_vec3());
+        return (
+            if scene.occluded_between(from, &target) {
+                0.0
+            } else {
+                1.0
+            },
+            cast + 1,
+        );
+    }
+    (f64::from(seen) / f64::from(total), cast)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn square(z: f64, half: f64) -> Vec<DVec3> {
+        vec![
+            DVec3::new(-half, -half, z),
+            DVec3::new(half, -half, z),
+            DVec3::new(half, half, z),
+            DVec3::new(-half, half, z),
+        ]
+    }
+
+    #[test]
+    fn differential_area_below_a_square_matches_closed_forms() {
+        // Siegel & Howell: unit square at height 1 above a differential area at its centre.
+        let f = point_to_polygon(DVec3::ZERO, DVec3::Z, &square(1.0, 0.5), None);
+        assert!((f - 0.239456).abs() < 1e-6, "{f}");
+        let f = point_to_polygon(DVec3::ZERO, DVec3::Z, &square(0.1, 0.5), None);
+        assert!((f - 0.968340).abs() < 1e-6, "{f}");
+    }
+
+    #[test]
+    fn coaxial_disc_limit() {
+        // A 256-gon approximates a disc of radius R at height H: F = R^2 / (R^2 + H^2).
+        let (r, hgt) = (0.7_f64, 1.3_f64);
+        let n = 256;
+        let poly: Vec<DVec3> = (0..n)
+            .map(|k| {
+                let a = 2.0 * PI * k as f64 / n as f64;
+                DVec3::new(r * a.cos(), r * a.sin(), hgt)
+            })
+            .collect();
+        // Inscribed polygon area ratio n sin(2pi/n)/(2pi) corrects to first order.
+        let area_ratio = n as f64 * (2.0 * PI / n as f64).sin() / (2.0 * PI);
+        let exact = r * r / (r * r + hgt * hgt);
+        let f = point_to_polygon(DVec3::ZERO, DVec3::Z, &poly, None);
+        assert!(
+            (f - exact * area_ratio).abs() < 1e-4 * exact,
+            "{f} vs {exact}"
+        );
+    }
+
+    #[test]
+    fn touching_receivers_stay_bounded() {
+        // A unit square wall standing on the x axis, receiver on the floor at the junction.
+        let wall = [
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(1.0, 0.0, 1.0),
+            DVec3::new(0.0, 0.0, 1.0),
+        ];
+        for x in [0.0, 0.5, 1.0, 1e-9] {
+            for y in [0.0, 1e-12, 1e-6] {
+                let f = point_to_polygon(DVec3::new(x, y, 0.0), DVec3::Z, &wall, None);
+                assert!(
+                    f.is_finite() && (0.0..=0.5 + 1e-9).contains(&f),
+                    "{f} at {x}, {y}"
+                );
+            }
+        }
+        // Approaching the junction from the room, F converges (no blow-up, unlike the disc
+        // approximation, whose 1/r^2 diverges there).
+        let near = point_to_polygon(DVec3::new(0.5, 1e-6, 0.0), DVec3::Z, &wall, None);
+        let nearer = point_to_polygon(DVec3::new(0.5, 1e-9, 0.0), DVec3::Z, &wall, None);
+        assert!(
+            (near - nearer).abs() < 1e-5 && near < 0.5,
+            "{near} vs {nearer}"
+        );
+        // A wall much larger than the distance to its edges fills the receiver's half of the
+        // hemisphere toward it: F -> 1/2 (Siegel & Howell, perpendicular plates sharing an edge).
+        let big = [
+            DVec3::new(-1e4, 0.0, 0.0),
+            DVec3::new(1e4, 0.0, 0.0),
+            DVec3::new(1e4, 0.0, 1e4),
+            DVec3::new(-1e4, 0.0, 1e4),
+        ];
+        let f = point_to_polygon(DVec3::new(0.0, 1e-3, 0.0), DVec3::Z, &big, None);
+        assert!((f - 0.5).abs() < 1e-4, "{f}");
+    }
+
+    #[test]
+    fn coplanar_polygons_contribute_nothing() {
+        let sq = square(0.0, 0.5);
+        // The receiver inside, on the edge of, and outside a polygon in its own plane, with
+        // rounding noise in the heights.
+        for x in [DVec3::new(0.1, 0.2, 1e-9), DVec3::new(0.5, 0.0, -1e-9), DVec3::new(2.0, 0.0, 0.0)] {
+            assert_eq!(point_to_polygon(x, DVec3::Z, &sq, Some(DVec3::Z)), 0.0, "{x}");
+            assert_eq!(point_to_polygon(x, DVec3::Z, &sq, None), 0.0, "{x}");
+        }
+    }
+
+    #[test]
+    fn one_sided_and_clipped() {
+        let sq = square(1.0, 0.5);
+        // Shooter facing +z: a receiver below it is behind, sees nothing.
+        assert_eq!(
+            point_to_polygon(DVec3::ZERO, DVec3::Z, &sq, Some(DVec3::Z)),
+            0.0
+        );
+        assert!(point_to_polygon(DVec3::ZERO, DVec3::Z, &sq, Some(-DVec3::Z)) > 0.0);
+        // A receiver facing away sees nothing; one tilted sideways sees part of it.
+        assert_eq!(point_to_polygon(DVec3::ZERO, -DVec3::Z, &sq, None), 0.0);
+        let side = point_to_polygon(DVec3::ZERO, DVec3::X, &sq, None);
+        assert!(side > 0.0 && side < 0.239456);
+    }
+}

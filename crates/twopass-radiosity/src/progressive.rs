@@ -1,0 +1,830 @@
+//! Progressive refinement (Cohen, Chen, Wallace & Greenberg 1988) with ray-traced form factors
+//! at the receiving vertices (Wallace, Elmquist & Haines 1989) and adaptive element subdivision.
+
+use std::ops::ControlFlow;
+use std::time::{Duration, Instant};
+
+use glam::{DVec3, Vec3};
+use rayon::prelude::*;
+use twopass_brdf::Rgb;
+use twopass_scene::Scene;
+
+use crate::element::ElementMesh;
+use crate::form_factor::{self, VisibilityRays, hash};
+use crate::solution::Solution;
+
+/// When the solver stops. The first criterion met ends the solve.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Stop {
+    /// Unshot power as a fraction of the emitted power (sum over channels), default 1e-3.
+    pub unshot_fraction: f64,
+    /// Most shots in all, if set.
+    pub max_shots: Option<u64>,
+    /// Wall-clock budget, if set.
+    pub time_budget: Option<Duration>,
+}
+
+impl Default for Stop {
+    fn default() -> Self {
+        Self {
+            unshot_fraction: 1e-3,
+            max_shots: None,
+            time_budget: None,
+        }
+    }
+}
+
+/// Adaptive subdivision of elements where the radiosity changes fast.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Adaptive {
+    /// Split an element when its vertices' luminances differ by more than this fraction of
+    /// the scene's mean luminance.
+    pub threshold: f32,
+    /// Never split an element whose longest edge is shorter than twice this (scene units);
+    /// `None`: an eighth of the element size.
+    pub min_element_size: Option<f32>,
+    /// Refinement rounds, each followed by shooting down to `at_unshot_fraction`.
+    pub rounds: u32,
+    /// Unshot fraction at which each round looks at the solution.
+    pub at_unshot_fraction: f64,
+}
+
+impl Default for Adaptive {
+    fn default() -> Self {
+        Self {
+            threshold: 0.2,
+            min_element_size: None,
+            rounds: 3,
+            at_unshot_fraction: 1e-2,
+        }
+    }
+}
+
+/// Everything the solver can be told. Defaults suit the Cornell box; sizes default to
+/// fractions of the scene's bounding-box diagonal.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Options {
+    /// Longest patch edge (shooters), scene units; default diagonal / 8.
+    pub patch_size: Option<f32>,
+    /// Longest element edge (receivers) before adaptive subdivision; default diagonal / 24.
+    pub element_size: Option<f32>,
+    /// Adaptive subdivision, or `None` for a fixed mesh.
+    pub adaptive: Option<Adaptive>,
+    /// Shadow rays per visibility estimate.
+    pub visibility: VisibilityRays,
+    /// Measure visibility with shadow rays; `false` treats every pair as unoccluded (exact only
+    /// for scenes where no surface hides another, such as one convex room).
+    pub occlusion: bool,
+    /// Stop criteria.
+    pub stop: Stop,
+    /// Seed of the visibility sampling.
+    pub seed: u64,
+    /// Memory allowed for cached vertex-to-patch form factors, bytes (default 1 GiB).
+    pub cache_bytes: usize,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Self {
+            patch_size: None,
+            element_size: None,
+            adaptive: Some(Adaptive::default()),
+            visibility: VisibilityRays::default(),
+            occlusion: true,
+            stop: Stop::default(),
+            seed: 0,
+            cache_bytes: 1 << 30,
+        }
+    }
+}
+
+/// Why a solve cannot start.
+#[derive(Debug, Clone, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum SolveError {
+    /// Nothing in the scene emits light: there is nothing to solve.
+    NoEmitters,
+    /// No surface reflects diffusely or emits: radiosity has nothing to compute.
+    NothingTakesPart,
+    /// An option is out of range.
+    Option {
+        /// The option's name.
+        name: &'static str,
+        /// Why.
+        problem: String,
+    },
+}
+
+impl std::fmt::Display for SolveError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::NoEmitters => write!(
+                f,
+                "nothing in the scene emits light, so there is no radiosity to solve"
+            ),
+            Self::NothingTakesPart => write!(
+                f,
+                "no surface reflects diffusely or emits, so radiosity has nothing to compute"
+            ),
+            Self::Option { name, problem } => write!(f, "radiosity option `{name}`: {problem}"),
+        }
+    }
+}
+
+impl std::error::Error for SolveError {}
+
+/// Power bookkeeping, W per channel (scene units): emitted = absorbed + escaped + unshot +
+/// remeshing, exactly up to rounding.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Energy {
+    /// Total emitted power.
+    pub emitted: DVec3,
+    /// Absorbed by surfaces (the (1 - rho) part of what arrived).
+    pub absorbed: DVec3,
+    /// Shot but not received by any element: left through openings, or the discretization
+    /// error of the vertex form factors (can then be slightly negative).
+    pub escaped: DVec3,
+    /// Received and reflected but not shot yet.
+    pub unshot: DVec3,
+    /// Change of the unshot estimate when adaptive subdivision re-estimated patch radiosities.
+    pub remeshing: DVec3,
+}
+
+impl Energy {
+    /// Largest relative imbalance over the channels, |emitted - (sum of the rest)| / emitted.
+    pub fn imbalance(&self) -> f64 {
+        let rest = self.absorbed + self.escaped + self.unshot + self.remeshing;
+        let d = (self.emitted - rest).abs();
+        let e = self.emitted.max(DVec3::splat(f64::MIN_POSITIVE));
+        (d / e).max_element()
+    }
+}
+
+/// Where a solve stands.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Progress {
+    /// Shots so far.
+    pub shots: u64,
+    /// Unshot power / emitted power (sums over channels).
+    pub unshot_fraction: f64,
+    /// Shadow rays cast so far.
+    pub rays: u64,
+    /// Elements (leaves) now.
+    pub elements: usize,
+    /// Vertices now.
+    pub vertices: usize,
+    /// Patches (shooters).
+    pub patches: usize,
+    /// Adaptive rounds done.
+    pub refinement_rounds: u32,
+    /// Wall-clock time since the solver was created.
+    pub elapsed: Duration,
+    /// Time spent building the patch and element mesh.
+    pub meshing: Duration,
+    /// Time spent in adaptive subdivision (including the new vertices' gathering).
+    pub refining: Duration,
+    /// Power bookkeeping.
+    pub energy: Energy,
+    /// Largest energy imbalance seen after any step.
+    pub worst_imbalance: f64,
+}
+
+/// Consistency figures of a solve (see [`Solver::residuals`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Residuals {
+    /// Largest relative energy imbalance seen after any shot.
+    pub energy_imbalance: f64,
+    /// Smallest sampled vertex form-factor row sum.
+    pub row_sum_min: f64,
+    /// Mean sampled row sum.
+    pub row_sum_mean: f64,
+    /// Largest sampled row sum.
+    pub row_sum_max: f64,
+    /// Patch pairs with a non-zero form factor among those sampled.
+    pub reciprocity_pairs: usize,
+    /// Largest |A_p F_pq - A_q F_qp| / max of the two over the sampled pairs. Large for pairs
+    /// seen through small gaps, where a few vertices and shadow rays sample visibility.
+    pub reciprocity_spread: f64,
+    /// The same, weighted: sum of |A_p F_pq - A_q F_qp| over sum of the larger of the two.
+    pub reciprocity_mean: f64,
+}
+
+/// Why [`Solver::run`] returned.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Finish {
+    /// The unshot fraction fell below the threshold.
+    Converged,
+    /// The shot limit was reached.
+    MaxShots,
+    /// The time budget ran out.
+    TimeBudget,
+    /// The observer asked to stop.
+    Cancelled,
+    /// No patch had unshot power left.
+    Exhausted,
+}
+
+/// A progressive-refinement radiosity solve over a scene. Deterministic: the same options and
+/// seed give the same solution bit for bit on any number of threads.
+pub struct Solver<'s> {
+    scene: &'s Scene,
+    options: Options,
+    mesh: ElementMesh,
+    element_size: f32,
+    /// Per vertex: reflectance, emitted exitance E = pi L_e.
+    rho: Vec<DVec3>,
+    emission: Vec<DVec3>,
+    /// Per vertex: irradiance received from emitted and from reflected light, W/m^2.
+    received_emit: Vec<DVec3>,
+    received_refl: Vec<DVec3>,
+    /// Per patch: unshot and shot radiosity, split by origin.
+    unshot_emit: Vec<DVec3>,
+    unshot_refl: Vec<DVec3>,
+    shot_emit: Vec<DVec3>,
+    shot_refl: Vec<DVec3>,
+    /// Per patch: its elements (leaves).
+    patch_leaves: Vec<Vec<u32>>,
+    /// Per patch: cached form factors (with visibility) to every vertex, once computed.
+    cache: Vec<Option<Vec<f32>>>,
+    cached_bytes: usize,
+    energy: Energy,
+    worst_imbalance: f64,
+    shots: u64,
+    rays: u64,
+    rounds: u32,
+    started: Instant,
+    meshing: Duration,
+    refining: Duration,
+}
+
+/// Fraction of the way from a vertex toward its triangle's centroid at which it receives.
+const RECEIVER_INSET: f64 = 1e-5;
+
+fn rgb(v: Rgb) -> DVec3 {
+    v.as_dvec3()
+}
+
+impl<'s> Solver<'s> {
+    /// Meshes the scene into patches and elements and sets up the emitters' unshot power.
+    /// Only objects that reflect diffusely or emit take part; others still cast shadows.
+    pub fn new(scene: &'s Scene, options: Options) -> Result<Self, SolveError> {
+        if scene.emitters.is_empty() {
+            return Err(SolveError::NoEmitters);
+        }
+        let diag = scene.bounds.diagonal();
+        let patch_size = options.patch_size.unwrap_or(diag / 8.0);
+        let element_size = options.element_size.unwrap_or(diag / 24.0).min(patch_size);
+        for (name, v) in [("patch_size", patch_size), ("element_size", element_size)] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(SolveError::Option {
+                    name,
+                    problem: format!("{v} must be finite and > 0 scene units"),
+                });
+            }
+        }
+        if !(options.stop.unshot_fraction >= 0.0) {
+            return Err(SolveError::Option {
+                name: "unshot_fraction",
+                problem: "must be >= 0".into(),
+            });
+        }
+        if options.visibility.min == 0 || options.visibility.max < options.visibility.min {
+            return Err(SolveError::Option {
+                name: "visibility",
+                problem: "needs 1 <= min <= max rays".into(),
+            });
+        }
+        let takes_part: Vec<bool> = scene
+            .objects
+            .iter()
+            .map(|o| {
+                o.emission.max_element() > 0.0
+                    || scene.materials[o.material as usize]
+                        .material
+                        .reflects_diffusely()
+            })
+            .collect();
+        if !takes_part.iter().any(|&t| t) {
+            return Err(SolveError::NothingTakesPart);
+        }
+        let started = Instant::now();
+        let mut mesh = ElementMesh::new(scene, &takes_part);
+        mesh.refine_to(patch_size, scene);
+        mesh.mark_patches();
+        mesh.refine_to(element_size, scene);
+        let mut s = Self {
+            scene,
+            options,
+            mesh,
+            element_size,
+            rho: Vec::new(),
+            emission: Vec::new(),
+            received_emit: Vec::new(),
+            received_refl: Vec::new(),
+            unshot_emit: Vec::new(),
+            unshot_refl: Vec::new(),
+            shot_emit: Vec::new(),
+            shot_refl: Vec::new(),
+            patch_leaves: Vec::new(),
+            cache: Vec::new(),
+            cached_bytes: 0,
+            energy: Energy::default(),
+            worst_imbalance: 0.0,
+            shots: 0,
+            rays: 0,
+            rounds: 0,
+            started,
+            meshing: started.elapsed(),
+            refining: Duration::ZERO,
+        };
+        s.sync_vertices();
+        let n = s.mesh.patches.len();
+        s.unshot_refl = vec![DVec3::ZERO; n];
+        s.shot_emit = vec![DVec3::ZERO; n];
+        s.shot_refl = vec![DVec3::ZERO; n];
+        s.cache = vec![None; n];
+        s.unshot_emit = (0..n).map(|p| s.patch_emission(p)).collect();
+        s.energy.emitted = (0..n).map(|p| s.unshot_emit[p] * s.patch_area(p)).sum();
+        s.energy.unshot = s.energy.emitted;
+        s.rebuild_patch_leaves();
+        Ok(s)
+    }
+
+    fn object_of_patch(&self, p: usize) -> u32 {
+        let node = &self.mesh.nodes[self.mesh.patches[p] as usize];
+        self.scene.mesh.triangle_object[node.scene_triangle as usize]
+    }
+
+    fn patch_emission(&self, p: usize) -> DVec3 {
+        rgb(self.scene.objects[self.object_of_patch(p) as usize].emission) * std::f64::consts::PI
+    }
+
+    fn patch_rho(&self, p: usize) -> DVec3 {
+        let o = &self.scene.objects[self.object_of_patch(p) as usize];
+        rgb(self.scene.materials[o.material as usize]
+            .material
+            .diffuse_albedo())
+    }
+
+    fn patch_area(&self, p: usize) -> f64 {
+        f64::from(self.mesh.nodes[self.mesh.patches[p] as usize].area)
+    }
+
+    /// Extends the per-vertex arrays to new vertices (reflectance, emission; zero received).
+    fn sync_vertices(&mut self) {
+        for v in self.rho.len()..self.mesh.vertices.len() {
+            let o = &self.scene.objects[self.mesh.vertices[v].object as usize];
+            self.rho.push(rgb(self.scene.materials[o.material as usize]
+                .material
+                .diffuse_albedo()));
+            self.emission.push(rgb(o.emission) * std::f64::consts::PI);
+            self.received_emit.push(DVec3::ZERO);
+            self.received_refl.push(DVec3::ZERO);
+        }
+    }
+
+    fn rebuild_patch_leaves(&mut self) {
+        self.patch_leaves = vec![Vec::new(); self.mesh.patches.len()];
+        for leaf in self.mesh.leaves() {
+            let p = self.mesh.nodes[leaf as usize].patch as usize;
+            self.patch_leaves[p].push(leaf);
+        }
+    }
+
+    /// Form factors (with visibility) from every vertex in `vertices` to patch `p`, and the
+    /// shadow rays cast. Parallel over vertices; each value depends only on (seed, vertex,
+    /// patch), never on scheduling.
+    fn form_factors(&self, p: usize, vertices: std::ops::Range<usize>) -> (Vec<f32>, u64) {
+        let node = self.mesh.nodes[self.mesh.patches[p] as usize];
+        let shooter = self.mesh.corners(self.mesh.patches[p]);
+        let shooter_tri = node.scene_triangle;
+        let ns = self.scene.mesh.geometric_normals[shooter_tri as usize].as_dvec3();
+        let results: Vec<(f32, u64)> = vertices
+            .into_par_iter()
+            .with_min_len(64)
+            .map(|v| {
+                let vert = &self.mesh.vertices[v];
+                // Evaluated a hair inside the vertex's own triangle: a vertex on a junction
+                // lies in the plane of the surface it meets, which it would see edge-on
+                // (F = 0); from inside its own surface it gets the limit it converges to.
+                let centroid = self
+                    .scene
+                    .mesh
+                    .corners(vert.triangle)
+                    .iter()
+                    .map(|c| c.as_dvec3())
+                    .sum::<DVec3>()
+                    / 3.0;
+                let x = vert.position.as_dvec3()
+                    + (centroid - vert.position.as_dvec3()) * RECEIVER_INSET;
+                let f =
+                    form_factor::point_to_polygon(x, vert.normal.as_dvec3(), &shooter, Some(ns));
+                if f <= 0.0 || !self.options.occlusion {
+                    return (f as f32, 0);
+                }
+                let from = self
+                    .scene
+                    .mesh
+                    .surface_point_at(vert.triangle, vert.position);
+                let seed = hash(self.options.seed ^ hash((v as u64) << 32 | p as u64));
+                let (vis, rays) = form_factor::visibility(
+                    self.scene,
+                    &from,
+                    vert.normal,
+                    shooter,
+                    shooter_tri,
+                    self.options.visibility,
+                    seed,
+                );
+                ((f * vis) as f32, rays)
+            })
+            .collect();
+        let rays = results.iter().map(|r| r.1).sum();
+        (results.into_iter().map(|r| r.0).collect(), rays)
+    }
+
+    /// The form factors of every vertex to patch `p`, from the cache when possible.
+    fn patch_row(&mut self, p: usize) -> Vec<f32> {
+        let n = self.mesh.vertices.len();
+        let have = self.cache[p].as_ref().map_or(0, Vec::len);
+        if have == n {
+            return self.cache[p].clone().expect("cached row");
+        }
+        let (fresh, rays) = self.form_factors(p, have..n);
+        self.rays += rays;
+        let mut row = self.cache[p].take().unwrap_or_default();
+        row.extend_from_slice(&fresh);
+        let bytes = fresh.len() * 4;
+        if self.cached_bytes + bytes <= self.options.cache_bytes {
+            self.cached_bytes += bytes;
+            self.cache[p] = Some(row.clone());
+        } else if have > 0 {
+            self.cached_bytes -= have * 4;
+        }
+        row
+    }
+
+    /// Shoots the patch with the most unshot power. Returns `false` when none has any.
+    pub fn shoot(&mut self) -> bool {
+        let unshot = |s: &Self, p: usize| {
+            ((s.unshot_emit[p] + s.unshot_refl[p]).abs().element_sum()) * s.patch_area(p)
+        };
+        let Some((p, power)) = (0..self.mesh.patches.len())
+            .map(|p| (p, unshot(self, p)))
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+        else {
+            return false;
+        };
+        if power <= 0.0 {
+            return false;
+        }
+        let (de, dr) = (self.unshot_emit[p], self.unshot_refl[p]);
+        let row = self.patch_row(p);
+        let area = self.patch_area(p);
+        for (v, &f) in row.iter().enumerate() {
+            if f > 0.0 {
+                self.received_emit[v] += de * f64::from(f);
+                self.received_refl[v] += dr * f64::from(f);
+            }
+        }
+        // Power arriving at each element: area times the mean irradiance of its vertices.
+        let mut arrived = DVec3::ZERO;
+        for q in 0..self.mesh.patches.len() {
+            let mut gained = DVec3::ZERO;
+            for &leaf in &self.patch_leaves[q] {
+                let node = &self.mesh.nodes[leaf as usize];
+                let h: f64 = node
+                    .vertices
+                    .iter()
+                    .map(|&v| f64::from(row[v as usize]))
+                    .sum::<f64>()
+                    / 3.0;
+                if h > 0.0 {
+                    gained += (de + dr) * h * f64::from(node.area);
+                }
+            }
+            if gained != DVec3::ZERO {
+                let rho = self.patch_rho(q);
+                arrived += gained;
+                self.energy.absorbed += gained * (DVec3::ONE - rho);
+                let a = self.patch_area(q);
+                self.unshot_refl[q] += gained * rho / a;
+                self.energy.unshot += gained * rho;
+            }
+        }
+        let shot = (de + dr) * area;
+        self.energy.escaped += shot - arrived;
+        self.energy.unshot -= shot;
+        self.shot_emit[p] += de;
+        self.shot_refl[p] += dr;
+        self.unshot_emit[p] -= de;
+        self.unshot_refl[p] -= dr;
+        self.shots += 1;
+        self.worst_imbalance = self.worst_imbalance.max(self.energy.imbalance());
+        true
+    }
+
+    /// Unshot power over emitted power (sums over channels).
+    pub fn unshot_fraction(&self) -> f64 {
+        let unshot: f64 = (0..self.mesh.patches.len())
+            .map(|p| {
+                (self.unshot_emit[p] + self.unshot_refl[p])
+                    .abs()
+                    .element_sum()
+                    * self.patch_area(p)
+            })
+            .sum();
+        unshot / self.energy.emitted.element_sum().max(f64::MIN_POSITIVE)
+    }
+
+    /// Where the solve stands.
+    pub fn progress(&self) -> Progress {
+        Progress {
+            shots: self.shots,
+            unshot_fraction: self.unshot_fraction(),
+            rays: self.rays,
+            elements: self.mesh.leaves().count(),
+            vertices: self.mesh.vertices.len(),
+            patches: self.mesh.patches.len(),
+            refinement_rounds: self.rounds,
+            elapsed: self.started.elapsed(),
+            meshing: self.meshing,
+            refining: self.refining,
+            energy: self.energy,
+            worst_imbalance: self.worst_imbalance,
+        }
+    }
+
+    /// Displayed radiosity of vertex `v` without the ambient term, W/m^2.
+    fn radiosity(&self, v: usize) -> DVec3 {
+        self.emission[v] + self.rho[v] * (self.received_emit[v] + self.received_refl[v])
+    }
+
+    /// One round of adaptive subdivision: splits (conformingly) every element whose vertices'
+    /// luminances differ by more than the threshold, gathers the new vertices' radiosity from
+    /// everything shot so far, and re-estimates the patches' unshot radiosity on the finer
+    /// mesh. Returns how many elements were split.
+    pub fn refine(&mut self, adaptive: &Adaptive) -> usize {
+        let started = Instant::now();
+        let splits = self.refine_round(adaptive);
+        self.refining += started.elapsed();
+        splits
+    }
+
+    fn refine_round(&mut self, adaptive: &Adaptive) -> usize {
+        let lum = |c: DVec3| 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z;
+        let (mut total, mut area) = (0.0, 0.0);
+        let leaves: Vec<u32> = self.mesh.leaves().collect();
+        for &l in &leaves {
+            let node = &self.mesh.nodes[l as usize];
+            let y: f64 = node
+                .vertices
+                .iter()
+                .map(|&v| lum(self.radiosity(v as usize)))
+                .sum::<f64>()
+                / 3.0;
+            total += y * f64::from(node.area);
+            area += f64::from(node.area);
+        }
+        let mean = total / area.max(f64::MIN_POSITIVE);
+        let min_size = adaptive.min_element_size.unwrap_or(self.element_size / 8.0);
+        let split: Vec<u32> = leaves
+            .into_iter()
+            .filter(|&l| {
+                let ys = self.mesh.nodes[l as usize]
+                    .vertices
+                    .map(|v| lum(self.radiosity(v as usize)));
+                let spread = ys.iter().copied().fold(f64::MIN, f64::max)
+                    - ys.iter().copied().fold(f64::MAX, f64::min);
+                spread > f64::from(adaptive.threshold) * mean
+                    && self.mesh.longest_edge_length(l) > 2.0 * min_size
+            })
+            .collect();
+        let mut splits = 0;
+        for l in split {
+            splits += self.mesh.refine(l, self.scene);
+        }
+        if splits == 0 {
+            return 0;
+        }
+        let old = self.rho.len();
+        self.sync_vertices();
+        // New vertices gather everything shot so far.
+        for p in 0..self.mesh.patches.len() {
+            let (se, sr) = (self.shot_emit[p], self.shot_refl[p]);
+            if se == DVec3::ZERO && sr == DVec3::ZERO {
+                continue;
+            }
+            let row = self.patch_row(p);
+            for v in old..row.len() {
+                let f = f64::from(row[v]);
+                self.received_emit[v] += se * f;
+                self.received_refl[v] += sr * f;
+            }
+        }
+        self.rebuild_patch_leaves();
+        // Re-estimate each patch's reflected radiosity from its (finer) elements.
+        for p in 0..self.mesh.patches.len() {
+            let mut reflected = DVec3::ZERO;
+            for &leaf in &self.patch_leaves[p] {
+                let node = &self.mesh.nodes[leaf as usize];
+                let r: DVec3 = node
+                    .vertices
+                    .iter()
+                    .map(|&v| {
+                        self.rho[v as usize]
+                            * (self.received_emit[v as usize] + self.received_refl[v as usize])
+                    })
+                    .sum::<DVec3>()
+                    / 3.0;
+                reflected += r * f64::from(node.area);
+            }
+            let reflected = reflected / self.patch_area(p);
+            let new_unshot = reflected - self.shot_refl[p];
+            let change = (new_unshot - self.unshot_refl[p]) * self.patch_area(p);
+            self.energy.unshot += change;
+            self.energy.remeshing -= change;
+            self.unshot_refl[p] = new_unshot;
+        }
+        self.rounds += 1;
+        splits
+    }
+
+    /// Runs the whole schedule: shooting, adaptive rounds (if enabled), shooting to the stop
+    /// criteria. `observer` sees the progress after every shot and may stop the solve early;
+    /// the solution is usable whenever this returns.
+    pub fn run(&mut self, mut observer: impl FnMut(&Progress) -> ControlFlow<()>) -> Finish {
+        let stop = self.options.stop;
+        let adaptive = self.options.adaptive;
+        let mut rounds_left = adaptive.map_or(0, |a| a.rounds);
+        loop {
+            let target = match adaptive {
+                Some(a) if rounds_left > 0 => a.at_unshot_fraction.max(stop.unshot_fraction),
+                _ => stop.unshot_fraction,
+            };
+            if self.unshot_fraction() <= target {
+                if let (Some(a), true) = (adaptive, rounds_left > 0) {
+                    rounds_left -= 1;
+                    if self.refine(&a) == 0 {
+                        rounds_left = 0;
+                    }
+                    continue;
+                }
+                return Finish::Converged;
+            }
+            if stop.max_shots.is_some_and(|m| self.shots >= m) {
+                return Finish::MaxShots;
+            }
+            if stop
+                .time_budget
+                .is_some_and(|b| self.started.elapsed() >= b)
+            {
+                return Finish::TimeBudget;
+            }
+            if !self.shoot() {
+                return Finish::Exhausted;
+            }
+            if observer(&self.progress()).is_break() {
+                return Finish::Cancelled;
+            }
+        }
+    }
+
+    /// The ambient term (Cohen et al. 1988): the unshot radiosity spread over the scene and
+    /// multiplied by the interreflection factor 1 / (1 - mean reflectance), W/m^2.
+    pub fn ambient(&self) -> DVec3 {
+        let (mut unshot, mut rho, mut area) = (DVec3::ZERO, DVec3::ZERO, 0.0);
+        for p in 0..self.mesh.patches.len() {
+            let a = self.patch_area(p);
+            unshot += (self.unshot_emit[p] + self.unshot_refl[p]) * a;
+            rho += self.patch_rho(p) * a;
+            area += a;
+        }
+        let mean_rho = rho / area;
+        unshot / area / (DVec3::ONE - mean_rho).max(DVec3::splat(1e-6))
+    }
+
+    /// The current solution, with the ambient term for display of a partial solve.
+    pub fn solution(&self) -> Solution {
+        let ambient = self.ambient();
+        let n = self.mesh.vertices.len();
+        let to32 = |v: DVec3| Vec3::new(v.x as f32, v.y as f32, v.z as f32);
+        Solution::new(
+            self.mesh.clone(),
+            (0..n).map(|v| to32(self.radiosity(v))).collect(),
+            (0..n)
+                .map(|v| to32(self.rho[v] * self.received_emit[v]))
+                .collect(),
+            (0..n)
+                .map(|v| to32(self.rho[v] * self.received_refl[v]))
+                .collect(),
+            (0..n).map(|v| to32(self.rho[v] * ambient)).collect(),
+        )
+    }
+
+    /// Checks of the solve's consistency: the energy balance, the form-factor row sums of up
+    /// to `samples` vertices (1 in a closed scene, less where light escapes) and the
+    /// reciprocity A_p F_pq = A_q F_qp on up to `samples` pairs of patches, with the patch-to-
+    /// patch form factors integrated from the vertex ones. Pairs are picked deterministically.
+    pub fn residuals(&mut self, samples: usize) -> Residuals {
+        let rows = self.form_factor_rows();
+        let weights = self.patch_weights();
+        let areas = self.patch_areas();
+        let n_v = self.mesh.vertices.len();
+        let n_p = self.mesh.patches.len();
+        let step = (n_v / samples.max(1)).max(1);
+        let sums: Vec<f64> = (0..n_v)
+            .step_by(step)
+            .map(|v| rows.iter().map(|r| f64::from(r[v])).sum())
+            .collect();
+        let patch_ff = |p: usize, q: usize| {
+            weights[p]
+                .iter()
+                .map(|&(v, w)| w * f64::from(rows[q][v as usize]))
+                .sum::<f64>()
+        };
+        let (mut spread, mut diff, mut scale) = (0.0_f64, 0.0, 0.0);
+        let mut pairs = 0;
+        for k in 0..samples as u64 {
+            let (p, q) = (
+                (hash(k) % n_p as u64) as usize,
+                (hash(k ^ 0xABCD) % n_p as u64) as usize,
+            );
+            let (a, b) = (areas[p] * patch_ff(p, q), areas[q] * patch_ff(q, p));
+            if p != q && a.max(b) > 0.0 {
+                spread = spread.max((a - b).abs() / a.max(b));
+                diff += (a - b).abs();
+                scale += a.max(b);
+                pairs += 1;
+            }
+        }
+        Residuals {
+            energy_imbalance: self.worst_imbalance,
+            row_sum_min: sums.iter().copied().fold(f64::INFINITY, f64::min),
+            row_sum_mean: sums.iter().sum::<f64>() / sums.len().max(1) as f64,
+            row_sum_max: sums.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+            reciprocity_pairs: pairs,
+            reciprocity_spread: spread,
+            reciprocity_mean: diff / scale.max(f64::MIN_POSITIVE),
+        }
+    }
+
+    /// The element mesh.
+    pub fn mesh(&self) -> &ElementMesh {
+        &self.mesh
+    }
+
+    /// The scene being solved.
+    pub fn scene(&self) -> &Scene {
+        self.scene
+    }
+
+    /// Every vertex-to-patch form factor (with visibility), as the shots use them: row per
+    /// patch. Computes what is not cached.
+    pub fn form_factor_rows(&mut self) -> Vec<Vec<f32>> {
+        (0..self.mesh.patches.len())
+            .map(|p| self.patch_row(p))
+            .collect()
+    }
+
+    /// Per patch: (vertex, weight) pairs with patch radiosity = sum of weight x vertex
+    /// radiosity (area-weighted mean over the patch's elements).
+    pub fn patch_weights(&self) -> Vec<Vec<(u32, f64)>> {
+        (0..self.mesh.patches.len())
+            .map(|p| {
+                let mut w: Vec<(u32, f64)> = Vec::new();
+                let a = self.patch_area(p);
+                for &leaf in &self.patch_leaves[p] {
+                    let node = &self.mesh.nodes[leaf as usize];
+                    for &v in &node.vertices {
+                        let x = f64::from(node.area) / (3.0 * a);
+                        match w.iter_mut().find(|e| e.0 == v) {
+                            Some(e) => e.1 += x,
+                            None => w.push((v, x)),
+                        }
+                    }
+                }
+                w
+            })
+            .collect()
+    }
+
+    /// Per vertex: reflectance and emitted exitance.
+    pub fn vertex_terms(&self) -> (&[DVec3], &[DVec3]) {
+        (&self.rho, &self.emission)
+    }
+
+    /// Displayed radiosity of every vertex without the ambient term, W/m^2.
+    pub fn vertex_radiosity(&self) -> Vec<DVec3> {
+        (0..self.mesh.vertices.len())
+            .map(|v| self.radiosity(v))
+            .collect()
+    }
+
+    /// Per patch: area, scene units squared.
+    pub fn patch_areas(&self) -> Vec<f64> {
+        (0..self.mesh.patches.len())
+            .map(|p| self.patch_area(p))
+            .collect()
+    }
+}

@@ -1,0 +1,113 @@
+//! A radiosity solution: per-vertex radiosity over the element mesh, and its lookup at any
+//! surface point for the ray tracer.
+
+use twopass_brdf::Rgb;
+use twopass_scene::DiffuseRadiance;
+
+use crate::element::ElementMesh;
+
+/// Per-vertex radiosity (W/m^2 per RGB channel, areas in scene units) over the element mesh,
+/// split into emission, direct and indirect parts, plus the ambient term of a partial solve.
+#[derive(Debug, Clone)]
+pub struct Solution {
+    mesh: ElementMesh,
+    /// Emission + all reflected light (without the ambient term).
+    radiosity: Vec<Rgb>,
+    /// Light reflected once from the emitters.
+    direct: Vec<Rgb>,
+    /// Light reflected after two or more bounces.
+    indirect: Vec<Rgb>,
+    /// The ambient estimate of what is not shot yet, times the reflectance.
+    ambient: Vec<Rgb>,
+}
+
+impl Solution {
+    /// A solution from its per-vertex parts (all the length of `mesh.vertices`).
+    pub fn new(
+        mesh: ElementMesh,
+        radiosity: Vec<Rgb>,
+        direct: Vec<Rgb>,
+        indirect: Vec<Rgb>,
+        ambient: Vec<Rgb>,
+    ) -> Self {
+        let n = mesh.vertices.len();
+        assert!(
+            radiosity.len() == n && direct.len() == n && indirect.len() == n && ambient.len() == n,
+            "one value per vertex"
+        );
+        Self {
+            mesh,
+            radiosity,
+            direct,
+            indirect,
+            ambient,
+        }
+    }
+
+    /// The element mesh the values live on.
+    pub fn mesh(&self) -> &ElementMesh {
+        &self.mesh
+    }
+
+    /// Radiosity per vertex including the ambient term, W/m^2: what is displayed.
+    pub fn vertex_radiosity(&self) -> Vec<Rgb> {
+        self.radiosity
+            .iter()
+            .zip(&self.ambient)
+            .map(|(b, a)| *b + *a)
+            .collect()
+    }
+
+    /// Radiosity per vertex without the ambient term (emission + shot light), W/m^2.
+    pub fn shot_radiosity(&self) -> &[Rgb] {
+        &self.radiosity
+    }
+
+    /// Direct part per vertex (light reflected once from the emitters), W/m^2.
+    pub fn direct(&self) -> &[Rgb] {
+        &self.direct
+    }
+
+    /// Indirect part per vertex (two or more bounces, without ambient), W/m^2.
+    pub fn indirect(&self) -> &[Rgb] {
+        &self.indirect
+    }
+
+    /// Ambient term per vertex (reflectance times the ambient radiosity), W/m^2.
+    pub fn ambient(&self) -> &[Rgb] {
+        &self.ambient
+    }
+
+    fn interpolate(&self, values: impl Fn(usize) -> Rgb, triangle: u32, b: [f32; 3]) -> Rgb {
+        match self.mesh.locate(triangle, b[1], b[2]) {
+            None => Rgb::ZERO,
+            Some((leaf, w)) => {
+                let v = self.mesh.nodes[leaf as usize].vertices;
+                let w = w.map(|x| x.clamp(0.0, 1.0));
+                let sum = (w[0] + w[1] + w[2]).max(f32::MIN_POSITIVE);
+                (values(v[0] as usize) * w[0]
+                    + values(v[1] as usize) * w[1]
+                    + values(v[2] as usize) * w[2])
+                    / sum
+            }
+        }
+    }
+}
+
+impl DiffuseRadiance for Solution {
+    fn radiance(&self, triangle: u32, barycentric: [f32; 3]) -> Rgb {
+        self.interpolate(
+            |v| self.radiosity[v] + self.ambient[v],
+            triangle,
+            barycentric,
+        ) * std::f32::consts::FRAC_1_PI
+    }
+
+    fn indirect_radiance(&self, triangle: u32, barycentric: [f32; 3]) -> Rgb {
+        self.interpolate(
+            |v| self.indirect[v] + self.ambient[v],
+            triangle,
+            barycentric,
+        ) * std::f32::consts::FRAC_1_PI
+    }
+}
