@@ -4,6 +4,7 @@ use std::path::{Path, PathBuf};
 
 mod accel;
 mod bad_input;
+mod radiosity;
 mod scenes;
 
 /// A scene under the repository's `scenes/`.
