@@ -124,6 +124,123 @@ impl ElementMesh {
         mesh
     }
 
+    /// Rebuilds a mesh from its public parts (as stored in a bake file), checking everything a
+    /// lookup or a further refinement relies on: indices in range, finite positions, normals
+    /// and areas, non-degenerate barycentric corners, one tree per participating scene
+    /// triangle (`roots.len()` is the scene's triangle count) whose children come after their
+    /// parent and split it at a shared midpoint, and patches that point back at themselves.
+    /// The private edge maps are rebuilt from the leaves and the bisections.
+    pub fn from_parts(
+        vertices: Vec<Vertex>,
+        nodes: Vec<Node>,
+        roots: Vec<u32>,
+        patches: Vec<u32>,
+    ) -> Result<Self, crate::bake::InvalidMesh> {
+        use crate::bake::{InvalidMesh, MeshPart};
+        let bad = |part, index: usize, problem| Err(InvalidMesh::new(part, index, problem));
+        let (n_v, n_n, n_t) = (vertices.len(), nodes.len(), roots.len());
+        for (i, v) in vertices.iter().enumerate() {
+            if !(v.position.is_finite() && v.normal.is_finite()) {
+                return bad(MeshPart::Vertex, i, "position or normal is not finite");
+            }
+            if v.triangle as usize >= n_t {
+                return bad(MeshPart::Vertex, i, "scene triangle out of range");
+            }
+        }
+        let mut parent = vec![u32::MAX; n_n];
+        let mut midpoints = HashMap::new();
+        for (i, node) in nodes.iter().enumerate() {
+            if node.vertices.iter().any(|&v| v as usize >= n_v) {
+                return bad(MeshPart::Node, i, "vertex index out of range");
+            }
+            if node.scene_triangle as usize >= n_t {
+                return bad(MeshPart::Node, i, "scene triangle out of range");
+            }
+            if node.patch != u32::MAX && node.patch as usize >= patches.len() {
+                return bad(MeshPart::Node, i, "patch index out of range");
+            }
+            if !(node.area.is_finite() && node.area >= 0.0) {
+                return bad(MeshPart::Node, i, "area is negative or not finite");
+            }
+            let [a, b, c] = node.uv.map(Vec2::as_dvec2);
+            let det = (b - a).perp_dot(c - a);
+            if !(det.is_finite() && det > 0.0) {
+                return bad(MeshPart::Node, i, "barycentric corners are degenerate");
+            }
+            let Some([c0, c1]) = node.children else {
+                continue;
+            };
+            // Children are always appended after their parent: this also rules out cycles.
+            if c0 as usize >= n_n || c1 as usize >= n_n || c0 as usize <= i || c1 as usize <= i {
+                return bad(
+                    MeshPart::Node,
+                    i,
+                    "child index out of range or not after parent",
+                );
+            }
+            for ch in [c0, c1] {
+                if parent[ch as usize] != u32::MAX || c0 == c1 {
+                    return bad(MeshPart::Node, ch as usize, "node has two parents");
+                }
+                parent[ch as usize] = i as u32;
+                if nodes[ch as usize].scene_triangle != node.scene_triangle {
+                    return bad(
+                        MeshPart::Node,
+                        ch as usize,
+                        "child of another scene triangle",
+                    );
+                }
+            }
+            // A bisection [a, b, c] -> [a, m, c], [m, b, c].
+            let (h0, h1) = (nodes[c0 as usize].vertices, nodes[c1 as usize].vertices);
+            if h0[1] != h1[0] || h0[2] != h1[2] {
+                return bad(
+                    MeshPart::Node,
+                    i,
+                    "children are not the halves of a bisection",
+                );
+            }
+            midpoints.insert(edge(h0[0], h1[1]), h0[1]);
+        }
+        for (t, &r) in roots.iter().enumerate() {
+            if r == u32::MAX {
+                continue;
+            }
+            if r as usize >= n_n
+                || parent[r as usize] != u32::MAX
+                || nodes[r as usize].scene_triangle as usize != t
+            {
+                return bad(MeshPart::Root, t, "not the parentless root of its triangle");
+            }
+            parent[r as usize] = r;
+        }
+        if let Some(orphan) = parent.iter().position(|&p| p == u32::MAX) {
+            return bad(MeshPart::Node, orphan, "node belongs to no tree");
+        }
+        for (p, &n) in patches.iter().enumerate() {
+            if n as usize >= n_n || nodes[n as usize].patch as usize != p {
+                return bad(
+                    MeshPart::Patch,
+                    p,
+                    "patch node out of range or of another patch",
+                );
+            }
+        }
+        let mut mesh = Self {
+            vertices,
+            nodes,
+            roots,
+            patches,
+            midpoints,
+            edge_leaves: HashMap::new(),
+        };
+        let leaves: Vec<u32> = mesh.leaves().collect();
+        for n in leaves {
+            mesh.link(n);
+        }
+        Ok(mesh)
+    }
+
     fn link(&mut self, n: u32) {
         let v = self.nodes[n as usize].vertices;
         for k in 0..3 {

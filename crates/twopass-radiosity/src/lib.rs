@@ -22,6 +22,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+pub mod bake;
 mod direct;
 pub mod element;
 pub mod form_factor;
