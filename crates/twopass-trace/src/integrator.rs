@@ -1,0 +1,182 @@
+//! The integrator boundary (STYLE.md F): one required method that turns a camera ray into
+//! layered radiance, plus the shared pieces every integrator uses: the shading context at a hit
+//! (local frame, one-sided surfaces) and direct lighting from the area emitters with stratified
+//! shadow rays. Visibility and ray-origin offsetting belong to the scene (`Scene::intersect_from`,
+//! `Scene::occluded_between`); nothing here holds an epsilon. Integrators never spawn threads.
+
+use glam::Vec3;
+use twopass_brdf::frame::Frame;
+use twopass_brdf::{Material, Rgb};
+use twopass_scene::{Hit, Ray, Scene};
+
+use crate::film::Radiance;
+use crate::sampler::{Sampler, stratum};
+
+/// Ray counts of one camera sample, summed into the render statistics.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Tally {
+    /// Closest-hit queries (camera, reflection, refraction and path rays).
+    pub rays: u64,
+    /// Occlusion queries (shadow rays).
+    pub shadow_rays: u64,
+}
+
+impl Tally {
+    /// Adds another tally.
+    pub fn add(&mut self, other: Tally) {
+        self.rays += other.rays;
+        self.shadow_rays += other.shadow_rays;
+    }
+}
+
+/// A light transport method: radiance arriving along a camera ray.
+///
+/// Implementations are pure functions of their inputs and the sampler's stream: the render
+/// loop ([`crate::render()`]) owns tiling, threads, seeding and progress.
+pub trait Integrator: Sync {
+    /// A short name for reports and file names (`whitted`, `radiosity`, `hybrid`,
+    /// `hybrid-direct`, `reference`).
+    fn name(&self) -> &'static str;
+
+    /// Radiance (W/(m^2 sr) per channel) arriving at the camera along `ray` (unit direction),
+    /// split into [`crate::Layer`]s; `tally` counts the rays it traces.
+    fn radiance(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        sampler: &mut Sampler,
+        tally: &mut Tally,
+    ) -> Radiance;
+}
+
+/// What a shader needs at a hit: the material, the local shading frame and the outgoing
+/// direction in it.
+#[derive(Debug, Clone, Copy)]
+pub struct Shading<'a> {
+    /// The hit.
+    pub hit: Hit,
+    /// The hit surface's material.
+    pub material: &'a Material,
+    /// Local frame around the shading normal (on the geometric normal's side).
+    pub frame: Frame,
+    /// Direction toward the viewer (unit, local frame; z < 0 when seen from behind).
+    pub wo: Vec3,
+    /// Emitted radiance toward the viewer, W/(m^2 sr): the object's L_e on its front side,
+    /// zero on its back (emitters are one-sided).
+    pub emitted: Rgb,
+}
+
+impl<'a> Shading<'a> {
+    /// The shading context of `hit`, reached by a ray of unit direction `direction`.
+    pub fn new(scene: &'a Scene, hit: Hit, direction: Vec3) -> Self {
+        let material = &scene.materials[hit.material as usize].material;
+        let frame = Frame::from_normal(hit.shading_normal);
+        let wo = frame.to_local(-direction);
+        let emitted = if hit.front_face {
+            scene.objects[hit.object as usize].emission
+        } else {
+            Rgb::ZERO
+        };
+        Self {
+            hit,
+            material,
+            frame,
+            wo,
+            emitted,
+        }
+    }
+
+    /// Whether the surface scatters light toward this side: opaque surfaces are one-sided
+    /// (their back reflects nothing, as in the radiosity solution, whose receivers are
+    /// one-sided); a smooth dielectric is seen from both sides.
+    pub fn scatters(&self) -> bool {
+        self.hit.front_face || self.is_dielectric()
+    }
+
+    /// Whether the material is a smooth dielectric (two-sided interface).
+    pub fn is_dielectric(&self) -> bool {
+        matches!(
+            self.material.delta(),
+            Some(twopass_brdf::delta::DeltaLobe::Dielectric { .. })
+        )
+    }
+}
+
+/// Direct light from every emitter at a shading point, with `grid` x `grid` stratified shadow
+/// rays per emitter, split into two parts by `brdf`, which returns two BRDF values (1/sr,
+/// without the cosine) for a local incident direction. Returns the two reflected radiances,
+/// W/(m^2 sr) per channel.
+///
+/// Estimator: for each emitter of area A and radiance L_e, the mean over its samples of
+/// f L_e cos(theta_x) cos(theta_y) / d^2 * A, with points uniform by area (density 1/A), the
+/// triangle choice and the position within it stratified (a randomly rotated 1-D stratification
+/// of the choice against a jittered grid of positions: every sample is uniform by area, so the
+/// estimate is unbiased). Light must reach the front of the shading point's geometric surface
+/// and leave the front of the emitter.
+pub fn direct_light(
+    scene: &Scene,
+    s: &Shading<'_>,
+    grid: u32,
+    sampler: &mut Sampler,
+    tally: &mut Tally,
+    brdf: impl Fn(Vec3) -> [Rgb; 2],
+) -> [Rgb; 2] {
+    let mut out = [Rgb::ZERO; 2];
+    if !s.hit.front_face {
+        return out;
+    }
+    let k = grid.max(1);
+    let n = k * k;
+    let x = s.hit.point;
+    for emitter in &scene.emitters {
+        let rotation = sampler.next_below(n);
+        let mut sum = [Rgb::ZERO; 2];
+        for i in 0..n {
+            let pick = (((i + rotation) % n) as f32 + sampler.next_f32()) / n as f32;
+            let pick = pick.min(1.0 - f32::EPSILON / 2.0);
+            let u = stratum(i, k, sampler.next_2d());
+            let y = emitter.sample(scene, pick, u);
+            let d = y.position - x.position;
+            let dist2 = d.length_squared();
+            if dist2 <= 0.0 {
+                continue;
+            }
+            let wi = d / dist2.sqrt();
+            let cos_y = -wi.dot(y.normal);
+            if cos_y <= 0.0 || wi.dot(x.normal) <= 0.0 {
+                continue;
+            }
+            let wl = s.frame.to_local(wi);
+            if wl.z <= 0.0 {
+                continue;
+            }
+            let f = brdf(wl);
+            if f[0].max_element() <= 0.0 && f[1].max_element() <= 0.0 {
+                continue;
+            }
+            tally.shadow_rays += 1;
+            if scene.occluded_between(&x, &y) {
+                continue;
+            }
+            let g = wl.z * cos_y / dist2;
+            sum[0] += f[0] * g;
+            sum[1] += f[1] * g;
+        }
+        let scale = emitter.radiance * (emitter.area / n as f32);
+        out[0] += sum[0] * scale;
+        out[1] += sum[1] * scale;
+    }
+    out
+}
+
+/// The closest hit along a ray leaving the shading point in world direction `direction`,
+/// counted in `tally`.
+pub fn trace_from(
+    scene: &Scene,
+    s: &Shading<'_>,
+    direction: Vec3,
+    tally: &mut Tally,
+) -> Option<Hit> {
+    tally.rays += 1;
+    scene.intersect_from(&s.hit.point, direction)
+}

@@ -1,0 +1,44 @@
+//! The view-dependent pass of twopass: the integrators and the render loop.
+//!
+//! - [`Whitted`]: Whitted-style ray tracing alone (shadow rays to the area emitters, the local
+//!   models of twopass-brdf, the Phong ambient term in place of interreflection, mirror
+//!   reflection and refraction followed recursively).
+//! - [`hybrid::radiosity_only`], [`hybrid::hybrid`], [`hybrid::hybrid_direct`]: the
+//!   radiosity-based methods, reading a solution through
+//!   [`twopass_scene::DiffuseRadiance`] only.
+//! - [`Reference`]: a path tracer with next-event estimation, MIS and Russian roulette, the
+//!   ground truth.
+//! - [`render()`]: the one render loop (tiles, rayon, per-(seed, pixel, sample) random streams,
+//!   progress, non-finite sample counting), producing named linear RGB [`Layer`]s that sum to
+//!   the image.
+//!
+//! Units: radiance in W/(m^2 sr) per linear RGB channel with areas in the scene's units (the
+//! emitters' L_e is given that way); BRDF values in 1/sr; pixel positions in pixels from the
+//! top-left corner.
+//!
+//! ```no_run
+//! use twopass_trace::{Progress, RenderSettings, Whitted, WhittedSettings, render};
+//! let (scene, _) = twopass_scene::load("scenes/cornell-spheres.toml")?;
+//! let camera = scene.camera.with_resolution(Some(64), None);
+//! let whitted = Whitted::new(twopass_trace::whitted::ambient_estimate(&scene), WhittedSettings::default());
+//! let out = render(&scene, &camera, &whitted, &RenderSettings::default(), &Progress::new());
+//! let image = out.layers.composite();
+//! eprintln!("{} rays/s, {} non-finite samples", out.stats.rays_per_second(), out.stats.non_finite);
+//! # let _ = image;
+//! # Ok::<(), twopass_scene::SceneError>(())
+//! ```
+
+pub mod film;
+pub mod hybrid;
+pub mod integrator;
+pub mod reference;
+pub mod render;
+pub mod sampler;
+pub mod whitted;
+
+pub use film::{Image, Layer, LayerImages, Radiance};
+pub use integrator::{Integrator, Tally};
+pub use reference::{Reference, ReferenceSettings};
+pub use render::{Progress, RenderOutput, RenderSettings, RenderStats, render};
+pub use sampler::Sampler;
+pub use whitted::{Whitted, WhittedSettings};

@@ -1,0 +1,209 @@
+//! The Whitted-style ray tracer (Whitted 1980) and the shading core it shares with the
+//! radiosity-based methods of [`crate::hybrid`].
+//!
+//! At each hit: emission (one-sided), the diffuse light from a [`DiffuseSource`], the glossy lobe
+//! of the material (Phong, Blinn-Phong, Cook-Torrance) against every emitter with stratified
+//! shadow rays, and the delta lobes followed recursively: perfect mirror, smooth conductor
+//! (reflecting in its own colour: exact complex Fresnel per channel) and smooth dielectric
+//! (Snell refraction with exact Fresnel weights and total internal reflection), until
+//! [`WhittedSettings::max_depth`] or until the path's throughput falls under
+//! [`WhittedSettings::min_throughput`]. Rays that leave the scene see black.
+//!
+//! | setting | unit | default | meaning |
+//! | --- | --- | --- | --- |
+//! | `max_depth` | bounces | 8 | delta bounces followed after the camera hit |
+//! | `min_throughput` | dimensionless | 1e-3 | a branch whose largest channel weight falls below is cut |
+//! | `shadow_grid` | samples per axis | 4 | shadow rays per emitter per shading point: grid^2 |
+
+use twopass_brdf::Rgb;
+use twopass_scene::{Ray, Scene};
+
+use crate::film::{Layer, Radiance};
+use crate::hybrid::DiffuseSource;
+use crate::integrator::{Integrator, Shading, Tally, direct_light, trace_from};
+use crate::sampler::Sampler;
+
+/// Recursion and shadow-ray settings of the Whitted-family tracers.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WhittedSettings {
+    /// Largest number of delta bounces (reflection or refraction) after the camera hit.
+    pub max_depth: u32,
+    /// Smallest throughput (largest channel of the product of delta weights, dimensionless)
+    /// for which a reflection or refraction ray is still traced.
+    pub min_throughput: f32,
+    /// Shadow rays per emitter and shading point along each axis of the stratification grid
+    /// (`shadow_grid`^2 rays; at least 1).
+    pub shadow_grid: u32,
+}
+
+impl Default for WhittedSettings {
+    fn default() -> Self {
+        Self {
+            max_depth: 8,
+            min_throughput: 1e-3,
+            shadow_grid: 4,
+        }
+    }
+}
+
+/// A Whitted-family ray tracer: camera rays, local models against emitters, delta lobes
+/// followed recursively, and diffuse light from a [`DiffuseSource`]. The classic Whitted
+/// tracer is [`Whitted::new`]; the radiosity-based methods are built in [`crate::hybrid`].
+#[derive(Clone, Copy)]
+pub struct Whitted<'a> {
+    pub(crate) source: DiffuseSource<'a>,
+    /// Whether the view-dependent terms (glossy lobes, reflection, refraction) are traced;
+    /// `false` only for radiosity alone.
+    pub(crate) view_dependent: bool,
+    pub(crate) settings: WhittedSettings,
+    pub(crate) name: &'static str,
+}
+
+impl std::fmt::Debug for Whitted<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Whitted")
+            .field("name", &self.name)
+            .field("view_dependent", &self.view_dependent)
+            .field("settings", &self.settings)
+            .finish_non_exhaustive()
+    }
+}
+
+impl<'a> Whitted<'a> {
+    /// The classic Whitted tracer: direct light by shadow rays and the constant ambient term
+    /// k_a I_amb in place of interreflection, with `ambient` = I_amb, a radiance in
+    /// W/(m^2 sr) per channel (see [`ambient_estimate`] for a value derived from the scene).
+    pub fn new(ambient: Rgb, settings: WhittedSettings) -> Self {
+        Self {
+            source: DiffuseSource::Ambient { ambient },
+            view_dependent: true,
+            settings,
+            name: "whitted",
+        }
+    }
+
+    /// The settings.
+    pub fn settings(&self) -> WhittedSettings {
+        self.settings
+    }
+
+    /// The layered radiance leaving the surface of `hit` toward the origin of a ray of unit
+    /// direction `direction`, `depth` delta bounces after the camera hit, reached with
+    /// throughput `throughput`.
+    fn shade(
+        &self,
+        scene: &Scene,
+        s: &Shading<'_>,
+        depth: u32,
+        throughput: Rgb,
+        sampler: &mut Sampler,
+        tally: &mut Tally,
+    ) -> Radiance {
+        let mut r = Radiance::ZERO;
+        let m = s.material;
+        let glossy = self.view_dependent && m.lobe().is_some_and(|l| !l.is_delta());
+
+        // Diffuse light (and emission) from the source; direct diffuse light by shadow rays
+        // when the source asks for it, sharing the shadow rays with the glossy lobe.
+        let direct_diffuse = self.source.diffuse(s, &mut r);
+        let need_diffuse = direct_diffuse && m.reflects_diffusely();
+        if s.hit.front_face && (need_diffuse || glossy) {
+            let [d, g] = direct_light(scene, s, self.settings.shadow_grid, sampler, tally, |wi| {
+                [
+                    if need_diffuse {
+                        m.eval_diffuse(s.wo, wi)
+                    } else {
+                        Rgb::ZERO
+                    },
+                    if glossy {
+                        m.eval_non_diffuse(s.wo, wi)
+                    } else {
+                        Rgb::ZERO
+                    },
+                ]
+            });
+            r.add(Layer::Diffuse, d);
+            r.add(Layer::DirectSpecular, g);
+        }
+
+        // Delta lobes, followed recursively.
+        if self.view_dependent
+            && depth < self.settings.max_depth
+            && let Some(lobe) = m.delta()
+        {
+            let rays = [
+                (lobe.reflection(s.wo), Layer::Reflection),
+                (lobe.refraction(s.wo), Layer::Refraction),
+            ];
+            for (ray, layer) in rays {
+                let Some(ray) = ray else { continue };
+                let t = throughput * ray.weight;
+                if t.max_element() < self.settings.min_throughput {
+                    continue;
+                }
+                let dir = s.frame.to_world(ray.wi).normalize();
+                if let Some(h) = trace_from(scene, s, dir, tally) {
+                    let child = Shading::new(scene, h, dir);
+                    let l = self.shade(scene, &child, depth + 1, t, sampler, tally);
+                    r.add(layer, ray.weight * l.total());
+                }
+            }
+        }
+        r
+    }
+}
+
+impl Integrator for Whitted<'_> {
+    fn name(&self) -> &'static str {
+        self.name
+    }
+
+    fn radiance(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        sampler: &mut Sampler,
+        tally: &mut Tally,
+    ) -> Radiance {
+        tally.rays += 1;
+        match scene.intersect(ray) {
+            None => Radiance::ZERO,
+            Some(hit) => {
+                let s = Shading::new(scene, hit, ray.direction);
+                self.shade(scene, &s, 0, Rgb::ONE, sampler, tally)
+            }
+        }
+    }
+}
+
+/// A constant ambient radiance I_amb (W/(m^2 sr) per channel) for the classic Whitted tracer,
+/// from the scene alone: the indirect irradiance of a uniformly lit enclosure,
+/// E_ind = (sum of emitted power / total area) * rho / (1 - rho), with rho the area-weighted
+/// mean diffuse reflectance, as radiance E_ind / pi (the estimate behind the ambient term of
+/// progressive radiosity, Cohen et al. 1988, with the first bounce left to the shadow rays).
+pub fn ambient_estimate(scene: &Scene) -> Rgb {
+    let total_area = scene.total_area();
+    if total_area <= 0.0 {
+        return Rgb::ZERO;
+    }
+    let mut rho_area = glam::DVec3::ZERO;
+    for o in &scene.objects {
+        let rho = scene.materials[o.material as usize]
+            .material
+            .diffuse_albedo()
+            .as_dvec3();
+        let area: f64 = o
+            .triangles
+            .clone()
+            .map(|t| f64::from(scene.mesh.areas[t as usize]))
+            .sum();
+        rho_area += rho * area;
+    }
+    let rho = rho_area / total_area;
+    let power = scene
+        .emitters
+        .iter()
+        .fold(glam::DVec3::ZERO, |a, e| a + e.power.as_dvec3());
+    let e_ind = power / total_area * rho / (glam::DVec3::ONE - rho);
+    (e_ind / std::f64::consts::PI).as_vec3()
+}
