@@ -18,6 +18,26 @@ pub enum BenchCommand {
     /// Ray queries per second (camera, incoherent, occlusion) on one and on all threads, and
     /// the BVH build time.
     Rays(RaysArgs),
+    /// Radiosity solves at several element counts: time, shots, rays, peak memory, and the
+    /// error against the dense solve where it fits.
+    Radiosity(RadiosityArgs),
+}
+
+/// Arguments of `twopass bench radiosity`.
+#[derive(Debug, Args)]
+pub struct RadiosityArgs {
+    /// Scene file (.toml or .obj).
+    pub scene: PathBuf,
+    /// Element counts to aim at (the mesh reaches about these by bisection).
+    #[arg(long, value_delimiter = ',', default_values_t = [1000u32, 10_000, 50_000])]
+    pub elements: Vec<u32>,
+    /// Unshot fraction to solve to.
+    #[arg(long, default_value_t = 1e-3)]
+    pub unshot: f64,
+    /// Compare with the dense solve when the mesh has at most this many vertices (its cost
+    /// grows as the cube).
+    #[arg(long, default_value_t = 3000)]
+    pub dense_max_vertices: usize,
 }
 
 /// Arguments of `twopass bench rays`.
@@ -68,7 +88,152 @@ struct Report {
 pub fn run(cmd: &BenchCommand, ctx: &Context) -> Result<(), CliError> {
     match cmd {
         BenchCommand::Rays(args) => rays(args, ctx),
+        BenchCommand::Radiosity(args) => radiosity(args, ctx),
     }
+}
+
+/// Peak resident memory of this process since the last [`reset_peak_memory`], bytes (Linux:
+/// VmHWM of /proc/self/status; `None` elsewhere).
+fn peak_memory() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+/// Resets the peak resident memory to the current one (Linux `clear_refs` 5), so each bench
+/// row reports its own peak.
+fn reset_peak_memory() {
+    let _ = std::fs::write("/proc/self/clear_refs", "5");
+}
+
+/// One measured radiosity solve.
+#[derive(Debug, Serialize)]
+struct SolveRow {
+    target_elements: u32,
+    element_size: f32,
+    patches: usize,
+    elements: usize,
+    vertices: usize,
+    shots: u64,
+    rays: u64,
+    seconds: f64,
+    /// Shadow rays per second over the whole solve.
+    mrays_per_s: f64,
+    unshot_fraction: f64,
+    peak_memory_mib: Option<f64>,
+    /// Relative RMS difference of the vertex radiosities to the dense solve, when it fits.
+    dense_relative_rms: Option<f64>,
+    dense_seconds: Option<f64>,
+}
+
+fn radiosity(args: &RadiosityArgs, ctx: &Context) -> Result<(), CliError> {
+    use twopass_radiosity::{Options, Solver, Stop, dense_solve};
+    let (scene, _) = twopass_scene::load(&args.scene)?;
+    let area = scene.total_area();
+    let progress = ctx.progress(args.elements.len() as u64, "bench radiosity");
+    let mut rows = Vec::new();
+    for &target in &args.elements {
+        // Bisection leaves are right triangles of area about L^2 / 4 for a longest edge L.
+        let element_size = (4.0 * area / f64::from(target.max(1))).sqrt() as f32;
+        let options = Options {
+            element_size: Some(element_size),
+            patch_size: Some((scene.bounds.diagonal() / 8.0).max(element_size)),
+            adaptive: None,
+            stop: Stop {
+                unshot_fraction: args.unshot,
+                ..Stop::default()
+            },
+            seed: ctx.seed,
+            ..Options::default()
+        };
+        reset_peak_memory();
+        let start = Instant::now();
+        let mut solver = Solver::new(&scene, options)
+            .map_err(|e| CliError::Input(format!("{}: {e}", args.scene.display())))?;
+        solver.run(|_| std::ops::ControlFlow::Continue(()));
+        let seconds = start.elapsed().as_secs_f64();
+        let p = solver.progress();
+        let peak = peak_memory();
+        let (dense_relative_rms, dense_seconds) = if p.vertices <= args.dense_max_vertices {
+            let t = Instant::now();
+            match dense_solve(&mut solver) {
+                Some(dense) => {
+                    let prog = solver.vertex_radiosity();
+                    let (mut num, mut den) = (0.0, 0.0);
+                    for (a, b) in prog.iter().zip(&dense) {
+                        num += (*a - *b).length_squared();
+                        den += b.length_squared();
+                    }
+                    (Some((num / den).sqrt()), Some(t.elapsed().as_secs_f64()))
+                }
+                None => (None, None),
+            }
+        } else {
+            (None, None)
+        };
+        rows.push(SolveRow {
+            target_elements: target,
+            element_size,
+            patches: p.patches,
+            elements: p.elements,
+            vertices: p.vertices,
+            shots: p.shots,
+            rays: p.rays,
+            seconds,
+            mrays_per_s: p.rays as f64 / seconds / 1e6,
+            unshot_fraction: p.unshot_fraction,
+            peak_memory_mib: peak.map(|b| b as f64 / (1024.0 * 1024.0)),
+            dense_relative_rms,
+            dense_seconds,
+        });
+        progress.inc(1);
+    }
+    progress.finish_and_clear();
+    if ctx.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&rows).expect("rows serialize")
+        );
+    } else if !ctx.quiet {
+        println!(
+            "scene {}: solve to unshot {:.0e}, fixed mesh, {} threads",
+            args.scene.display(),
+            args.unshot,
+            rayon::current_num_threads()
+        );
+        println!(
+            "{:>8} {:>8} {:>8} {:>8} {:>7} {:>11} {:>8} {:>8} {:>9} {:>11}",
+            "elements",
+            "vertices",
+            "patches",
+            "size",
+            "shots",
+            "rays",
+            "seconds",
+            "Mrays/s",
+            "peak MiB",
+            "dense rRMS"
+        );
+        for r in &rows {
+            println!(
+                "{:>8} {:>8} {:>8} {:>8.1} {:>7} {:>11} {:>8.2} {:>8.2} {:>9} {:>11}",
+                r.elements,
+                r.vertices,
+                r.patches,
+                r.element_size,
+                r.shots,
+                r.rays,
+                r.seconds,
+                r.mrays_per_s,
+                r.peak_memory_mib
+                    .map_or_else(|| "n/a".to_owned(), |m| format!("{m:.0}")),
+                r.dense_relative_rms
+                    .map_or_else(|| "-".to_owned(), |e| format!("{e:.2e}"))
+            );
+        }
+    }
+    Ok(())
 }
 
 enum Batch {
