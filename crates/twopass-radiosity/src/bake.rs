@@ -295,16 +295,20 @@ impl std::error::Error for BakeError {
 // Atomic writes
 
 /// Writes `bytes` to `path` atomically: a temporary file in the same folder (which must
-/// exist), synced to disk, then renamed over `path`. On any failure the temporary file is
+/// exist), synced to disk, then renamed over `path`, with the mode a new file would get. On any failure the temporary file is
 /// removed and `path` is left as it was.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), BakeError> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
-    let mut tmp = tempfile::Builder::new()
-        .prefix(".twopass-bake-")
-        .suffix(".tmp")
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".twopass-bake-").suffix(".tmp");
+    // Temporary files are private (0600) by default; an output gets the usual mode
+    // (0666 less the umask, as `File::create` would give it).
+    #[cfg(unix)]
+    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
+    let mut tmp = builder
         .tempfile_in(dir)
         .map_err(|e| BakeError::io(dir, e))?;
     tmp.write_all(bytes).map_err(|e| BakeError::io(path, e))?;
