@@ -28,6 +28,17 @@ pub enum CliError {
         /// What went wrong.
         message: String,
     },
+    /// A radiosity solve cannot start for this scene (no emitter, an option out of range).
+    #[error("{}: {source}", path.display())]
+    Solve {
+        /// The scene file.
+        path: PathBuf,
+        /// Why the solver refused.
+        source: twopass_radiosity::SolveError,
+    },
+    /// Encoding, writing or reading a bake output failed (the error names the file).
+    #[error(transparent)]
+    Bake(#[from] twopass_radiosity::bake::BakeError),
     /// The command's arguments are valid syntax but make no sense together or for this input.
     #[error("{0}")]
     Input(String),

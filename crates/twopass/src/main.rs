@@ -4,6 +4,7 @@
 //! `--height`, `--seed`, `--threads`, `--quiet`, `--json`). Exit codes: 0 on success, 1 on a user
 //! error (bad input; the message on stderr names the file and the problem), 2 on a usage error.
 
+mod bake;
 mod bench;
 mod brdf_check;
 mod context;
@@ -35,6 +36,9 @@ enum Command {
     Info(info::InfoArgs),
     /// Tabulate the plausibility of every reflection model and plot their lobes.
     BrdfCheck(brdf_check::BrdfCheckArgs),
+    /// Solve the scene's radiosity and write the baked lighting: glTF binary (.glb, COLOR_0),
+    /// PLY (float radiance), a bake file `render` can load, and a JSON manifest.
+    Bake(bake::BakeArgs),
     /// Measure the engine: ray queries (more benchmarks come with later passes).
     #[command(subcommand)]
     Bench(bench::BenchCommand),
@@ -61,6 +65,7 @@ fn run(cli: Cli) -> Result<(), CliError> {
     match &cli.command {
         Command::Info(args) => info::run(args, &cli.ctx),
         Command::BrdfCheck(args) => brdf_check::run(args, &cli.ctx),
+        Command::Bake(args) => bake::run(args, &cli.ctx),
         Command::Bench(cmd) => bench::run(cmd, &cli.ctx),
     }
 }

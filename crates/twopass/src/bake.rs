@@ -1,0 +1,271 @@
+//! `twopass bake SCENE`: solve the scene's radiosity once and write the baked lighting for
+//! engines and tools (glTF binary with `COLOR_0`, PLY with float radiance), a bake file that
+//! `twopass render` loads to render any view without solving again, and a JSON manifest of
+//! the settings, timings, rays, counts, unshot fraction and residuals.
+//!
+//! Files, in `--output DIR` (default `bake/`, created if missing), named after the scene file:
+//! `<stem>.glb`, `<stem>.ply`, `<stem>.bake` and `<stem>.manifest.json`. Each is written
+//! atomically (a temporary file in DIR, then a rename); the manifest comes last and lists the
+//! others. Formats and units: `twopass_radiosity::bake`.
+
+use std::collections::BTreeSet;
+use std::ops::ControlFlow;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use clap::{Args, ValueEnum};
+use twopass_radiosity::bake::{self, ColorMapping, ColorRecord, FileRecord, Manifest};
+use twopass_radiosity::{Adaptive, Options, Solver, Stop, VisibilityRays};
+
+use crate::context::Context;
+use crate::error::CliError;
+
+/// An output format of `twopass bake`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, ValueEnum)]
+pub enum Format {
+    /// glTF 2.0 binary: per-vertex linear colour COLOR_0 = min(1, exposure * radiance).
+    Glb,
+    /// Binary PLY: per-vertex float radiance, W/(m^2 sr).
+    Ply,
+    /// The bake file `twopass render` loads (the element mesh and radiosity, bit for bit).
+    Bake,
+}
+
+impl Format {
+    fn extension(self) -> &'static str {
+        match self {
+            Self::Glb => "glb",
+            Self::Ply => "ply",
+            Self::Bake => "bake",
+        }
+    }
+}
+
+/// Arguments of `twopass bake`.
+#[derive(Debug, Args)]
+pub struct BakeArgs {
+    /// Scene file (.toml) or mesh (.obj).
+    pub scene: PathBuf,
+    /// Outputs to write, comma separated (the manifest is always written).
+    #[arg(
+        long,
+        value_enum,
+        value_delimiter = ',',
+        default_value = "glb,ply,bake"
+    )]
+    pub format: Vec<Format>,
+    /// Stop when the unshot power falls below this fraction of the emitted power.
+    #[arg(long, default_value_t = 1e-3, value_name = "FRACTION")]
+    pub unshot: f64,
+    /// Stop after this many shots.
+    #[arg(long, value_name = "N")]
+    pub max_shots: Option<u64>,
+    /// Stop after this much wall-clock time, seconds (the result is usable but not
+    /// deterministic then).
+    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
+    pub time_budget: Option<Duration>,
+    /// Longest patch (shooter) edge, scene units [default: scene diagonal / 8].
+    #[arg(long, value_name = "LENGTH")]
+    pub patch_size: Option<f32>,
+    /// Longest element (receiver) edge before adaptive subdivision, scene units
+    /// [default: scene diagonal / 24].
+    #[arg(long, value_name = "LENGTH")]
+    pub element_size: Option<f32>,
+    /// Keep the element mesh fixed: no adaptive subdivision where the light changes fast.
+    #[arg(long)]
+    pub no_adaptive: bool,
+    /// Shadow rays per visibility estimate: a first estimate of MIN, up to MAX where the
+    /// visibility is partial or the receiver is close.
+    #[arg(long, value_name = "MIN,MAX", value_parser = parse_rays, default_value = "4,16")]
+    pub visibility_rays: VisibilityRays,
+    /// Multiplier from radiance (W/(m^2 sr)) to the .glb's COLOR_0, which is clipped at 1
+    /// [default: auto, the 99th-percentile vertex luminance maps to 1].
+    #[arg(long, value_name = "SR_M2_PER_W", value_parser = parse_exposure)]
+    pub exposure: Option<f32>,
+    /// Vertices and patch pairs sampled for the residual report.
+    #[arg(long, default_value_t = 200, value_name = "N")]
+    pub residual_samples: usize,
+}
+
+fn parse_seconds(s: &str) -> Result<Duration, String> {
+    let secs: f64 = s.parse().map_err(|e| format!("{e}"))?;
+    if !(secs.is_finite() && secs > 0.0) {
+        return Err(format!("{secs} must be a finite number of seconds > 0"));
+    }
+    Duration::try_from_secs_f64(secs).map_err(|e| e.to_string())
+}
+
+fn parse_rays(s: &str) -> Result<VisibilityRays, String> {
+    let (min, max) = s
+        .split_once(',')
+        .ok_or_else(|| format!("`{s}`: expected MIN,MAX such as 4,16"))?;
+    let parse = |x: &str| x.trim().parse::<u32>().map_err(|e| format!("`{x}`: {e}"));
+    let (min, max) = (parse(min)?, parse(max)?);
+    if min == 0 || max < min {
+        return Err(format!("{min},{max}: needs 1 <= MIN <= MAX"));
+    }
+    Ok(VisibilityRays { min, max })
+}
+
+fn parse_exposure(s: &str) -> Result<f32, String> {
+    let x: f32 = s.parse().map_err(|e| format!("{e}"))?;
+    if x.is_finite() && x > 0.0 {
+        Ok(x)
+    } else {
+        Err(format!("{x} must be finite and > 0"))
+    }
+}
+
+/// Bar position of an unshot fraction on a log scale: 0 at 1, `STEPS` at the target.
+const STEPS: u64 = 1000;
+
+fn bar_position(unshot: f64, target: f64) -> u64 {
+    let target = target.clamp(1e-15, 0.5);
+    let x = unshot.max(1e-300).ln() / target.ln();
+    (x.clamp(0.0, 1.0) * STEPS as f64).round() as u64
+}
+
+/// Solves the scene and writes the selected outputs and the manifest.
+pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
+    let started = Instant::now();
+    let (scene, warnings) = twopass_scene::load(&args.scene)?;
+    if !ctx.quiet {
+        for w in &warnings {
+            eprintln!("warning: {w}");
+        }
+    }
+    let load_time = started.elapsed();
+    let options = Options {
+        patch_size: args.patch_size,
+        element_size: args.element_size,
+        adaptive: (!args.no_adaptive).then(Adaptive::default),
+        visibility: args.visibility_rays,
+        stop: Stop {
+            unshot_fraction: args.unshot,
+            max_shots: args.max_shots,
+            time_budget: args.time_budget,
+        },
+        seed: ctx.seed,
+        ..Options::default()
+    };
+    let mut solver = Solver::new(&scene, options.clone()).map_err(|source| CliError::Solve {
+        path: args.scene.clone(),
+        source,
+    })?;
+    let bar = ctx.progress(STEPS, "radiosity");
+    let finish = solver.run(|p| {
+        bar.set_position(bar_position(p.unshot_fraction, args.unshot));
+        bar.set_message(format!("unshot {:.1e}", p.unshot_fraction));
+        ControlFlow::Continue(())
+    });
+    bar.finish_and_clear();
+    let progress = solver.progress();
+    let residuals_started = Instant::now();
+    let residuals = solver.residuals(args.residual_samples);
+    let residuals_time = residuals_started.elapsed();
+    let solution = solver.solution();
+    let mut manifest = Manifest::new(
+        &scene,
+        &options,
+        finish,
+        &progress,
+        &residuals,
+        args.residual_samples,
+        residuals_time,
+    );
+    manifest.timings.load_s = load_time.as_secs_f64();
+
+    let dir = ctx.output_or(Path::new("bake"));
+    std::fs::create_dir_all(dir).map_err(|e| CliError::io(dir, e))?;
+    let stem = args
+        .scene
+        .file_stem()
+        .map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned());
+    let writing_started = Instant::now();
+    let formats: BTreeSet<Format> = args.format.iter().copied().collect();
+    for format in formats {
+        let path = dir.join(format!("{stem}.{}", format.extension()));
+        let bytes = match format {
+            Format::Glb => {
+                let (mapping, mode) = match args.exposure {
+                    Some(exposure) => (ColorMapping { exposure }, "fixed"),
+                    None => (ColorMapping::auto(&solution), "auto"),
+                };
+                let glb = bake::encode_glb(&solution, &scene, mapping)?;
+                manifest.color = Some(ColorRecord {
+                    mapping: ColorMapping::FORMULA.into(),
+                    exposure: mapping.exposure,
+                    exposure_mode: mode.into(),
+                    clamped_vertices: glb.clamped_vertices,
+                });
+                glb.bytes
+            }
+            Format::Ply => bake::encode_ply(&solution, &scene)?,
+            Format::Bake => bake::encode_bake(&solution, &scene)?,
+        };
+        bake::write_atomic(&path, &bytes)?;
+        manifest.files.push(FileRecord {
+            format: format.extension().into(),
+            path,
+            bytes: bytes.len() as u64,
+        });
+    }
+    manifest.timings.writing_s = writing_started.elapsed().as_secs_f64();
+    manifest.timings.total_s = started.elapsed().as_secs_f64();
+    let manifest_path = dir.join(format!("{stem}.manifest.json"));
+    let json = manifest.to_json()?;
+    bake::write_atomic(&manifest_path, &json)?;
+
+    if ctx.json {
+        print!("{}", String::from_utf8_lossy(&json));
+    } else if ctx.chatty() {
+        print_summary(&manifest, &manifest_path);
+    }
+    Ok(())
+}
+
+fn print_summary(m: &Manifest, manifest_path: &Path) {
+    let t = &m.timings;
+    println!(
+        "{}: {} after {} shots in {:.2} s (load {:.2}, meshing {:.2}, shooting {:.2}, \
+         refining {:.2}, residuals {:.2}, writing {:.2})",
+        m.scene.display(),
+        m.finish.replace('_', " "),
+        m.shots,
+        t.total_s,
+        t.load_s,
+        t.meshing_s,
+        t.shooting_s,
+        t.refining_s,
+        t.residuals_s,
+        t.writing_s
+    );
+    let c = &m.counts;
+    println!(
+        "  {} patches, {} elements, {} vertices, {} refinement rounds; {:.3e} shadow rays",
+        c.patches, c.elements, c.vertices, c.refinement_rounds, m.rays as f64
+    );
+    let r = &m.residuals;
+    println!(
+        "  unshot fraction {:.2e}; energy imbalance {:.1e}; form-factor row sums {:.3}..{:.3} \
+         (mean {:.3}); reciprocity spread {:.2e} (weighted {:.2e}, {} pairs)",
+        m.unshot_fraction,
+        r.energy_imbalance,
+        r.row_sum_min,
+        r.row_sum_max,
+        r.row_sum_mean,
+        r.reciprocity_spread,
+        r.reciprocity_mean,
+        r.reciprocity_pairs
+    );
+    if let Some(color) = &m.color {
+        println!(
+            "  glb COLOR_0 = min(1, {:.4e} * L) ({} exposure), {} vertices clipped",
+            color.exposure, color.exposure_mode, color.clamped_vertices
+        );
+    }
+    for f in &m.files {
+        println!("  wrote {} ({} bytes)", f.path.display(), f.bytes);
+    }
+    println!("  wrote {}", manifest_path.display());
+}

@@ -1,0 +1,274 @@
+//! `twopass bake` as scripts drive it: the files it writes, a manifest whose numbers are the
+//! solver's, and clear failures (no emitter, unwritable output, bad options).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use twopass_radiosity::bake;
+
+fn repo(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../..")
+        .join(rel)
+}
+
+fn twopass(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_twopass"))
+        .args(args)
+        .env("CI", "1")
+        .output()
+        .expect("the binary runs")
+}
+
+fn file_names(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+const COARSE: [&str; 6] = [
+    "--element-size",
+    "60",
+    "--patch-size",
+    "150",
+    "--unshot",
+    "1e-2",
+];
+
+#[test]
+fn cornell_bake_writes_every_file_and_a_truthful_manifest() {
+    let out_dir = tempfile::tempdir().unwrap();
+    let dir = out_dir.path().join("lighting");
+    let scene_path = repo("scenes/cornell-box.toml");
+    let mut args = vec![
+        "bake",
+        scene_path.to_str().unwrap(),
+        "--output",
+        dir.to_str().unwrap(),
+        "--json",
+    ];
+    args.extend(COARSE);
+    let out = twopass(&args);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(
+        file_names(&dir),
+        [
+            "cornell-box.bake",
+            "cornell-box.glb",
+            "cornell-box.manifest.json",
+            "cornell-box.ply"
+        ]
+    );
+    let manifest_bytes = std::fs::read(dir.join("cornell-box.manifest.json")).unwrap();
+    assert_eq!(out.stdout, manifest_bytes, "--json prints the manifest");
+    let m: serde_json::Value = serde_json::from_slice(&manifest_bytes).unwrap();
+
+    assert!(m["rays"].as_u64().unwrap() > 0);
+    assert!(m["shots"].as_u64().unwrap() > 0);
+    assert_eq!(m["finish"], "converged");
+    let unshot = m["unshot_fraction"].as_f64().unwrap();
+    assert!(unshot > 0.0 && unshot <= 1e-2, "{unshot}");
+    assert_eq!(m["settings"]["unshot_fraction"], 1e-2);
+    assert_eq!(m["settings"]["element_size"], 60.0);
+    assert_eq!(m["settings"]["patch_size"], 150.0);
+    assert_eq!(m["settings"]["seed"], 0);
+    for phase in [
+        "load_s",
+        "meshing_s",
+        "shooting_s",
+        "refining_s",
+        "residuals_s",
+    ] {
+        assert!(m["timings"][phase].as_f64().unwrap() >= 0.0, "{phase}");
+    }
+    let total = m["timings"]["total_s"].as_f64().unwrap();
+    assert!(total >= m["timings"]["shooting_s"].as_f64().unwrap());
+    assert!(m["residuals"]["energy_imbalance"].as_f64().unwrap() < 1e-6);
+    let color = &m["color"];
+    assert_eq!(color["exposure_mode"], "auto");
+    assert!(color["exposure"].as_f64().unwrap() > 0.0);
+
+    // The manifest's counts are those of the solution in the bake file.
+    let (scene, _) = twopass_scene::load(&scene_path).unwrap();
+    let solution = bake::read_bake(&dir.join("cornell-box.bake"), &scene).unwrap();
+    let mesh = solution.mesh();
+    assert_eq!(
+        m["counts"]["elements"].as_u64().unwrap() as usize,
+        mesh.leaves().count()
+    );
+    assert_eq!(
+        m["counts"]["vertices"].as_u64().unwrap() as usize,
+        mesh.vertices.len()
+    );
+    assert_eq!(
+        m["counts"]["patches"].as_u64().unwrap() as usize,
+        mesh.patches.len()
+    );
+    assert_eq!(
+        m["geometry_fingerprint"],
+        format!("{:016x}", bake::geometry_fingerprint(&scene))
+    );
+
+    // Every listed file exists with the listed size.
+    let files = m["files"].as_array().unwrap();
+    assert_eq!(files.len(), 3);
+    for f in files {
+        let path = PathBuf::from(f["path"].as_str().unwrap());
+        assert_eq!(
+            std::fs::metadata(&path).unwrap().len(),
+            f["bytes"].as_u64().unwrap()
+        );
+    }
+
+    // The .glb is valid glTF with one COLOR_0 per vertex; the .ply parses.
+    let glb = std::fs::read(dir.join("cornell-box.glb")).unwrap();
+    let gltf = gltf::Gltf::from_slice(&glb).unwrap();
+    let blob = gltf.blob.as_deref().unwrap();
+    let mut vertices = 0;
+    for g in gltf.meshes() {
+        for p in g.primitives() {
+            let r = p.reader(|_| Some(blob));
+            let n = r.read_positions().unwrap().len();
+            assert_eq!(r.read_colors(0).unwrap().into_rgb_f32().len(), n);
+            vertices += n;
+        }
+    }
+    assert_eq!(vertices, mesh.vertices.len());
+    let ply = std::fs::read(dir.join("cornell-box.ply")).unwrap();
+    let ply = ply_rs_bw::parser::Parser::<ply_rs_bw::ply::DefaultElement>::new()
+        .read_ply(&mut ply.as_slice())
+        .unwrap();
+    assert_eq!(ply.payload["vertex"].len(), mesh.vertices.len());
+    assert_eq!(ply.payload["face"].len(), mesh.leaves().count());
+}
+
+#[test]
+fn format_selects_the_outputs_and_exposure_is_recorded() {
+    let out_dir = tempfile::tempdir().unwrap();
+    let scene_path = repo("scenes/cornell-box.toml");
+    let out = twopass(&[
+        "bake",
+        scene_path.to_str().unwrap(),
+        "-o",
+        out_dir.path().to_str().unwrap(),
+        "--format",
+        "glb",
+        "--no-adaptive",
+        "--max-shots",
+        "40",
+        "--element-size",
+        "100",
+        "--visibility-rays",
+        "1,4",
+        "--exposure",
+        "0.5",
+        "--quiet",
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(out.stdout.is_empty() && out.stderr.is_empty(), "--quiet");
+    assert_eq!(
+        file_names(out_dir.path()),
+        ["cornell-box.glb", "cornell-box.manifest.json"]
+    );
+    let m: serde_json::Value = serde_json::from_slice(
+        &std::fs::read(out_dir.path().join("cornell-box.manifest.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(m["finish"], "max_shots");
+    assert_eq!(m["shots"], 40);
+    assert_eq!(m["settings"]["adaptive"], serde_json::Value::Null);
+    assert_eq!(m["settings"]["visibility_rays_min"], 1);
+    assert_eq!(m["settings"]["visibility_rays_max"], 4);
+    assert_eq!(m["color"]["exposure"], 0.5);
+    assert_eq!(m["color"]["exposure_mode"], "fixed");
+    assert_eq!(m["counts"]["refinement_rounds"], 0);
+}
+
+#[test]
+fn a_scene_without_emitters_is_a_clear_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("dark.toml");
+    std::fs::write(
+        &scene,
+        "version = 1\n[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\nfov_y = 40\n\
+         [[material]]\nname = \"w\"\ntype = \"lambert\"\ndiffuse = 0.5\n\
+         [[object]]\nname = \"q\"\nmaterial = \"w\"\n\
+         shape = { type = \"quad\", origin = [0, 0, 0], edge_u = [2, 0, 0], edge_v = [0, 1, 0] }\n",
+    )
+    .unwrap();
+    let out_dir = dir.path().join("out");
+    let out = twopass(&[
+        "bake",
+        scene.to_str().unwrap(),
+        "-o",
+        out_dir.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("dark.toml") && err.contains("emits"), "{err}");
+    assert!(
+        !out_dir.exists(),
+        "nothing written before the solve can start"
+    );
+}
+
+#[test]
+fn an_unwritable_output_fails_without_partial_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let blocker = dir.path().join("taken");
+    std::fs::write(&blocker, b"a file, not a folder").unwrap();
+    let scene_path = repo("scenes/cornell-box.toml");
+    let out = twopass(&[
+        "bake",
+        scene_path.to_str().unwrap(),
+        "-o",
+        blocker.to_str().unwrap(),
+        "--max-shots",
+        "5",
+        "--no-adaptive",
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("taken"), "{err}");
+    assert_eq!(file_names(dir.path()), ["taken"]);
+    assert_eq!(std::fs::read(&blocker).unwrap(), b"a file, not a folder");
+}
+
+#[test]
+fn bad_solver_options_are_usage_errors() {
+    let scene = repo("scenes/cornell-box.toml");
+    let scene = scene.to_str().unwrap();
+    for bad in [
+        &["--visibility-rays", "8,4"][..],
+        &["--visibility-rays", "0,4"],
+        &["--visibility-rays", "4"],
+        &["--time-budget", "-1"],
+        &["--exposure", "0"],
+        &["--format", "obj"],
+    ] {
+        let mut args = vec!["bake", scene];
+        args.extend(bad);
+        assert_eq!(twopass(&args).status.code(), Some(2), "{bad:?}");
+    }
+    // Syntactically fine but out of range for the solver: a user error naming the file.
+    let out = twopass(&["bake", scene, "--element-size=-3", "-o", "/nonexistent/x"]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("cornell-box.toml") && err.contains("element_size"),
+        "{err}"
+    );
+}
