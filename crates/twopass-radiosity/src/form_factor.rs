@@ -22,7 +22,10 @@ const PLANE_TOLERANCE: f64 = 1e-6;
 /// approximation, and is exact for any distance.
 pub fn point_to_polygon(x: DVec3, n: DVec3, poly: &[DVec3], shooter_normal: Option<DVec3>) -> f64 {
     let centroid = poly.iter().sum::<DVec3>() / poly.len() as f64;
-    let size = poly.iter().map(|p| (*p - centroid).length()).fold(0.0, f64::max);
+    let size = poly
+        .iter()
+        .map(|p| (*p - centroid).length())
+        .fold(0.0, f64::max);
     if let Some(ns) = shooter_normal
         && (x - centroid).dot(ns) <= PLANE_TOLERANCE * (size + (x - centroid).length())
     {
@@ -34,7 +37,11 @@ pub fn point_to_polygon(x: DVec3, n: DVec3, poly: &[DVec3], shooter_normal: Opti
     let mut clipped: Vec<DVec3> = Vec::with_capacity(poly.len() + 2);
     let h = |p: DVec3| {
         let d = (p - x).dot(n);
-        if d.abs() <= PLANE_TOLERANCE * (p - x).length() { 0.0 } else { d }
+        if d.abs() <= PLANE_TOLERANCE * (p - x).length() {
+            0.0
+        } else {
+            d
+        }
     };
     for k in 0..poly.len() {
         let (a, b) = (poly[k], poly[(k + 1) % poly.len()]);
@@ -254,8 +261,16 @@ mod tests {
         let sq = square(0.0, 0.5);
         // The receiver inside, on the edge of, and outside a polygon in its own plane, with
         // rounding noise in the heights.
-        for x in [DVec3::new(0.1, 0.2, 1e-9), DVec3::new(0.5, 0.0, -1e-9), DVec3::new(2.0, 0.0, 0.0)] {
-            assert_eq!(point_to_polygon(x, DVec3::Z, &sq, Some(DVec3::Z)), 0.0, "{x}");
+        for x in [
+            DVec3::new(0.1, 0.2, 1e-9),
+            DVec3::new(0.5, 0.0, -1e-9),
+            DVec3::new(2.0, 0.0, 0.0),
+        ] {
+            assert_eq!(
+                point_to_polygon(x, DVec3::Z, &sq, Some(DVec3::Z)),
+                0.0,
+                "{x}"
+            );
             assert_eq!(point_to_polygon(x, DVec3::Z, &sq, None), 0.0, "{x}");
         }
     }

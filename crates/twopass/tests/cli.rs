@@ -120,7 +120,8 @@ fn bench_radiosity_reports_each_mesh_with_the_dense_check() {
     for r in rows {
         assert!(r["unshot_fraction"].as_f64().unwrap() <= 1e-2);
         assert!(r["rays"].as_u64().unwrap() > 0);
-        // Small meshes are checked against the dense solve: 1 % at unshot 1e-2 is loose.
-        assert!(r["dense_relative_rms"].as_f64().unwrap() < 5e-2);
+        // Small meshes are checked against the dense solve. What is still unshot, u, becomes
+        // at most u / (1 - rho_max) of the radiosity once interreflected (rho_max = 0.725).
+        assert!(r["dense_relative_rms"].as_f64().unwrap() < 1e-2 / (1.0 - 0.725));
     }
 }
