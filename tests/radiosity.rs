@@ -17,7 +17,14 @@ fn scene(objects: &str, materials: &str) -> Scene {
     load_toml(&text, Path::new("inline.toml")).unwrap().0
 }
 
-fn quad(name: &str, material: &str, origin: [f64; 3], u: [f64; 3], v: [f64; 3], emission: Option<f64>) -> String {
+fn quad(
+    name: &str,
+    material: &str,
+    origin: [f64; 3],
+    u: [f64; 3],
+    v: [f64; 3],
+    emission: Option<f64>,
+) -> String {
     let e = emission.map_or_else(String::new, |e| format!("emission = {e}\n"));
     format!(
         "[[object]]\nname = \"{name}\"\nmaterial = \"{material}\"\n{e}shape = {{ type = \"quad\", origin = {origin:?}, edge_u = {u:?}, edge_v = {v:?} }}\n"
@@ -31,7 +38,11 @@ fn lambert(name: &str, rho: f64) -> String {
 fn run(solver: &mut Solver<'_>) {
     solver.run(|_| ControlFlow::Continue(()));
     let p = solver.progress();
-    assert!(p.worst_imbalance < 1e-6, "energy imbalance {}", p.worst_imbalance);
+    assert!(
+        p.worst_imbalance < 1e-6,
+        "energy imbalance {}",
+        p.worst_imbalance
+    );
 }
 
 /// Area-weighted form factor from every patch of object `from` to all patches of object `to`.
@@ -40,7 +51,10 @@ fn object_form_factor(solver: &mut Solver<'_>, from: u32, to: u32) -> f64 {
     let weights = solver.patch_weights();
     let areas = solver.patch_areas();
     let mesh = solver.mesh().clone();
-    let object = |p: usize| solver.scene().mesh.triangle_object[mesh.nodes[mesh.patches[p] as usize].scene_triangle as usize];
+    let object = |p: usize| {
+        solver.scene().mesh.triangle_object
+            [mesh.nodes[mesh.patches[p] as usize].scene_triangle as usize]
+    };
     let (mut num, mut area) = (0.0, 0.0);
     for p in 0..mesh.patches.len() {
         if object(p) != from {
@@ -48,7 +62,12 @@ fn object_form_factor(solver: &mut Solver<'_>, from: u32, to: u32) -> f64 {
         }
         let f: f64 = (0..mesh.patches.len())
             .filter(|&q| object(q) == to)
-            .map(|q| weights[p].iter().map(|&(v, w)| w * f64::from(rows[q][v as usize])).sum::<f64>())
+            .map(|q| {
+                weights[p]
+                    .iter()
+                    .map(|&(v, w)| w * f64::from(rows[q][v as usize]))
+                    .sum::<f64>()
+            })
             .sum();
         num += f * areas[p];
         area += areas[p];
@@ -61,33 +80,75 @@ fn parallel_and_perpendicular_squares_match_siegel_and_howell() {
     let m = lambert("w", 0.5);
     // Two directly opposed unit squares at distance 1: 0.199825.
     let s = scene(
-        &(quad("a", "w", [0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], Some(1.0))
-            + &quad("b", "w", [0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0], None)),
+        &(quad(
+            "a",
+            "w",
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            Some(1.0),
+        ) + &quad(
+            "b",
+            "w",
+            [0.0, 0.0, 1.0],
+            [0.0, 1.0, 0.0],
+            [1.0, 0.0, 0.0],
+            None,
+        )),
         &m,
     );
     let mut coarse = f64::NAN;
     for (k, element) in [None, Some(0.02)].into_iter().enumerate() {
-        let mut solver = Solver::new(&s, Options { element_size: element, ..Options::default() }).unwrap();
+        let mut solver = Solver::new(
+            &s,
+            Options {
+                element_size: element,
+                ..Options::default()
+            },
+        )
+        .unwrap();
         let f = object_form_factor(&mut solver, 0, 1);
         let err = (f - 0.199825).abs() / 0.199825;
         assert!(err < 5e-3, "parallel squares: {f} (error {err})");
         if k == 0 {
             coarse = err;
         } else {
-            assert!(err <= coarse, "finer elements must not be worse: {err} vs {coarse}");
+            assert!(
+                err <= coarse,
+                "finer elements must not be worse: {err} vs {coarse}"
+            );
         }
         let back = object_form_factor(&mut solver, 1, 0);
-        assert!((back - f).abs() < 5e-3 * f, "reciprocity with equal areas: {back} vs {f}");
+        assert!(
+            (back - f).abs() < 5e-3 * f,
+            "reciprocity with equal areas: {back} vs {f}"
+        );
     }
     // Perpendicular unit squares sharing an edge: 0.200044.
     let s = scene(
-        &(quad("floor", "w", [0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], Some(1.0))
-            + &quad("wall", "w", [0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], None)),
+        &(quad(
+            "floor",
+            "w",
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            Some(1.0),
+        ) + &quad(
+            "wall",
+            "w",
+            [0.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            None,
+        )),
         &m,
     );
     let mut solver = Solver::new(&s, Options::default()).unwrap();
     let f = object_form_factor(&mut solver, 1, 0);
-    assert!((f - 0.200044).abs() < 5e-3 * 0.200044, "perpendicular squares: {f}");
+    assert!(
+        (f - 0.200044).abs() < 5e-3 * 0.200044,
+        "perpendicular squares: {f}"
+    );
 }
 
 fn cube(rho: f64, emission: f64) -> Scene {
@@ -117,7 +178,10 @@ fn closed_cube_rows_sum_to_one() {
     let s = cube(0.5, 1.0);
     let mut solver = Solver::new(&s, Options::default()).unwrap();
     let r = solver.residuals(10_000);
-    assert!((r.row_sum_min - 1.0).abs() < 5e-3 && (r.row_sum_max - 1.0).abs() < 5e-3, "{r:?}");
+    assert!(
+        (r.row_sum_min - 1.0).abs() < 5e-3 && (r.row_sum_max - 1.0).abs() < 5e-3,
+        "{r:?}"
+    );
 }
 
 #[test]
@@ -128,7 +192,10 @@ fn furnace_converges_to_e_over_one_minus_rho() {
             patch_size: Some(1.0),
             element_size: Some(0.5),
             adaptive: None,
-            stop: Stop { unshot_fraction: 1e-6, ..Stop::default() },
+            stop: Stop {
+                unshot_fraction: 1e-6,
+                ..Stop::default()
+            },
             ..Options::default()
         };
         let mut solver = Solver::new(&s, options).unwrap();
@@ -136,12 +203,18 @@ fn furnace_converges_to_e_over_one_minus_rho() {
         let expected = std::f64::consts::PI / (1.0 - rho); // E = pi L_e with L_e = 1
         for (v, b) in solver.vertex_radiosity().iter().enumerate() {
             for c in 0..3 {
-                assert!((b[c] - expected).abs() < 1e-3 * expected, "rho {rho}: vertex {v} has {b}, expected {expected}");
+                assert!(
+                    (b[c] - expected).abs() < 1e-3 * expected,
+                    "rho {rho}: vertex {v} has {b}, expected {expected}"
+                );
             }
         }
         // Nothing escapes a closed box: emitted = absorbed (+ what is still unshot).
         let e = solver.progress().energy;
-        assert!(e.escaped.abs().max_element() < 1e-3 * e.emitted.max_element(), "{e:?}");
+        assert!(
+            e.escaped.abs().max_element() < 1e-3 * e.emitted.max_element(),
+            "{e:?}"
+        );
     }
 }
 
@@ -152,17 +225,28 @@ fn ambient_term_makes_partial_solutions_plausible() {
         patch_size: Some(1.0),
         element_size: Some(0.5),
         adaptive: None,
-        stop: Stop { unshot_fraction: 0.3, ..Stop::default() },
+        stop: Stop {
+            unshot_fraction: 0.3,
+            ..Stop::default()
+        },
         ..Options::default()
     };
     let mut solver = Solver::new(&s, options).unwrap();
     run(&mut solver);
     let expected = std::f32::consts::PI / 0.1;
     let sol = solver.solution();
-    let err = |values: &[glam::Vec3]| values.iter().map(|b| ((b.x - expected) / expected).abs()).fold(0.0, f32::max);
+    let err = |values: &[glam::Vec3]| {
+        values
+            .iter()
+            .map(|b| ((b.x - expected) / expected).abs())
+            .fold(0.0, f32::max)
+    };
     let with = err(&sol.vertex_radiosity());
     let without = err(sol.shot_radiosity());
-    assert!(without > 0.2, "a partial solve is far from converged: {without}");
+    assert!(
+        without > 0.2,
+        "a partial solve is far from converged: {without}"
+    );
     assert!(with < without / 5.0, "ambient {with} vs none {without}");
 }
 
@@ -170,8 +254,14 @@ fn cornell_options(unshot: f64) -> Options {
     Options {
         patch_size: Some(150.0),
         element_size: Some(60.0),
-        adaptive: Some(Adaptive { rounds: 1, ..Adaptive::default() }),
-        stop: Stop { unshot_fraction: unshot, ..Stop::default() },
+        adaptive: Some(Adaptive {
+            rounds: 1,
+            ..Adaptive::default()
+        }),
+        stop: Stop {
+            unshot_fraction: unshot,
+            ..Stop::default()
+        },
         ..Options::default()
     }
 }
@@ -202,7 +292,10 @@ fn progressive_refinement_converges_to_the_dense_solve() {
 fn same_seed_same_solution_on_one_or_two_threads() {
     let (s, _) = load(scene_path("cornell-box.toml")).unwrap();
     let solve = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
         pool.install(|| {
             let mut solver = Solver::new(&s, cornell_options(1e-2)).unwrap();
             run(&mut solver);
@@ -210,7 +303,11 @@ fn same_seed_same_solution_on_one_or_two_threads() {
         })
     };
     let (one, two) = (solve(1), solve(2));
-    assert!(one.iter().zip(&two).all(|(a, b)| a.to_array().map(f64::to_bits) == b.to_array().map(f64::to_bits)));
+    assert!(
+        one.iter()
+            .zip(&two)
+            .all(|(a, b)| a.to_array().map(f64::to_bits) == b.to_array().map(f64::to_bits))
+    );
 }
 
 #[test]
@@ -220,7 +317,13 @@ fn cornell_box_lookup_is_continuous_and_finite() {
     run(&mut solver);
     let sol = solver.solution();
     // Walk across the floor's first triangle: no jumps bigger than the gradient allows.
-    let floor = s.objects.iter().find(|o| o.name == "floor").unwrap().triangles.start;
+    let floor = s
+        .objects
+        .iter()
+        .find(|o| o.name == "floor")
+        .unwrap()
+        .triangles
+        .start;
     let mut prev = None;
     for k in 0..=400 {
         let b1 = 0.1 + 0.6 * k as f32 / 400.0;
@@ -228,12 +331,21 @@ fn cornell_box_lookup_is_continuous_and_finite() {
         assert!(l.is_finite() && l.min_element() >= 0.0);
         if let Some(p) = prev {
             let step: glam::Vec3 = l - p;
-            assert!(step.abs().max_element() < 0.05 * l.max_element().max(1.0), "jump {step} at {k}");
+            assert!(
+                step.abs().max_element() < 0.05 * l.max_element().max(1.0),
+                "jump {step} at {k}"
+            );
         }
         prev = Some(l);
     }
     // Light leaves the emitter at its radiance; the ceiling behind it gets none directly.
-    let light = s.objects.iter().find(|o| o.name == "light").unwrap().triangles.start;
+    let light = s
+        .objects
+        .iter()
+        .find(|o| o.name == "light")
+        .unwrap()
+        .triangles
+        .start;
     let l = sol.radiance(light, [1.0 / 3.0; 3]);
     assert!((l.x - 17.0).abs() / 17.0 < 0.05, "light radiance {l}");
 }
@@ -242,20 +354,50 @@ fn cornell_box_lookup_is_continuous_and_finite() {
 fn emitters_from_1e_minus_6_to_1e6_scale_linearly() {
     let solve = |e: f64| {
         let s = scene(
-            &(quad("light", "w", [0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0], Some(e))
-                + &quad("floor", "w", [-1.0, -1.0, 0.0], [3.0, 0.0, 0.0], [0.0, 3.0, 0.0], None)),
+            &(quad(
+                "light",
+                "w",
+                [0.0, 0.0, 1.0],
+                [0.0, 1.0, 0.0],
+                [1.0, 0.0, 0.0],
+                Some(e),
+            ) + &quad(
+                "floor",
+                "w",
+                [-1.0, -1.0, 0.0],
+                [3.0, 0.0, 0.0],
+                [0.0, 3.0, 0.0],
+                None,
+            )),
             &lambert("w", 0.7),
         );
-        let mut solver = Solver::new(&s, Options { stop: Stop { unshot_fraction: 1e-6, ..Stop::default() }, ..Options::default() }).unwrap();
+        let mut solver = Solver::new(
+            &s,
+            Options {
+                stop: Stop {
+                    unshot_fraction: 1e-6,
+                    ..Stop::default()
+                },
+                ..Options::default()
+            },
+        )
+        .unwrap();
         run(&mut solver);
-        solver.vertex_radiosity().into_iter().map(|b| b / e).collect::<Vec<_>>()
+        solver
+            .vertex_radiosity()
+            .into_iter()
+            .map(|b| b / e)
+            .collect::<Vec<_>>()
     };
     let (lo, hi) = (solve(1e-6), solve(1e6));
     assert_eq!(lo.len(), hi.len());
     for (a, b) in lo.iter().zip(&hi) {
         assert!(a.is_finite() && b.is_finite());
         // The emissions themselves are f32 in the scene: 1e-6 is stored to 3e-9 relative.
-        assert!((*a - *b).abs().max_element() <= 4.0 * f64::from(f32::EPSILON) * b.abs().max_element(), "{a} vs {b}");
+        assert!(
+            (*a - *b).abs().max_element() <= 4.0 * f64::from(f32::EPSILON) * b.abs().max_element(),
+            "{a} vs {b}"
+        );
     }
 }
 
@@ -263,11 +405,31 @@ fn emitters_from_1e_minus_6_to_1e6_scale_linearly() {
 fn receiver_a_micron_from_the_shooter_stays_bounded() {
     // A unit emitter facing a receiver 1e-6 away: F -> 1, so B -> rho E, finite.
     let s = scene(
-        &(quad("light", "w", [0.0, 0.0, 1e-6], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0], Some(1.0))
-            + &quad("floor", "w", [0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], None)),
+        &(quad(
+            "light",
+            "w",
+            [0.0, 0.0, 1e-6],
+            [0.0, 1.0, 0.0],
+            [1.0, 0.0, 0.0],
+            Some(1.0),
+        ) + &quad(
+            "floor",
+            "w",
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            None,
+        )),
         &lambert("w", 0.5),
     );
-    let mut solver = Solver::new(&s, Options { adaptive: None, ..Options::default() }).unwrap();
+    let mut solver = Solver::new(
+        &s,
+        Options {
+            adaptive: None,
+            ..Options::default()
+        },
+    )
+    .unwrap();
     run(&mut solver);
     let sol = solver.solution();
     let floor = s.objects[1].triangles.start;
@@ -275,14 +437,30 @@ fn receiver_a_micron_from_the_shooter_stays_bounded() {
     // B = E rho (1 + rho_light F ... ): the light reflects too; one bounce dominates, bounded by
     // rho E / (1 - rho^2) for two facing plates with F = 1.
     let e = std::f32::consts::PI;
-    assert!(b.is_finite() && b.x >= 0.5 * e * 0.99 && b.x <= 0.5 * e / (1.0 - 0.25) * 1.01, "{b}");
+    assert!(
+        b.is_finite() && b.x >= 0.5 * e * 0.99 && b.x <= 0.5 * e / (1.0 - 0.25) * 1.01,
+        "{b}"
+    );
 }
 
 #[test]
 fn coplanar_touching_patches_exchange_nothing() {
     let s = scene(
-        &(quad("light", "w", [0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], Some(1.0))
-            + &quad("beside", "w", [1.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], None)),
+        &(quad(
+            "light",
+            "w",
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            Some(1.0),
+        ) + &quad(
+            "beside",
+            "w",
+            [1.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            None,
+        )),
         &lambert("w", 0.5),
     );
     let mut solver = Solver::new(&s, Options::default()).unwrap();
@@ -290,7 +468,11 @@ fn coplanar_touching_patches_exchange_nothing() {
     let sol = solver.solution();
     for t in s.objects[1].triangles.clone() {
         for b in [[1.0 / 3.0; 3], [0.0, 0.0, 1.0], [0.5, 0.5, 0.0]] {
-            assert_eq!(sol.radiance(t, b), glam::Vec3::ZERO, "coplanar neighbour receives nothing");
+            assert_eq!(
+                sol.radiance(t, b),
+                glam::Vec3::ZERO,
+                "coplanar neighbour receives nothing"
+            );
         }
     }
 }
@@ -299,9 +481,28 @@ fn coplanar_touching_patches_exchange_nothing() {
 fn elements_of_very_different_sizes_side_by_side() {
     // A 1 mm^2 quad beside a 1 km^2 one under the same light.
     let s = scene(
-        &(quad("light", "w", [0.0, 0.0, 2.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0], Some(1.0))
-            + &quad("tiny", "w", [0.0, 0.0, 0.0], [1e-3, 0.0, 0.0], [0.0, 1e-3, 0.0], None)
-            + &quad("big", "w", [1e-3, -500.0, 0.0], [1000.0, 0.0, 0.0], [0.0, 1000.0, 0.0], None)),
+        &(quad(
+            "light",
+            "w",
+            [0.0, 0.0, 2.0],
+            [0.0, 1.0, 0.0],
+            [1.0, 0.0, 0.0],
+            Some(1.0),
+        ) + &quad(
+            "tiny",
+            "w",
+            [0.0, 0.0, 0.0],
+            [1e-3, 0.0, 0.0],
+            [0.0, 1e-3, 0.0],
+            None,
+        ) + &quad(
+            "big",
+            "w",
+            [1e-3, -500.0, 0.0],
+            [1000.0, 0.0, 0.0],
+            [0.0, 1000.0, 0.0],
+            None,
+        )),
         &lambert("w", 0.5),
     );
     let mut solver = Solver::new(&s, Options::default()).unwrap();
@@ -316,7 +517,10 @@ fn elements_of_very_different_sizes_side_by_side() {
     let one_bounce = 0.5 * f; // rho F E / pi with E = pi
     let tiny = f64::from(sol.radiance(s.objects[1].triangles.start, [1.0 / 3.0; 3]).x);
     // Interreflection with the (reflecting) light only adds a little.
-    assert!(tiny >= one_bounce * 0.995 && tiny <= one_bounce * 1.05, "{tiny} vs {one_bounce}");
+    assert!(
+        tiny >= one_bounce * 0.995 && tiny <= one_bounce * 1.05,
+        "{tiny} vs {one_bounce}"
+    );
     for t in 0..s.mesh.triangles.len() as u32 {
         let l = sol.radiance(t, [0.2, 0.3, 0.5]);
         assert!(l.is_finite() && l.min_element() >= 0.0, "triangle {t}: {l}");
@@ -332,9 +536,53 @@ fn one_triangle_and_no_emitter() {
     let mut solver = Solver::new(&s, Options::default()).unwrap();
     run(&mut solver);
     let e = solver.progress().energy;
-    assert!((e.escaped - e.emitted).abs().max_element() < 1e-9 * e.emitted.max_element(), "all of it escapes: {e:?}");
-    assert!(solver.vertex_radiosity().iter().all(|b| (b.x - 2.0 * std::f64::consts::PI).abs() < 1e-9));
+    assert!(
+        (e.escaped - e.emitted).abs().max_element() < 1e-9 * e.emitted.max_element(),
+        "all of it escapes: {e:?}"
+    );
+    assert!(
+        solver
+            .vertex_radiosity()
+            .iter()
+            .all(|b| (b.x - 2.0 * std::f64::consts::PI).abs() < 1e-9)
+    );
     let dark = text.replace("emission = 2\n", "");
     let (s, _) = load_toml(&dark, Path::new("dark.toml")).unwrap();
-    assert_eq!(Solver::new(&s, Options::default()).err(), Some(SolveError::NoEmitters));
+    assert_eq!(
+        Solver::new(&s, Options::default()).err(),
+        Some(SolveError::NoEmitters)
+    );
+}
+
+#[test]
+fn cancelled_solves_give_usable_intermediate_solutions() {
+    let (s, _) = load(scene_path("cornell-box.toml")).unwrap();
+    let mut solver = Solver::new(&s, cornell_options(1e-6)).unwrap();
+    let mut taken = None;
+    let finish = solver.run(|solver| {
+        if solver.progress().shots == 20 {
+            taken = Some(solver.solution());
+            return ControlFlow::Break(());
+        }
+        ControlFlow::Continue(())
+    });
+    assert_eq!(finish, twopass_radiosity::Finish::Cancelled);
+    let p = solver.progress();
+    assert_eq!(p.shots, 20);
+    assert!(p.unshot_fraction > 1e-6 && p.worst_imbalance < 1e-6);
+    let partial = taken.unwrap();
+    // The partial solution is finite everywhere, and its ambient term fills in what is unshot.
+    let ambient: f32 = partial.ambient().iter().map(|a| a.element_sum()).sum();
+    assert!(ambient > 0.0);
+    assert!(
+        partial
+            .vertex_radiosity()
+            .iter()
+            .all(|b| b.is_finite() && b.min_element() >= 0.0)
+    );
+    // Resuming after a cancel continues to convergence.
+    assert_eq!(
+        solver.run(|_| ControlFlow::Continue(())),
+        twopass_radiosity::Finish::Converged
+    );
 }

@@ -28,7 +28,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         start.patches, start.elements, start.vertices
     );
     let mut last = 0;
-    let finish = solver.run(|p| {
+    let finish = solver.run(|s| {
+        let p = s.progress();
         if p.shots >= last * 2 || p.shots == 1 {
             last = p.shots.max(1);
             println!(

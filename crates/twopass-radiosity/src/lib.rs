@@ -12,8 +12,8 @@
 //! use twopass_scene::DiffuseRadiance;
 //! let (scene, _) = twopass_scene::load("scenes/cornell-box.toml")?;
 //! let mut solver = Solver::new(&scene, Options::default())?;
-//! let finish = solver.run(|progress| {
-//!     eprintln!("unshot {:.2e}", progress.unshot_fraction);
+//! let finish = solver.run(|solver| {
+//!     eprintln!("unshot {:.2e}", solver.progress().unshot_fraction);
 //!     std::ops::ControlFlow::Continue(())
 //! });
 //! let solution = solver.solution();

@@ -282,7 +282,7 @@ impl<'s> Solver<'s> {
                 });
             }
         }
-        if !(options.stop.unshot_fraction >= 0.0) {
+        if options.stop.unshot_fraction.is_nan() || options.stop.unshot_fraction < 0.0 {
             return Err(SolveError::Option {
                 name: "unshot_fraction",
                 problem: "must be >= 0".into(),
@@ -543,7 +543,7 @@ impl<'s> Solver<'s> {
             shots: self.shots,
             unshot_fraction: self.unshot_fraction(),
             rays: self.rays,
-            elements: self.mesh.leaves().count(),
+            elements: self.patch_leaves.iter().map(Vec::len).sum(),
             vertices: self.mesh.vertices.len(),
             patches: self.mesh.patches.len(),
             refinement_rounds: self.rounds,
@@ -616,10 +616,9 @@ impl<'s> Solver<'s> {
                 continue;
             }
             let row = self.patch_row(p);
-            for v in old..row.len() {
-                let f = f64::from(row[v]);
-                self.received_emit[v] += se * f;
-                self.received_refl[v] += sr * f;
+            for (v, &f) in row.iter().enumerate().skip(old) {
+                self.received_emit[v] += se * f64::from(f);
+                self.received_refl[v] += sr * f64::from(f);
             }
         }
         self.rebuild_patch_leaves();
@@ -651,9 +650,11 @@ impl<'s> Solver<'s> {
     }
 
     /// Runs the whole schedule: shooting, adaptive rounds (if enabled), shooting to the stop
-    /// criteria. `observer` sees the progress after every shot and may stop the solve early;
-    /// the solution is usable whenever this returns.
-    pub fn run(&mut self, mut observer: impl FnMut(&Progress) -> ControlFlow<()>) -> Finish {
+    /// criteria. `observer` sees the solver after every shot: it can read
+    /// [`Solver::progress`], take an intermediate [`Solver::solution`] (with the ambient term)
+    /// or stop the solve early by returning `Break`; the solution is usable whenever this
+    /// returns.
+    pub fn run(&mut self, mut observer: impl FnMut(&Self) -> ControlFlow<()>) -> Finish {
         let stop = self.options.stop;
         let adaptive = self.options.adaptive;
         let mut rounds_left = adaptive.map_or(0, |a| a.rounds);
@@ -684,7 +685,7 @@ impl<'s> Solver<'s> {
             if !self.shoot() {
                 return Finish::Exhausted;
             }
-            if observer(&self.progress()).is_break() {
+            if observer(self).is_break() {
                 return Finish::Cancelled;
             }
         }

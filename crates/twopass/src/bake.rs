@@ -153,7 +153,8 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
         source,
     })?;
     let bar = ctx.progress(STEPS, "radiosity");
-    let finish = solver.run(|p| {
+    let finish = solver.run(|s| {
+        let p = s.progress();
         bar.set_position(bar_position(p.unshot_fraction, args.unshot));
         bar.set_message(format!("unshot {:.1e}", p.unshot_fraction));
         ControlFlow::Continue(())

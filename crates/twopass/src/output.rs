@@ -14,11 +14,12 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), CliError> {
         _ => Path::new("."),
     };
     fs::create_dir_all(dir).map_err(|e| CliError::io(dir, e))?;
-    let mut tmp = tempfile::Builder::new()
-        .prefix(".twopass-")
-        .suffix(".tmp")
-        .tempfile_in(dir)
-        .map_err(|e| CliError::io(dir, e))?;
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".twopass-").suffix(".tmp");
+    // The usual mode of a new file (0666 less the umask), not the temporary file's 0600.
+    #[cfg(unix)]
+    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
+    let mut tmp = builder.tempfile_in(dir).map_err(|e| CliError::io(dir, e))?;
     tmp.write_all(bytes).map_err(|e| CliError::io(path, e))?;
     tmp.as_file()
         .sync_all()
