@@ -111,12 +111,29 @@ fn bench_rays_reports_every_query_kind() {
 #[test]
 fn bench_radiosity_reports_each_mesh_with_the_dense_check() {
     let scene = repo("scenes/cornell-box.toml");
-    let out = twopass(&["bench", "radiosity", scene.to_str().unwrap(), "--json", "--elements", "300,600", "--unshot", "1e-2"]);
-    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = twopass(&[
+        "bench",
+        "radiosity",
+        scene.to_str().unwrap(),
+        "--json",
+        "--elements",
+        "300,600",
+        "--unshot",
+        "1e-2",
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let rows: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let rows = rows.as_array().unwrap();
     assert_eq!(rows.len(), 2);
-    assert!(rows[1]["elements"].as_u64() > rows[0]["elements"].as_u64(), "more elements asked, more made");
+    assert!(
+        rows[1]["elements"].as_u64() > rows[0]["elements"].as_u64(),
+        "more elements asked, more made"
+    );
     for r in rows {
         assert!(r["unshot_fraction"].as_f64().unwrap() <= 1e-2);
         assert!(r["rays"].as_u64().unwrap() > 0);
