@@ -13,10 +13,10 @@
 //! solver.
 
 use twopass_brdf::Rgb;
-use twopass_scene::DiffuseRadiance;
+use twopass_scene::{DiffuseRadiance, Scene};
 
 use crate::film::{Layer, Radiance};
-use crate::integrator::Shading;
+use crate::integrator::{Lights, Shading};
 use crate::whitted::{Whitted, WhittedSettings};
 
 /// Where the diffuse light at a hit comes from.
@@ -72,10 +72,11 @@ impl DiffuseSource<'_> {
     }
 }
 
-/// Radiosity alone: camera rays shaded with the solution (interpolated per vertex); mirrors and
+/// Radiosity alone, for rendering `scene`: camera rays shaded with the solution (interpolated per vertex); mirrors and
 /// glass show as their diffuse part, as in the classic picture. No shadow or secondary rays.
-pub fn radiosity_only(solution: &dyn DiffuseRadiance) -> Whitted<'_> {
+pub fn radiosity_only<'a>(scene: &Scene, solution: &'a dyn DiffuseRadiance) -> Whitted<'a> {
     Whitted {
+        lights: Lights::new(scene),
         source: DiffuseSource::Radiosity(solution),
         view_dependent: false,
         settings: WhittedSettings::default(),
@@ -85,8 +86,13 @@ pub fn radiosity_only(solution: &dyn DiffuseRadiance) -> Whitted<'_> {
 
 /// The two-pass hybrid: the solution for all diffuse light, plus the glossy lobes against the
 /// emitters (shadow rays) and delta reflection and refraction paths.
-pub fn hybrid(solution: &dyn DiffuseRadiance, settings: WhittedSettings) -> Whitted<'_> {
+pub fn hybrid<'a>(
+    scene: &Scene,
+    solution: &'a dyn DiffuseRadiance,
+    settings: WhittedSettings,
+) -> Whitted<'a> {
     Whitted {
+        lights: Lights::new(scene),
         source: DiffuseSource::Radiosity(solution),
         view_dependent: true,
         settings,
@@ -97,8 +103,13 @@ pub fn hybrid(solution: &dyn DiffuseRadiance, settings: WhittedSettings) -> Whit
 /// The hybrid with per-pixel direct light (Chen et al. 1991): direct diffuse light with shadow
 /// rays at every shading point (sharp shadows without a finer mesh), the solution's
 /// [`DiffuseRadiance::indirect_radiance`] for the rest, plus the hybrid's view-dependent terms.
-pub fn hybrid_direct(solution: &dyn DiffuseRadiance, settings: WhittedSettings) -> Whitted<'_> {
+pub fn hybrid_direct<'a>(
+    scene: &Scene,
+    solution: &'a dyn DiffuseRadiance,
+    settings: WhittedSettings,
+) -> Whitted<'a> {
     Whitted {
+        lights: Lights::new(scene),
         source: DiffuseSource::RadiosityIndirect(solution),
         view_dependent: true,
         settings,

@@ -7,7 +7,7 @@
 use glam::Vec3;
 use twopass_brdf::frame::Frame;
 use twopass_brdf::{Material, Rgb};
-use twopass_scene::{Hit, Ray, Scene};
+use twopass_scene::{Hit, Ray, Scene, SurfacePoint};
 
 use crate::film::Radiance;
 use crate::sampler::{Sampler, stratum};
@@ -102,19 +102,72 @@ impl<'a> Shading<'a> {
     }
 }
 
+/// Area sampling of the emitters that keeps a 2-D stratification: the first coordinate picks a
+/// triangle by area and its remainder becomes the first coordinate within that triangle, so a
+/// jittered grid over [0, 1)^2 becomes a stratified set of points over the emitter's whole area.
+/// (`Emitter::sample` takes three numbers and discards the remainder, which would leave the
+/// triangle choice and the position within it correlated or unstratified.)
+#[derive(Debug, Clone)]
+pub struct Lights {
+    /// Per emitter: its first triangle and the cumulative areas of its triangles (scene units
+    /// squared, f64; the last entry is the emitter's area).
+    emitters: Vec<(u32, Vec<f64>)>,
+}
+
+impl Lights {
+    /// The sampling tables of `scene`'s emitters.
+    pub fn new(scene: &Scene) -> Self {
+        let emitters = scene
+            .emitters
+            .iter()
+            .map(|e| {
+                let tris = scene.objects[e.object as usize].triangles.clone();
+                let mut acc = 0.0;
+                let cdf = tris
+                    .clone()
+                    .map(|t| {
+                        acc += f64::from(scene.mesh.areas[t as usize]);
+                        acc
+                    })
+                    .collect();
+                (tris.start, cdf)
+            })
+            .collect();
+        Self { emitters }
+    }
+
+    /// A point of emitter `emitter` (index into `Scene::emitters`), uniform by area (density
+    /// 1 / area) for `u` uniform in [0, 1)^2, stratified when `u` is.
+    pub fn sample(&self, scene: &Scene, emitter: usize, u: glam::Vec2) -> SurfacePoint {
+        let (first, cdf) = &self.emitters[emitter];
+        let total = cdf.last().copied().unwrap_or(0.0);
+        let target = f64::from(u.x) * total;
+        let i = cdf.partition_point(|&c| c <= target).min(cdf.len() - 1);
+        let lo = if i == 0 { 0.0 } else { cdf[i - 1] };
+        let width = cdf[i] - lo;
+        let fx = if width > 0.0 {
+            ((target - lo) / width).clamp(0.0, 1.0 - f64::from(f32::EPSILON) / 2.0) as f32
+        } else {
+            0.5
+        };
+        scene
+            .mesh
+            .sample_triangle(*first + i as u32, glam::Vec2::new(fx, u.y))
+    }
+}
+
 /// Direct light from every emitter at a shading point, with `grid` x `grid` stratified shadow
 /// rays per emitter, split into two parts by `brdf`, which returns two BRDF values (1/sr,
 /// without the cosine) for a local incident direction. Returns the two reflected radiances,
 /// W/(m^2 sr) per channel.
 ///
 /// Estimator: for each emitter of area A and radiance L_e, the mean over its samples of
-/// f L_e cos(theta_x) cos(theta_y) / d^2 * A, with points uniform by area (density 1/A), the
-/// triangle choice and the position within it stratified (a randomly rotated 1-D stratification
-/// of the choice against a jittered grid of positions: every sample is uniform by area, so the
-/// estimate is unbiased). Light must reach the front of the shading point's geometric surface
-/// and leave the front of the emitter.
+/// f L_e cos(theta_x) cos(theta_y) / d^2 * A, with points uniform by area (density 1/A) from a
+/// jittered grid ([`Lights::sample`]): unbiased, stratified over the emitter's area. Light must
+/// reach the front of the shading point's geometric surface and leave the front of the emitter.
 pub fn direct_light(
     scene: &Scene,
+    lights: &Lights,
     s: &Shading<'_>,
     grid: u32,
     sampler: &mut Sampler,
@@ -128,14 +181,10 @@ pub fn direct_light(
     let k = grid.max(1);
     let n = k * k;
     let x = s.hit.point;
-    for emitter in &scene.emitters {
-        let rotation = sampler.next_below(n);
+    for (e, emitter) in scene.emitters.iter().enumerate() {
         let mut sum = [Rgb::ZERO; 2];
         for i in 0..n {
-            let pick = (((i + rotation) % n) as f32 + sampler.next_f32()) / n as f32;
-            let pick = pick.min(1.0 - f32::EPSILON / 2.0);
-            let u = stratum(i, k, sampler.next_2d());
-            let y = emitter.sample(scene, pick, u);
+            let y = lights.sample(scene, e, stratum(i, k, sampler.next_2d()));
             let d = y.position - x.position;
             let dist2 = d.length_squared();
             if dist2 <= 0.0 {

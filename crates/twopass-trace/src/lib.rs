@@ -20,7 +20,8 @@
 //! use twopass_trace::{Progress, RenderSettings, Whitted, WhittedSettings, render};
 //! let (scene, _) = twopass_scene::load("scenes/cornell-spheres.toml")?;
 //! let camera = scene.camera.with_resolution(Some(64), None);
-//! let whitted = Whitted::new(twopass_trace::whitted::ambient_estimate(&scene), WhittedSettings::default());
+//! let ambient = twopass_trace::whitted::ambient_estimate(&scene);
+//! let whitted = Whitted::new(&scene, ambient, WhittedSettings::default());
 //! let out = render(&scene, &camera, &whitted, &RenderSettings::default(), &Progress::new());
 //! let image = out.layers.composite();
 //! eprintln!("{} rays/s, {} non-finite samples", out.stats.rays_per_second(), out.stats.non_finite);
@@ -37,7 +38,7 @@ pub mod sampler;
 pub mod whitted;
 
 pub use film::{Image, Layer, LayerImages, Radiance};
-pub use integrator::{Integrator, Tally};
+pub use integrator::{Integrator, Lights, Tally};
 pub use reference::{Reference, ReferenceSettings};
 pub use render::{Progress, RenderOutput, RenderSettings, RenderStats, render};
 pub use sampler::Sampler;

@@ -20,7 +20,7 @@ use twopass_scene::{Ray, Scene};
 
 use crate::film::{Layer, Radiance};
 use crate::hybrid::DiffuseSource;
-use crate::integrator::{Integrator, Shading, Tally, direct_light, trace_from};
+use crate::integrator::{Integrator, Lights, Shading, Tally, direct_light, trace_from};
 use crate::sampler::Sampler;
 
 /// Recursion and shadow-ray settings of the Whitted-family tracers.
@@ -49,8 +49,9 @@ impl Default for WhittedSettings {
 /// A Whitted-family ray tracer: camera rays, local models against emitters, delta lobes
 /// followed recursively, and diffuse light from a [`DiffuseSource`]. The classic Whitted
 /// tracer is [`Whitted::new`]; the radiosity-based methods are built in [`crate::hybrid`].
-#[derive(Clone, Copy)]
+#[derive(Clone)]
 pub struct Whitted<'a> {
+    pub(crate) lights: Lights,
     pub(crate) source: DiffuseSource<'a>,
     /// Whether the view-dependent terms (glossy lobes, reflection, refraction) are traced;
     /// `false` only for radiosity alone.
@@ -72,9 +73,11 @@ impl std::fmt::Debug for Whitted<'_> {
 impl<'a> Whitted<'a> {
     /// The classic Whitted tracer: direct light by shadow rays and the constant ambient term
     /// k_a I_amb in place of interreflection, with `ambient` = I_amb, a radiance in
-    /// W/(m^2 sr) per channel (see [`ambient_estimate`] for a value derived from the scene).
-    pub fn new(ambient: Rgb, settings: WhittedSettings) -> Self {
+    /// W/(m^2 sr) per channel (see [`ambient_estimate`] for a value derived from the scene),
+    /// for rendering `scene`.
+    pub fn new(scene: &Scene, ambient: Rgb, settings: WhittedSettings) -> Self {
         Self {
+            lights: Lights::new(scene),
             source: DiffuseSource::Ambient { ambient },
             view_dependent: true,
             settings,
@@ -108,20 +111,28 @@ impl<'a> Whitted<'a> {
         let direct_diffuse = self.source.diffuse(s, &mut r);
         let need_diffuse = direct_diffuse && m.reflects_diffusely();
         if s.hit.front_face && (need_diffuse || glossy) {
-            let [d, g] = direct_light(scene, s, self.settings.shadow_grid, sampler, tally, |wi| {
-                [
-                    if need_diffuse {
-                        m.eval_diffuse(s.wo, wi)
-                    } else {
-                        Rgb::ZERO
-                    },
-                    if glossy {
-                        m.eval_non_diffuse(s.wo, wi)
-                    } else {
-                        Rgb::ZERO
-                    },
-                ]
-            });
+            let [d, g] = direct_light(
+                scene,
+                &self.lights,
+                s,
+                self.settings.shadow_grid,
+                sampler,
+                tally,
+                |wi| {
+                    [
+                        if need_diffuse {
+                            m.eval_diffuse(s.wo, wi)
+                        } else {
+                            Rgb::ZERO
+                        },
+                        if glossy {
+                            m.eval_non_diffuse(s.wo, wi)
+                        } else {
+                            Rgb::ZERO
+                        },
+                    ]
+                },
+            );
             r.add(Layer::Diffuse, d);
             r.add(Layer::DirectSpecular, g);
         }

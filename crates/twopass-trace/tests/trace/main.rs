@@ -1,0 +1,10 @@
+//! Validation of twopass-trace: closed forms, the furnace, mirror and glass against exact
+//! optics, spawned rays, the hybrid invariant, determinism and non-finite samples. One test
+//! binary (one link step on a 2-core machine).
+
+mod analytic;
+mod common;
+mod determinism;
+mod furnace;
+mod hybrid;
+mod optics;
