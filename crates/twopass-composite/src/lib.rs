@@ -1,0 +1,2 @@
+//! twopass-composite: linear RGB images and named layers in; tone-mapped PNGs, multi-layer EXRs,
+//! comparison sheets and error metrics out. Depends on no renderer crate.
