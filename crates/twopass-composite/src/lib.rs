@@ -1,2 +1,8 @@
 //! twopass-composite: linear RGB images and named layers in; tone-mapped PNGs, multi-layer EXRs,
 //! comparison sheets and error metrics out. Depends on no renderer crate.
+
+pub mod error;
+pub mod image;
+pub mod layer;
+pub mod metric;
+pub mod tonemap;
