@@ -416,13 +416,11 @@ impl ElementMesh {
             match node.children {
                 None => return Some((n, barycentric_2d(node.uv, p))),
                 Some([c0, c1]) => {
-                    // Inside the first half when its weights are all non-negative (with slack).
-                    let w = barycentric_2d(self.nodes[c0 as usize].uv, p);
-                    n = if w.iter().all(|&x| x >= -1e-6) {
-                        c0
-                    } else {
-                        c1
-                    };
+                    // The halves (a, m, c) and (m, b, c) are split by the segment m-c: the point
+                    // belongs to the first when it lies on a's side of that line.
+                    let [a, m, c] = self.nodes[c0 as usize].uv;
+                    let side = |q: Vec2| (c - m).perp_dot(q - m);
+                    n = if side(p) * side(a) >= 0.0 { c0 } else { c1 };
                 }
             }
         }

@@ -21,6 +21,25 @@ pub enum BenchCommand {
     /// Radiosity solves at several element counts: time, shots, rays, peak memory, and the
     /// error against the dense solve where it fits.
     Radiosity(RadiosityArgs),
+    /// Render time and rays per second of every method, and frames per second of new views
+    /// rendered from a bake file (radiosity alone).
+    Render(RenderArgs),
+}
+
+/// Arguments of `twopass bench render`.
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// Scene file (.toml or .obj).
+    pub scene: PathBuf,
+    /// Bake file from `twopass bake` for the radiosity-based methods (default: solve now).
+    #[arg(long)]
+    pub bake: Option<PathBuf>,
+    /// Samples per pixel of every method.
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+    pub spp: u32,
+    /// Views rendered from the bake for the frames-per-second figure.
+    #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    pub frames: u32,
 }
 
 /// Arguments of `twopass bench radiosity`.
@@ -89,6 +108,7 @@ pub fn run(cmd: &BenchCommand, ctx: &Context) -> Result<(), CliError> {
     match cmd {
         BenchCommand::Rays(args) => rays(args, ctx),
         BenchCommand::Radiosity(args) => radiosity(args, ctx),
+        BenchCommand::Render(args) => render(args, ctx),
     }
 }
 
@@ -386,6 +406,173 @@ fn rays(args: &RaysArgs, ctx: &Context) -> Result<(), CliError> {
                 100.0 * r.hit_fraction
             );
         }
+    }
+    Ok(())
+}
+
+/// One method's render measurement.
+#[derive(Debug, Serialize)]
+struct RenderRow {
+    method: &'static str,
+    seconds: f64,
+    /// Camera, secondary and shadow rays per second, millions.
+    mrays_per_s: f64,
+    /// Mean of the image over pixels and channels, W/(m^2 sr).
+    mean: f64,
+    non_finite: u64,
+}
+
+#[derive(Debug, Serialize)]
+struct RenderReport {
+    scene: String,
+    width: u32,
+    height: u32,
+    spp: u32,
+    threads: usize,
+    /// Where the radiosity came from: "bake" or "solve", and how long that took.
+    radiosity_source: &'static str,
+    radiosity_seconds: f64,
+    rows: Vec<RenderRow>,
+    /// Radiosity alone from the bake, 1 sample per pixel, new views around the camera.
+    frames: u32,
+    frames_per_second: f64,
+}
+
+fn render(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
+    use twopass_trace::hybrid::{hybrid, hybrid_direct, radiosity_only};
+    use twopass_trace::whitted::ambient_estimate;
+    use twopass_trace::{
+        Integrator, Progress, Reference, ReferenceSettings, RenderSettings, Whitted,
+        WhittedSettings,
+    };
+
+    let (scene, _) = twopass_scene::load(&args.scene)?;
+    let camera = scene.camera.with_resolution(
+        Some(ctx.width.unwrap_or(512)),
+        ctx.height.or(Some(ctx.width.unwrap_or(512))),
+    );
+    let started = Instant::now();
+    let (solution, source) = match &args.bake {
+        Some(path) => (
+            twopass_radiosity::bake::read_bake(path, &scene)
+                .map_err(|e| CliError::Input(e.to_string()))?,
+            "bake",
+        ),
+        None => {
+            let mut solver = twopass_radiosity::Solver::new(
+                &scene,
+                twopass_radiosity::Options {
+                    seed: ctx.seed,
+                    ..Default::default()
+                },
+            )
+            .map_err(|e| CliError::Input(format!("{}: {e}", args.scene.display())))?;
+            solver.run(|_| std::ops::ControlFlow::Continue(()));
+            (solver.solution(), "solve")
+        }
+    };
+    let radiosity_seconds = started.elapsed().as_secs_f64();
+    let settings = RenderSettings {
+        samples_per_pixel: args.spp,
+        seed: ctx.seed,
+        ..Default::default()
+    };
+    let w = WhittedSettings::default();
+    let methods: Vec<Box<dyn Integrator + '_>> = vec![
+        Box::new(Whitted::new(&scene, ambient_estimate(&scene), w)),
+        Box::new(radiosity_only(&scene, &solution)),
+        Box::new(hybrid(&scene, &solution, w)),
+        Box::new(hybrid_direct(&scene, &solution, w)),
+        Box::new(Reference::new(&scene, ReferenceSettings::default())),
+    ];
+    let bar = ctx.progress(methods.len() as u64 + 1, "bench render");
+    let mut rows = Vec::new();
+    for m in &methods {
+        let out = twopass_trace::render(&scene, &camera, m.as_ref(), &settings, &Progress::new());
+        let mean = out.layers.composite().mean();
+        rows.push(RenderRow {
+            method: out.stats.method,
+            seconds: out.stats.elapsed.as_secs_f64(),
+            mrays_per_s: out.stats.rays_per_second() / 1e6,
+            mean: f64::from(mean.element_sum()) / 3.0,
+            non_finite: out.stats.non_finite,
+        });
+        bar.inc(1);
+    }
+    // New views: the camera turned about the vertical through its target, 1 spp each.
+    let interactive = radiosity_only(&scene, &solution);
+    let one = RenderSettings {
+        samples_per_pixel: 1,
+        seed: ctx.seed,
+        ..Default::default()
+    };
+    let target = camera.position
+        + camera.forward * (scene.bounds.center() - camera.position).dot(camera.forward);
+    let t = Instant::now();
+    for f in 0..args.frames {
+        let angle = (f as f32 / args.frames as f32 - 0.5) * 0.4;
+        let offset = glam::Quat::from_axis_angle(camera.up, angle) * (camera.position - target);
+        let view = twopass_scene::Camera::look_at(
+            target + offset,
+            target,
+            camera.up,
+            camera.fov_y,
+            camera.width,
+            camera.height,
+        )
+        .map_err(|p| CliError::Input(format!("bench view {f}: {p}")))?;
+        std::hint::black_box(twopass_trace::render(
+            &scene,
+            &view,
+            &interactive,
+            &one,
+            &Progress::new(),
+        ));
+    }
+    let frames_per_second = f64::from(args.frames) / t.elapsed().as_secs_f64();
+    bar.finish_and_clear();
+    let report = RenderReport {
+        scene: args.scene.display().to_string(),
+        width: camera.width,
+        height: camera.height,
+        spp: args.spp,
+        threads: rayon::current_num_threads(),
+        radiosity_source: source,
+        radiosity_seconds,
+        rows,
+        frames: args.frames,
+        frames_per_second,
+    };
+    if ctx.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&report).expect("report serializes")
+        );
+    } else if !ctx.quiet {
+        println!(
+            "scene {}: {} x {}, {} spp, {} threads; radiosity from {} in {:.2} s",
+            report.scene,
+            report.width,
+            report.height,
+            report.spp,
+            report.threads,
+            report.radiosity_source,
+            report.radiosity_seconds
+        );
+        println!(
+            "{:<14} {:>9} {:>9} {:>10} {:>10}",
+            "method", "seconds", "Mrays/s", "mean", "non-finite"
+        );
+        for r in &report.rows {
+            println!(
+                "{:<14} {:>9.3} {:>9.2} {:>10.4} {:>10}",
+                r.method, r.seconds, r.mrays_per_s, r.mean, r.non_finite
+            );
+        }
+        println!(
+            "new views from the radiosity solution (radiosity alone, 1 spp): {:.1} frames per second over {} frames",
+            report.frames_per_second, report.frames
+        );
     }
     Ok(())
 }

@@ -142,3 +142,55 @@ fn bench_radiosity_reports_each_mesh_with_the_dense_check() {
         assert!(r["dense_relative_rms"].as_f64().unwrap() < 1e-2 / (1.0 - 0.725));
     }
 }
+
+#[test]
+fn bench_render_times_every_method_and_the_bake_frame_rate() {
+    let scene = repo("scenes/cornell-spheres.toml");
+    let out = twopass(&[
+        "bench",
+        "render",
+        scene.to_str().unwrap(),
+        "--json",
+        "--width",
+        "24",
+        "--spp",
+        "1",
+        "--frames",
+        "2",
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let methods: Vec<&str> = v["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["method"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        methods,
+        [
+            "whitted",
+            "radiosity",
+            "hybrid",
+            "hybrid-direct",
+            "reference"
+        ]
+    );
+    assert_eq!(
+        (v["width"].as_u64(), v["height"].as_u64()),
+        (Some(24), Some(24))
+    );
+    assert!(v["frames_per_second"].as_f64().unwrap() > 0.0);
+    assert!(
+        v["rows"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|r| r["non_finite"] == 0)
+    );
+}
