@@ -6,6 +6,7 @@ mod accel;
 mod bad_input;
 mod radiosity;
 mod scenes;
+mod trace;
 
 /// A scene under the repository's `scenes/`.
 pub fn scene_path(name: &str) -> PathBuf {

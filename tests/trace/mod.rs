@@ -1,6 +1,5 @@
 //! Validation of twopass-trace: closed forms, the furnace, mirror and glass against exact
-//! optics, spawned rays, the hybrid invariant, determinism and non-finite samples. One test
-//! binary (one link step on a 2-core machine).
+//! optics, spawned rays, the hybrid invariant, determinism and non-finite samples.
 
 mod analytic;
 mod common;

@@ -6,7 +6,7 @@
 use glam::{Vec2, Vec3};
 use twopass_trace::{Layer, Progress, RenderSettings, Whitted, WhittedSettings, render};
 
-use crate::common::{repo_scene, scene};
+use super::common::{repo_scene, scene};
 
 const PATTERN: &str = "[[material]]\nname = \"black\"\ntype = \"lambert\"\ndiffuse = 0\n\
     [[object]]\nname = \"a\"\nmaterial = \"black\"\nemission = [3, 1, 0.5]\n\

@@ -5,7 +5,7 @@
 
 use twopass_trace::{Progress, Reference, ReferenceSettings, RenderSettings, render};
 
-use crate::common::{mean_and_error, scene};
+use super::common::{mean_and_error, scene};
 
 const CUBE: &str = "version = 1\n\
     [camera]\nposition = [0.1, -0.2, 0.05]\nlook_at = [0.4, 0.3, 1]\nfov_y = 100\nresolution = [32, 32]\n\

@@ -1,6 +1,6 @@
 //! Scene builders and statistics shared by the tests.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use twopass_scene::Scene;
 
@@ -13,9 +13,7 @@ pub fn scene(text: &str) -> Scene {
 
 /// A scene of the repository's `scenes/` folder.
 pub fn repo_scene(name: &str) -> Scene {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../scenes")
-        .join(name);
+    let path = crate::scene_path(name);
     twopass_scene::load(&path)
         .expect("repository scene loads")
         .0

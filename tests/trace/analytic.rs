@@ -8,7 +8,7 @@ use twopass_trace::{
     Layer, Progress, Reference, ReferenceSettings, RenderSettings, Whitted, WhittedSettings, render,
 };
 
-use crate::common::{mean_and_error, scene};
+use super::common::{mean_and_error, scene};
 
 const RHO: f32 = 0.5;
 const L_E: f32 = 10.0;

@@ -6,7 +6,7 @@ use twopass_trace::{
     RenderSettings, Sampler, Tally, Whitted, WhittedSettings, render,
 };
 
-use crate::common::repo_scene;
+use super::common::repo_scene;
 
 fn on_threads(n: usize, f: impl FnOnce() -> RenderOutput + Send) -> RenderOutput {
     rayon::ThreadPoolBuilder::new()

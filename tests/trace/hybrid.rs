@@ -11,7 +11,7 @@ use twopass_trace::{
     Layer, Progress, Reference, ReferenceSettings, RenderSettings, WhittedSettings, render,
 };
 
-use crate::common::repo_scene;
+use super::common::repo_scene;
 
 /// A smooth, position-dependent stand-in for a solution.
 struct Smooth;
