@@ -2,7 +2,9 @@
 //! comparison sheets and error metrics out. Depends on no renderer crate.
 
 pub mod error;
+pub mod false_colour;
 pub mod image;
 pub mod layer;
 pub mod metric;
 pub mod tonemap;
+pub mod write;

@@ -1,0 +1,274 @@
+//! Atomic EXR and PNG writes, and reading EXRs back.
+//!
+//! Every write encodes the whole file in memory first, then writes it to a temporary file in
+//! the destination's folder, syncs it and renames it over the destination. A failed write
+//! (bad pixels, encoder error, full disk) leaves the destination as it was and no temporary file
+//! behind. Non-finite pixels are refused before anything touches the disk, with an error naming
+//! the file, the layer and the pixel.
+//!
+//! EXR files are linear, 32-bit float, ZIP-compressed scanlines, one part. A layer set is
+//! written the way OpenEXR names layers in one part: channels `<layer>.R`, `<layer>.G`,
+//! `<layer>.B` (as Blender's multilayer files, tev and OpenEXR's tools read them); a single
+//! image is written as plain `R`, `G`, `B`. PNGs are 8-bit sRGB with an `sRGB` chunk and, when
+//! given, a `Description` text chunk that says how they were tone mapped.
+
+use std::io::{Cursor, Write};
+use std::path::Path;
+
+use exr::prelude as ex;
+use exr::prelude::{ReadChannels, ReadLayers, WritableImage};
+use glam::Vec3;
+
+use crate::error::{CompositeError, Result};
+use crate::image::{Image, Rgb8Image};
+use crate::layer::Layers;
+use crate::tonemap::ToneMap;
+
+/// Writes `bytes` to `path` atomically: a temporary file in the same folder (which must exist),
+/// synced, then renamed over `path`, with the mode a new file would get (0666 less the umask).
+/// On failure the temporary file is removed and `path` is untouched.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let io = |p: &Path| {
+        let p = p.to_path_buf();
+        move |source| CompositeError::Io { path: p, source }
+    };
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".twopass-composite-").suffix(".tmp");
+    // Temporary files are private (0600) by default; an output gets the usual mode.
+    #[cfg(unix)]
+    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
+    let mut tmp = builder.tempfile_in(dir).map_err(io(dir))?;
+    tmp.write_all(bytes).map_err(io(path))?;
+    tmp.as_file().sync_all().map_err(io(path))?;
+    tmp.persist(path).map_err(|e| CompositeError::Io {
+        path: path.to_path_buf(),
+        source: e.error,
+    })?;
+    Ok(())
+}
+
+fn refuse_non_finite(path: &Path, layer: &str, image: &Image) -> Result<()> {
+    match image.first_non_finite() {
+        None => Ok(()),
+        Some((x, y, v)) => Err(CompositeError::NonFinite {
+            path: Some(path.to_path_buf()),
+            layer: Some(layer.to_owned()),
+            x,
+            y,
+            value: v.to_array(),
+        }),
+    }
+}
+
+/// Encodes one EXR part holding every `(prefix, image)`: channels `prefix.R/G/B`, or `R/G/B`
+/// for an empty prefix. All images have one size (checked by the callers).
+fn encode_exr(path: &Path, parts: &[(&str, &Image)]) -> Result<Vec<u8>> {
+    let Some((_, first)) = parts.first() else {
+        return Err(CompositeError::Empty {
+            what: format!("layer set for {}", path.display()),
+        });
+    };
+    let (w, h) = first.size();
+    if w == 0 || h == 0 {
+        return Err(CompositeError::Empty {
+            what: format!("image for {}", path.display()),
+        });
+    }
+    for (name, image) in parts {
+        refuse_non_finite(path, if name.is_empty() { "image" } else { name }, image)?;
+    }
+    let mut channels: ex::SmallVec<[ex::AnyChannel<ex::FlatSamples>; 4]> = ex::SmallVec::new();
+    for (prefix, image) in parts {
+        for (c, letter) in ["R", "G", "B"].iter().enumerate() {
+            let name = if prefix.is_empty() {
+                (*letter).to_owned()
+            } else {
+                format!("{prefix}.{letter}")
+            };
+            let samples: Vec<f32> = image.pixels().iter().map(|p| p[c]).collect();
+            let text = ex::Text::new_or_none(&name).ok_or_else(|| CompositeError::LayerName {
+                name: (*prefix).to_owned(),
+                reason: "not representable as an EXR channel name",
+            })?;
+            channels.push(ex::AnyChannel::new(text, ex::FlatSamples::F32(samples)));
+        }
+    }
+    let layer = ex::Layer::new(
+        ex::Vec2(w as usize, h as usize),
+        ex::LayerAttributes::default(),
+        ex::Encoding::SMALL_LOSSLESS,
+        ex::AnyChannels::sort(channels),
+    );
+    let mut buf = Cursor::new(Vec::new());
+    ex::Image::from_layer(layer)
+        .write()
+        .non_parallel()
+        .to_buffered(&mut buf)
+        .map_err(|source| CompositeError::Exr {
+            path: path.to_path_buf(),
+            source,
+        })?;
+    Ok(buf.into_inner())
+}
+
+/// Writes one linear image as an EXR with channels `R`, `G`, `B` (32-bit float), atomically.
+pub fn write_exr(path: &Path, image: &Image) -> Result<()> {
+    let bytes = encode_exr(path, &[("", image)])?;
+    write_atomic(path, &bytes)
+}
+
+/// Writes every layer into one EXR (channels `<layer>.R/G/B`, 32-bit float), atomically.
+pub fn write_exr_layers(path: &Path, layers: &Layers) -> Result<()> {
+    let parts: Vec<(&str, &Image)> = layers.iter().collect();
+    let bytes = encode_exr(path, &parts)?;
+    write_atomic(path, &bytes)
+}
+
+/// Reads every part and channel of an EXR as `(full channel name, width, height, samples)`;
+/// the full name is `<part name>.<channel>` when the part is named (multi-part files).
+fn read_channels(path: &Path) -> Result<Vec<(String, u32, u32, Vec<f32>)>> {
+    let image = ex::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .all_layers()
+        .all_attributes()
+        .non_parallel()
+        .from_file(path)
+        .map_err(|source| CompositeError::Exr {
+            path: path.to_path_buf(),
+            source,
+        })?;
+    let mut out = Vec::new();
+    for layer in &image.layer_data {
+        let (w, h) = (layer.size.width() as u32, layer.size.height() as u32);
+        let part = layer.attributes.layer_name.as_ref().map(|t| t.to_string());
+        for ch in &layer.channel_data.list {
+            let name = match &part {
+                Some(p) => format!("{p}.{}", ch.name),
+                None => ch.name.to_string(),
+            };
+            out.push((name, w, h, ch.sample_data.values_as_f32().collect()));
+        }
+    }
+    Ok(out)
+}
+
+fn assemble(path: &Path, prefix: &str, channels: &[(String, u32, u32, Vec<f32>)]) -> Result<Image> {
+    let mut rgb: [Option<&(String, u32, u32, Vec<f32>)>; 3] = [None; 3];
+    for (c, letter) in ["R", "G", "B"].iter().enumerate() {
+        let want = if prefix.is_empty() {
+            (*letter).to_owned()
+        } else {
+            format!("{prefix}.{letter}")
+        };
+        rgb[c] = channels.iter().find(|(n, ..)| *n == want);
+        if rgb[c].is_none() {
+            return Err(CompositeError::MissingChannel {
+                path: path.to_path_buf(),
+                channel: want,
+            });
+        }
+    }
+    let [Some(r), Some(g), Some(b)] = rgb else {
+        unreachable!("checked above")
+    };
+    let (w, h) = (r.1, r.2);
+    for ch in [g, b] {
+        if (ch.1, ch.2) != (w, h) {
+            return Err(CompositeError::SizeMismatch {
+                what: format!("{}: channel {}", path.display(), ch.0),
+                expected: (w, h),
+                found: (ch.1, ch.2),
+            });
+        }
+    }
+    let pixels = (0..r.3.len())
+        .map(|i| Vec3::new(r.3[i], g.3[i], b.3[i]))
+        .collect();
+    Image::from_pixels(w, h, pixels)
+}
+
+/// Reads an EXR's plain `R`, `G`, `B` channels as a linear image.
+pub fn read_exr(path: &Path) -> Result<Image> {
+    let channels = read_channels(path)?;
+    assemble(path, "", &channels)
+}
+
+/// Reads every layer of an EXR: each channel group `<layer>.R/G/B` becomes a layer (in
+/// alphabetical order, as EXR stores channels). Channels without a layer prefix, and groups
+/// without all of R, G and B, are skipped.
+pub fn read_exr_layers(path: &Path) -> Result<Layers> {
+    let channels = read_channels(path)?;
+    let mut names: Vec<&str> = channels
+        .iter()
+        .filter_map(|(n, ..)| n.rsplit_once('.').map(|(p, _)| p))
+        .collect();
+    names.sort_unstable();
+    names.dedup();
+    let mut pairs = Vec::new();
+    for name in names {
+        let has = |l: &str| channels.iter().any(|(n, ..)| *n == format!("{name}.{l}"));
+        if has("R") && has("G") && has("B") {
+            pairs.push((name.to_owned(), assemble(path, name, &channels)?));
+        }
+    }
+    // Layer names from other tools may hold '.', which `Layers` refuses; keep what it accepts.
+    let mut layers = match pairs.first() {
+        Some((_, i)) => Layers::new(i.width(), i.height()),
+        None => Layers::new(0, 0),
+    };
+    for (name, image) in pairs {
+        match layers.push(name, image) {
+            Ok(()) | Err(CompositeError::LayerName { .. }) => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(layers)
+}
+
+/// Encodes an 8-bit sRGB PNG in memory, with an `sRGB` chunk and an optional `Description`.
+pub fn encode_png(path: &Path, image: &Rgb8Image, description: Option<&str>) -> Result<Vec<u8>> {
+    if image.width() == 0 || image.height() == 0 {
+        return Err(CompositeError::Empty {
+            what: format!("image for {}", path.display()),
+        });
+    }
+    let err = |source| CompositeError::Png {
+        path: path.to_path_buf(),
+        source,
+    };
+    let mut buf = Vec::new();
+    {
+        let mut enc = png::Encoder::new(&mut buf, image.width(), image.height());
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        enc.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+        if let Some(d) = description {
+            enc.add_text_chunk("Description".into(), d.into())
+                .map_err(err)?;
+        }
+        let mut writer = enc.write_header().map_err(err)?;
+        writer.write_image_data(image.data()).map_err(err)?;
+        writer.finish().map_err(err)?;
+    }
+    Ok(buf)
+}
+
+/// Writes an 8-bit sRGB image (a sheet, a false-colour image) as a PNG, atomically.
+/// `description` goes into a `Description` text chunk (say how the pixels were made).
+pub fn write_png(path: &Path, image: &Rgb8Image, description: Option<&str>) -> Result<()> {
+    let bytes = encode_png(path, image, description)?;
+    write_atomic(path, &bytes)
+}
+
+/// Tone maps a linear image with `map` and writes it as a PNG whose `Description` says so
+/// ([`ToneMap::describe`]), atomically. Non-finite pixels are refused.
+pub fn write_png_tonemapped(path: &Path, image: &Image, map: &ToneMap) -> Result<()> {
+    refuse_non_finite(path, "image", image)?;
+    write_png(path, &map.apply(image), Some(&map.describe()))
+}
