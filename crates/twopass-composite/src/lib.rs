@@ -6,5 +6,7 @@ pub mod false_colour;
 pub mod image;
 pub mod layer;
 pub mod metric;
+pub mod sheet;
+mod text;
 pub mod tonemap;
 pub mod write;
