@@ -27,14 +27,12 @@ pub(crate) fn width(font: &FontRef<'_>, px: f32, text: &str) -> f32 {
     w
 }
 
-/// Draws one line of `text` with its top at `top` and its left edge at `left`, at `px` pixels
-/// per em, in `colour`, touching only pixels inside `clip`.
+/// Draws one line of `text` with its top-left corner at `(left, top)`, at `px` pixels per em, in `colour`, touching only pixels inside `clip`.
 pub(crate) fn draw(
     canvas: &mut Rgb8Image,
     font: &FontRef<'_>,
     px: f32,
-    left: f32,
-    top: f32,
+    (left, top): (f32, f32),
     colour: [u8; 3],
     clip: Rect,
     text: &str,

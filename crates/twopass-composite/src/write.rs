@@ -130,7 +130,10 @@ pub fn write_exr_layers(path: &Path, layers: &Layers) -> Result<()> {
 
 /// Reads every part and channel of an EXR as `(full channel name, width, height, samples)`;
 /// the full name is `<part name>.<channel>` when the part is named (multi-part files).
-fn read_channels(path: &Path) -> Result<Vec<(String, u32, u32, Vec<f32>)>> {
+/// One channel read: full name, width, height, samples.
+type Channel = (String, u32, u32, Vec<f32>);
+
+fn read_channels(path: &Path) -> Result<Vec<Channel>> {
     let image = ex::read()
         .no_deep_data()
         .largest_resolution_level()
@@ -158,8 +161,8 @@ fn read_channels(path: &Path) -> Result<Vec<(String, u32, u32, Vec<f32>)>> {
     Ok(out)
 }
 
-fn assemble(path: &Path, prefix: &str, channels: &[(String, u32, u32, Vec<f32>)]) -> Result<Image> {
-    let mut rgb: [Option<&(String, u32, u32, Vec<f32>)>; 3] = [None; 3];
+fn assemble(path: &Path, prefix: &str, channels: &[Channel]) -> Result<Image> {
+    let mut rgb: [Option<&Channel>; 3] = [None; 3];
     for (c, letter) in ["R", "G", "B"].iter().enumerate() {
         let want = if prefix.is_empty() {
             (*letter).to_owned()
