@@ -15,7 +15,7 @@ use std::time::{Duration, Instant};
 
 use clap::{Args, ValueEnum};
 use twopass_radiosity::bake::{self, ColorMapping, ColorRecord, FileRecord, Manifest};
-use twopass_radiosity::{Adaptive, Options, Solver, Stop, VisibilityRays};
+use twopass_radiosity::{Adaptive, Finish, Options, Solver, Stop, VisibilityRays};
 
 use crate::context::Context;
 use crate::error::CliError;
@@ -54,6 +54,21 @@ pub struct BakeArgs {
         default_value = "glb,ply,bake"
     )]
     pub format: Vec<Format>,
+    /// The radiosity solver's settings.
+    #[command(flatten)]
+    pub solve: SolveArgs,
+    /// Multiplier from radiance (W/(m^2 sr)) to the .glb's COLOR_0, which is clipped at 1
+    /// [default: auto, the 99th-percentile vertex luminance maps to 1].
+    #[arg(long, value_name = "SR_M2_PER_W", value_parser = parse_exposure)]
+    pub exposure: Option<f32>,
+    /// Vertices and patch pairs sampled for the residual report.
+    #[arg(long, default_value_t = 200, value_name = "N")]
+    pub residual_samples: usize,
+}
+
+/// The radiosity solver's settings, shared by every command that solves.
+#[derive(Debug, Args)]
+pub struct SolveArgs {
     /// Stop when the unshot power falls below this fraction of the emitted power.
     #[arg(long, default_value_t = 1e-3, value_name = "FRACTION")]
     pub unshot: f64,
@@ -78,13 +93,38 @@ pub struct BakeArgs {
     /// visibility is partial or the receiver is close.
     #[arg(long, value_name = "MIN,MAX", value_parser = parse_rays, default_value = "4,16")]
     pub visibility_rays: VisibilityRays,
-    /// Multiplier from radiance (W/(m^2 sr)) to the .glb's COLOR_0, which is clipped at 1
-    /// [default: auto, the 99th-percentile vertex luminance maps to 1].
-    #[arg(long, value_name = "SR_M2_PER_W", value_parser = parse_exposure)]
-    pub exposure: Option<f32>,
-    /// Vertices and patch pairs sampled for the residual report.
-    #[arg(long, default_value_t = 200, value_name = "N")]
-    pub residual_samples: usize,
+}
+
+impl SolveArgs {
+    /// The solver options these arguments ask for.
+    pub fn options(&self, seed: u64) -> Options {
+        Options {
+            patch_size: self.patch_size,
+            element_size: self.element_size,
+            adaptive: (!self.no_adaptive).then(Adaptive::default),
+            visibility: self.visibility_rays,
+            stop: Stop {
+                unshot_fraction: self.unshot,
+                max_shots: self.max_shots,
+                time_budget: self.time_budget,
+            },
+            seed,
+            ..Options::default()
+        }
+    }
+
+    /// Runs `solver` to its stop criteria with a progress bar over the unshot fraction.
+    pub fn run(&self, solver: &mut Solver<'_>, ctx: &Context) -> Finish {
+        let bar = ctx.progress(STEPS, "radiosity");
+        let finish = solver.run(|s| {
+            let p = s.progress();
+            bar.set_position(bar_position(p.unshot_fraction, self.unshot));
+            bar.set_message(format!("unshot {:.1e}", p.unshot_fraction));
+            ControlFlow::Continue(())
+        });
+        bar.finish_and_clear();
+        finish
+    }
 }
 
 fn parse_seconds(s: &str) -> Result<Duration, String> {
@@ -135,31 +175,12 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
         }
     }
     let load_time = started.elapsed();
-    let options = Options {
-        patch_size: args.patch_size,
-        element_size: args.element_size,
-        adaptive: (!args.no_adaptive).then(Adaptive::default),
-        visibility: args.visibility_rays,
-        stop: Stop {
-            unshot_fraction: args.unshot,
-            max_shots: args.max_shots,
-            time_budget: args.time_budget,
-        },
-        seed: ctx.seed,
-        ..Options::default()
-    };
+    let options = args.solve.options(ctx.seed);
     let mut solver = Solver::new(&scene, options.clone()).map_err(|source| CliError::Solve {
         path: args.scene.clone(),
         source,
     })?;
-    let bar = ctx.progress(STEPS, "radiosity");
-    let finish = solver.run(|s| {
-        let p = s.progress();
-        bar.set_position(bar_position(p.unshot_fraction, args.unshot));
-        bar.set_message(format!("unshot {:.1e}", p.unshot_fraction));
-        ControlFlow::Continue(())
-    });
-    bar.finish_and_clear();
+    let finish = args.solve.run(&mut solver, ctx);
     let progress = solver.progress();
     let residuals_started = Instant::now();
     let residuals = solver.residuals(args.residual_samples);

@@ -12,6 +12,7 @@ mod error;
 mod info;
 mod output;
 mod plan;
+mod render;
 
 use std::process::ExitCode;
 
@@ -34,6 +35,8 @@ struct Cli {
 enum Command {
     /// Describe a scene: triangles, materials, emitters, bounds, and the passes it requires.
     Info(info::InfoArgs),
+    /// Render an image with one method: whitted, radiosity, hybrid, hybrid-direct, reference.
+    Render(render::RenderArgs),
     /// Tabulate the plausibility of every reflection model and plot their lobes.
     BrdfCheck(brdf_check::BrdfCheckArgs),
     /// Solve the scene's radiosity and write the baked lighting: glTF binary (.glb, COLOR_0),
@@ -65,6 +68,7 @@ fn run(cli: Cli) -> Result<(), CliError> {
     match &cli.command {
         Command::Info(args) => info::run(args, &cli.ctx),
         Command::BrdfCheck(args) => brdf_check::run(args, &cli.ctx),
+        Command::Render(args) => render::run(args, &cli.ctx),
         Command::Bake(args) => bake::run(args, &cli.ctx),
         Command::Bench(cmd) => bench::run(cmd, &cli.ctx),
     }

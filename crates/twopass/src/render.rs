@@ -1,0 +1,339 @@
+//! `twopass render SCENE --method M`: one image with one method, written as a multi-layer EXR
+//! (every layer of the tracer plus the final image) and, with `--png`, a tone-mapped PNG.
+//!
+//! The radiosity-based methods take their diffuse light from a fresh solve, or from a bake file
+//! of `twopass bake` (`--bake FILE`), which renders any view without solving again.
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use clap::{Args, ValueEnum};
+use serde::Serialize;
+use twopass_composite::image::Image;
+use twopass_composite::layer::Layers;
+use twopass_composite::tonemap::ToneMap;
+use twopass_composite::write::{write_exr_layers, write_png_tonemapped};
+use twopass_radiosity::{Solution, Solver};
+use twopass_scene::Scene;
+use twopass_trace::hybrid::{hybrid, hybrid_direct, radiosity_only};
+use twopass_trace::whitted::ambient_estimate;
+use twopass_trace::{
+    Integrator, Layer, LayerImages, Progress, Reference, ReferenceSettings, RenderOutput,
+    RenderSettings, Whitted, WhittedSettings,
+};
+
+use crate::bake::SolveArgs;
+use crate::context::Context;
+use crate::error::CliError;
+use crate::plan::plan;
+
+/// A rendering method.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Method {
+    /// Whitted ray tracing alone, with the Phong ambient term for interreflection.
+    Whitted,
+    /// Radiosity alone: camera rays shaded by the radiosity solution.
+    Radiosity,
+    /// Two-pass: radiosity for the diffuse light, the tracer for the non-diffuse terms.
+    Hybrid,
+    /// As hybrid, with direct diffuse light per pixel and radiosity's indirect part.
+    HybridDirect,
+    /// The reference path tracer.
+    Reference,
+}
+
+impl Method {
+    /// Whether the method reads a radiosity solution.
+    pub fn needs_radiosity(self) -> bool {
+        matches!(self, Self::Radiosity | Self::Hybrid | Self::HybridDirect)
+    }
+
+    /// The name used on the command line and in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Whitted => "whitted",
+            Self::Radiosity => "radiosity",
+            Self::Hybrid => "hybrid",
+            Self::HybridDirect => "hybrid-direct",
+            Self::Reference => "reference",
+        }
+    }
+}
+
+/// Arguments of `twopass render`.
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// Scene file (.toml) or mesh (.obj).
+    pub scene: PathBuf,
+    /// The method.
+    #[arg(long, value_enum, default_value = "hybrid")]
+    pub method: Method,
+    /// Bake file from `twopass bake` for the radiosity-based methods (default: solve now).
+    #[arg(long, value_name = "FILE")]
+    pub bake: Option<PathBuf>,
+    /// Samples per pixel (stratified).
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+    pub spp: u32,
+    /// Recursion depth of mirror and refraction paths (Whitted and the hybrids).
+    #[arg(long, default_value_t = WhittedSettings::default().max_depth)]
+    pub depth: u32,
+    /// Shadow rays per emitter and hit, as an N x N stratified grid (Whitted and the hybrids).
+    #[arg(long, default_value_t = WhittedSettings::default().shadow_grid, value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub shadow_grid: u32,
+    /// Also write a tone-mapped PNG beside the EXR.
+    #[arg(long)]
+    pub png: bool,
+    /// PNG exposure in stops (EV) [default: auto, the 99th-percentile luminance maps to 1].
+    #[arg(long, allow_hyphen_values = true)]
+    pub exposure: Option<f32>,
+    /// The radiosity solver's settings, for a fresh solve.
+    #[command(flatten)]
+    pub solve: SolveArgs,
+}
+
+#[derive(Debug, Serialize)]
+struct Summary {
+    scene: PathBuf,
+    method: Method,
+    width: u32,
+    height: u32,
+    spp: u32,
+    radiosity: Option<&'static str>,
+    radiosity_seconds: f64,
+    render_seconds: f64,
+    rays: u64,
+    shadow_rays: u64,
+    mrays_per_s: f64,
+    non_finite_samples: u64,
+    /// Mean of the final image over pixels, per channel, W/(m^2 sr).
+    mean: [f32; 3],
+    exr: PathBuf,
+    png: Option<PathBuf>,
+    skipped: Vec<String>,
+}
+
+/// The radiosity for the radiosity-based methods: from a bake file, or solved now.
+pub fn radiosity(
+    scene: &Scene,
+    path: &Path,
+    bake: Option<&Path>,
+    solve: &SolveArgs,
+    ctx: &Context,
+) -> Result<(Solution, &'static str), CliError> {
+    match bake {
+        Some(file) => Ok((twopass_radiosity::bake::read_bake(file, scene)?, "bake")),
+        None => {
+            let mut solver =
+                Solver::new(scene, solve.options(ctx.seed)).map_err(|source| CliError::Solve {
+                    path: path.to_owned(),
+                    source,
+                })?;
+            solve.run(&mut solver, ctx);
+            Ok((solver.solution(), "solve"))
+        }
+    }
+}
+
+/// Renders with a progress bar drawn from the render loop's counters.
+pub fn render_with_bar(
+    scene: &Scene,
+    camera: &twopass_scene::Camera,
+    integrator: &dyn Integrator,
+    settings: &RenderSettings,
+    label: &str,
+    ctx: &Context,
+) -> RenderOutput {
+    let progress = Progress::new();
+    let bar = ctx.progress(1000, label);
+    let done = std::sync::atomic::AtomicBool::new(false);
+    let out = std::thread::scope(|s| {
+        s.spawn(|| {
+            while !done.load(std::sync::atomic::Ordering::Relaxed) {
+                bar.set_position((progress.fraction() * 1000.0) as u64);
+                std::thread::sleep(Duration::from_millis(100));
+            }
+        });
+        let out = twopass_trace::render(scene, camera, integrator, settings, &progress);
+        done.store(true, std::sync::atomic::Ordering::Relaxed);
+        out
+    });
+    bar.finish_and_clear();
+    out
+}
+
+/// The tracer's layers as named compositor layers, plus the final image as `image`.
+pub fn to_layers(images: &LayerImages) -> Result<Layers, CliError> {
+    let convert =
+        |img: &twopass_trace::Image| Image::from_pixels(img.width, img.height, img.pixels.clone());
+    let mut layers = Vec::with_capacity(Layer::ALL.len() + 1);
+    layers.push(("image".to_owned(), convert(&images.composite())?));
+    for layer in Layer::ALL {
+        layers.push((layer.name().to_owned(), convert(images.layer(layer))?));
+    }
+    Ok(Layers::from_vec(layers)?)
+}
+
+/// The integrator of a method; `solution` must be given for the radiosity-based ones.
+pub fn integrator<'a>(
+    method: Method,
+    scene: &'a Scene,
+    solution: Option<&'a Solution>,
+    whitted: WhittedSettings,
+) -> Box<dyn Integrator + 'a> {
+    let solution = || solution.expect("radiosity-based methods get a solution");
+    match method {
+        Method::Whitted => Box::new(Whitted::new(scene, ambient_estimate(scene), whitted)),
+        Method::Radiosity => Box::new(radiosity_only(scene, solution())),
+        Method::Hybrid => Box::new(hybrid(scene, solution(), whitted)),
+        Method::HybridDirect => Box::new(hybrid_direct(scene, solution(), whitted)),
+        Method::Reference => Box::new(Reference::new(scene, ReferenceSettings::default())),
+    }
+}
+
+/// Renders the scene and writes the EXR (and PNG).
+pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
+    let (scene, warnings) = twopass_scene::load(&args.scene)?;
+    if !ctx.quiet {
+        for w in &warnings {
+            eprintln!("warning: {w}");
+        }
+    }
+    if args.bake.is_some() && !args.method.needs_radiosity() {
+        return Err(CliError::Input(format!(
+            "--bake is for the radiosity-based methods, not {}",
+            args.method.name()
+        )));
+    }
+    let camera = scene.camera.with_resolution(ctx.width, ctx.height);
+    let decisions = plan(&scene);
+    let mut skipped = Vec::new();
+    if args.method.needs_radiosity() && !decisions.diffuse.required {
+        return Err(CliError::Input(format!(
+            "{}: no radiosity to compute: {}",
+            args.scene.display(),
+            decisions.diffuse.reason
+        )));
+    }
+    if matches!(args.method, Method::Hybrid | Method::HybridDirect) && !decisions.specular.required
+    {
+        skipped.push(format!(
+            "specular pass skipped: {}",
+            decisions.specular.reason
+        ));
+    }
+    let started = Instant::now();
+    let solution = if args.method.needs_radiosity() {
+        Some(radiosity(
+            &scene,
+            &args.scene,
+            args.bake.as_deref(),
+            &args.solve,
+            ctx,
+        )?)
+    } else {
+        None
+    };
+    let radiosity_seconds = started.elapsed().as_secs_f64();
+    let whitted = WhittedSettings {
+        max_depth: args.depth,
+        shadow_grid: args.shadow_grid,
+        ..WhittedSettings::default()
+    };
+    let integrator = integrator(
+        args.method,
+        &scene,
+        solution.as_ref().map(|s| &s.0),
+        whitted,
+    );
+    let settings = RenderSettings {
+        samples_per_pixel: args.spp,
+        seed: ctx.seed,
+        ..RenderSettings::default()
+    };
+    let out = render_with_bar(
+        &scene,
+        &camera,
+        integrator.as_ref(),
+        &settings,
+        args.method.name(),
+        ctx,
+    );
+    let layers = to_layers(&out.layers)?;
+    let stem = args
+        .scene
+        .file_stem()
+        .map_or_else(|| "render".to_owned(), |s| s.to_string_lossy().into_owned());
+    let exr = match &ctx.output {
+        Some(p) if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")) => p.clone(),
+        Some(dir) => dir.join(format!("{stem}-{}.exr", args.method.name())),
+        None => PathBuf::from(format!("{stem}-{}.exr", args.method.name())),
+    };
+    if let Some(dir) = exr.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|e| CliError::io(dir, e))?;
+    }
+    write_exr_layers(&exr, &layers)?;
+    let png = if args.png {
+        let image = layers.require("image")?;
+        let map = match args.exposure {
+            Some(stops) => ToneMap::from_stops(stops)?,
+            None => ToneMap::auto(image, 0.99, 1.0)?,
+        };
+        let path = exr.with_extension("png");
+        write_png_tonemapped(&path, image, &map)?;
+        Some(path)
+    } else {
+        None
+    };
+    let s = &out.stats;
+    let mean = out.layers.composite().mean();
+    let summary = Summary {
+        scene: args.scene.clone(),
+        method: args.method,
+        width: camera.width,
+        height: camera.height,
+        spp: args.spp,
+        radiosity: solution.as_ref().map(|s| s.1),
+        radiosity_seconds,
+        render_seconds: s.elapsed.as_secs_f64(),
+        rays: s.rays,
+        shadow_rays: s.shadow_rays,
+        mrays_per_s: s.rays_per_second() / 1e6,
+        non_finite_samples: s.non_finite,
+        mean: mean.to_array(),
+        exr,
+        png,
+        skipped,
+    };
+    if ctx.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&summary).expect("summary serializes")
+        );
+    } else if !ctx.quiet {
+        for s in &summary.skipped {
+            println!("{s}");
+        }
+        if let Some(source) = summary.radiosity {
+            println!(
+                "radiosity from {source} in {:.2} s",
+                summary.radiosity_seconds
+            );
+        }
+        println!(
+            "{} {} x {} at {} spp in {:.2} s ({:.2} Mrays/s, {} non-finite samples dropped)",
+            summary.method.name(),
+            summary.width,
+            summary.height,
+            summary.spp,
+            summary.render_seconds,
+            summary.mrays_per_s,
+            summary.non_finite_samples
+        );
+        println!("wrote {}", summary.exr.display());
+        if let Some(p) = &summary.png {
+            println!("wrote {}", p.display());
+        }
+    }
+    Ok(())
+}
