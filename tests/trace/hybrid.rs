@@ -95,8 +95,7 @@ fn hybrid_with_a_real_solution_matches_radiosity_alone_and_the_reference() {
     );
     assert_eq!(alone.layers, h.layers);
 
-    // Against the reference: the difference is the radiosity mesh's discretisation error
-    // plus the reference's noise; reported, and bounded loosely as a sanity check.
+    // Both see the light itself identically.
     let hd = render(
         &scene,
         &camera,
@@ -104,37 +103,84 @@ fn hybrid_with_a_real_solution_matches_radiosity_alone_and_the_reference() {
         &settings(),
         &p,
     );
+    assert_eq!(
+        h.layers.layer(Layer::Emission),
+        hd.layers.layer(Layer::Emission)
+    );
+}
+
+/// Relative RMS error of issue 7: sqrt(mean((x - r)^2 / (r^2 + 0.01))) over pixels and channels.
+fn relative_rmse(x: &twopass_trace::Image, r: &twopass_trace::Image) -> f64 {
+    let mut sum = 0.0;
+    for (a, b) in x.pixels.iter().zip(&r.pixels) {
+        for c in 0..3 {
+            let (a, b) = (f64::from(a[c]), f64::from(b[c]));
+            sum += (a - b).powi(2) / (b * b + 0.01);
+        }
+    }
+    (sum / (3 * x.pixels.len()) as f64).sqrt()
+}
+
+#[test]
+fn hybrid_error_against_the_reference_shrinks_as_the_mesh_is_refined() {
+    let scene = repo_scene("cornell-box.toml");
+    let camera = scene.camera.with_resolution(Some(16), Some(16));
+    let p = Progress::new();
+    // Two independent references: their difference measures the reference's own noise.
     let reference = Reference::new(&scene, ReferenceSettings::default());
-    let ref_settings = RenderSettings {
-        samples_per_pixel: 64,
-        ..settings()
+    let spp = |samples_per_pixel, seed| RenderSettings {
+        samples_per_pixel,
+        seed,
+        ..Default::default()
     };
-    let r = render(&scene, &camera, &reference, &ref_settings, &p)
+    let r1 = render(&scene, &camera, &reference, &spp(1024, 1), &p)
         .layers
         .composite();
-    let rel_rms = |img: &twopass_trace::Image| {
-        let (mut num, mut den) = (0.0_f64, 0.0_f64);
-        for (a, b) in img.pixels.iter().zip(&r.pixels) {
-            num += f64::from((*a - *b).length_squared());
-            den += f64::from(b.length_squared());
-        }
-        (num / den).sqrt()
-    };
-    let e_h = rel_rms(&h.layers.composite());
-    let e_hd = rel_rms(&hd.layers.composite());
-    let (mh, mr) = (h.layers.composite().mean(), r.mean());
+    let r2 = render(&scene, &camera, &reference, &spp(1024, 2), &p)
+        .layers
+        .composite();
+    // Each reference has noise e / sqrt(2) when two differ by e.
+    let noise = relative_rmse(&r1, &r2) / std::f64::consts::SQRT_2;
+    let mut errors = Vec::new();
+    for element_size in [250.0, 60.0, 20.0] {
+        let options = twopass_radiosity::Options {
+            element_size: Some(element_size),
+            patch_size: Some(120.0_f32.max(element_size)),
+            adaptive: None,
+            stop: twopass_radiosity::Stop {
+                unshot_fraction: 1e-4,
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        let mut solver = twopass_radiosity::Solver::new(&scene, options).unwrap();
+        let _ = solver.run(|_| ControlFlow::Continue(()));
+        let solution = solver.solution();
+        // As many pixel samples as the reference: the light's edge pixels then agree, and what
+        // remains is the mesh's discretisation error.
+        let h = render(
+            &scene,
+            &camera,
+            &hybrid(&scene, &solution, WhittedSettings::default()),
+            &spp(1024, 3),
+            &p,
+        )
+        .layers
+        .composite();
+        errors.push(relative_rmse(&h, &r1));
+    }
+    // The error is sqrt(d^2 + noise^2), d the mesh's discretisation error; the same reference
+    // serves every mesh, so its noise shifts all three alike and their order is the mesh's.
+    let d: Vec<f64> = errors
+        .iter()
+        .map(|e| (e * e - noise * noise).max(0.0).sqrt())
+        .collect();
     eprintln!(
-        "relative RMS vs reference (24x24, 64 spp, reference noise included): hybrid {e_h:.3}, \
-         hybrid-direct {e_hd:.3}; image means hybrid {mh}, reference {mr}"
+        "relative RMSE vs reference (16x16, 1024 spp): {errors:?}; reference noise {noise:.4}; discretisation {d:?}"
     );
-    // Sanity bound only: the image means agree to the mesh's discretisation error.
+    assert!(errors.windows(2).all(|w| w[1] < w[0]), "{errors:?}");
     assert!(
-        ((mh / mr) - glam::Vec3::ONE).abs().max_element() < 0.1,
-        "{mh} vs {mr}"
-    );
-    // Both see the light itself identically.
-    assert_eq!(
-        h.layers.layer(Layer::Emission).mean().max_element() > 0.0,
-        hd.layers.layer(Layer::Emission).mean().max_element() > 0.0
+        errors[0] - errors[2] > 2.0 * noise,
+        "{errors:?} with reference noise {noise}"
     );
 }
