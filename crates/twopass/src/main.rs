@@ -7,6 +7,7 @@
 mod bake;
 mod bench;
 mod brdf_check;
+mod compare;
 mod context;
 mod error;
 mod info;
@@ -35,6 +36,9 @@ struct Cli {
 enum Command {
     /// Describe a scene: triangles, materials, emitters, bounds, and the passes it requires.
     Info(info::InfoArgs),
+    /// Render the scene with every method it calls for and compare them with the reference:
+    /// a comparison sheet, one EXR per method, a JSON and CSV report.
+    Compare(compare::CompareArgs),
     /// Render an image with one method: whitted, radiosity, hybrid, hybrid-direct, reference.
     Render(render::RenderArgs),
     /// Tabulate the plausibility of every reflection model and plot their lobes.
@@ -69,6 +73,7 @@ fn run(cli: Cli) -> Result<(), CliError> {
         Command::Info(args) => info::run(args, &cli.ctx),
         Command::BrdfCheck(args) => brdf_check::run(args, &cli.ctx),
         Command::Render(args) => render::run(args, &cli.ctx),
+        Command::Compare(args) => compare::run(args, &cli.ctx),
         Command::Bake(args) => bake::run(args, &cli.ctx),
         Command::Bench(cmd) => bench::run(cmd, &cli.ctx),
     }

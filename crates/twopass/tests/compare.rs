@@ -1,0 +1,140 @@
+//! `twopass compare`: the report's numbers are recomputed from the EXRs it wrote.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use twopass_composite::metric::compare;
+use twopass_composite::sheet::ComparisonOptions;
+use twopass_composite::tonemap::ToneMap;
+use twopass_composite::write::read_exr_layers;
+
+fn repo(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../..")
+        .join(rel)
+}
+
+#[test]
+fn report_matches_the_images_it_wrote() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = repo("scenes/cornell-spheres.toml");
+    let out = Command::new(env!("CARGO_BIN_EXE_twopass"))
+        .args([
+            "compare",
+            scene.to_str().unwrap(),
+            "--quick",
+            "--width",
+            "24",
+            "--spp",
+            "2",
+            "--reference-spp",
+            "16",
+            "--json",
+        ])
+        .args(["--output", dir.path().to_str().unwrap()])
+        .env("CI", "1")
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let rows = report["rows"].as_array().unwrap();
+    let methods: Vec<&str> = rows.iter().map(|r| r["method"].as_str().unwrap()).collect();
+    // The spheres call for every method; the reference comes first.
+    assert_eq!(
+        methods,
+        [
+            "reference",
+            "whitted",
+            "radiosity",
+            "hybrid",
+            "hybrid-direct"
+        ]
+    );
+    let image = |row: &serde_json::Value| {
+        let layers = read_exr_layers(Path::new(row["exr"].as_str().unwrap())).unwrap();
+        layers.require("image").unwrap().clone()
+    };
+    let reference = image(&rows[0]);
+    let tone = ToneMap::auto_default(&reference)
+        .unwrap()
+        .with_curve(ComparisonOptions::default().curve);
+    assert_eq!(report["tone_map"].as_str().unwrap(), tone.describe());
+    for row in &rows[1..] {
+        let m = compare(&image(row), &reference, &tone).unwrap();
+        for (key, value) in [
+            ("mae", m.mae),
+            ("rmse", m.rmse),
+            ("rel_mse", m.rel_mse),
+            ("rel_rmse", m.rel_rmse),
+            ("ssim", m.ssim),
+        ] {
+            let reported = row[key].as_f64().unwrap();
+            assert!(
+                (reported - value).abs() <= 1e-12 * value.abs().max(1.0),
+                "{} {key}: {reported} vs {value}",
+                row["method"]
+            );
+        }
+        assert!(row["total_seconds"].as_f64().unwrap() >= row["render_seconds"].as_f64().unwrap());
+    }
+    assert!(rows[0]["rel_rmse"].is_null());
+    // The CSV holds the same rows.
+    let csv = std::fs::read_to_string(dir.path().join("cornell-spheres-compare.csv")).unwrap();
+    assert_eq!(csv.lines().count(), rows.len() + 1);
+    assert!(
+        csv.lines()
+            .next()
+            .unwrap()
+            .starts_with("method,width,height,spp")
+    );
+    // The sheet exists and is a PNG holding two rows of 24-pixel panels.
+    let png = std::fs::read(dir.path().join("cornell-spheres-compare.png")).unwrap();
+    assert_eq!(&png[1..4], b"PNG");
+}
+
+#[test]
+fn a_diffuse_scene_skips_the_hybrid_and_says_why() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = repo("scenes/cornell-box.toml");
+    let out = Command::new(env!("CARGO_BIN_EXE_twopass"))
+        .args([
+            "compare",
+            scene.to_str().unwrap(),
+            "--quick",
+            "--width",
+            "16",
+            "--spp",
+            "1",
+            "--reference-spp",
+            "4",
+            "--json",
+        ])
+        .args(["--output", dir.path().to_str().unwrap()])
+        .env("CI", "1")
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let methods: Vec<&str> = report["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["method"].as_str().unwrap())
+        .collect();
+    assert!(!methods.contains(&"hybrid"));
+    let skipped = report["skipped"][0].as_str().unwrap();
+    assert!(
+        skipped.starts_with("hybrid") && skipped.contains("purely diffuse"),
+        "{skipped}"
+    );
+}
