@@ -439,12 +439,9 @@ struct RenderReport {
 }
 
 fn render(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
-    use twopass_trace::hybrid::{hybrid, hybrid_direct, radiosity_only};
-    use twopass_trace::whitted::ambient_estimate;
-    use twopass_trace::{
-        Integrator, Progress, Reference, ReferenceSettings, RenderSettings, Whitted,
-        WhittedSettings,
-    };
+    use crate::render::{Method, integrator};
+    use twopass_trace::hybrid::radiosity_only;
+    use twopass_trace::{Integrator, Progress, RenderSettings, WhittedSettings};
 
     let (scene, _) = twopass_scene::load(&args.scene)?;
     let camera = scene.camera.with_resolution(
@@ -478,13 +475,16 @@ fn render(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
         ..Default::default()
     };
     let w = WhittedSettings::default();
-    let methods: Vec<Box<dyn Integrator + '_>> = vec![
-        Box::new(Whitted::new(&scene, ambient_estimate(&scene), w)),
-        Box::new(radiosity_only(&scene, &solution)),
-        Box::new(hybrid(&scene, &solution, w)),
-        Box::new(hybrid_direct(&scene, &solution, w)),
-        Box::new(Reference::new(&scene, ReferenceSettings::default())),
-    ];
+    let methods: Vec<Box<dyn Integrator + '_>> = [
+        Method::Whitted,
+        Method::Radiosity,
+        Method::Hybrid,
+        Method::HybridDirect,
+        Method::Reference,
+    ]
+    .into_iter()
+    .map(|m| integrator(m, &scene, Some(&solution), w))
+    .collect();
     let bar = ctx.progress(methods.len() as u64 + 1, "bench render");
     let mut rows = Vec::new();
     for m in &methods {
