@@ -19,6 +19,7 @@ use twopass_radiosity::{Adaptive, Finish, Options, Solver, Stop, VisibilityRays}
 
 use crate::context::Context;
 use crate::error::CliError;
+use crate::preset::RadiosityKnobs;
 
 /// An output format of `twopass bake`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, ValueEnum)]
@@ -57,6 +58,13 @@ pub struct BakeArgs {
     /// The radiosity solver's settings.
     #[command(flatten)]
     pub solve: SolveArgs,
+    /// The solver settings of a measured preset (draft, preview, final) of `twopass bench
+    /// tradeoff`; the preset must use radiosity.
+    #[arg(long, value_name = "NAME", conflicts_with_all = &crate::render::PRESET_SETS[4..])]
+    pub preset: Option<String>,
+    /// The presets file [default: `<stem>.presets.toml` beside the scene].
+    #[arg(long, value_name = "FILE", requires = "preset")]
+    pub presets: Option<PathBuf>,
     /// Multiplier from radiance (W/(m^2 sr)) to the .glb's COLOR_0, which is clipped at 1
     /// [default: auto, the 99th-percentile vertex luminance maps to 1].
     #[arg(long, value_name = "SR_M2_PER_W", value_parser = parse_exposure)]
@@ -67,7 +75,7 @@ pub struct BakeArgs {
 }
 
 /// The radiosity solver's settings, shared by every command that solves.
-#[derive(Debug, Args)]
+#[derive(Debug, Clone, Args)]
 pub struct SolveArgs {
     /// Stop when the unshot power falls below this fraction of the emitted power.
     #[arg(long, default_value_t = 1e-3, value_name = "FRACTION")]
@@ -96,6 +104,23 @@ pub struct SolveArgs {
 }
 
 impl SolveArgs {
+    /// The settings of a measured preset's solve; the others (patch size, shot and time
+    /// limits) at their defaults.
+    pub fn from_knobs(k: &RadiosityKnobs) -> Self {
+        Self {
+            unshot: k.unshot,
+            max_shots: None,
+            time_budget: None,
+            patch_size: None,
+            element_size: Some(k.element_size),
+            no_adaptive: !k.adaptive,
+            visibility_rays: VisibilityRays {
+                min: k.visibility_min,
+                max: k.visibility_max,
+            },
+        }
+    }
+
     /// The solver options these arguments ask for.
     pub fn options(&self, seed: u64) -> Options {
         Options {
@@ -175,12 +200,27 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
         }
     }
     let load_time = started.elapsed();
-    let options = args.solve.options(ctx.seed);
+    let preset_solve = match &args.preset {
+        Some(name) => {
+            let preset = crate::preset::load(&args.scene, args.presets.as_deref(), name)?;
+            let knobs = preset.radiosity.ok_or_else(|| {
+                CliError::Input(format!(
+                    "{}: preset `{name}` renders with {}, which bakes no radiosity",
+                    args.scene.display(),
+                    preset.method.name()
+                ))
+            })?;
+            Some(SolveArgs::from_knobs(&knobs))
+        }
+        None => None,
+    };
+    let solve = preset_solve.as_ref().unwrap_or(&args.solve);
+    let options = solve.options(ctx.seed);
     let mut solver = Solver::new(&scene, options.clone()).map_err(|source| CliError::Solve {
         path: args.scene.clone(),
         source,
     })?;
-    let finish = args.solve.run(&mut solver, ctx);
+    let finish = solve.run(&mut solver, ctx);
     let progress = solver.progress();
     let residuals_started = Instant::now();
     let residuals = solver.residuals(args.residual_samples);

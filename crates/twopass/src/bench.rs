@@ -24,6 +24,9 @@ pub enum BenchCommand {
     /// Render time and rays per second of every method, and frames per second of new views
     /// rendered from a bake file (radiosity alone).
     Render(RenderArgs),
+    /// The speed/accuracy trade: sweeps every method's knobs, measures time and error against
+    /// a cached converged reference, plots the Pareto front and derives the presets.
+    Tradeoff(crate::tradeoff::TradeoffArgs),
 }
 
 /// Arguments of `twopass bench render`.
@@ -109,12 +112,13 @@ pub fn run(cmd: &BenchCommand, ctx: &Context) -> Result<(), CliError> {
         BenchCommand::Rays(args) => rays(args, ctx),
         BenchCommand::Radiosity(args) => radiosity(args, ctx),
         BenchCommand::Render(args) => render(args, ctx),
+        BenchCommand::Tradeoff(args) => crate::tradeoff::run(args, ctx),
     }
 }
 
 /// Peak resident memory of this process since the last [`reset_peak_memory`], bytes (Linux:
 /// VmHWM of /proc/self/status; `None` elsewhere).
-fn peak_memory() -> Option<u64> {
+pub(crate) fn peak_memory() -> Option<u64> {
     let status = std::fs::read_to_string("/proc/self/status").ok()?;
     let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
     let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
@@ -123,7 +127,7 @@ fn peak_memory() -> Option<u64> {
 
 /// Resets the peak resident memory to the current one (Linux `clear_refs` 5), so each bench
 /// row reports its own peak.
-fn reset_peak_memory() {
+pub(crate) fn reset_peak_memory() {
     let _ = std::fs::write("/proc/self/clear_refs", "5");
 }
 

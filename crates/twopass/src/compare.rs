@@ -5,7 +5,7 @@
 //! against the reference), `<stem>-<method>.exr` per method (every layer), and
 //! `<stem>-compare.json` / `.csv` (method, settings, time per phase, rays, error metrics).
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 use clap::Args;
@@ -87,7 +87,7 @@ struct RadiosityInfo {
 }
 
 /// The methods a scene calls for, and what was skipped and why.
-fn methods(scene: &twopass_scene::Scene) -> (Vec<Method>, Vec<String>) {
+pub(crate) fn methods(scene: &twopass_scene::Scene) -> (Vec<Method>, Vec<String>) {
     let p = plan(scene);
     let mut methods = vec![Method::Reference, Method::Whitted];
     let mut skipped = Vec::new();
@@ -284,7 +284,7 @@ pub fn run(args: &CompareArgs, ctx: &Context) -> Result<(), CliError> {
     };
     let json = serde_json::to_string_pretty(&report).expect("report serializes");
     write_atomic(&dir.join(format!("{stem}-compare.json")), json.as_bytes())?;
-    write_csv(&dir.join(format!("{stem}-compare.csv")), &report.rows)?;
+    crate::output::write_csv(&dir.join(format!("{stem}-compare.csv")), &report.rows)?;
 
     if ctx.json {
         println!("{json}");
@@ -322,19 +322,4 @@ pub fn run(args: &CompareArgs, ctx: &Context) -> Result<(), CliError> {
         );
     }
     Ok(())
-}
-
-fn write_csv(path: &Path, rows: &[Row]) -> Result<(), CliError> {
-    let mut w = csv::Writer::from_writer(Vec::new());
-    for r in rows {
-        w.serialize(r).map_err(|e| CliError::Encode {
-            path: path.to_owned(),
-            message: e.to_string(),
-        })?;
-    }
-    let bytes = w.into_inner().map_err(|e| CliError::Encode {
-        path: path.to_owned(),
-        message: e.to_string(),
-    })?;
-    Ok(write_atomic(path, &bytes)?)
 }

@@ -13,7 +13,9 @@ mod error;
 mod info;
 mod output;
 mod plan;
+mod preset;
 mod render;
+mod tradeoff;
 
 use std::process::ExitCode;
 
@@ -46,7 +48,7 @@ enum Command {
     /// Solve the scene's radiosity and write the baked lighting: glTF binary (.glb, COLOR_0),
     /// PLY (float radiance), a bake file `render` can load, and a JSON manifest.
     Bake(bake::BakeArgs),
-    /// Measure the engine: ray queries (more benchmarks come with later passes).
+    /// Measure the engine: ray queries, radiosity solves, renders, and the speed/accuracy trade.
     #[command(subcommand)]
     Bench(bench::BenchCommand),
 }

@@ -46,3 +46,17 @@ pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Resul
     }
     write_atomic(path, &bytes)
 }
+
+/// Writes `rows` as CSV (a header from the field names, one line per row) atomically to `path`.
+pub fn write_csv<T: serde::Serialize>(path: &Path, rows: &[T]) -> Result<(), CliError> {
+    let encode = |message: String| CliError::Encode {
+        path: path.to_owned(),
+        message,
+    };
+    let mut w = csv::Writer::from_writer(Vec::new());
+    for r in rows {
+        w.serialize(r).map_err(|e| encode(e.to_string()))?;
+    }
+    let bytes = w.into_inner().map_err(|e| encode(e.to_string()))?;
+    write_atomic(path, &bytes)
+}

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use clap::{Args, ValueEnum};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use twopass_composite::image::Image;
 use twopass_composite::layer::Layers;
 use twopass_composite::tonemap::ToneMap;
@@ -26,9 +26,10 @@ use crate::bake::SolveArgs;
 use crate::context::Context;
 use crate::error::CliError;
 use crate::plan::plan;
+use crate::preset::RenderKnobs;
 
 /// A rendering method.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Method {
     /// Whitted ray tracing alone, with the Phong ambient term for interreflection.
@@ -90,12 +91,35 @@ pub struct RenderArgs {
     /// The radiosity solver's settings, for a fresh solve.
     #[command(flatten)]
     pub solve: SolveArgs,
+    /// A measured preset (draft, preview, final) of `twopass bench tradeoff`: the cheapest
+    /// setting measured to reach its error target. Sets the method and every setting above.
+    #[arg(long, value_name = "NAME", conflicts_with_all = PRESET_SETS)]
+    pub preset: Option<String>,
+    /// The presets file [default: `<stem>.presets.toml` beside the scene].
+    #[arg(long, value_name = "FILE", requires = "preset")]
+    pub presets: Option<PathBuf>,
 }
+
+/// The arguments a preset sets, which conflict with `--preset`.
+pub const PRESET_SETS: [&str; 11] = [
+    "method",
+    "spp",
+    "depth",
+    "shadow_grid",
+    "unshot",
+    "max_shots",
+    "time_budget",
+    "patch_size",
+    "element_size",
+    "no_adaptive",
+    "visibility_rays",
+];
 
 #[derive(Debug, Serialize)]
 struct Summary {
     scene: PathBuf,
     method: Method,
+    preset: Option<String>,
     width: u32,
     height: u32,
     spp: u32,
@@ -199,23 +223,42 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
             eprintln!("warning: {w}");
         }
     }
-    if args.bake.is_some() && !args.method.needs_radiosity() {
+    let preset = args
+        .preset
+        .as_deref()
+        .map(|name| crate::preset::load(&args.scene, args.presets.as_deref(), name))
+        .transpose()?;
+    let method = preset.as_ref().map_or(args.method, |p| p.method);
+    let knobs = preset.as_ref().map_or(
+        RenderKnobs {
+            spp: args.spp,
+            depth: args.depth,
+            shadow_grid: args.shadow_grid,
+        },
+        |p| p.render,
+    );
+    let preset_solve = preset
+        .as_ref()
+        .and_then(|p| p.radiosity.as_ref())
+        .map(SolveArgs::from_knobs);
+    let solve = preset_solve.as_ref().unwrap_or(&args.solve);
+    if args.bake.is_some() && !method.needs_radiosity() {
         return Err(CliError::Input(format!(
             "--bake is for the radiosity-based methods, not {}",
-            args.method.name()
+            method.name()
         )));
     }
     let camera = scene.camera.with_resolution(ctx.width, ctx.height);
     let decisions = plan(&scene);
     let mut skipped = Vec::new();
-    if args.method.needs_radiosity() && !decisions.diffuse.required {
+    if method.needs_radiosity() && !decisions.diffuse.required {
         return Err(CliError::Input(format!(
             "{}: no radiosity to compute: {}",
             args.scene.display(),
             decisions.diffuse.reason
         )));
     }
-    if matches!(args.method, Method::Hybrid | Method::HybridDirect) && !decisions.specular.required
+    if matches!(method, Method::Hybrid | Method::HybridDirect) && !decisions.specular.required
     {
         skipped.push(format!(
             "specular pass skipped: {}",
@@ -223,31 +266,26 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
         ));
     }
     let started = Instant::now();
-    let solution = if args.method.needs_radiosity() {
+    let solution = if method.needs_radiosity() {
         Some(radiosity(
             &scene,
             &args.scene,
             args.bake.as_deref(),
-            &args.solve,
+            solve,
             ctx,
         )?)
     } else {
         None
     };
     let radiosity_seconds = started.elapsed().as_secs_f64();
-    let whitted = WhittedSettings {
-        max_depth: args.depth,
-        shadow_grid: args.shadow_grid,
-        ..WhittedSettings::default()
-    };
     let integrator = integrator(
-        args.method,
+        method,
         &scene,
         solution.as_ref().map(|s| &s.0),
-        whitted,
+        knobs.whitted(),
     );
     let settings = RenderSettings {
-        samples_per_pixel: args.spp,
+        samples_per_pixel: knobs.spp,
         seed: ctx.seed,
         ..RenderSettings::default()
     };
@@ -256,7 +294,7 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
         &camera,
         integrator.as_ref(),
         &settings,
-        args.method.name(),
+        method.name(),
         ctx,
     );
     let layers = to_layers(&out.layers)?;
@@ -266,8 +304,8 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
         .map_or_else(|| "render".to_owned(), |s| s.to_string_lossy().into_owned());
     let exr = match &ctx.output {
         Some(p) if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")) => p.clone(),
-        Some(dir) => dir.join(format!("{stem}-{}.exr", args.method.name())),
-        None => PathBuf::from(format!("{stem}-{}.exr", args.method.name())),
+        Some(dir) => dir.join(format!("{stem}-{}.exr", method.name())),
+        None => PathBuf::from(format!("{stem}-{}.exr", method.name())),
     };
     if let Some(dir) = exr.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(|e| CliError::io(dir, e))?;
@@ -289,10 +327,11 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
     let mean = out.layers.composite().mean();
     let summary = Summary {
         scene: args.scene.clone(),
-        method: args.method,
+        method,
+        preset: args.preset.clone(),
         width: camera.width,
         height: camera.height,
-        spp: args.spp,
+        spp: knobs.spp,
         radiosity: solution.as_ref().map(|s| s.1),
         radiosity_seconds,
         render_seconds: s.elapsed.as_secs_f64(),

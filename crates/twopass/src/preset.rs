@@ -1,0 +1,141 @@
+//! Named quality presets (draft, preview, final) measured by `twopass bench tradeoff`.
+//!
+//! A preset is not a guess: it is the cheapest setting the tradeoff sweep measured to reach an
+//! error target (relative RMSE against a converged reference) on one scene. The sweep writes
+//! them to `<stem>.presets.toml`; `twopass render --preset NAME` and `twopass bake --preset
+//! NAME` read that file from beside the scene (or from `--presets FILE`).
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+use twopass_trace::WhittedSettings;
+
+use crate::error::CliError;
+use crate::render::Method;
+
+/// The tracer's knobs of one measured setting.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RenderKnobs {
+    /// Samples per pixel (stratified anti-aliasing; the path tracer's paths per pixel).
+    pub spp: u32,
+    /// Recursion depth of mirror and refraction paths (Whitted and the hybrids).
+    pub depth: u32,
+    /// Shadow rays per emitter and hit as an N x N grid (Whitted and the hybrids).
+    pub shadow_grid: u32,
+}
+
+impl RenderKnobs {
+    /// The Whitted-family settings these knobs ask for.
+    pub fn whitted(&self) -> WhittedSettings {
+        WhittedSettings {
+            max_depth: self.depth,
+            shadow_grid: self.shadow_grid,
+            ..WhittedSettings::default()
+        }
+    }
+}
+
+/// The radiosity solver's knobs of one measured setting.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RadiosityKnobs {
+    /// Longest element edge before adaptive subdivision, scene units.
+    pub element_size: f32,
+    /// Unshot fraction the solve stops at (of the emitted power).
+    pub unshot: f64,
+    /// Shadow rays of the first visibility estimate.
+    pub visibility_min: u32,
+    /// Shadow rays where the first estimate is partial or the receiver close.
+    pub visibility_max: u32,
+    /// Adaptive subdivision where the light changes fast.
+    pub adaptive: bool,
+}
+
+/// One named preset: the setting and what it measured.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Preset {
+    /// Its name: draft, preview or final.
+    pub name: String,
+    /// The error it was chosen to reach: relative RMSE against the reference, unitless.
+    pub target_rel_rmse: f64,
+    /// Whether any measured setting reached the target (if not, this is the most accurate one).
+    pub reached: bool,
+    /// Relative RMSE measured for this setting, unitless.
+    pub measured_rel_rmse: f64,
+    /// Wall-clock seconds measured for this setting, radiosity solve included.
+    pub measured_seconds: f64,
+    /// The method.
+    pub method: Method,
+    /// The tracer's knobs.
+    pub render: RenderKnobs,
+    /// The solver's knobs, for the radiosity-based methods.
+    pub radiosity: Option<RadiosityKnobs>,
+}
+
+/// A presets file: where and how the presets were measured, and the presets by name.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PresetFile {
+    /// The command that measured them.
+    pub measured_by: String,
+    /// Image size of the measurement, pixels.
+    pub width: u32,
+    /// Image height of the measurement, pixels.
+    pub height: u32,
+    /// Worker threads of the measurement.
+    pub threads: usize,
+    /// The presets, cheapest first.
+    pub presets: Vec<Preset>,
+}
+
+impl PresetFile {
+    /// The preset called `name`.
+    pub fn get(&self, name: &str) -> Option<&Preset> {
+        self.presets.iter().find(|p| p.name == name)
+    }
+
+    /// The presets file of a scene: `<dir>/<stem>.presets.toml` beside it.
+    pub fn beside(scene: &Path) -> PathBuf {
+        let stem = scene
+            .file_stem()
+            .map_or_else(|| "scene".to_owned(), |s| s.to_string_lossy().into_owned());
+        scene.with_file_name(format!("{stem}.presets.toml"))
+    }
+
+    /// Reads a presets file, naming the file in every error.
+    pub fn read(path: &Path) -> Result<Self, CliError> {
+        let text = std::fs::read_to_string(path).map_err(|e| {
+            CliError::Input(format!(
+                "{}: cannot read the presets ({e}); `twopass bench tradeoff SCENE \
+                 --install-presets` measures and writes them",
+                path.display()
+            ))
+        })?;
+        toml::from_str(&text).map_err(|e| CliError::Input(format!("{}: {e}", path.display())))
+    }
+
+    /// The file as TOML, with a header comment saying what it is.
+    pub fn to_toml(&self) -> String {
+        let body = toml::to_string_pretty(self).expect("presets serialize to TOML");
+        format!(
+            "# Quality presets measured by `twopass bench tradeoff`: each is the cheapest\n\
+             # setting measured to reach its target relative RMSE. Regenerate, don't edit.\n{body}"
+        )
+    }
+}
+
+/// The preset `name` for `scene`, from `presets` or the file beside the scene.
+pub fn load(scene: &Path, presets: Option<&Path>, name: &str) -> Result<Preset, CliError> {
+    let path = presets.map_or_else(|| PresetFile::beside(scene), Path::to_path_buf);
+    let file = PresetFile::read(&path)?;
+    file.get(name).cloned().ok_or_else(|| {
+        let names: Vec<&str> = file.presets.iter().map(|p| p.name.as_str()).collect();
+        CliError::Input(format!(
+            "{}: no preset `{name}` (it has {})",
+            path.display(),
+            names.join(", ")
+        ))
+    })
+}

@@ -1,0 +1,788 @@
+//! `twopass bench tradeoff SCENE`: the speed/accuracy trade of every method, measured.
+//!
+//! Sweeps each method's knobs one at a time around a base setting (and anti-aliasing against
+//! shadow rays as a grid, since they trade against each other), renders every setting,
+//! and measures its time (radiosity solve included) and its error against a converged
+//! reference: the reference path tracer run long, cached on disk ([`reference`]).
+//!
+//! - radiosity: element size, unshot fraction, visibility rays, adaptive subdivision on/off,
+//!   each solve rendered as radiosity alone and by the hybrids;
+//! - Whitted and the hybrids: samples per pixel x shadow-ray grid, and recursion depth;
+//! - the reference path tracer: samples per pixel.
+//!
+//! Writes, in `--output DIR` (default `tradeoff/`): `<stem>-tradeoff.csv` (one row per run:
+//! method, settings, time per phase, rays, peak memory, error metrics, Pareto membership),
+//! `<stem>-tradeoff.json` (the same plus the reference, the presets and the time each method
+//! takes to reach each target), `<stem>-tradeoff.png` (error against time, log-log, one curve
+//! per method, the Pareto front marked) and `<stem>.presets.toml` (the presets derived from the
+//! front: the cheapest measured setting reaching each target error).
+
+pub mod front;
+mod plot;
+pub mod reference;
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use clap::Args;
+use serde::Serialize;
+use twopass_composite::image::Image;
+use twopass_composite::metric::{Metrics, compare};
+use twopass_composite::tonemap::ToneMap;
+use twopass_radiosity::{Solution, Solver};
+use twopass_trace::{RenderSettings, RenderStats};
+
+use crate::bake::SolveArgs;
+use crate::bench::{peak_memory, reset_peak_memory};
+use crate::compare::methods;
+use crate::context::Context;
+use crate::error::CliError;
+use crate::preset::{Preset, PresetFile, RadiosityKnobs, RenderKnobs};
+use crate::render::{Method, integrator, render_with_bar};
+
+/// Arguments of `twopass bench tradeoff`.
+#[derive(Debug, Args)]
+pub struct TradeoffArgs {
+    /// Scene file (.toml) or mesh (.obj).
+    pub scene: PathBuf,
+    /// A small sweep at 48 pixels wide for smoke tests (seconds, not minutes); its presets mean
+    /// little.
+    #[arg(long)]
+    pub quick: bool,
+    /// Samples per pixel of the converged reference [default: 8192; 256 with --quick].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(2..=10_000_000))]
+    pub reference_spp: Option<u32>,
+    /// Directory of the cached converged references [default: OUTPUT/cache].
+    #[arg(long, value_name = "DIR")]
+    pub cache: Option<PathBuf>,
+    /// Relative RMSE targets of the presets draft, preview and final, in that order.
+    #[arg(long, value_delimiter = ',', num_args = 3, default_values_t = [0.10, 0.026, 0.014], value_parser = parse_target)]
+    pub targets: Vec<f64>,
+    /// Methods to sweep, comma separated [default: every method the scene calls for].
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub methods: Vec<Method>,
+    /// Also write the presets beside the scene (`<stem>.presets.toml`), where `--preset`
+    /// looks for them.
+    #[arg(long)]
+    pub install_presets: bool,
+}
+
+fn parse_target(s: &str) -> Result<f64, String> {
+    let x: f64 = s.parse().map_err(|e| format!("`{s}`: {e}"))?;
+    if x.is_finite() && x > 0.0 {
+        Ok(x)
+    } else {
+        Err(format!("{x}: a target relative RMSE must be finite and > 0"))
+    }
+}
+
+/// Names of the presets, in the order of `--targets`.
+const PRESET_NAMES: [&str; 3] = ["draft", "preview", "final"];
+
+/// The knobs swept, and the base setting the others vary around.
+struct Sweep {
+    /// Image width, pixels (height from the scene camera's aspect ratio).
+    width: u32,
+    reference_spp: u32,
+    base_render: RenderKnobs,
+    /// Base radiosity setting with the element size as a divisor of the scene diagonal.
+    base_divisor: f32,
+    base_unshot: f64,
+    base_visibility: (u32, u32),
+    element_divisors: Vec<f32>,
+    unshots: Vec<f64>,
+    visibility: Vec<(u32, u32)>,
+    /// Samples per pixel crossed with shadow grids for Whitted and the hybrids.
+    spps: Vec<u32>,
+    shadow_grids: Vec<u32>,
+    depths: Vec<u32>,
+    /// Samples per pixel of radiosity alone (base solve).
+    radiosity_spps: Vec<u32>,
+    reference_spps: Vec<u32>,
+}
+
+impl Sweep {
+    fn full() -> Self {
+        Self {
+            width: 256,
+            reference_spp: 8192,
+            base_render: RenderKnobs {
+                spp: 4,
+                depth: 8,
+                shadow_grid: 2,
+            },
+            base_divisor: 24.0,
+            base_unshot: 1e-3,
+            base_visibility: (4, 16),
+            element_divisors: vec![8.0, 12.0, 16.0, 24.0, 32.0, 48.0],
+            unshots: vec![1e-1, 1e-2, 1e-3, 1e-4],
+            visibility: vec![(1, 1), (4, 16), (16, 64)],
+            spps: vec![1, 4, 16],
+            shadow_grids: vec![1, 2, 4],
+            depths: vec![1, 2, 4, 8],
+            radiosity_spps: vec![1, 4, 16],
+            reference_spps: vec![1, 4, 16, 64, 256, 1024],
+        }
+    }
+
+    fn quick() -> Self {
+        Self {
+            width: 48,
+            reference_spp: 256,
+            base_render: RenderKnobs {
+                spp: 1,
+                depth: 2,
+                shadow_grid: 1,
+            },
+            base_divisor: 8.0,
+            base_unshot: 1e-2,
+            base_visibility: (1, 4),
+            element_divisors: vec![4.0, 8.0],
+            unshots: vec![1e-1, 1e-2],
+            visibility: vec![(1, 4)],
+            spps: vec![1, 2],
+            shadow_grids: vec![1],
+            depths: vec![2],
+            radiosity_spps: vec![1],
+            reference_spps: vec![1, 4],
+        }
+    }
+}
+
+/// One solve of the sweep: which knob it varies and its settings.
+struct SolveSpec {
+    knob: &'static str,
+    knobs: RadiosityKnobs,
+}
+
+/// One render of the sweep.
+struct RunSpec {
+    method: Method,
+    knob: &'static str,
+    render: RenderKnobs,
+    /// Index into the solves, for the radiosity-based methods.
+    solve: Option<usize>,
+}
+
+/// The solves and runs of a sweep for `methods`.
+fn plan_runs(sweep: &Sweep, diagonal: f32, methods: &[Method]) -> (Vec<SolveSpec>, Vec<RunSpec>) {
+    let knobs = |divisor: f32, unshot: f64, (vmin, vmax): (u32, u32), adaptive: bool| {
+        RadiosityKnobs {
+            element_size: diagonal / divisor,
+            unshot,
+            visibility_min: vmin,
+            visibility_max: vmax,
+            adaptive,
+        }
+    };
+    let base = knobs(
+        sweep.base_divisor,
+        sweep.base_unshot,
+        sweep.base_visibility,
+        true,
+    );
+    let mut solves = vec![SolveSpec {
+        knob: "base",
+        knobs: base,
+    }];
+    let mut add = |knob: &'static str, k: RadiosityKnobs| {
+        if !solves.iter().any(|s| s.knobs == k) {
+            solves.push(SolveSpec { knob, knobs: k });
+        }
+    };
+    for &d in &sweep.element_divisors {
+        add(
+            "element-size",
+            knobs(d, sweep.base_unshot, sweep.base_visibility, true),
+        );
+    }
+    for &u in &sweep.unshots {
+        add(
+            "unshot",
+            knobs(sweep.base_divisor, u, sweep.base_visibility, true),
+        );
+    }
+    for &v in &sweep.visibility {
+        add(
+            "visibility-rays",
+            knobs(sweep.base_divisor, sweep.base_unshot, v, true),
+        );
+    }
+    add(
+        "adaptive",
+        knobs(
+            sweep.base_divisor,
+            sweep.base_unshot,
+            sweep.base_visibility,
+            false,
+        ),
+    );
+    if !methods.iter().any(|m| m.needs_radiosity()) {
+        solves.clear();
+    }
+
+    let base_render = sweep.base_render;
+    let mut runs = Vec::new();
+    for &method in methods {
+        let mut push = |knob: &'static str, render: RenderKnobs, solve: Option<usize>| {
+            let dup = runs
+                .iter()
+                .any(|r: &RunSpec| r.method == method && r.render == render && r.solve == solve);
+            if !dup {
+                runs.push(RunSpec {
+                    method,
+                    knob,
+                    render,
+                    solve,
+                });
+            }
+        };
+        match method {
+            Method::Reference => {
+                for &spp in &sweep.reference_spps {
+                    push("spp", RenderKnobs { spp, ..base_render }, None);
+                }
+            }
+            Method::Radiosity => {
+                for (i, s) in solves.iter().enumerate() {
+                    push(s.knob, base_render, Some(i));
+                }
+                for &spp in &sweep.radiosity_spps {
+                    push("spp", RenderKnobs { spp, ..base_render }, Some(0));
+                }
+            }
+            Method::Whitted | Method::Hybrid | Method::HybridDirect => {
+                let solve = method.needs_radiosity().then_some(0);
+                if method.needs_radiosity() {
+                    for (i, s) in solves.iter().enumerate() {
+                        push(s.knob, base_render, Some(i));
+                    }
+                }
+                push("base", base_render, solve);
+                for &spp in &sweep.spps {
+                    for &shadow_grid in &sweep.shadow_grids {
+                        let render = RenderKnobs {
+                            spp,
+                            shadow_grid,
+                            ..base_render
+                        };
+                        push("spp-shadow-grid", render, solve);
+                    }
+                }
+                for &depth in &sweep.depths {
+                    push("depth", RenderKnobs { depth, ..base_render }, solve);
+                }
+            }
+        }
+    }
+    (solves, runs)
+}
+
+/// A finished solve.
+struct Solved {
+    solution: Solution,
+    seconds: f64,
+    elements: usize,
+    rays: u64,
+    unshot_fraction: f64,
+    peak_bytes: Option<u64>,
+}
+
+/// One measured run: a CSV row.
+#[derive(Debug, Clone, Serialize)]
+struct Row {
+    method: &'static str,
+    /// The knob this run varies from the base setting.
+    knob: &'static str,
+    spp: u32,
+    depth: u32,
+    shadow_grid: u32,
+    /// Radiosity settings (empty for Whitted and the path tracer).
+    element_size: Option<f32>,
+    unshot: Option<f64>,
+    visibility_min: Option<u32>,
+    visibility_max: Option<u32>,
+    adaptive: Option<bool>,
+    elements: Option<usize>,
+    /// Unshot fraction the solve reached.
+    unshot_reached: Option<f64>,
+    /// Wall-clock seconds of the radiosity solve (0 without one).
+    radiosity_seconds: f64,
+    render_seconds: f64,
+    /// Solve plus render, seconds.
+    total_seconds: f64,
+    /// Shadow rays of the solve.
+    radiosity_rays: u64,
+    /// Camera and secondary rays of the render.
+    rays: u64,
+    shadow_rays: u64,
+    /// Largest resident memory of the solve and the render, MiB.
+    peak_memory_mib: Option<f64>,
+    mae: f64,
+    rmse: f64,
+    rel_rmse: f64,
+    ssim: f64,
+    /// On the Pareto front of all runs.
+    pareto: bool,
+    /// On the Pareto front of its own method.
+    method_pareto: bool,
+}
+
+/// Time each method takes to reach a target error.
+#[derive(Debug, Serialize)]
+struct Reach {
+    method: &'static str,
+    target_rel_rmse: f64,
+    /// Seconds, interpolated on log-log axes along the method's front; `None`: not reached.
+    seconds: Option<f64>,
+    /// `false` when even the cheapest run was below the target (the time is an upper bound).
+    interpolated: bool,
+    /// `seconds` over the reference path tracer's, when both reached it.
+    ratio_to_path_tracer: Option<f64>,
+}
+
+#[derive(Debug, Serialize)]
+struct ReferenceInfo {
+    exr: PathBuf,
+    settings: reference::ReferenceKey,
+    render_seconds: f64,
+    cached: bool,
+    noise_rel_rmse: f64,
+}
+
+#[derive(Debug, Serialize)]
+struct Report {
+    scene: PathBuf,
+    width: u32,
+    height: u32,
+    threads: usize,
+    seed: u64,
+    reference: ReferenceInfo,
+    skipped: Vec<String>,
+    rows: Vec<Row>,
+    reach: Vec<Reach>,
+    presets: Vec<Preset>,
+    csv: PathBuf,
+    plot: PathBuf,
+    presets_file: PathBuf,
+}
+
+/// Runs the sweep and writes the CSV, JSON, plot and presets.
+pub fn run(args: &TradeoffArgs, ctx: &Context) -> Result<(), CliError> {
+    let (scene, warnings) = twopass_scene::load(&args.scene)?;
+    if ctx.chatty() {
+        for w in &warnings {
+            eprintln!("warning: {w}");
+        }
+    }
+    if scene.emitters.is_empty() {
+        return Err(CliError::Input(format!(
+            "{}: nothing emits light, every render would be black",
+            args.scene.display()
+        )));
+    }
+    let mut sweep = if args.quick {
+        Sweep::quick()
+    } else {
+        Sweep::full()
+    };
+    if let Some(spp) = args.reference_spp {
+        sweep.reference_spp = spp;
+    }
+    let camera = match (ctx.width, ctx.height) {
+        (None, None) => scene.camera.with_resolution(Some(sweep.width), None),
+        (w, h) => scene.camera.with_resolution(w, h),
+    };
+    let (called_for, skipped) = methods(&scene);
+    let chosen: Vec<Method> = if args.methods.is_empty() {
+        called_for
+    } else {
+        let mut m = args.methods.clone();
+        m.dedup();
+        if let Some(bad) = m
+            .iter()
+            .find(|m| m.needs_radiosity() && !called_for.contains(m))
+        {
+            return Err(CliError::Input(format!(
+                "{}: --methods {}: the scene does not call for it ({})",
+                args.scene.display(),
+                bad.name(),
+                skipped.join("; ")
+            )));
+        }
+        m
+    };
+    let dir = ctx
+        .output
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("tradeoff"));
+    std::fs::create_dir_all(&dir).map_err(|e| CliError::io(&dir, e))?;
+    let cache = args.cache.clone().unwrap_or_else(|| dir.join("cache"));
+    let stem = args
+        .scene
+        .file_stem()
+        .map_or_else(|| "scene".to_owned(), |s| s.to_string_lossy().into_owned());
+
+    let key = reference::key(
+        &scene,
+        &args.scene,
+        camera.width,
+        camera.height,
+        sweep.reference_spp,
+        ctx.seed,
+    );
+    let converged = reference::converged(&scene, &camera, &cache, key, ctx)?;
+    if ctx.chatty() {
+        eprintln!(
+            "reference: {} spp, {} ({:.1} s), its own noise {:.2} % relative RMSE",
+            sweep.reference_spp,
+            if converged.cached {
+                format!("from {}", converged.exr.display())
+            } else {
+                format!("rendered, cached as {}", converged.exr.display())
+            },
+            converged.render_seconds,
+            100.0 * converged.noise_rel_rmse
+        );
+    }
+    let display = ToneMap::auto_default(&converged.image)?;
+
+    let (solves, runs) = plan_runs(&sweep, scene.bounds.diagonal(), &chosen);
+    let bar = ctx.progress((solves.len() + runs.len()) as u64, "tradeoff");
+    let mut solved: Vec<Solved> = Vec::with_capacity(solves.len());
+    for spec in &solves {
+        reset_peak_memory();
+        let started = Instant::now();
+        let mut solver = Solver::new(&scene, SolveArgs::from_knobs(&spec.knobs).options(ctx.seed)).map_err(|source| {
+            CliError::Solve {
+                path: args.scene.clone(),
+                source,
+            }
+        })?;
+        solver.run(|_| std::ops::ControlFlow::Continue(()));
+        let p = solver.progress();
+        solved.push(Solved {
+            solution: solver.solution(),
+            seconds: started.elapsed().as_secs_f64(),
+            elements: p.elements,
+            rays: p.rays,
+            unshot_fraction: p.unshot_fraction,
+            peak_bytes: peak_memory(),
+        });
+        bar.inc(1);
+    }
+
+    let mut rows = Vec::with_capacity(runs.len());
+    for run in &runs {
+        let solve = run.solve.map(|i| (&solves[i], &solved[i]));
+        let integ = integrator(
+            run.method,
+            &scene,
+            solve.map(|s| &s.1.solution),
+            run.render.whitted(),
+        );
+        let settings = RenderSettings {
+            samples_per_pixel: run.render.spp,
+            seed: ctx.seed,
+            ..RenderSettings::default()
+        };
+        reset_peak_memory();
+        let out = render_with_bar(
+            &scene,
+            &camera,
+            integ.as_ref(),
+            &settings,
+            run.method.name(),
+            ctx,
+        );
+        let render_peak = peak_memory();
+        let img = out.layers.composite();
+        let image = Image::from_pixels(img.width, img.height, img.pixels)?;
+        image.check_finite(run.method.name())?;
+        let metrics = compare(&image, &converged.image, &display)?;
+        rows.push(row(run, solve, &out.stats, &metrics, render_peak));
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+
+    mark_fronts(&mut rows);
+    let presets = derive_presets(&rows, &runs, &solves, &args.targets);
+    let reach = reach_table(&rows, &chosen, &args.targets);
+
+    let csv_path = dir.join(format!("{stem}-tradeoff.csv"));
+    let plot_path = dir.join(format!("{stem}-tradeoff.png"));
+    let presets_path = dir.join(format!("{stem}.presets.toml"));
+    let measured_by = format!(
+        "twopass bench tradeoff {}{}{}",
+        args.scene.display(),
+        if args.quick { " --quick" } else { "" },
+        args.reference_spp
+            .map_or_else(String::new, |s| format!(" --reference-spp {s}"))
+    );
+    let preset_file = PresetFile {
+        measured_by,
+        width: camera.width,
+        height: camera.height,
+        threads: rayon::current_num_threads(),
+        presets: presets.clone(),
+    };
+    let report = Report {
+        scene: args.scene.clone(),
+        width: camera.width,
+        height: camera.height,
+        threads: rayon::current_num_threads(),
+        seed: ctx.seed,
+        reference: ReferenceInfo {
+            exr: converged.exr.clone(),
+            settings: converged.key.clone(),
+            render_seconds: converged.render_seconds,
+            cached: converged.cached,
+            noise_rel_rmse: converged.noise_rel_rmse,
+        },
+        skipped,
+        rows,
+        reach,
+        presets,
+        csv: csv_path.clone(),
+        plot: plot_path.clone(),
+        presets_file: presets_path.clone(),
+    };
+    crate::output::write_csv(&csv_path, &report.rows)?;
+    plot::plot(
+        &plot_path,
+        &format!(
+            "{}: {} x {}, {} threads",
+            args.scene.display(),
+            camera.width,
+            camera.height,
+            report.threads
+        ),
+        &report.rows,
+        &report.presets,
+        converged.noise_rel_rmse,
+    )?;
+    let toml = preset_file.to_toml();
+    crate::output::write_atomic(&presets_path, toml.as_bytes())?;
+    if args.install_presets {
+        crate::output::write_atomic(&PresetFile::beside(&args.scene), toml.as_bytes())?;
+    }
+    let json = serde_json::to_string_pretty(&report).expect("report serializes");
+    crate::output::write_atomic(&dir.join(format!("{stem}-tradeoff.json")), json.as_bytes())?;
+    if ctx.json {
+        println!("{json}");
+    } else if !ctx.quiet {
+        print_report(&report);
+    }
+    Ok(())
+}
+
+fn row(
+    run: &RunSpec,
+    solve: Option<(&SolveSpec, &Solved)>,
+    stats: &RenderStats,
+    m: &Metrics,
+    render_peak: Option<u64>,
+) -> Row {
+    let k = solve.map(|s| s.0.knobs);
+    let s = solve.map(|s| s.1);
+    let radiosity_seconds = s.map_or(0.0, |s| s.seconds);
+    let render_seconds = stats.elapsed.as_secs_f64();
+    let peak = match (render_peak, s.and_then(|s| s.peak_bytes)) {
+        (Some(a), Some(b)) => Some(a.max(b)),
+        (a, b) => a.or(b),
+    };
+    Row {
+        method: run.method.name(),
+        knob: run.knob,
+        spp: run.render.spp,
+        depth: run.render.depth,
+        shadow_grid: run.render.shadow_grid,
+        element_size: k.map(|k| k.element_size),
+        unshot: k.map(|k| k.unshot),
+        visibility_min: k.map(|k| k.visibility_min),
+        visibility_max: k.map(|k| k.visibility_max),
+        adaptive: k.map(|k| k.adaptive),
+        elements: s.map(|s| s.elements),
+        unshot_reached: s.map(|s| s.unshot_fraction),
+        radiosity_seconds,
+        render_seconds,
+        total_seconds: radiosity_seconds + render_seconds,
+        radiosity_rays: s.map_or(0, |s| s.rays),
+        rays: stats.rays,
+        shadow_rays: stats.shadow_rays,
+        peak_memory_mib: peak.map(|b| b as f64 / (1024.0 * 1024.0)),
+        mae: m.mae,
+        rmse: m.rmse,
+        rel_rmse: m.rel_rmse,
+        ssim: m.ssim,
+        pareto: false,
+        method_pareto: false,
+    }
+}
+
+fn points(rows: &[Row]) -> Vec<(f64, f64)> {
+    rows.iter().map(|r| (r.total_seconds, r.rel_rmse)).collect()
+}
+
+/// Marks the global front and each method's own front.
+fn mark_fronts(rows: &mut [Row]) {
+    for i in front::pareto_front(&points(rows)) {
+        rows[i].pareto = true;
+    }
+    let names: Vec<&'static str> = rows.iter().map(|r| r.method).collect();
+    for name in names.iter().copied().collect::<std::collections::BTreeSet<_>>() {
+        let idx: Vec<usize> = (0..rows.len()).filter(|&i| names[i] == name).collect();
+        let pts: Vec<(f64, f64)> = idx
+            .iter()
+            .map(|&i| (rows[i].total_seconds, rows[i].rel_rmse))
+            .collect();
+        for j in front::pareto_front(&pts) {
+            rows[idx[j]].method_pareto = true;
+        }
+    }
+}
+
+/// The presets: for each target, the cheapest run reaching it.
+fn derive_presets(
+    rows: &[Row],
+    runs: &[RunSpec],
+    solves: &[SolveSpec],
+    targets: &[f64],
+) -> Vec<Preset> {
+    let pts = points(rows);
+    PRESET_NAMES
+        .iter()
+        .zip(targets)
+        .filter_map(|(name, &target)| {
+            let (i, reached) = front::cheapest_reaching(&pts, target)?;
+            Some(Preset {
+                name: (*name).to_owned(),
+                target_rel_rmse: target,
+                reached,
+                measured_rel_rmse: rows[i].rel_rmse,
+                measured_seconds: rows[i].total_seconds,
+                method: runs[i].method,
+                render: runs[i].render,
+                radiosity: runs[i].solve.map(|s| solves[s].knobs),
+            })
+        })
+        .collect()
+}
+
+/// Time to reach each target, per method, with the ratio to the path tracer's.
+fn reach_table(rows: &[Row], methods: &[Method], targets: &[f64]) -> Vec<Reach> {
+    let curve = |name: &str| -> Vec<(f64, f64)> {
+        rows.iter()
+            .filter(|r| r.method == name)
+            .map(|r| (r.total_seconds, r.rel_rmse))
+            .collect()
+    };
+    let mut out = Vec::new();
+    for &target in targets {
+        let pt = front::time_to_reach(&curve(Method::Reference.name()), target);
+        for m in methods {
+            let reached = front::time_to_reach(&curve(m.name()), target);
+            out.push(Reach {
+                method: m.name(),
+                target_rel_rmse: target,
+                seconds: reached.map(|r| r.0),
+                interpolated: reached.is_some_and(|r| r.1),
+                ratio_to_path_tracer: match (reached, pt) {
+                    (Some(a), Some(b)) => Some(a.0 / b.0),
+                    _ => None,
+                },
+            });
+        }
+    }
+    out
+}
+
+fn print_report(r: &Report) {
+    for s in &r.skipped {
+        println!("skipped {s}");
+    }
+    println!(
+        "{}: {} x {}, {} threads; reference {} spp ({:.1} s{}), its noise {:.2} %",
+        r.scene.display(),
+        r.width,
+        r.height,
+        r.threads,
+        r.reference.settings.spp,
+        r.reference.render_seconds,
+        if r.reference.cached { ", cached" } else { "" },
+        100.0 * r.reference.noise_rel_rmse
+    );
+    println!(
+        "{:<14} {:<16} {:>5} {:>4} {:>4} {:>9} {:>8} {:>8} {:>9} {:>9} {:>9} {:>7}",
+        "method",
+        "knob",
+        "spp",
+        "grid",
+        "dep",
+        "elem size",
+        "elements",
+        "unshot",
+        "solve s",
+        "total s",
+        "rel RMSE",
+        "peak MiB"
+    );
+    for row in &r.rows {
+        let opt = |x: Option<String>| x.unwrap_or_else(|| "-".to_owned());
+        println!(
+            "{:<14} {:<16} {:>5} {:>4} {:>4} {:>9} {:>8} {:>8} {:>9.3} {:>9.3} {:>8.2}%{} {:>7}",
+            row.method,
+            row.knob,
+            row.spp,
+            row.shadow_grid,
+            row.depth,
+            opt(row.element_size.map(|e| format!("{e:.1}"))),
+            opt(row.elements.map(|e| e.to_string())),
+            opt(row.unshot.map(|u| format!("{u:.0e}"))),
+            row.radiosity_seconds,
+            row.total_seconds,
+            100.0 * row.rel_rmse,
+            if row.pareto { "*" } else { " " },
+            opt(row.peak_memory_mib.map(|m| format!("{m:.0}"))),
+        );
+    }
+    println!("* on the Pareto front of all methods");
+    for reach in &r.reach {
+        println!(
+            "{:<14} reaches {:>5.2} % in {}{}",
+            reach.method,
+            100.0 * reach.target_rel_rmse,
+            reach.seconds.map_or_else(
+                || "(not reached)".to_owned(),
+                |s| format!("{}{s:.3} s", if reach.interpolated { "" } else { "<= " })
+            ),
+            reach
+                .ratio_to_path_tracer
+                .map_or_else(String::new, |x| format!(", {x:.3} x the path tracer's time"))
+        );
+    }
+    for p in &r.presets {
+        println!(
+            "preset {:<8} target {:>5.2} %{}: {} at {} spp, grid {}, depth {}{} -> {:.2} % in {:.3} s",
+            p.name,
+            100.0 * p.target_rel_rmse,
+            if p.reached { "" } else { " (not reached)" },
+            p.method.name(),
+            p.render.spp,
+            p.render.shadow_grid,
+            p.render.depth,
+            p.radiosity.map_or_else(String::new, |k| format!(
+                ", elements {:.1}, unshot {:.0e}, visibility {}-{}, adaptive {}",
+                k.element_size, k.unshot, k.visibility_min, k.visibility_max, k.adaptive
+            )),
+            100.0 * p.measured_rel_rmse,
+            p.measured_seconds
+        );
+    }
+    println!(
+        "wrote {}, {}, {} and the JSON beside them",
+        r.csv.display(),
+        r.plot.display(),
+        r.presets_file.display()
+    );
+}

@@ -1,0 +1,229 @@
+//! The converged reference of the tradeoff sweep: the reference path tracer run long, cached on
+//! disk with its settings so it is rendered once per scene, size and sample count.
+//!
+//! Cache files, in the cache directory: `<stem>-reference-<key>.exr` (the image) and
+//! `<stem>-reference-<key>.json` (the settings it was rendered with, its render time and its
+//! own noise). `<key>` is the CRC-32 of the settings, which include a checksum of the loaded
+//! scene (geometry, materials, objects, emitters, camera), so editing the scene invalidates
+//! the cache. The JSON is written last: an interrupted render leaves no usable entry.
+//!
+//! The reference is rendered as two independent halves of `spp / 2` samples each, with seeds
+//! no sweep run uses, and their mean is the reference. A half differs from the mean by half
+//! the difference of the halves, whose variance is that of the mean: the relative RMSE of a
+//! half against the mean is the noise of the reference itself, the floor below which no
+//! measured error means anything.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use serde::{Deserialize, Serialize};
+use twopass_composite::image::Image;
+use twopass_composite::metric::compare;
+use twopass_composite::tonemap::ToneMap;
+use twopass_composite::write::{read_exr, write_atomic, write_exr};
+use twopass_scene::Scene;
+use twopass_trace::{Reference, ReferenceSettings, RenderSettings};
+
+use crate::context::Context;
+use crate::error::CliError;
+use crate::render::render_with_bar;
+
+/// Seeds of the two halves are the sweep's seed mixed with this, so no sweep run shares a
+/// sample sequence with the reference (shared samples would hide part of the error).
+const REFERENCE_SEED_MIX: u64 = 0x7265_6665_7265_6e63;
+
+/// What the cached image was rendered with; an entry is used only when every field matches.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ReferenceKey {
+    /// The scene file as given.
+    pub scene: PathBuf,
+    /// CRC-32 of the loaded scene's geometry, materials, objects, emitters and camera.
+    pub scene_checksum: String,
+    /// Image width, pixels.
+    pub width: u32,
+    /// Image height, pixels.
+    pub height: u32,
+    /// Samples per pixel of the mean of both halves.
+    pub spp: u32,
+    /// The sweep's seed (the halves use seeds derived from it).
+    pub seed: u64,
+    /// Longest path, surface vertices.
+    pub max_depth: u32,
+    /// Path length from which Russian roulette may end a path.
+    pub roulette_depth: u32,
+    /// Version of twopass that rendered it.
+    pub version: String,
+}
+
+/// A cache entry's record.
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Record {
+    key: ReferenceKey,
+    /// Wall-clock seconds of both halves.
+    render_seconds: f64,
+    /// Relative RMSE of the mean from its own noise, unitless.
+    noise_rel_rmse: f64,
+}
+
+/// The converged reference image and what it cost.
+#[derive(Debug)]
+pub struct Converged {
+    /// The image, W/(m^2 sr) per channel.
+    pub image: Image,
+    /// Its settings.
+    pub key: ReferenceKey,
+    /// Wall-clock seconds it took to render (when it was rendered, possibly in an earlier run).
+    pub render_seconds: f64,
+    /// Relative RMSE of the reference from its own noise: the floor of every measured error.
+    pub noise_rel_rmse: f64,
+    /// Whether it came from the cache.
+    pub cached: bool,
+    /// The cached EXR.
+    pub exr: PathBuf,
+}
+
+/// CRC-32 of everything in the loaded scene that changes an image.
+fn scene_checksum(scene: &Scene) -> String {
+    let mut h = crc32fast::Hasher::new();
+    for p in &scene.mesh.positions {
+        for c in p.to_array() {
+            h.update(&c.to_le_bytes());
+        }
+    }
+    for t in &scene.mesh.triangles {
+        for i in t {
+            h.update(&i.to_le_bytes());
+        }
+    }
+    let described = format!(
+        "{:?}{:?}{:?}{:?}{:?}",
+        scene.mesh.normals, scene.materials, scene.objects, scene.emitters, scene.camera
+    );
+    h.update(described.as_bytes());
+    format!("{:08x}", h.finalize())
+}
+
+/// The key of a reference for this scene, camera size and settings.
+pub fn key(
+    scene: &Scene,
+    path: &Path,
+    width: u32,
+    height: u32,
+    spp: u32,
+    seed: u64,
+) -> ReferenceKey {
+    let settings = ReferenceSettings::default();
+    ReferenceKey {
+        scene: path.to_owned(),
+        scene_checksum: scene_checksum(scene),
+        width,
+        height,
+        spp,
+        seed,
+        max_depth: settings.max_depth,
+        roulette_depth: settings.roulette_depth,
+        version: env!("CARGO_PKG_VERSION").to_owned(),
+    }
+}
+
+/// The cache's file names for `key` (EXR, JSON).
+fn files(dir: &Path, key: &ReferenceKey) -> (PathBuf, PathBuf) {
+    let json = serde_json::to_string(key).expect("key serializes");
+    let stem = key
+        .scene
+        .file_stem()
+        .map_or_else(|| "scene".to_owned(), |s| s.to_string_lossy().into_owned());
+    let name = format!(
+        "{stem}-reference-{:08x}-{}x{}-{}spp",
+        crc32fast::hash(json.as_bytes()),
+        key.width,
+        key.height,
+        key.spp
+    );
+    (
+        dir.join(format!("{name}.exr")),
+        dir.join(format!("{name}.json")),
+    )
+}
+
+/// The cached entry for `key`, when there is a complete one.
+fn cached(dir: &Path, key: &ReferenceKey) -> Option<Converged> {
+    let (exr, json) = files(dir, key);
+    let record: Record = serde_json::from_slice(&std::fs::read(&json).ok()?).ok()?;
+    if &record.key != key {
+        return None;
+    }
+    let image = read_exr(&exr).ok()?;
+    if image.size() != (key.width, key.height) || image.first_non_finite().is_some() {
+        return None;
+    }
+    Some(Converged {
+        image,
+        key: record.key,
+        render_seconds: record.render_seconds,
+        noise_rel_rmse: record.noise_rel_rmse,
+        cached: true,
+        exr,
+    })
+}
+
+/// The converged reference for `key`: from the cache in `dir`, or rendered now (two halves,
+/// with a progress bar) and stored there.
+pub fn converged(
+    scene: &Scene,
+    camera: &twopass_scene::Camera,
+    dir: &Path,
+    key: ReferenceKey,
+    ctx: &Context,
+) -> Result<Converged, CliError> {
+    if let Some(hit) = cached(dir, &key) {
+        return Ok(hit);
+    }
+    let integrator = Reference::new(scene, ReferenceSettings::default());
+    let started = Instant::now();
+    let mut halves = Vec::with_capacity(2);
+    for half in 0..2u64 {
+        let settings = RenderSettings {
+            samples_per_pixel: key.spp.div_ceil(2),
+            seed: (key.seed ^ REFERENCE_SEED_MIX).wrapping_add(half),
+            ..RenderSettings::default()
+        };
+        let out = render_with_bar(
+            scene,
+            camera,
+            &integrator,
+            &settings,
+            &format!("reference {}/2", half + 1),
+            ctx,
+        );
+        let img = out.layers.composite();
+        halves.push(Image::from_pixels(img.width, img.height, img.pixels)?);
+    }
+    let render_seconds = started.elapsed().as_secs_f64();
+    let mean = Image::from_fn(key.width, key.height, |x, y| {
+        0.5 * (halves[0].get(x, y) + halves[1].get(x, y))
+    });
+    mean.check_finite("reference")?;
+    let display = ToneMap::auto_default(&mean)?;
+    let noise_rel_rmse = compare(&halves[0], &mean, &display)?.rel_rmse;
+    let (exr, json) = files(dir, &key);
+    std::fs::create_dir_all(dir).map_err(|e| CliError::io(dir, e))?;
+    write_exr(&exr, &mean)?;
+    let record = Record {
+        key: key.clone(),
+        render_seconds,
+        noise_rel_rmse,
+    };
+    let text = serde_json::to_string_pretty(&record).expect("record serializes");
+    write_atomic(&json, text.as_bytes())?;
+    Ok(Converged {
+        image: mean,
+        key,
+        render_seconds,
+        noise_rel_rmse,
+        cached: false,
+        exr,
+    })
+}
