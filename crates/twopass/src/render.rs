@@ -258,8 +258,7 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
             decisions.diffuse.reason
         )));
     }
-    if matches!(method, Method::Hybrid | Method::HybridDirect) && !decisions.specular.required
-    {
+    if matches!(method, Method::Hybrid | Method::HybridDirect) && !decisions.specular.required {
         skipped.push(format!(
             "specular pass skipped: {}",
             decisions.specular.reason

@@ -96,7 +96,10 @@ mod tests {
     #[test]
     fn time_to_reach_interpolates_a_power_law_exactly() {
         // error = t^-1/2, the Monte Carlo rate: 1 % is reached at t = 10^4.
-        let pts: Vec<(f64, f64)> = [1.0, 100.0, 1e6].iter().map(|&t| (t, t.powf(-0.5))).collect();
+        let pts: Vec<(f64, f64)> = [1.0f64, 100.0, 1e6]
+            .iter()
+            .map(|&t| (t, t.powf(-0.5)))
+            .collect();
         let (t, interpolated) = time_to_reach(&pts, 0.01).unwrap();
         assert!(interpolated);
         assert!((t / 1e4 - 1.0).abs() < 1e-9, "{t}");

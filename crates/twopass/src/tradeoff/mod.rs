@@ -72,7 +72,9 @@ fn parse_target(s: &str) -> Result<f64, String> {
     if x.is_finite() && x > 0.0 {
         Ok(x)
     } else {
-        Err(format!("{x}: a target relative RMSE must be finite and > 0"))
+        Err(format!(
+            "{x}: a target relative RMSE must be finite and > 0"
+        ))
     }
 }
 
@@ -166,15 +168,14 @@ struct RunSpec {
 
 /// The solves and runs of a sweep for `methods`.
 fn plan_runs(sweep: &Sweep, diagonal: f32, methods: &[Method]) -> (Vec<SolveSpec>, Vec<RunSpec>) {
-    let knobs = |divisor: f32, unshot: f64, (vmin, vmax): (u32, u32), adaptive: bool| {
-        RadiosityKnobs {
+    let knobs =
+        |divisor: f32, unshot: f64, (vmin, vmax): (u32, u32), adaptive: bool| RadiosityKnobs {
             element_size: diagonal / divisor,
             unshot,
             visibility_min: vmin,
             visibility_max: vmax,
             adaptive,
-        }
-    };
+        };
     let base = knobs(
         sweep.base_divisor,
         sweep.base_unshot,
@@ -270,7 +271,14 @@ fn plan_runs(sweep: &Sweep, diagonal: f32, methods: &[Method]) -> (Vec<SolveSpec
                     }
                 }
                 for &depth in &sweep.depths {
-                    push("depth", RenderKnobs { depth, ..base_render }, solve);
+                    push(
+                        "depth",
+                        RenderKnobs {
+                            depth,
+                            ..base_render
+                        },
+                        solve,
+                    );
                 }
             }
         }
@@ -453,12 +461,11 @@ pub fn run(args: &TradeoffArgs, ctx: &Context) -> Result<(), CliError> {
     for spec in &solves {
         reset_peak_memory();
         let started = Instant::now();
-        let mut solver = Solver::new(&scene, SolveArgs::from_knobs(&spec.knobs).options(ctx.seed)).map_err(|source| {
-            CliError::Solve {
+        let mut solver = Solver::new(&scene, SolveArgs::from_knobs(&spec.knobs).options(ctx.seed))
+            .map_err(|source| CliError::Solve {
                 path: args.scene.clone(),
                 source,
-            }
-        })?;
+            })?;
         solver.run(|_| std::ops::ControlFlow::Continue(()));
         let p = solver.progress();
         solved.push(Solved {
@@ -630,7 +637,11 @@ fn mark_fronts(rows: &mut [Row]) {
         rows[i].pareto = true;
     }
     let names: Vec<&'static str> = rows.iter().map(|r| r.method).collect();
-    for name in names.iter().copied().collect::<std::collections::BTreeSet<_>>() {
+    for name in names
+        .iter()
+        .copied()
+        .collect::<std::collections::BTreeSet<_>>()
+    {
         let idx: Vec<usize> = (0..rows.len()).filter(|&i| names[i] == name).collect();
         let pts: Vec<(f64, f64)> = idx
             .iter()
@@ -758,7 +769,9 @@ fn print_report(r: &Report) {
             ),
             reach
                 .ratio_to_path_tracer
-                .map_or_else(String::new, |x| format!(", {x:.3} x the path tracer's time"))
+                .map_or_else(String::new, |x| format!(
+                    ", {x:.3} x the path tracer's time"
+                ))
         );
     }
     for p in &r.presets {

@@ -100,9 +100,7 @@ pub fn plot(
                 ))
                 .map_err(|e| err(e.to_string()))?
                 .label(format!("reference noise {floor:.2} %"))
-                .legend(|(x, y)| {
-                    PathElement::new([(x, y), (x + 18, y)], RGBColor(160, 160, 160))
-                });
+                .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], RGBColor(160, 160, 160)));
         }
 
         let mut methods: Vec<&str> = Vec::new();
@@ -116,7 +114,8 @@ pub fn plot(
             let mine = || finite().filter(move |r| r.method == m);
             chart
                 .draw_series(
-                    mine().map(|r| Circle::new((r.total_seconds, 100.0 * r.rel_rmse), 3, c.filled())),
+                    mine()
+                        .map(|r| Circle::new((r.total_seconds, 100.0 * r.rel_rmse), 3, c.filled())),
                 )
                 .map_err(|e| err(e.to_string()))?
                 .label(m.to_owned())
@@ -148,17 +147,16 @@ pub fn plot(
             stairs.push((x1, e));
         }
         chart
-            .draw_series(DashedLineSeries::new(
-                stairs,
-                7,
-                5,
-                BLACK.stroke_width(2),
-            ))
+            .draw_series(DashedLineSeries::new(stairs, 7, 5, BLACK.stroke_width(2)))
             .map_err(|e| err(e.to_string()))?
             .label("Pareto front (all methods)")
             .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], BLACK.stroke_width(2)));
         chart
-            .draw_series(front.iter().map(|&p| Circle::new(p, 6, BLACK.stroke_width(2))))
+            .draw_series(
+                front
+                    .iter()
+                    .map(|&p| Circle::new(p, 6, BLACK.stroke_width(2))),
+            )
             .map_err(|e| err(e.to_string()))?;
 
         // Presets sharing a run share one label.

@@ -1,0 +1,237 @@
+//! `twopass bench tradeoff`: the front, the presets and the cache, checked from its own report.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use serde_json::Value;
+
+fn repo(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../..")
+        .join(rel)
+}
+
+fn twopass(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_twopass"))
+        .args(args)
+        .env("CI", "1")
+        .output()
+        .unwrap()
+}
+
+fn sweep(out: &Path) -> Value {
+    let scene = repo("scenes/cornell-box.toml");
+    let o = twopass(&[
+        "bench",
+        "tradeoff",
+        scene.to_str().unwrap(),
+        "--quick",
+        "--width",
+        "32",
+        "--reference-spp",
+        "64",
+        "--json",
+        "--output",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
+fn f(v: &Value) -> f64 {
+    v.as_f64().unwrap()
+}
+
+#[test]
+fn front_presets_and_cache_agree_with_the_measured_rows() {
+    let dir = tempfile::tempdir().unwrap();
+    let first = sweep(dir.path());
+    let rows = first["rows"].as_array().unwrap();
+
+    // Every method the diffuse box calls for was measured (hybrid is skipped, and says why).
+    for m in ["reference", "whitted", "radiosity", "hybrid-direct"] {
+        assert!(rows.iter().any(|r| r["method"] == m), "{m} missing");
+    }
+    assert!(rows.iter().all(|r| r["method"] != "hybrid"));
+    assert!(first["skipped"][0].as_str().unwrap().starts_with("hybrid"));
+
+    // The front, recomputed from the definition: no other row is no slower and no less
+    // accurate while strictly better in one of the two.
+    let pts: Vec<(f64, f64)> = rows
+        .iter()
+        .map(|r| (f(&r["total_seconds"]), f(&r["rel_rmse"])))
+        .collect();
+    for (i, r) in rows.iter().enumerate() {
+        let dominated = pts.iter().enumerate().any(|(j, q)| {
+            j != i
+                && q.0 <= pts[i].0
+                && q.1 <= pts[i].1
+                && (q.0 < pts[i].0 || q.1 < pts[i].1 || j < i)
+        });
+        assert_eq!(r["pareto"].as_bool().unwrap(), !dominated, "row {i}: {r}");
+        assert!(pts[i].1.is_finite() && pts[i].1 > 0.0);
+        assert!(f(&r["peak_memory_mib"]) > 0.0, "row {i} has no peak memory");
+        assert!(
+            (f(&r["total_seconds"]) - f(&r["radiosity_seconds"]) - f(&r["render_seconds"])).abs()
+                < 1e-9
+        );
+    }
+
+    // Each preset is the cheapest row reaching its target, or the most accurate of all.
+    let presets = first["presets"].as_array().unwrap();
+    let names: Vec<&str> = presets
+        .iter()
+        .map(|p| p["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["draft", "preview", "final"]);
+    for p in presets {
+        let target = f(&p["target_rel_rmse"]);
+        let reaching = pts.iter().filter(|q| q.1 <= target);
+        let expected = match reaching.clone().map(|q| q.0).reduce(f64::min) {
+            Some(t) => {
+                assert!(p["reached"].as_bool().unwrap());
+                t
+            }
+            None => {
+                assert!(!p["reached"].as_bool().unwrap());
+                let best = pts.iter().map(|q| q.1).fold(f64::INFINITY, f64::min);
+                assert_eq!(f(&p["measured_rel_rmse"]), best);
+                pts.iter()
+                    .filter(|q| q.1 == best)
+                    .map(|q| q.0)
+                    .fold(f64::INFINITY, f64::min)
+            }
+        };
+        assert_eq!(f(&p["measured_seconds"]), expected, "{p}");
+    }
+
+    // The path tracer converges: 4 spp beats 1 spp, and the reference's own noise is below both.
+    let pt = |spp: u64| {
+        rows.iter()
+            .find(|r| r["method"] == "reference" && r["spp"] == spp)
+            .map(|r| f(&r["rel_rmse"]))
+            .unwrap()
+    };
+    let noise = f(&first["reference"]["noise_rel_rmse"]);
+    assert!(
+        pt(1) > pt(4) && pt(4) > noise && noise > 0.0,
+        "{} {} {noise}",
+        pt(1),
+        pt(4)
+    );
+    assert!(!first["reference"]["cached"].as_bool().unwrap());
+
+    // Outputs exist; the plot is a PNG.
+    let png = std::fs::read(first["plot"].as_str().unwrap()).unwrap();
+    assert_eq!(&png[1..4], b"PNG");
+    let csv = std::fs::read_to_string(first["csv"].as_str().unwrap()).unwrap();
+    assert_eq!(csv.lines().count(), rows.len() + 1);
+
+    // The second run takes the reference from the cache, and renders deterministically: every
+    // error is the same to the last bit.
+    let second = sweep(dir.path());
+    assert!(second["reference"]["cached"].as_bool().unwrap());
+    assert_eq!(
+        second["reference"]["noise_rel_rmse"],
+        first["reference"]["noise_rel_rmse"]
+    );
+    let errors = |v: &Value| -> Vec<f64> {
+        v["rows"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|r| f(&r["rel_rmse"]))
+            .collect()
+    };
+    assert_eq!(errors(&first), errors(&second));
+
+    // `render --preset` takes the preset's method and settings.
+    let presets_file = first["presets_file"].as_str().unwrap();
+    let scene = repo("scenes/cornell-box.toml");
+    let exr = dir.path().join("preset.exr");
+    let o = twopass(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--preset",
+        "draft",
+        "--presets",
+        presets_file,
+        "--width",
+        "16",
+        "--json",
+        "--output",
+        exr.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let summary: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(summary["method"], presets[0]["method"]);
+    assert_eq!(summary["spp"], presets[0]["render"]["spp"]);
+    assert_eq!(summary["preset"], "draft");
+}
+
+#[test]
+fn missing_presets_and_unknown_names_are_clear_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = repo("scenes/cornell-box.toml");
+    let missing = dir.path().join("none.presets.toml");
+    let o = twopass(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--preset",
+        "draft",
+        "--presets",
+        missing.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("none.presets.toml") && err.contains("bench tradeoff"),
+        "{err}"
+    );
+
+    let file = dir.path().join("x.presets.toml");
+    std::fs::write(
+        &file,
+        "measured_by = \"hand\"\nwidth = 8\nheight = 8\nthreads = 1\npresets = []\n",
+    )
+    .unwrap();
+    let o = twopass(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--preset",
+        "final",
+        "--presets",
+        file.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("x.presets.toml") && err.contains("no preset `final`"),
+        "{err}"
+    );
+
+    // A preset conflicts with the settings it sets.
+    let o = twopass(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--preset",
+        "draft",
+        "--spp",
+        "4",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+
+    let o = twopass(&["bench", "tradeoff", "no/such/scene.toml", "--quick"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("no/such/scene.toml"));
+}
