@@ -51,7 +51,7 @@ pub struct RadiosityArgs {
     /// Scene file (.toml or .obj).
     pub scene: PathBuf,
     /// Element counts to aim at (the mesh reaches about these by bisection).
-    #[arg(long, value_delimiter = ',', default_values_t = [1000u32, 10_000, 50_000])]
+    #[arg(long, value_delimiter = ',', default_values_t = [1000u32, 10_000, 50_000, 200_000])]
     pub elements: Vec<u32>,
     /// Unshot fraction to solve to.
     #[arg(long, default_value_t = 1e-3)]
@@ -93,6 +93,8 @@ struct Row {
     speedup: f64,
     /// Fraction of rays that hit (closest hit) or are blocked (occlusion).
     hit_fraction: f64,
+    /// Largest resident memory while measuring this query (scene, BVH and ray batch), MiB.
+    peak_memory_mib: Option<f64>,
 }
 
 #[derive(Debug, Serialize)]
@@ -131,6 +133,16 @@ pub(crate) fn reset_peak_memory() {
     let _ = std::fs::write("/proc/self/clear_refs", "5");
 }
 
+/// Bytes as MiB.
+pub(crate) fn mib(bytes: Option<u64>) -> Option<f64> {
+    bytes.map(|b| b as f64 / (1024.0 * 1024.0))
+}
+
+/// A peak memory figure for a table: whole MiB, or n/a where the platform does not say.
+fn fmt_mib(m: Option<f64>) -> String {
+    m.map_or_else(|| "n/a".to_owned(), |m| format!("{m:.0}"))
+}
+
 /// One measured radiosity solve.
 #[derive(Debug, Serialize)]
 struct SolveRow {
@@ -144,6 +156,11 @@ struct SolveRow {
     seconds: f64,
     /// Shadow rays per second over the whole solve.
     mrays_per_s: f64,
+    /// Seconds per element per shot, nanoseconds: flat when the solve grows as elements x
+    /// shooters.
+    ns_per_element_shot: f64,
+    /// log(time ratio) / log(element ratio) against the previous row: 1 is linear growth.
+    growth_exponent: Option<f64>,
     unshot_fraction: f64,
     peak_memory_mib: Option<f64>,
     /// Relative RMS difference of the vertex radiosities to the dense solve, when it fits.
@@ -206,8 +223,12 @@ fn radiosity(args: &RadiosityArgs, ctx: &Context) -> Result<(), CliError> {
             rays: p.rays,
             seconds,
             mrays_per_s: p.rays as f64 / seconds / 1e6,
+            ns_per_element_shot: seconds * 1e9 / (p.elements as f64 * p.shots.max(1) as f64),
+            growth_exponent: rows.last().map(|prev: &SolveRow| {
+                (seconds / prev.seconds).ln() / (p.elements as f64 / prev.elements as f64).ln()
+            }),
             unshot_fraction: p.unshot_fraction,
-            peak_memory_mib: peak.map(|b| b as f64 / (1024.0 * 1024.0)),
+            peak_memory_mib: mib(peak),
             dense_relative_rms,
             dense_seconds,
         });
@@ -227,7 +248,7 @@ fn radiosity(args: &RadiosityArgs, ctx: &Context) -> Result<(), CliError> {
             rayon::current_num_threads()
         );
         println!(
-            "{:>8} {:>8} {:>8} {:>8} {:>7} {:>11} {:>8} {:>8} {:>9} {:>11}",
+            "{:>8} {:>8} {:>8} {:>8} {:>7} {:>11} {:>8} {:>8} {:>8} {:>6} {:>9} {:>11}",
             "elements",
             "vertices",
             "patches",
@@ -236,12 +257,14 @@ fn radiosity(args: &RadiosityArgs, ctx: &Context) -> Result<(), CliError> {
             "rays",
             "seconds",
             "Mrays/s",
+            "ns/el/sh",
+            "growth",
             "peak MiB",
             "dense rRMS"
         );
         for r in &rows {
             println!(
-                "{:>8} {:>8} {:>8} {:>8.1} {:>7} {:>11} {:>8.2} {:>8.2} {:>9} {:>11}",
+                "{:>8} {:>8} {:>8} {:>8.1} {:>7} {:>11} {:>8.2} {:>8.2} {:>8.1} {:>6} {:>9} {:>11}",
                 r.elements,
                 r.vertices,
                 r.patches,
@@ -250,8 +273,10 @@ fn radiosity(args: &RadiosityArgs, ctx: &Context) -> Result<(), CliError> {
                 r.rays,
                 r.seconds,
                 r.mrays_per_s,
-                r.peak_memory_mib
-                    .map_or_else(|| "n/a".to_owned(), |m| format!("{m:.0}")),
+                r.ns_per_element_shot,
+                r.growth_exponent
+                    .map_or_else(|| "-".to_owned(), |g| format!("{g:.2}")),
+                fmt_mib(r.peak_memory_mib),
                 r.dense_relative_rms
                     .map_or_else(|| "-".to_owned(), |e| format!("{e:.2e}"))
             );
@@ -358,6 +383,7 @@ fn rays(args: &RaysArgs, ctx: &Context) -> Result<(), CliError> {
     let min = Duration::from_secs_f64(args.seconds);
     let mut rows = Vec::new();
     for (_, label, batch) in &batches {
+        reset_peak_memory();
         let (r1, hit) = batch.measure(&scene, false, min);
         progress.inc(1);
         let (rn, _) = batch.measure(&scene, true, min);
@@ -369,6 +395,7 @@ fn rays(args: &RaysArgs, ctx: &Context) -> Result<(), CliError> {
             mrays_n: rn / 1e6,
             speedup: rn / r1,
             hit_fraction: hit,
+            peak_memory_mib: mib(peak_memory()),
         });
     }
     progress.finish_and_clear();
@@ -391,23 +418,25 @@ fn rays(args: &RaysArgs, ctx: &Context) -> Result<(), CliError> {
             report.scene, report.triangles, report.bvh_nodes, report.bvh_build_ms, report.threads
         );
         println!(
-            "{:<18} {:>9} {:>14} {:>14} {:>9} {:>7}",
+            "{:<18} {:>9} {:>14} {:>14} {:>9} {:>7} {:>9}",
             "query",
             "rays",
             "1 thr Mrays/s",
             format!("{} thr Mrays/s", report.threads),
             "speed-up",
-            "hit %"
+            "hit %",
+            "peak MiB"
         );
         for r in &report.rows {
             println!(
-                "{:<18} {:>9} {:>14.2} {:>14.2} {:>8.2}x {:>6.1}%",
+                "{:<18} {:>9} {:>14.2} {:>14.2} {:>8.2}x {:>6.1}% {:>9}",
                 r.query,
                 r.rays,
                 r.mrays_1,
                 r.mrays_n,
                 r.speedup,
-                100.0 * r.hit_fraction
+                100.0 * r.hit_fraction,
+                fmt_mib(r.peak_memory_mib)
             );
         }
     }
@@ -424,6 +453,8 @@ struct RenderRow {
     /// Mean of the image over pixels and channels, W/(m^2 sr).
     mean: f64,
     non_finite: u64,
+    /// Largest resident memory while rendering (scene, radiosity solution, film), MiB.
+    peak_memory_mib: Option<f64>,
 }
 
 #[derive(Debug, Serialize)]
@@ -492,6 +523,7 @@ fn render(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
     let bar = ctx.progress(methods.len() as u64 + 1, "bench render");
     let mut rows = Vec::new();
     for m in &methods {
+        reset_peak_memory();
         let out = twopass_trace::render(&scene, &camera, m.as_ref(), &settings, &Progress::new());
         let mean = out.layers.composite().mean();
         rows.push(RenderRow {
@@ -500,6 +532,7 @@ fn render(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
             mrays_per_s: out.stats.rays_per_second() / 1e6,
             mean: f64::from(mean.element_sum()) / 3.0,
             non_finite: out.stats.non_finite,
+            peak_memory_mib: mib(peak_memory()),
         });
         bar.inc(1);
     }
@@ -564,13 +597,18 @@ fn render(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
             report.radiosity_seconds
         );
         println!(
-            "{:<14} {:>9} {:>9} {:>10} {:>10}",
-            "method", "seconds", "Mrays/s", "mean", "non-finite"
+            "{:<14} {:>9} {:>9} {:>10} {:>10} {:>9}",
+            "method", "seconds", "Mrays/s", "mean", "non-finite", "peak MiB"
         );
         for r in &report.rows {
             println!(
-                "{:<14} {:>9.3} {:>9.2} {:>10.4} {:>10}",
-                r.method, r.seconds, r.mrays_per_s, r.mean, r.non_finite
+                "{:<14} {:>9.3} {:>9.2} {:>10.4} {:>10} {:>9}",
+                r.method,
+                r.seconds,
+                r.mrays_per_s,
+                r.mean,
+                r.non_finite,
+                fmt_mib(r.peak_memory_mib)
             );
         }
         println!(

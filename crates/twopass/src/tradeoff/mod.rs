@@ -33,7 +33,7 @@ use twopass_radiosity::{Solution, Solver};
 use twopass_trace::{RenderSettings, RenderStats};
 
 use crate::bake::SolveArgs;
-use crate::bench::{peak_memory, reset_peak_memory};
+use crate::bench::{mib, peak_memory, reset_peak_memory};
 use crate::compare::methods;
 use crate::context::Context;
 use crate::error::CliError;
@@ -617,7 +617,7 @@ fn row(
         radiosity_rays: s.map_or(0, |s| s.rays),
         rays: stats.rays,
         shadow_rays: stats.shadow_rays,
-        peak_memory_mib: peak.map(|b| b as f64 / (1024.0 * 1024.0)),
+        peak_memory_mib: mib(peak),
         mae: m.mae,
         rmse: m.rmse,
         rel_rmse: m.rel_rmse,
