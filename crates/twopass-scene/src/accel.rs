@@ -5,12 +5,11 @@
 
 use std::time::{Duration, Instant};
 
-use glam::{DVec3, Vec3, Vec3A};
+use glam::{DVec3, UVec2, Vec3, Vec3A, Vec3Swizzles, Vec4};
 use obvhs::{
     Boundable, BvhBuildParams,
     aabb::Aabb,
-    cwbvh::{CwBvh, builder::build_cwbvh},
-    ray::{Ray as BvhRay, RayHit},
+    cwbvh::{Traversal, builder::build_cwbvh, node::CwBvhNode},
 };
 
 /// `gamma(n)` of Higham / pbrt: a bound on the relative error of n chained f32 operations.
@@ -98,12 +97,35 @@ impl SurfacePoint {
 /// occlude (pbrt's `ShadowEpsilon`, relative to the segment length).
 pub(crate) const SHADOW_EPSILON: f32 = 1e-4;
 
+/// A triangle stored by axis for the watertight test: `axes[a]` holds coordinate `a` of
+/// vertices 0, 1 and 2 (lanes x, y, z). The test then permutes the axes of all three vertices
+/// at once by picking rows, instead of indexing every vertex with the ray's permutation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct AxisTriangle {
+    axes: [Vec3A; 3],
+}
+
+impl AxisTriangle {
+    fn new(v: [Vec3A; 3]) -> Self {
+        Self {
+            axes: [
+                Vec3A::new(v[0].x, v[1].x, v[2].x),
+                Vec3A::new(v[0].y, v[1].y, v[2].y),
+                Vec3A::new(v[0].z, v[1].z, v[2].z),
+            ],
+        }
+    }
+}
+
 /// The ray in the watertight test's sheared space, computed once per query.
 #[derive(Clone, Copy)]
 struct ShearedRay {
-    origin: Vec3A,
+    /// Axis permutation: `k[2]` is the dominant direction axis.
     k: [usize; 3],
-    shear: Vec3A,
+    /// Origin coordinates in permuted order, each splatted over the three vertex lanes.
+    origin: [Vec3A; 3],
+    /// Shear of x and y by z, and the scale of z, splatted.
+    shear: [Vec3A; 3],
 }
 
 impl ShearedRay {
@@ -118,53 +140,57 @@ impl ShearedRay {
         };
         let kx = (kz + 1) % 3;
         let ky = (kx + 1) % 3;
-        let d = Vec3A::new(dir[kx], dir[ky], dir[kz]);
+        let d = Vec3::new(dir[kx], dir[ky], dir[kz]);
         Self {
-            origin: origin.into(),
             k: [kx, ky, kz],
-            shear: Vec3A::new(-d.x / d.z, -d.y / d.z, 1.0 / d.z),
+            origin: [
+                Vec3A::splat(origin[kx]),
+                Vec3A::splat(origin[ky]),
+                Vec3A::splat(origin[kz]),
+            ],
+            shear: [
+                Vec3A::splat(-d.x / d.z),
+                Vec3A::splat(-d.y / d.z),
+                Vec3A::splat(1.0 / d.z),
+            ],
         }
     }
 
     /// Watertight intersection; returns `(t, [b0, b1, b2])` for hits with 0 < t < `t_max`.
-    #[inline]
-    fn intersect(&self, v: &[Vec3A; 3], t_max: f32) -> Option<(f32, [f32; 3])> {
+    ///
+    /// Lane `i` of `px`, `py`, `pz` is vertex `i` in the ray's sheared space; every lane sees
+    /// exactly the operations of the scalar formulation (no fused multiply-add), so the edge
+    /// functions of a shared edge are bit-identical for both triangles.
+    #[inline(always)]
+    fn intersect(&self, tri: &AxisTriangle, t_max: f32) -> Option<(f32, [f32; 3])> {
         let [kx, ky, kz] = self.k;
-        let perm = |p: Vec3A| {
-            let q = p - self.origin;
-            Vec3A::new(q[kx], q[ky], q[kz])
-        };
-        let (mut p0, mut p1, mut p2) = (perm(v[0]), perm(v[1]), perm(v[2]));
-        let s = self.shear;
-        p0.x += s.x * p0.z;
-        p0.y += s.y * p0.z;
-        p1.x += s.x * p1.z;
-        p1.y += s.y * p1.z;
-        p2.x += s.x * p2.z;
-        p2.y += s.y * p2.z;
-        let mut e0 = p1.x * p2.y - p1.y * p2.x;
-        let mut e1 = p2.x * p0.y - p2.y * p0.x;
-        let mut e2 = p0.x * p1.y - p0.y * p1.x;
-        if e0 == 0.0 || e1 == 0.0 || e2 == 0.0 {
+        let [sx, sy, sz] = self.shear;
+        let pz = tri.axes[kz] - self.origin[2];
+        let px = (tri.axes[kx] - self.origin[0]) + sx * pz;
+        let py = (tri.axes[ky] - self.origin[1]) + sy * pz;
+        // e_i = p_{i+1}.x * p_{i+2}.y - p_{i+1}.y * p_{i+2}.x, all three lanes at once.
+        let mut e = px.yzx() * py.zxy() - py.yzx() * px.zxy();
+        if e.cmpeq(Vec3A::ZERO).any() {
             // On an edge in f32: decide in f64 so neighbours agree.
             let f = |a: f32, b: f32, c: f32, d: f32| {
                 (f64::from(a) * f64::from(b) - f64::from(c) * f64::from(d)) as f32
             };
-            e0 = f(p1.x, p2.y, p1.y, p2.x);
-            e1 = f(p2.x, p0.y, p2.y, p0.x);
-            e2 = f(p0.x, p1.y, p0.y, p1.x);
+            e = Vec3A::new(
+                f(px.y, py.z, py.y, px.z),
+                f(px.z, py.x, py.z, px.x),
+                f(px.x, py.y, py.x, px.y),
+            );
         }
-        if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
+        if e.cmplt(Vec3A::ZERO).any() && e.cmpgt(Vec3A::ZERO).any() {
             return None;
         }
-        let det = e0 + e1 + e2;
+        let det = e.x + e.y + e.z;
         if det == 0.0 {
             return None;
         }
-        p0.z *= s.z;
-        p1.z *= s.z;
-        p2.z *= s.z;
-        let t_scaled = e0 * p0.z + e1 * p1.z + e2 * p2.z;
+        let pz = pz * sz;
+        let ez = e * pz;
+        let t_scaled = ez.x + ez.y + ez.z;
         if det < 0.0 && (t_scaled >= 0.0 || t_scaled < t_max * det) {
             return None;
         }
@@ -174,34 +200,28 @@ impl ShearedRay {
         let inv_det = 1.0 / det;
         let t = t_scaled * inv_det;
         // Conservative bound: reject hits whose t cannot be told from 0.
-        let max_z = p0.z.abs().max(p1.z.abs()).max(p2.z.abs());
+        let max_z = pz.abs().max_element();
         let delta_z = gamma(3) * max_z;
-        let max_x = p0.x.abs().max(p1.x.abs()).max(p2.x.abs());
-        let max_y = p0.y.abs().max(p1.y.abs()).max(p2.y.abs());
+        let max_x = px.abs().max_element();
+        let max_y = py.abs().max_element();
         let delta_x = gamma(5) * (max_x + max_z);
         let delta_y = gamma(5) * (max_y + max_z);
         let delta_e = 2.0 * (gamma(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
-        let max_e = e0.abs().max(e1.abs()).max(e2.abs());
+        let max_e = e.abs().max_element();
         let delta_t =
             3.0 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) * inv_det.abs();
         if t <= delta_t || t >= t_max || t.is_nan() {
             return None;
         }
-        Some((t, [e0 * inv_det, e1 * inv_det, e2 * inv_det]))
+        let b = e * inv_det;
+        Some((t, [b.x, b.y, b.z]))
     }
 }
-
-/// obvhs's node test ignores boxes that end before t = 1e-4 in units of the ray direction.
-/// Directions handed to obvhs are scaled by this exact power of two (and t by its inverse), so
-/// that cut-off becomes 1e-4 / 65536 of a direction length: hits that close to the origin are
-/// still found. Power-of-two scaling is exact, so nothing else changes.
-const T_SCALE: f32 = 65536.0;
-const DIR_SCALE: f32 = 1.0 / T_SCALE;
 
 /// Largest inverse direction component: finite, so the slab test never forms 0 * inf.
 const MAX_INVERSE: f32 = 1e20;
 
-/// Relative padding of primitive bounds: obvhs's slab test can round a ray that passes exactly
+/// Relative padding of primitive bounds: a slab test can round a ray that passes exactly
 /// through a box's corner or edge (a triangle vertex on the box face) to a miss. Boxes grow by
 /// this fraction of the scene's extent, far above the few ulps of rounding.
 const BOX_PADDING: f32 = 1e-5;
@@ -217,27 +237,162 @@ impl Boundable for Padded {
     }
 }
 
-/// The ray as obvhs traverses it: direction scaled by [`DIR_SCALE`] and the exact inverse
-/// direction (obvhs's own constructor clamps components below f32::EPSILON, which would cull
-/// boxes wrongly for the scaled direction). Negative zeros become positive: the node test
-/// orders each slab by `direction < 0` while a -0.0 component has a negative inverse, and the
-/// mismatch culls every box (an axis-aligned ray such as `-Vec3::Z` would hit nothing).
-fn bvh_ray(origin: Vec3, direction: Vec3, t_max: f32) -> BvhRay {
-    let d = Vec3A::from(direction) * DIR_SCALE + Vec3A::ZERO;
-    let inv = |x: f32| {
-        let i = 1.0 / x;
-        if i.abs() > MAX_INVERSE {
-            MAX_INVERSE.copysign(x)
-        } else {
-            i
+/// One obvhs CWBVH node with its eight children's boxes decoded from the 8-bit quantized
+/// planes to f32 once at build time (rounded outward, so every decoded box contains the
+/// quantized one), so the traversal does not convert bytes to floats at every visit. The
+/// field names `child_base_idx`, `primitive_base_idx` and `imask` are the ones obvhs's
+/// `traverse!` macro reads; they are copied from the obvhs node unchanged.
+#[derive(Clone, Copy, Debug)]
+struct WideNode {
+    /// `bounds[4 * axis + 2 * side + half]`: lane `j` is child `4 * half + j`; side 0 is the
+    /// box minimum, 1 the maximum. Empty children are empty boxes (min +inf, max -inf).
+    bounds: [Vec4; 12],
+    /// obvhs's `child_meta` bytes as one little-endian word.
+    meta: u64,
+    /// Index of the first child node.
+    child_base_idx: u32,
+    /// Index of the first primitive slot.
+    primitive_base_idx: u32,
+    /// Bit `i` set when child `i` is an internal node.
+    imask: u8,
+}
+
+impl WideNode {
+    fn decode(n: &CwBvhNode) -> Self {
+        let ext = n.compute_extent();
+        let mut bounds = [Vec4::ZERO; 12];
+        let planes = [
+            (&n.child_min_x, &n.child_max_x),
+            (&n.child_min_y, &n.child_max_y),
+            (&n.child_min_z, &n.child_max_z),
+        ];
+        for (axis, (lo, hi)) in planes.into_iter().enumerate() {
+            let mut min = [f32::INFINITY; 8];
+            let mut max = [f32::NEG_INFINITY; 8];
+            for c in 0..8 {
+                if n.child_meta[c] != 0 {
+                    // q * 2^e is exact; the sum rounds once, then one more ulp outward.
+                    min[c] = (n.p[axis] + f32::from(lo[c]) * ext[axis]).next_down();
+                    max[c] = (n.p[axis] + f32::from(hi[c]) * ext[axis]).next_up();
+                }
+            }
+            for half in 0..2 {
+                let r = 4 * half..4 * half + 4;
+                bounds[4 * axis + half] = Vec4::from_slice(&min[r.clone()]);
+                bounds[4 * axis + 2 + half] = Vec4::from_slice(&max[r]);
+            }
         }
-    };
-    BvhRay {
-        origin: origin.into(),
-        direction: d,
-        inv_direction: Vec3A::new(inv(d.x), inv(d.y), inv(d.z)),
-        tmin: 0.0,
-        tmax: t_max * T_SCALE,
+        Self {
+            bounds,
+            meta: u64::from_le_bytes(n.child_meta),
+            child_base_idx: n.child_base_idx,
+            primitive_base_idx: n.primitive_base_idx,
+            imask: n.imask,
+        }
+    }
+
+    /// The children hit by `ray` within `[0, t_max]`, encoded as obvhs's node hit mask: the
+    /// high byte holds internal children by traversal priority, the low 24 bits the primitive
+    /// slots (relative to `primitive_base_idx`) of the hit leaves.
+    #[inline(always)]
+    fn intersect(&self, ray: &NodeRay, t_max: f32, oct_inv4: u32) -> u32 {
+        let b = &self.bounds;
+        let t_max = Vec4::splat(t_max);
+        let mut mask = 0u32;
+        for half in 0..2 {
+            let slab = |axis: usize| {
+                let near = b[4 * axis + ray.near[axis] + half];
+                let far = b[4 * axis + (2 - ray.near[axis]) + half];
+                (
+                    (near - ray.origin[axis]) * ray.inv[axis],
+                    (far - ray.origin[axis]) * ray.inv[axis],
+                )
+            };
+            let (nx, fx) = slab(0);
+            let (ny, fy) = slab(1);
+            let (nz, fz) = slab(2);
+            let t_near = nx.max(ny).max(nz.max(Vec4::ZERO));
+            let t_far = fx.min(fy).min(fz.min(t_max));
+            mask |= t_near.cmple(t_far).bitmask() << (4 * half);
+        }
+        // obvhs's CwBvhNode::get_child_and_index_bits and hit-mask assembly, without branches.
+        const INNER: u64 = 0x1010_1010_1010_1010;
+        const INDEX: u64 = 0x1f1f_1f1f_1f1f_1f1f;
+        const CHILD: u64 = 0x0707_0707_0707_0707;
+        let oct8 = u64::from(oct_inv4) | (u64::from(oct_inv4) << 32);
+        let meta = self.meta;
+        let inner8 = ((meta & (meta << 1)) & INNER) >> 4;
+        let bit_index8 = (meta ^ (oct8 & (inner8 * 0xff))) & INDEX;
+        let child_bits8 = (meta >> 5) & CHILD;
+        let mut hit = 0u32;
+        for c in 0..8 {
+            let on = (mask >> c) & 1;
+            let bits = ((child_bits8 >> (8 * c)) as u32 & 0xff) * on;
+            hit |= bits << ((bit_index8 >> (8 * c)) as u32 & 0x1f);
+        }
+        hit
+    }
+}
+
+/// The decoded nodes, named as obvhs's `traverse!` macro expects (`.nodes[i]`).
+struct WideBvh {
+    nodes: Vec<WideNode>,
+}
+
+/// The ray as the node test sees it: origin and inverse direction splatted per axis, and for
+/// each axis which side of a box the ray enters first. Negative zeros in the direction become
+/// positive and inverses are clamped to [`MAX_INVERSE`], so no slab ever forms 0 * inf; the
+/// entry side is chosen from the sign of the inverse itself, so near and far always agree
+/// with it (a mismatch would cull every box).
+struct NodeRay {
+    origin: [Vec4; 3],
+    inv: [Vec4; 3],
+    /// 0 when the ray enters through the box minimum on this axis, 2 through the maximum.
+    near: [usize; 3],
+    /// The direction as obvhs orders children by (its octant only).
+    direction: Vec3A,
+}
+
+impl NodeRay {
+    fn new(origin: Vec3, direction: Vec3) -> Self {
+        let d = direction + Vec3::ZERO;
+        let inv = |x: f32| {
+            let i = 1.0 / x;
+            if i.abs() > MAX_INVERSE {
+                MAX_INVERSE.copysign(x)
+            } else {
+                i
+            }
+        };
+        let inv = [inv(d.x), inv(d.y), inv(d.z)];
+        Self {
+            origin: [
+                Vec4::splat(origin.x),
+                Vec4::splat(origin.y),
+                Vec4::splat(origin.z),
+            ],
+            inv: inv.map(Vec4::splat),
+            near: inv.map(|i| if i < 0.0 { 2 } else { 0 }),
+            direction: Vec3A::new(inv[0], inv[1], inv[2]),
+        }
+    }
+
+    /// A fresh obvhs traversal state for this ray, starting at the root.
+    fn traversal(&self) -> Traversal {
+        // obvhs's ray_get_octant_inv4: one bit per axis with a non-negative direction.
+        let d = self.direction;
+        let oct_inv4 = (if d.x < 0.0 { 0 } else { 0x0404_0404 })
+            | (if d.y < 0.0 { 0 } else { 0x0202_0202 })
+            | (if d.z < 0.0 { 0 } else { 0x0101_0101 });
+        Traversal {
+            stack: Default::default(),
+            current_group: UVec2::new(0, 0x8000_0000),
+            primitive_group: UVec2::ZERO,
+            oct_inv4,
+            traversal_direction: d,
+            primitive_id: 0,
+            hitmask: 0,
+        }
     }
 }
 
@@ -254,9 +409,10 @@ pub struct TriangleHit {
 
 /// A CWBVH over the scene's triangles with the queries every pass uses.
 pub struct Accel {
-    bvh: CwBvh,
-    /// Triangle vertices in BVH slot order.
-    tris: Vec<[Vec3A; 3]>,
+    /// The obvhs CWBVH's nodes, decoded for the node test.
+    bvh: WideBvh,
+    /// Triangles in BVH slot order, stored by axis for the intersection test.
+    tris: Vec<AxisTriangle>,
     /// BVH slot -> scene triangle index.
     ids: Vec<u32>,
     build_time: Duration,
@@ -306,9 +462,15 @@ impl Accel {
                 },
             })
             .collect();
-        let bvh = build_cwbvh(&boxes, params, &mut Duration::default());
-        let ids = bvh.primitive_indices.clone();
-        let tris = ids.iter().map(|&i| corners[i as usize]).collect();
+        let cwbvh = build_cwbvh(&boxes, params, &mut Duration::default());
+        let bvh = WideBvh {
+            nodes: cwbvh.nodes.iter().map(WideNode::decode).collect(),
+        };
+        let ids = cwbvh.primitive_indices;
+        let tris = ids
+            .iter()
+            .map(|&i| AxisTriangle::new(corners[i as usize]))
+            .collect();
         Self {
             bvh,
             tris,
@@ -333,25 +495,29 @@ impl Accel {
             return None;
         }
         let sheared = ShearedRay::new(origin, direction);
-        let mut hit = RayHit::none();
-        let found =
-            self.bvh
-                .ray_traverse(bvh_ray(origin, direction, t_max), &mut hit, |r, slot| {
-                    sheared
-                        .intersect(&self.tris[slot], r.tmax * DIR_SCALE)
-                        .map_or(f32::INFINITY, |(t, _)| t * T_SCALE)
-                });
-        if !found {
-            return None;
-        }
-        let slot = hit.primitive_id as usize;
-        // Barycentrics of the winner only (cheaper than computing them for every candidate).
-        let (t, barycentric) = sheared.intersect(&self.tris[slot], f32::INFINITY)?;
-        Some(TriangleHit {
-            triangle: self.ids[slot],
-            t,
-            barycentric,
-        })
+        let ray = NodeRay::new(origin, direction);
+        let mut best: Option<TriangleHit> = None;
+        let mut t_max = t_max;
+        let mut state = ray.traversal();
+        let mut node;
+        obvhs::traverse!(
+            self.bvh,
+            node,
+            state,
+            node.intersect(&ray, t_max, state.oct_inv4),
+            {
+                let slot = state.primitive_id as usize;
+                if let Some((t, barycentric)) = sheared.intersect(&self.tris[slot], t_max) {
+                    t_max = t;
+                    best = Some(TriangleHit {
+                        triangle: self.ids[slot],
+                        t,
+                        barycentric,
+                    });
+                }
+            }
+        );
+        best
     }
 
     /// Whether anything is hit with `0 < t < t_max`; stops at the first hit found.
@@ -360,13 +526,28 @@ impl Accel {
             return false;
         }
         let sheared = ShearedRay::new(origin, direction);
-        !self
-            .bvh
-            .ray_traverse_miss(bvh_ray(origin, direction, t_max), |r, slot| {
-                sheared
-                    .intersect(&self.tris[slot], r.tmax * DIR_SCALE)
-                    .map_or(f32::INFINITY, |(t, _)| t * T_SCALE)
-            })
+        let ray = NodeRay::new(origin, direction);
+        let mut state = ray.traversal();
+        let mut node;
+        let mut hit = false;
+        'search: {
+            obvhs::traverse!(
+                self.bvh,
+                node,
+                state,
+                node.intersect(&ray, t_max, state.oct_inv4),
+                {
+                    if sheared
+                        .intersect(&self.tris[state.primitive_id as usize], t_max)
+                        .is_some()
+                    {
+                        hit = true;
+                        break 'search;
+                    }
+                }
+            );
+        }
+        hit
     }
 
     /// Reference answer by testing every triangle, O(n): the oracle for BVH tests.
@@ -380,7 +561,7 @@ impl Accel {
         let sheared = ShearedRay::new(origin, direction);
         let mut best: Option<TriangleHit> = None;
         for (i, t) in triangles.iter().enumerate() {
-            let v = t.map(|k| Vec3A::from(positions[k as usize]));
+            let v = AxisTriangle::new(t.map(|k| Vec3A::from(positions[k as usize])));
             let limit = best.map_or(t_max, |b| b.t);
             if let Some((t, barycentric)) = sheared.intersect(&v, limit) {
                 best = Some(TriangleHit {
@@ -405,4 +586,94 @@ pub(crate) fn triangle_normal(p: [Vec3; 3]) -> Option<(f64, DVec3)> {
         return None;
     }
     Some((len, c / len))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two triangles forming the unit square in the plane z = 0.
+    fn square() -> (Vec<Vec3>, Vec<[u32; 3]>) {
+        let p = vec![
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.0),
+        ];
+        (p, vec![[0, 1, 2], [0, 2, 3]])
+    }
+
+    #[test]
+    fn hits_very_close_to_the_origin_with_long_directions() {
+        let (p, t) = square();
+        let accel = Accel::build(&p, &t);
+        // 1e-3 units away along a direction of length 1000: t = 1e-6.
+        let origin = Vec3::new(0.3, 0.6, 1e-3);
+        let dir = Vec3::new(0.0, 0.0, -1000.0);
+        let hit = accel.closest(origin, dir, f32::INFINITY).expect("hit");
+        assert_eq!(hit.triangle, 1);
+        assert!((hit.t - 1e-6).abs() < 1e-9);
+        assert!(accel.any_hit(origin, dir, 1.0));
+        assert!(!accel.any_hit(origin, dir, 0.5e-6));
+    }
+
+    #[test]
+    fn axis_aligned_rays_with_negative_zeros_hit() {
+        let (p, t) = square();
+        let accel = Accel::build(&p, &t);
+        for (o, d) in [
+            (Vec3::new(0.25, 0.5, 2.0), -Vec3::Z),
+            (Vec3::new(0.25, 0.5, -2.0), Vec3::new(-0.0, -0.0, 1.0)),
+            // Exactly through the shared diagonal.
+            (Vec3::new(0.5, 0.5, 2.0), -Vec3::Z),
+        ] {
+            let hit = accel.closest(o, d, f32::INFINITY).expect("hit");
+            assert!((hit.t - 2.0).abs() < 1e-6);
+            assert!(accel.any_hit(o, d, f32::INFINITY));
+            let b = hit.barycentric;
+            assert!((b[0] + b[1] + b[2] - 1.0).abs() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn decoded_boxes_contain_the_quantized_ones() {
+        let positions: Vec<Vec3> = (0..300)
+            .map(|i| {
+                let f = i as f32;
+                Vec3::new((f * 0.37).sin() * 10.0, (f * 0.11).cos() * 7.0, f * 0.05)
+            })
+            .collect();
+        let tris: Vec<[u32; 3]> = (0..298).map(|i| [i, i + 1, i + 2]).collect();
+        let corners: Vec<Padded> = tris
+            .iter()
+            .map(|t| {
+                let v = t.map(|i| Vec3A::from(positions[i as usize]));
+                Padded {
+                    aabb: Aabb {
+                        min: v[0].min(v[1]).min(v[2]),
+                        max: v[0].max(v[1]).max(v[2]),
+                    },
+                }
+            })
+            .collect();
+        let bvh = build_cwbvh(
+            &corners,
+            BvhBuildParams::medium_build(),
+            &mut Duration::default(),
+        );
+        for n in &bvh.nodes {
+            let w = WideNode::decode(n);
+            for c in 0..8 {
+                if n.child_meta[c] == 0 {
+                    continue;
+                }
+                let q = n.child_aabb(c);
+                let (half, lane) = (c / 4, c % 4);
+                for axis in 0..3 {
+                    assert!(w.bounds[4 * axis + half][lane] <= q.min[axis]);
+                    assert!(w.bounds[4 * axis + 2 + half][lane] >= q.max[axis]);
+                }
+            }
+        }
+    }
 }
