@@ -38,7 +38,7 @@ use crate::compare::methods;
 use crate::context::Context;
 use crate::error::CliError;
 use crate::preset::{Preset, PresetFile, RadiosityKnobs, RenderKnobs};
-use crate::render::{Method, integrator, render_with_bar};
+use crate::render::{Method, integrator};
 
 /// Arguments of `twopass bench tradeoff`.
 #[derive(Debug, Args)]
@@ -459,6 +459,7 @@ pub fn run(args: &TradeoffArgs, ctx: &Context) -> Result<(), CliError> {
     let bar = ctx.progress((solves.len() + runs.len()) as u64, "tradeoff");
     let mut solved: Vec<Solved> = Vec::with_capacity(solves.len());
     for spec in &solves {
+        bar.set_message(format!("solve {}", spec.knob));
         reset_peak_memory();
         let started = Instant::now();
         let mut solver = Solver::new(&scene, SolveArgs::from_knobs(&spec.knobs).options(ctx.seed))
@@ -494,13 +495,14 @@ pub fn run(args: &TradeoffArgs, ctx: &Context) -> Result<(), CliError> {
             ..RenderSettings::default()
         };
         reset_peak_memory();
-        let out = render_with_bar(
+        bar.set_message(run.method.name());
+        // One bar for the whole sweep: a second bar per render would fight it for the line.
+        let out = twopass_trace::render(
             &scene,
             &camera,
             integ.as_ref(),
             &settings,
-            run.method.name(),
-            ctx,
+            &twopass_trace::Progress::new(),
         );
         let render_peak = peak_memory();
         let img = out.layers.composite();
