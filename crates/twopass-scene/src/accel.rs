@@ -218,6 +218,165 @@ impl ShearedRay {
     }
 }
 
+/// Four triangles (four consecutive BVH slots) stored for a one-ray, four-triangle watertight
+/// test: `v[axis][vertex]` holds that coordinate of that vertex for the four triangles (lanes).
+/// Lanes past the last slot are zero and never enabled.
+#[derive(Clone, Copy, Debug)]
+struct TriPacket {
+    v: [[Vec4; 3]; 3],
+}
+
+impl TriPacket {
+    fn new(tris: &[[Vec3A; 3]]) -> Self {
+        let mut v = [[[0.0f32; 4]; 3]; 3];
+        for (lane, t) in tris.iter().enumerate() {
+            for (vertex, p) in t.iter().enumerate() {
+                for axis in 0..3 {
+                    v[axis][vertex][lane] = p[axis];
+                }
+            }
+        }
+        Self {
+            v: v.map(|a| a.map(Vec4::from_array)),
+        }
+    }
+}
+
+/// The hits of one [`TriPacket`] test: per lane, `t` and the three edge functions and
+/// `1 / det` to form barycentrics from, and the lanes that hit.
+struct PacketHits {
+    t: Vec4,
+    e: [Vec4; 3],
+    inv_det: Vec4,
+    mask: u32,
+}
+
+impl PacketHits {
+    /// The lane with the smallest `t` among the hits (there must be one).
+    fn nearest(&self) -> usize {
+        let mut best = self.mask.trailing_zeros() as usize;
+        let mut rest = self.mask & (self.mask - 1);
+        while rest != 0 {
+            let lane = rest.trailing_zeros() as usize;
+            if self.t[lane] < self.t[best] {
+                best = lane;
+            }
+            rest &= rest - 1;
+        }
+        best
+    }
+
+    /// Barycentrics of lane `lane`.
+    fn barycentric(&self, lane: usize) -> [f32; 3] {
+        self.e.map(|e| e[lane] * self.inv_det[lane])
+    }
+}
+
+/// The ray splatted for [`TriPacket`] tests: the [`ShearedRay`] in four lanes.
+struct PacketRay {
+    k: [usize; 3],
+    origin: [Vec4; 3],
+    shear: [Vec4; 3],
+}
+
+impl PacketRay {
+    fn new(r: &ShearedRay) -> Self {
+        Self {
+            k: r.k,
+            origin: r.origin.map(|o| Vec4::splat(o.x)),
+            shear: r.shear.map(|s| Vec4::splat(s.x)),
+        }
+    }
+
+    /// [`ShearedRay::intersect`] on the enabled lanes (bits of `lanes`) of a packet: every lane
+    /// goes through exactly the scalar test's operations in the same order (no fused
+    /// multiply-add), so results agree bit for bit with it, watertightness included.
+    #[inline(always)]
+    fn intersect(&self, packet: &TriPacket, lanes: u32, t_max: f32) -> PacketHits {
+        let [kx, ky, kz] = self.k;
+        let [sx, sy, sz] = self.shear;
+        let [ox, oy, oz] = self.origin;
+        let (vx, vy, vz) = (&packet.v[kx], &packet.v[ky], &packet.v[kz]);
+        let pz = [vz[0] - oz, vz[1] - oz, vz[2] - oz];
+        let px = [0, 1, 2].map(|i| (vx[i] - ox) + sx * pz[i]);
+        let py = [0, 1, 2].map(|i| (vy[i] - oy) + sy * pz[i]);
+        let mut e = [
+            px[1] * py[2] - py[1] * px[2],
+            px[2] * py[0] - py[2] * px[0],
+            px[0] * py[1] - py[0] * px[1],
+        ];
+        let zero = Vec4::ZERO;
+        let on_edge = (e[0].cmpeq(zero) | e[1].cmpeq(zero) | e[2].cmpeq(zero)).bitmask() & lanes;
+        if on_edge != 0 {
+            // On an edge in f32: decide in f64 so neighbours agree (as the scalar test).
+            let f = |a: f32, b: f32, c: f32, d: f32| {
+                (f64::from(a) * f64::from(b) - f64::from(c) * f64::from(d)) as f32
+            };
+            let mut bits = on_edge;
+            while bits != 0 {
+                let l = bits.trailing_zeros() as usize;
+                e[0][l] = f(px[1][l], py[2][l], py[1][l], px[2][l]);
+                e[1][l] = f(px[2][l], py[0][l], py[2][l], px[0][l]);
+                e[2][l] = f(px[0][l], py[1][l], py[0][l], px[1][l]);
+                bits &= bits - 1;
+            }
+        }
+        let neg = e[0].cmplt(zero) | e[1].cmplt(zero) | e[2].cmplt(zero);
+        let pos = e[0].cmpgt(zero) | e[1].cmpgt(zero) | e[2].cmpgt(zero);
+        let det = e[0] + e[1] + e[2];
+        let pz = pz.map(|z| z * sz);
+        let t_scaled = e[0] * pz[0] + e[1] * pz[1] + e[2] * pz[2];
+        let t_max4 = Vec4::splat(t_max);
+        let limit = t_max4 * det;
+        let behind_neg = det.cmplt(zero) & (t_scaled.cmpge(zero) | t_scaled.cmplt(limit));
+        let behind_pos = det.cmpgt(zero) & (t_scaled.cmple(zero) | t_scaled.cmpgt(limit));
+        let miss = (neg & pos) | det.cmpeq(zero) | behind_neg | behind_pos;
+        let mut mask = lanes & !miss.bitmask();
+        let inv_det = Vec4::ONE / det;
+        let t = t_scaled * inv_det;
+        if mask != 0 {
+            // Conservative bound: reject hits whose t cannot be told from 0.
+            let max3 = |a: [Vec4; 3]| a[0].abs().max(a[1].abs()).max(a[2].abs());
+            let max_z = max3(pz);
+            let max_x = max3(px);
+            let max_y = max3(py);
+            let max_e = max3(e);
+            let delta_z = Vec4::splat(gamma(3)) * max_z;
+            let delta_x = Vec4::splat(gamma(5)) * (max_x + max_z);
+            let delta_y = Vec4::splat(gamma(5)) * (max_y + max_z);
+            let delta_e = Vec4::splat(2.0)
+                * (Vec4::splat(gamma(2)) * max_x * max_y + delta_y * max_x + delta_x * max_y);
+            let delta_t = Vec4::splat(3.0)
+                * (Vec4::splat(gamma(3)) * max_e * max_z + delta_e * max_z + delta_z * max_e)
+                * inv_det.abs();
+            // t > delta_t and t < t_max, both false for NaN.
+            mask &= (t.cmpgt(delta_t) & t.cmplt(t_max4)).bitmask();
+        }
+        PacketHits {
+            t,
+            e,
+            inv_det,
+            mask,
+        }
+    }
+}
+
+/// Calls `f(packet, lanes)` for every packet holding a slot of the primitive group
+/// (`base`, `bits`): bit `i` of `bits` is slot `base + i`.
+#[inline(always)]
+fn for_each_packet(base: u32, bits: u32, mut f: impl FnMut(usize, u32) -> bool) {
+    let mut rest = u64::from(bits) << (base % 4);
+    let mut packet = (base / 4) as usize;
+    while rest != 0 {
+        let lanes = (rest & 0xf) as u32;
+        if lanes != 0 && f(packet, lanes) {
+            return;
+        }
+        rest >>= 4;
+        packet += 1;
+    }
+}
+
 /// Largest inverse direction component: finite, so the slab test never forms 0 * inf.
 const MAX_INVERSE: f32 = 1e20;
 
@@ -243,12 +402,16 @@ impl Boundable for Padded {
 /// field names `child_base_idx`, `primitive_base_idx` and `imask` are the ones obvhs's
 /// `traverse!` macro reads; they are copied from the obvhs node unchanged.
 #[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
 struct WideNode {
     /// `bounds[4 * axis + 2 * side + half]`: lane `j` is child `4 * half + j`; side 0 is the
     /// box minimum, 1 the maximum. Empty children are empty boxes (min +inf, max -inf).
     bounds: [Vec4; 12],
-    /// obvhs's `child_meta` bytes as one little-endian word.
-    meta: u64,
+    /// What each child adds to obvhs's node hit mask when hit, if it is a leaf (zero for
+    /// internal and empty children): its primitive count in unary, shifted to its first slot.
+    /// Always below 2^24, so exact in f32, and the leaves' bits are disjoint: summing the hit
+    /// lanes ORs them.
+    leaf_bits: [Vec4; 2],
     /// Index of the first child node.
     child_base_idx: u32,
     /// Index of the first primitive slot.
@@ -256,6 +419,30 @@ struct WideNode {
     /// Bit `i` set when child `i` is an internal node.
     imask: u8,
 }
+
+/// `XOR_PERMUTE[o][m]` moves bit `c` of `m` to bit `c ^ o`: obvhs orders the internal children
+/// of a node by slot XOR the ray's octant.
+const XOR_PERMUTE: [[u8; 256]; 8] = {
+    let mut table = [[0u8; 256]; 8];
+    let mut o = 0;
+    while o < 8 {
+        let mut m = 0;
+        while m < 256 {
+            let mut out = 0u8;
+            let mut c = 0;
+            while c < 8 {
+                if m & (1 << c) != 0 {
+                    out |= 1 << (c ^ o);
+                }
+                c += 1;
+            }
+            table[o][m] = out;
+            m += 1;
+        }
+        o += 1;
+    }
+    table
+};
 
 impl WideNode {
     fn decode(n: &CwBvhNode) -> Self {
@@ -282,9 +469,24 @@ impl WideNode {
                 bounds[4 * axis + 2 + half] = Vec4::from_slice(&max[r]);
             }
         }
+        let mut leaf_bits = [0.0f32; 8];
+        for (c, &meta) in n.child_meta.iter().enumerate() {
+            let offset = u32::from(meta & 0x1f);
+            if n.imask & (1 << c) != 0 {
+                // obvhs numbers internal children by slot: 24 + slot.
+                assert_eq!(offset, 24 + c as u32, "unexpected CWBVH child numbering");
+            } else {
+                let bits = u32::from(meta >> 5) << offset;
+                assert!(bits < 1 << 24, "leaf primitive slots beyond 24");
+                leaf_bits[c] = bits as f32;
+            }
+        }
         Self {
             bounds,
-            meta: u64::from_le_bytes(n.child_meta),
+            leaf_bits: [
+                Vec4::from_slice(&leaf_bits[..4]),
+                Vec4::from_slice(&leaf_bits[4..]),
+            ],
             child_base_idx: n.child_base_idx,
             primitive_base_idx: n.primitive_base_idx,
             imask: n.imask,
@@ -299,6 +501,7 @@ impl WideNode {
         let b = &self.bounds;
         let t_max = Vec4::splat(t_max);
         let mut mask = 0u32;
+        let mut leaves = Vec4::ZERO;
         for half in 0..2 {
             let slab = |axis: usize| {
                 let near = b[4 * axis + ray.near[axis] + half];
@@ -313,24 +516,14 @@ impl WideNode {
             let (nz, fz) = slab(2);
             let t_near = nx.max(ny).max(nz.max(Vec4::ZERO));
             let t_far = fx.min(fy).min(fz.min(t_max));
-            mask |= t_near.cmple(t_far).bitmask() << (4 * half);
+            let hit = t_near.cmple(t_far);
+            mask |= hit.bitmask() << (4 * half);
+            leaves += Vec4::select(hit, self.leaf_bits[half], Vec4::ZERO);
         }
-        // obvhs's CwBvhNode::get_child_and_index_bits and hit-mask assembly, without branches.
-        const INNER: u64 = 0x1010_1010_1010_1010;
-        const INDEX: u64 = 0x1f1f_1f1f_1f1f_1f1f;
-        const CHILD: u64 = 0x0707_0707_0707_0707;
-        let oct8 = u64::from(oct_inv4) | (u64::from(oct_inv4) << 32);
-        let meta = self.meta;
-        let inner8 = ((meta & (meta << 1)) & INNER) >> 4;
-        let bit_index8 = (meta ^ (oct8 & (inner8 * 0xff))) & INDEX;
-        let child_bits8 = (meta >> 5) & CHILD;
-        let mut hit = 0u32;
-        for c in 0..8 {
-            let on = (mask >> c) & 1;
-            let bits = ((child_bits8 >> (8 * c)) as u32 & 0xff) * on;
-            hit |= bits << ((bit_index8 >> (8 * c)) as u32 & 0x1f);
-        }
-        hit
+        // obvhs's hit mask: hit internal children in the high byte, at bit 24 + (slot XOR
+        // octant); hit leaves' primitive slots in the low 24 bits.
+        let inner = XOR_PERMUTE[(oct_inv4 & 7) as usize][(mask & u32::from(self.imask)) as usize];
+        (u32::from(inner) << 24) | leaves.element_sum() as u32
     }
 }
 
@@ -411,8 +604,9 @@ pub struct TriangleHit {
 pub struct Accel {
     /// The obvhs CWBVH's nodes, decoded for the node test.
     bvh: WideBvh,
-    /// Triangles in BVH slot order, stored by axis for the intersection test.
-    tris: Vec<AxisTriangle>,
+    /// Triangles in BVH slot order, four to a packet (slot `s` is lane `s % 4` of packet
+    /// `s / 4`).
+    packets: Vec<TriPacket>,
     /// BVH slot -> scene triangle index.
     ids: Vec<u32>,
     build_time: Duration,
@@ -421,7 +615,7 @@ pub struct Accel {
 impl std::fmt::Debug for Accel {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Accel")
-            .field("triangles", &self.tris.len())
+            .field("triangles", &self.ids.len())
             .field("nodes", &self.bvh.nodes.len())
             .field("build_time", &self.build_time)
             .finish()
@@ -467,13 +661,11 @@ impl Accel {
             nodes: cwbvh.nodes.iter().map(WideNode::decode).collect(),
         };
         let ids = cwbvh.primitive_indices;
-        let tris = ids
-            .iter()
-            .map(|&i| AxisTriangle::new(corners[i as usize]))
-            .collect();
+        let slots: Vec<[Vec3A; 3]> = ids.iter().map(|&i| corners[i as usize]).collect();
+        let packets = slots.chunks(4).map(TriPacket::new).collect();
         Self {
             bvh,
-            tris,
+            packets,
             ids,
             build_time: start.elapsed(),
         }
@@ -491,10 +683,10 @@ impl Accel {
 
     /// The closest hit with `0 < t < t_max`, if any.
     pub fn closest(&self, origin: Vec3, direction: Vec3, t_max: f32) -> Option<TriangleHit> {
-        if self.tris.is_empty() {
+        if self.ids.is_empty() {
             return None;
         }
-        let sheared = ShearedRay::new(origin, direction);
+        let sheared = PacketRay::new(&ShearedRay::new(origin, direction));
         let ray = NodeRay::new(origin, direction);
         let mut best: Option<TriangleHit> = None;
         let mut t_max = t_max;
@@ -506,15 +698,23 @@ impl Accel {
             state,
             node.intersect(&ray, t_max, state.oct_inv4),
             {
-                let slot = state.primitive_id as usize;
-                if let Some((t, barycentric)) = sheared.intersect(&self.tris[slot], t_max) {
-                    t_max = t;
-                    best = Some(TriangleHit {
-                        triangle: self.ids[slot],
-                        t,
-                        barycentric,
-                    });
-                }
+                // Test the node's whole primitive group at once, four triangles at a time.
+                let group = state.primitive_group;
+                let bits = group.y | (1 << (state.primitive_id - group.x));
+                state.primitive_group.y = 0;
+                for_each_packet(group.x, bits, |p, lanes| {
+                    let hits = sheared.intersect(&self.packets[p], lanes, t_max);
+                    if hits.mask != 0 {
+                        let lane = hits.nearest();
+                        t_max = hits.t[lane];
+                        best = Some(TriangleHit {
+                            triangle: self.ids[4 * p + lane],
+                            t: t_max,
+                            barycentric: hits.barycentric(lane),
+                        });
+                    }
+                    false
+                });
             }
         );
         best
@@ -522,10 +722,10 @@ impl Accel {
 
     /// Whether anything is hit with `0 < t < t_max`; stops at the first hit found.
     pub fn any_hit(&self, origin: Vec3, direction: Vec3, t_max: f32) -> bool {
-        if self.tris.is_empty() {
+        if self.ids.is_empty() {
             return false;
         }
-        let sheared = ShearedRay::new(origin, direction);
+        let sheared = PacketRay::new(&ShearedRay::new(origin, direction));
         let ray = NodeRay::new(origin, direction);
         let mut state = ray.traversal();
         let mut node;
@@ -537,11 +737,14 @@ impl Accel {
                 state,
                 node.intersect(&ray, t_max, state.oct_inv4),
                 {
-                    if sheared
-                        .intersect(&self.tris[state.primitive_id as usize], t_max)
-                        .is_some()
-                    {
-                        hit = true;
+                    let group = state.primitive_group;
+                    let bits = group.y | (1 << (state.primitive_id - group.x));
+                    state.primitive_group.y = 0;
+                    for_each_packet(group.x, bits, |p, lanes| {
+                        hit = sheared.intersect(&self.packets[p], lanes, t_max).mask != 0;
+                        hit
+                    });
+                    if hit {
                         break 'search;
                     }
                 }
