@@ -598,6 +598,9 @@ pub struct TriangleHit {
     pub t: f32,
     /// Barycentric weights of the triangle's vertices 0, 1, 2 (sum 1).
     pub barycentric: [f32; 3],
+    /// Positions of the triangle's vertices 0, 1, 2 (the mesh's, bit for bit), from the
+    /// accelerator's copy that the test just read, so the caller need not fetch them again.
+    pub corners: [Vec3; 3],
 }
 
 /// A CWBVH over the scene's triangles with the queries every pass uses.
@@ -688,7 +691,8 @@ impl Accel {
         }
         let sheared = PacketRay::new(&ShearedRay::new(origin, direction));
         let ray = NodeRay::new(origin, direction);
-        let mut best: Option<TriangleHit> = None;
+        // Packet, lane, barycentrics of the nearest hit so far; its t is `t_max`.
+        let mut best: Option<(usize, usize, [f32; 3])> = None;
         let mut t_max = t_max;
         let mut state = ray.traversal();
         let mut node;
@@ -707,17 +711,20 @@ impl Accel {
                     if hits.mask != 0 {
                         let lane = hits.nearest();
                         t_max = hits.t[lane];
-                        best = Some(TriangleHit {
-                            triangle: self.ids[4 * p + lane],
-                            t: t_max,
-                            barycentric: hits.barycentric(lane),
-                        });
+                        best = Some((p, lane, hits.barycentric(lane)));
                     }
                     false
                 });
             }
         );
-        best
+        let (p, lane, barycentric) = best?;
+        let v = &self.packets[p].v;
+        Some(TriangleHit {
+            triangle: self.ids[4 * p + lane],
+            t: t_max,
+            barycentric,
+            corners: [0, 1, 2].map(|i| Vec3::new(v[0][i][lane], v[1][i][lane], v[2][i][lane])),
+        })
     }
 
     /// Whether anything is hit with `0 < t < t_max`; stops at the first hit found.
@@ -764,13 +771,15 @@ impl Accel {
         let sheared = ShearedRay::new(origin, direction);
         let mut best: Option<TriangleHit> = None;
         for (i, t) in triangles.iter().enumerate() {
-            let v = AxisTriangle::new(t.map(|k| Vec3A::from(positions[k as usize])));
+            let corners = t.map(|k| positions[k as usize]);
+            let v = AxisTriangle::new(corners.map(Vec3A::from));
             let limit = best.map_or(t_max, |b| b.t);
             if let Some((t, barycentric)) = sheared.intersect(&v, limit) {
                 best = Some(TriangleHit {
                     triangle: i as u32,
                     t,
                     barycentric,
+                    corners,
                 });
             }
         }

@@ -267,7 +267,13 @@ impl Scene {
     }
 
     fn hit_from(&self, ray: &Ray, h: TriangleHit) -> Hit {
-        let point = self.mesh.surface_point(h.triangle, h.barycentric);
+        // The hit carries the corners the accelerator just read: no second fetch from the mesh.
+        let point = SurfacePoint::on_triangle(
+            h.corners,
+            h.barycentric,
+            self.mesh.geometric_normals[h.triangle as usize],
+            h.triangle,
+        );
         let object = self.mesh.triangle_object[h.triangle as usize];
         let mut shading_normal = self.mesh.shading_normal(h.triangle, h.barycentric);
         if shading_normal.dot(point.normal) < 0.0 {
