@@ -6,7 +6,8 @@
 //! reference: the reference path tracer run long, cached on disk ([`reference`]).
 //!
 //! - radiosity: element size, unshot fraction, visibility rays, adaptive subdivision on/off,
-//!   each solve rendered as radiosity alone and by the hybrids;
+//!   each solve rendered as radiosity alone and by the hybrids, and element size crossed with
+//!   samples per pixel (the two knobs that dominate their error);
 //! - Whitted and the hybrids: samples per pixel x shadow-ray grid, and recursion depth;
 //! - the reference path tracer: samples per pixel.
 //!
@@ -98,7 +99,7 @@ struct Sweep {
     spps: Vec<u32>,
     shadow_grids: Vec<u32>,
     depths: Vec<u32>,
-    /// Samples per pixel of radiosity alone (base solve).
+    /// Samples per pixel crossed with the element sizes for the radiosity-based methods.
     radiosity_spps: Vec<u32>,
     reference_spps: Vec<u32>,
 }
@@ -122,8 +123,8 @@ impl Sweep {
             spps: vec![1, 4, 16],
             shadow_grids: vec![1, 2, 4],
             depths: vec![1, 2, 4, 8],
-            radiosity_spps: vec![1, 4, 16],
-            reference_spps: vec![1, 4, 16, 64, 256, 1024],
+            radiosity_spps: vec![1, 4, 16, 64],
+            reference_spps: vec![1, 4, 16, 64, 256, 1024, 2048],
         }
     }
 
@@ -238,49 +239,53 @@ fn plan_runs(sweep: &Sweep, diagonal: f32, methods: &[Method]) -> (Vec<SolveSpec
                 });
             }
         };
-        match method {
-            Method::Reference => {
-                for &spp in &sweep.reference_spps {
-                    push("spp", RenderKnobs { spp, ..base_render }, None);
-                }
+        if method == Method::Reference {
+            for &spp in &sweep.reference_spps {
+                push("spp", RenderKnobs { spp, ..base_render }, None);
             }
-            Method::Radiosity => {
-                for (i, s) in solves.iter().enumerate() {
-                    push(s.knob, base_render, Some(i));
-                }
-                for &spp in &sweep.radiosity_spps {
-                    push("spp", RenderKnobs { spp, ..base_render }, Some(0));
-                }
+            continue;
+        }
+        if method.needs_radiosity() {
+            // Every solve at the base render, then the two knobs that dominate the error
+            // (element size and samples per pixel) crossed.
+            for (i, s) in solves.iter().enumerate() {
+                push(s.knob, base_render, Some(i));
             }
-            Method::Whitted | Method::Hybrid | Method::HybridDirect => {
-                let solve = method.needs_radiosity().then_some(0);
-                if method.needs_radiosity() {
-                    for (i, s) in solves.iter().enumerate() {
-                        push(s.knob, base_render, Some(i));
+            for (i, s) in solves.iter().enumerate() {
+                if matches!(s.knob, "base" | "element-size") {
+                    for &spp in &sweep.radiosity_spps {
+                        let render = RenderKnobs { spp, ..base_render };
+                        push("element-size-spp", render, Some(i));
                     }
                 }
-                push("base", base_render, solve);
-                for &spp in &sweep.spps {
-                    for &shadow_grid in &sweep.shadow_grids {
-                        let render = RenderKnobs {
-                            spp,
-                            shadow_grid,
-                            ..base_render
-                        };
-                        push("spp-shadow-grid", render, solve);
-                    }
-                }
-                for &depth in &sweep.depths {
-                    push(
-                        "depth",
-                        RenderKnobs {
-                            depth,
-                            ..base_render
-                        },
-                        solve,
-                    );
-                }
             }
+            if method == Method::Radiosity {
+                continue; // no shadow rays, no recursion: nothing else to vary
+            }
+        }
+        // Whitted and the hybrids (on the base solve): anti-aliasing against shadow rays, and
+        // the recursion depth.
+        let solve = method.needs_radiosity().then_some(0);
+        push("base", base_render, solve);
+        for &spp in &sweep.spps {
+            for &shadow_grid in &sweep.shadow_grids {
+                let render = RenderKnobs {
+                    spp,
+                    shadow_grid,
+                    ..base_render
+                };
+                push("spp-shadow-grid", render, solve);
+            }
+        }
+        for &depth in &sweep.depths {
+            push(
+                "depth",
+                RenderKnobs {
+                    depth,
+                    ..base_render
+                },
+                solve,
+            );
         }
     }
     (solves, runs)
