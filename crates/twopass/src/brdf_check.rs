@@ -3,8 +3,7 @@
 //! plots of the lobes in the plane of incidence as PNG.
 
 use std::io::Write as _;
-use std::path::{Path, PathBuf};
-use std::sync::Once;
+use std::path::Path;
 
 use clap::Args;
 use glam::Vec3;
@@ -19,7 +18,7 @@ use twopass_brdf::{
 
 use crate::context::Context;
 use crate::error::CliError;
-use crate::output::write_png_rgb8;
+use crate::figure::{self, FONT};
 
 /// Options of `twopass brdf-check`.
 #[derive(Debug, Args)]
@@ -330,42 +329,19 @@ fn plot_models() -> Result<Vec<(&'static str, &'static str, BrdfModel)>, CliErro
     ])
 }
 
-const FONT: &str = "sans-serif";
-
-fn register_font() {
-    static ONCE: Once = Once::new();
-    ONCE.call_once(|| {
-        // The font is compiled in; registering it cannot fail for valid TrueType bytes, and if it
-        // did, text drawing reports the error through the plot's Result.
-        let _ = plotters::style::register_font(
-            FONT,
-            FontStyle::Normal,
-            epaint_default_fonts::UBUNTU_LIGHT,
-        );
-    });
-}
-
 /// A polar plot of f(wo, wi) cos(theta_o) in the plane of incidence (wi at azimuth 0, so the
 /// mirror direction is on the left), one curve per incidence angle, each scaled to its peak.
 fn plot_lobe(path: &Path, title: &str, model: &BrdfModel, angles: &[f32]) -> Result<(), CliError> {
     const W: u32 = 720;
     const H: u32 = 420; // about equal scales on both axes, so the unit circle looks round
-    register_font();
-    let err = |e: String| CliError::Encode {
-        path: PathBuf::from(path),
-        message: e,
-    };
-    let mut buf = vec![0u8; (W * H * 3) as usize];
-    {
-        let root = BitMapBackend::with_buffer(&mut buf, (W, H)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| err(e.to_string()))?;
-        let mut chart = ChartBuilder::on(&root)
+    figure::png(path, W, H, |root| {
+        let mut chart = ChartBuilder::on(root)
             .caption(title, (FONT, 22))
             .margin(12)
             .x_label_area_size(44)
             .y_label_area_size(52)
             .build_cartesian_2d(-1.1f32..1.1f32, 0f32..1.1f32)
-            .map_err(|e| err(e.to_string()))?;
+            .map_err(|e| e.to_string())?;
         chart
             .configure_mesh()
             .x_desc("r sin(theta_o), r = f cos(theta_o) / peak  (mirror side left)")
@@ -374,7 +350,7 @@ fn plot_lobe(path: &Path, title: &str, model: &BrdfModel, angles: &[f32]) -> Res
             .axis_desc_style((FONT, 15))
             .light_line_style(RGBColor(235, 235, 235))
             .draw()
-            .map_err(|e| err(e.to_string()))?;
+            .map_err(|e| e.to_string())?;
         let circle: Vec<(f32, f32)> = (0..=180)
             .map(|i| {
                 let t = (i as f32 - 90.0).to_radians();
@@ -383,7 +359,7 @@ fn plot_lobe(path: &Path, title: &str, model: &BrdfModel, angles: &[f32]) -> Res
             .collect();
         chart
             .draw_series(LineSeries::new(circle, RGBColor(190, 190, 190)))
-            .map_err(|e| err(e.to_string()))?;
+            .map_err(|e| e.to_string())?;
         let palette = [
             RGBColor(31, 119, 180),
             RGBColor(214, 39, 40),
@@ -410,7 +386,7 @@ fn plot_lobe(path: &Path, title: &str, model: &BrdfModel, angles: &[f32]) -> Res
                 .map(|&(t, v)| (v * scale * t.sin(), v * scale * t.cos()));
             chart
                 .draw_series(LineSeries::new(curve, color.stroke_width(2)))
-                .map_err(|e| err(e.to_string()))?
+                .map_err(|e| e.to_string())?
                 .label(format!("theta_i {deg} deg, peak f cos = {peak:.3} /sr"))
                 .legend(move |(x, y)| {
                     PathElement::new([(x, y), (x + 18, y)], color.stroke_width(2))
@@ -420,17 +396,9 @@ fn plot_lobe(path: &Path, title: &str, model: &BrdfModel, angles: &[f32]) -> Res
                     [(0.0, 0.0), (s, c)],
                     color.mix(0.5).stroke_width(1),
                 ))
-                .map_err(|e| err(e.to_string()))?;
+                .map_err(|e| e.to_string())?;
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .label_font((FONT, 13))
-            .background_style(WHITE.mix(0.85))
-            .border_style(RGBColor(200, 200, 200))
-            .draw()
-            .map_err(|e| err(e.to_string()))?;
-        root.present().map_err(|e| err(e.to_string()))?;
-    }
-    write_png_rgb8(path, W, H, &buf)
+        figure::legend(&mut chart, SeriesLabelPosition::UpperRight, 13)?;
+        Ok(())
+    })
 }

@@ -19,7 +19,7 @@ use twopass_trace::{RenderSettings, WhittedSettings};
 use crate::context::Context;
 use crate::error::CliError;
 use crate::plan::plan;
-use crate::render::{Method, integrator, render_with_bar, to_layers};
+use crate::render::{Method, integrator, load_lit, render_with_bar, to_layers};
 
 /// Arguments of `twopass compare`.
 #[derive(Debug, Args)]
@@ -113,18 +113,7 @@ pub(crate) fn methods(scene: &twopass_scene::Scene) -> (Vec<Method>, Vec<String>
 
 /// Renders, compares and writes everything.
 pub fn run(args: &CompareArgs, ctx: &Context) -> Result<(), CliError> {
-    let (scene, warnings) = twopass_scene::load(&args.scene)?;
-    if !ctx.quiet {
-        for w in &warnings {
-            eprintln!("warning: {w}");
-        }
-    }
-    if scene.emitters.is_empty() {
-        return Err(CliError::Input(format!(
-            "{}: nothing emits light, every render would be black",
-            args.scene.display()
-        )));
-    }
+    let scene = load_lit(&args.scene, ctx)?;
     let default_width = if args.quick { 256 } else { 512 };
     let camera = match (ctx.width, ctx.height) {
         (None, None) => scene.camera.with_resolution(Some(default_width), None),

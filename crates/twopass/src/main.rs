@@ -10,6 +10,7 @@ mod brdf_check;
 mod compare;
 mod context;
 mod error;
+mod figure;
 mod info;
 mod output;
 mod plan;

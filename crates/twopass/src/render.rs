@@ -137,6 +137,24 @@ struct Summary {
     skipped: Vec<String>,
 }
 
+/// Loads a scene to render with several methods: prints its warnings unless quiet, and refuses
+/// a scene where nothing emits (every image would be black).
+pub fn load_lit(path: &Path, ctx: &Context) -> Result<Scene, CliError> {
+    let (scene, warnings) = twopass_scene::load(path)?;
+    if !ctx.quiet {
+        for w in &warnings {
+            eprintln!("warning: {w}");
+        }
+    }
+    if scene.emitters.is_empty() {
+        return Err(CliError::Input(format!(
+            "{}: nothing emits light, every render would be black",
+            path.display()
+        )));
+    }
+    Ok(scene)
+}
+
 /// The radiosity for the radiosity-based methods: from a bake file, or solved now.
 pub fn radiosity(
     scene: &Scene,

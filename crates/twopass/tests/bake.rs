@@ -1,24 +1,13 @@
 //! `twopass bake` as scripts drive it: the files it writes, a manifest whose numbers are the
 //! solver's, and clear failures (no emitter, unwritable output, bad options).
 
+mod common;
+
+use common::{repo, twopass};
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 use twopass_radiosity::bake;
-
-fn repo(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../..")
-        .join(rel)
-}
-
-fn twopass(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_twopass"))
-        .args(args)
-        .env("CI", "1")
-        .output()
-        .expect("the binary runs")
-}
 
 fn file_names(dir: &Path) -> Vec<String> {
     let mut names: Vec<String> = std::fs::read_dir(dir)

@@ -1,21 +1,8 @@
 //! The command line as scripts drive it: exit codes, messages on stderr, JSON on stdout.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn repo(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../..")
-        .join(rel)
-}
-
-fn twopass(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_twopass"))
-        .args(args)
-        .env("CI", "1")
-        .output()
-        .expect("the binary runs")
-}
+use common::{repo, twopass};
 
 #[test]
 fn info_json_describes_the_cornell_box() {

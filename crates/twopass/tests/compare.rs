@@ -1,18 +1,16 @@
 //! `twopass compare`: the report's numbers are recomputed from the EXRs it wrote.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use common::repo;
+
+use std::path::Path;
 use std::process::Command;
 
 use twopass_composite::metric::compare;
 use twopass_composite::sheet::ComparisonOptions;
 use twopass_composite::tonemap::ToneMap;
 use twopass_composite::write::read_exr_layers;
-
-fn repo(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../..")
-        .join(rel)
-}
 
 #[test]
 fn report_matches_the_images_it_wrote() {

@@ -1,23 +1,12 @@
 //! `twopass render`: every method writes a multi-layer EXR whose layers sum to the image.
 
+mod common;
+
+use common::{repo, twopass};
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 use twopass_composite::write::read_exr_layers;
-
-fn repo(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../..")
-        .join(rel)
-}
-
-fn twopass(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_twopass"))
-        .args(args)
-        .env("CI", "1")
-        .output()
-        .expect("the binary runs")
-}
 
 const COARSE: [&str; 6] = [
     "--element-size",

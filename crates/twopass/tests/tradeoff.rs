@@ -1,23 +1,12 @@
 //! `twopass bench tradeoff`: the front, the presets and the cache, checked from its own report.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
+
+use common::{repo, twopass};
+
+use std::path::Path;
 
 use serde_json::Value;
-
-fn repo(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../..")
-        .join(rel)
-}
-
-fn twopass(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_twopass"))
-        .args(args)
-        .env("CI", "1")
-        .output()
-        .unwrap()
-}
 
 fn sweep(out: &Path) -> Value {
     let scene = repo("scenes/cornell-box.toml");

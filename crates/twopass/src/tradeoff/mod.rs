@@ -39,7 +39,7 @@ use crate::compare::methods;
 use crate::context::Context;
 use crate::error::CliError;
 use crate::preset::{Preset, PresetFile, RadiosityKnobs, RenderKnobs};
-use crate::render::{Method, integrator};
+use crate::render::{Method, integrator, load_lit};
 
 /// Arguments of `twopass bench tradeoff`.
 #[derive(Debug, Args)]
@@ -382,18 +382,7 @@ struct Report {
 
 /// Runs the sweep and writes the CSV, JSON, plot and presets.
 pub fn run(args: &TradeoffArgs, ctx: &Context) -> Result<(), CliError> {
-    let (scene, warnings) = twopass_scene::load(&args.scene)?;
-    if ctx.chatty() {
-        for w in &warnings {
-            eprintln!("warning: {w}");
-        }
-    }
-    if scene.emitters.is_empty() {
-        return Err(CliError::Input(format!(
-            "{}: nothing emits light, every render would be black",
-            args.scene.display()
-        )));
-    }
+    let scene = load_lit(&args.scene, ctx)?;
     let mut sweep = if args.quick {
         Sweep::quick()
     } else {

@@ -2,31 +2,17 @@
 //! each method's own front drawn as a curve, the front of all methods as a thick dashed line,
 //! the presets labelled, and the reference's own noise as the floor.
 
-use std::path::{Path, PathBuf};
-use std::sync::Once;
+use std::path::Path;
 
 use plotters::prelude::*;
 
 use super::Row;
 use crate::error::CliError;
-use crate::output::write_png_rgb8;
+use crate::figure::{self, FONT, draw_error};
 use crate::preset::Preset;
 
-const FONT: &str = "sans-serif";
 const W: u32 = 960;
 const H: u32 = 640;
-
-fn register_font() {
-    static ONCE: Once = Once::new();
-    ONCE.call_once(|| {
-        // Compiled-in TrueType bytes; a failure would surface as a text-drawing error.
-        let _ = plotters::style::register_font(
-            FONT,
-            FontStyle::Normal,
-            epaint_default_fonts::UBUNTU_LIGHT,
-        );
-    });
-}
 
 /// A method's colour (the same in every plot).
 fn colour(method: &str) -> RGBColor {
@@ -47,11 +33,6 @@ pub fn plot(
     presets: &[Preset],
     noise_floor: f64,
 ) -> Result<(), CliError> {
-    register_font();
-    let err = |e: String| CliError::Encode {
-        path: PathBuf::from(path),
-        message: e,
-    };
     let finite = || {
         rows.iter()
             .filter(|r| r.total_seconds > 0.0 && r.rel_rmse > 0.0)
@@ -64,22 +45,21 @@ pub fn plot(
         (a.min(r.rel_rmse), b.max(r.rel_rmse))
     });
     if !(t0.is_finite() && t1 > 0.0 && e1 > 0.0) {
-        return Err(err("no run with a positive time and error to plot".into()));
+        return Err(draw_error(path)(
+            "no run with a positive time and error to plot".into(),
+        ));
     }
     // Percent on the error axis; a little room around the points.
     let (x0, x1) = (t0 / 1.6, t1 * 1.6);
     let (y0, y1) = (100.0 * e0 / 1.4, 100.0 * e1 * 1.4);
-    let mut buf = vec![0u8; (W * H * 3) as usize];
-    {
-        let root = BitMapBackend::with_buffer(&mut buf, (W, H)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| err(e.to_string()))?;
-        let mut chart = ChartBuilder::on(&root)
+    figure::png(path, W, H, |root| {
+        let mut chart = ChartBuilder::on(root)
             .caption(title, (FONT, 22))
             .margin(14)
             .x_label_area_size(48)
             .y_label_area_size(64)
             .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
-            .map_err(|e| err(e.to_string()))?;
+            .map_err(|e| e.to_string())?;
         chart
             .configure_mesh()
             .x_desc("wall-clock time, radiosity solve included (s)")
@@ -88,7 +68,7 @@ pub fn plot(
             .axis_desc_style((FONT, 16))
             .light_line_style(RGBColor(236, 236, 236))
             .draw()
-            .map_err(|e| err(e.to_string()))?;
+            .map_err(|e| e.to_string())?;
 
         // The reference's own noise: no error below it can be told apart.
         let floor = 100.0 * noise_floor;
@@ -98,7 +78,7 @@ pub fn plot(
                     [(x0, floor), (x1, floor)],
                     RGBColor(160, 160, 160).stroke_width(1),
                 ))
-                .map_err(|e| err(e.to_string()))?
+                .map_err(|e| e.to_string())?
                 .label(format!("reference noise {floor:.2} %"))
                 .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], RGBColor(160, 160, 160)));
         }
@@ -117,7 +97,7 @@ pub fn plot(
                     mine()
                         .map(|r| Circle::new((r.total_seconds, 100.0 * r.rel_rmse), 3, c.filled())),
                 )
-                .map_err(|e| err(e.to_string()))?
+                .map_err(|e| e.to_string())?
                 .label(m.to_owned())
                 .legend(move |(x, y)| Circle::new((x + 9, y), 4, c.filled()));
             let mut curve: Vec<(f64, f64)> = mine()
@@ -127,7 +107,7 @@ pub fn plot(
             curve.sort_by(|a, b| a.0.total_cmp(&b.0));
             chart
                 .draw_series(LineSeries::new(curve, c.stroke_width(2)))
-                .map_err(|e| err(e.to_string()))?;
+                .map_err(|e| e.to_string())?;
         }
 
         // The front of all methods: a staircase (each point is best until the next one).
@@ -148,7 +128,7 @@ pub fn plot(
         }
         chart
             .draw_series(DashedLineSeries::new(stairs, 7, 5, BLACK.stroke_width(2)))
-            .map_err(|e| err(e.to_string()))?
+            .map_err(|e| e.to_string())?
             .label("Pareto front (all methods)")
             .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], BLACK.stroke_width(2)));
         chart
@@ -157,7 +137,7 @@ pub fn plot(
                     .iter()
                     .map(|&p| Circle::new(p, 6, BLACK.stroke_width(2))),
             )
-            .map_err(|e| err(e.to_string()))?;
+            .map_err(|e| e.to_string())?;
 
         // Presets sharing a run share one label.
         let mut labels: Vec<((f64, f64), String)> = Vec::new();
@@ -180,17 +160,9 @@ pub fn plot(
                         (8, -18),
                         (FONT, 15).into_font().color(&BLACK),
                     )])
-                .map_err(|e| err(e.to_string()))?;
+                .map_err(|e| e.to_string())?;
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::LowerLeft)
-            .label_font((FONT, 14))
-            .background_style(WHITE.mix(0.85))
-            .border_style(RGBColor(200, 200, 200))
-            .draw()
-            .map_err(|e| err(e.to_string()))?;
-        root.present().map_err(|e| err(e.to_string()))?;
-    }
-    write_png_rgb8(path, W, H, &buf)
+        figure::legend(&mut chart, SeriesLabelPosition::LowerLeft, 14)?;
+        Ok(())
+    })
 }

@@ -1,0 +1,22 @@
+//! Helpers every CLI test file shares: repository paths and running the binary as CI does.
+// Each test file is its own crate and uses only some of these.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// A path relative to the repository root.
+pub fn repo(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../..")
+        .join(rel)
+}
+
+/// Runs `twopass` with `args` as CI would (no progress bars) and waits for it.
+pub fn twopass(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_twopass"))
+        .args(args)
+        .env("CI", "1")
+        .output()
+        .expect("the binary runs")
+}
