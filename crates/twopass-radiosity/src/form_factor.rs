@@ -103,14 +103,15 @@ fn unit(h: u64) -> f32 {
 
 /// A stratified point on a triangle (corners `p`) for stratum `(i, j)` of `k x k`, jittered by
 /// `h`; triangle-square warp of the stratum.
-fn stratified_point(p: [DVec3; 3], i: u32, j: u32, k: u32, h: u64) -> DVec3 {
+fn stratified_point(p: [DVec3; 3], i: u32, j: u32, k: u32, h: u64) -> (DVec3, [f64; 3]) {
     let u = Vec2::new(
         (i as f32 + unit(h)) / k as f32,
         (j as f32 + unit(hash(h))) / k as f32,
     );
     let s = f64::from(u.x).sqrt();
     let (b1, b2) = (s * (1.0 - f64::from(u.y)), s * f64::from(u.y));
-    p[0] * (1.0 - b1 - b2) + p[1] * b1 + p[2] * b2
+    let w = [1.0 - b1 - b2, b1, b2];
+    (p[0] * w[0] + p[1] * w[1] + p[2] * w[2], w)
 }
 
 /// The visible fraction of shooter triangle `shooter` (corners, scene triangle `shooter_tri`)
@@ -128,6 +129,8 @@ pub fn visibility(
     seed: u64,
 ) -> (f64, u64) {
     let x = from.position.as_dvec3();
+    // Barycentrics of the shooter's corners on its scene triangle.
+    let corners = shooter.map(|c| scene.mesh.barycentric(shooter_tri, c));
     let size = (shooter[1] - shooter[0])
         .length()
         .max((shooter[2] - shooter[0]).length())
@@ -140,12 +143,17 @@ pub fn visibility(
         for i in 0..k {
             for j in 0..k {
                 let h = hash(seed ^ salt ^ (u64::from(i) << 32 | u64::from(j)));
-                let p = stratified_point(shooter, i, j, k, h);
+                let (p, w) = stratified_point(shooter, i, j, k, h);
                 if (p - x).dot(receiver_normal.as_dvec3()) <= 0.0 {
                     continue;
                 }
                 total += 1;
-                let target = scene.mesh.surface_point_at(shooter_tri, p.as_vec3());
+                // The sample's barycentrics on the scene triangle, from the corners' (the
+                // map is affine), instead of solving for them per ray.
+                let b = [0, 1, 2].map(|c| {
+                    (corners[0][c] * w[0] + corners[1][c] * w[1] + corners[2][c] * w[2]) as f32
+                });
+                let target = scene.mesh.surface_point(shooter_tri, b);
                 if !scene.occluded_between(from, &target) {
                     seen += 1;
                 }

@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use twopass_brdf::Rgb;
-use twopass_scene::Scene;
+use twopass_scene::{Scene, SurfacePoint};
 
 use crate::element::ElementMesh;
 use crate::form_factor::{self, VisibilityRays, hash};
@@ -234,6 +234,9 @@ pub struct Solver<'s> {
     /// Per vertex: reflectance, emitted exitance E = pi L_e.
     rho: Vec<DVec3>,
     emission: Vec<DVec3>,
+    /// Per vertex: where its shadow rays start (position with its error bound on its scene
+    /// triangle), computed once instead of once per shooter.
+    receivers: Vec<SurfacePoint>,
     /// Per vertex: irradiance received from emitted and from reflected light, W/m^2.
     received_emit: Vec<DVec3>,
     received_refl: Vec<DVec3>,
@@ -319,6 +322,7 @@ impl<'s> Solver<'s> {
             element_size,
             rho: Vec::new(),
             emission: Vec::new(),
+            receivers: Vec::new(),
             received_emit: Vec::new(),
             received_refl: Vec::new(),
             unshot_emit: Vec::new(),
@@ -378,6 +382,12 @@ impl<'s> Solver<'s> {
                 .material
                 .diffuse_albedo()));
             self.emission.push(rgb(o.emission) * std::f64::consts::PI);
+            let vert = &self.mesh.vertices[v];
+            self.receivers.push(
+                self.scene
+                    .mesh
+                    .surface_point_at(vert.triangle, vert.position),
+            );
             self.received_emit.push(DVec3::ZERO);
             self.received_refl.push(DVec3::ZERO);
         }
@@ -422,14 +432,11 @@ impl<'s> Solver<'s> {
                 if f <= 0.0 || !self.options.occlusion {
                     return (f as f32, 0);
                 }
-                let from = self
-                    .scene
-                    .mesh
-                    .surface_point_at(vert.triangle, vert.position);
+                let from = &self.receivers[v];
                 let seed = hash(self.options.seed ^ hash((v as u64) << 32 | p as u64));
                 let (vis, rays) = form_factor::visibility(
                     self.scene,
-                    &from,
+                    from,
                     vert.normal,
                     shooter,
                     shooter_tri,

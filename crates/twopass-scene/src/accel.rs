@@ -81,15 +81,14 @@ impl SurfacePoint {
         if direction.dot(self.normal) < 0.0 {
             offset = -offset;
         }
-        let mut po = self.position + offset;
-        for i in 0..3 {
-            if offset[i] > 0.0 {
-                po[i] = po[i].next_up();
-            } else if offset[i] < 0.0 {
-                po[i] = po[i].next_down();
-            }
-        }
-        po
+        let po = self.position + offset;
+        // Then at least one more float along each axis the offset moves (branch-free, where
+        // pbrt steps to the next float per axis): |x| * EPSILON is at least the spacing of
+        // floats at x (and the smallest normal float covers x = 0), so the rounded sum lands
+        // on or beyond the next float.
+        let up = Vec3::select(offset.cmpgt(Vec3::ZERO), Vec3::ONE, Vec3::ZERO);
+        let down = Vec3::select(offset.cmplt(Vec3::ZERO), Vec3::ONE, Vec3::ZERO);
+        po + (up - down) * (po.abs() * f32::EPSILON + Vec3::splat(f32::MIN_POSITIVE))
     }
 }
 

@@ -4,7 +4,7 @@
 use std::ops::Range;
 use std::path::PathBuf;
 
-use glam::{Vec2, Vec3};
+use glam::{DVec3, Vec2, Vec3};
 use rayon::prelude::*;
 use twopass_brdf::{Material, Rgb};
 
@@ -93,13 +93,22 @@ impl Mesh {
     /// plane, barycentrics from the projection), with its error bound: for points computed
     /// elsewhere, such as the vertices of a finer mesh over the triangle.
     pub fn surface_point_at(&self, t: u32, position: Vec3) -> SurfacePoint {
+        self.surface_point(
+            t,
+            self.barycentric(t, position.as_dvec3()).map(|b| b as f32),
+        )
+    }
+
+    /// Barycentric weights on triangle `t` of `position` projected into its plane, in f64
+    /// (they sum to 1; all in [0, 1] for points inside).
+    pub fn barycentric(&self, t: u32, position: DVec3) -> [f64; 3] {
         let [p0, p1, p2] = self.corners(t).map(|p| p.as_dvec3());
-        let (e1, e2, d) = (p1 - p0, p2 - p0, position.as_dvec3() - p0);
+        let (e1, e2, d) = (p1 - p0, p2 - p0, position - p0);
         let (a, b, c) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
         let (r1, r2) = (d.dot(e1), d.dot(e2));
         let det = a * c - b * b;
         let (b1, b2) = ((c * r1 - b * r2) / det, (a * r2 - b * r1) / det);
-        self.surface_point(t, [(1.0 - b1 - b2) as f32, b1 as f32, b2 as f32])
+        [1.0 - b1 - b2, b1, b2]
     }
 
     /// A point uniformly distributed over triangle `t` for `u` in [0, 1)^2.
