@@ -399,8 +399,12 @@ pub fn run(args: &TradeoffArgs, ctx: &Context) -> Result<(), CliError> {
     let chosen: Vec<Method> = if args.methods.is_empty() {
         called_for
     } else {
-        let mut m = args.methods.clone();
-        m.dedup();
+        let mut m: Vec<Method> = Vec::new();
+        for &method in &args.methods {
+            if !m.contains(&method) {
+                m.push(method);
+            }
+        }
         if let Some(bad) = m
             .iter()
             .find(|m| m.needs_radiosity() && !called_for.contains(m))

@@ -5,6 +5,7 @@
 use std::path::Path;
 
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::Row;
 use crate::error::CliError;
@@ -153,13 +154,21 @@ pub fn plot(
                 .iter()
                 .find(|p| (p.measured_seconds, 100.0 * p.measured_rel_rmse) == at)
                 .map_or("", |p| p.method.name());
+            // Labels right of their point, or left of it in the right third of the plot.
+            let right_third = at.0.ln() > x0.ln() + 2.0 * (x1.ln() - x0.ln()) / 3.0;
+            let (offset, h) = if right_third {
+                ((-8, -6), HPos::Right)
+            } else {
+                ((8, -6), HPos::Left)
+            };
+            let style = (FONT, 15)
+                .into_font()
+                .color(&BLACK)
+                .pos(Pos::new(h, VPos::Bottom));
             chart
-                .draw_series([EmptyElement::at(at)
-                    + Text::new(
-                        format!("{names} ({method})"),
-                        (8, -18),
-                        (FONT, 15).into_font().color(&BLACK),
-                    )])
+                .draw_series([
+                    EmptyElement::at(at) + Text::new(format!("{names} ({method})"), offset, style)
+                ])
                 .map_err(|e| e.to_string())?;
         }
         figure::legend(&mut chart, SeriesLabelPosition::LowerLeft, 14)?;
