@@ -62,7 +62,7 @@ pub struct BakeArgs {
     /// tradeoff`; the preset must use radiosity.
     #[arg(long, value_name = "NAME", conflicts_with_all = &crate::render::PRESET_SETS[4..])]
     pub preset: Option<String>,
-    /// The presets file [default: `<stem>.presets.toml` beside the scene].
+    /// The presets file (default: `<stem>.presets.toml` beside the scene).
     #[arg(long, value_name = "FILE", requires = "preset")]
     pub presets: Option<PathBuf>,
     /// Multiplier from radiance (W/(m^2 sr)) to the .glb's COLOR_0, which is clipped at 1

@@ -95,7 +95,7 @@ pub struct RenderArgs {
     /// setting measured to reach its error target. Sets the method and every setting above.
     #[arg(long, value_name = "NAME", conflicts_with_all = PRESET_SETS)]
     pub preset: Option<String>,
-    /// The presets file [default: `<stem>.presets.toml` beside the scene].
+    /// The presets file (default: `<stem>.presets.toml` beside the scene).
     #[arg(long, value_name = "FILE", requires = "preset")]
     pub presets: Option<PathBuf>,
 }

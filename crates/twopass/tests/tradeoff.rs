@@ -172,17 +172,23 @@ fn front_presets_and_cache_agree_with_the_measured_rows() {
 fn missing_presets_and_unknown_names_are_clear_errors() {
     let dir = tempfile::tempdir().unwrap();
     let scene = repo("scenes/cornell-box.toml");
-    let missing = dir.path().join("none.presets.toml");
-    let o = twopass(&[
-        "render",
-        scene.to_str().unwrap(),
-        "--preset",
-        "draft",
-        "--presets",
-        missing.to_str().unwrap(),
-    ]);
-    assert_eq!(o.status.code(), Some(1));
-    let err = String::from_utf8_lossy(&o.stderr);
+    // Exit code and stderr of `render --preset NAME --presets FILE`.
+    let render = |name: &str, file: &Path| {
+        let o = twopass(&[
+            "render",
+            scene.to_str().unwrap(),
+            "--preset",
+            name,
+            "--presets",
+            file.to_str().unwrap(),
+        ]);
+        (
+            o.status.code(),
+            String::from_utf8_lossy(&o.stderr).into_owned(),
+        )
+    };
+    let (code, err) = render("draft", &dir.path().join("none.presets.toml"));
+    assert_eq!(code, Some(1));
     assert!(
         err.contains("none.presets.toml") && err.contains("bench tradeoff"),
         "{err}"
@@ -194,16 +200,8 @@ fn missing_presets_and_unknown_names_are_clear_errors() {
         "measured_by = \"hand\"\nwidth = 8\nheight = 8\nthreads = 1\npresets = []\n",
     )
     .unwrap();
-    let o = twopass(&[
-        "render",
-        scene.to_str().unwrap(),
-        "--preset",
-        "final",
-        "--presets",
-        file.to_str().unwrap(),
-    ]);
-    assert_eq!(o.status.code(), Some(1));
-    let err = String::from_utf8_lossy(&o.stderr);
+    let (code, err) = render("final", &file);
+    assert_eq!(code, Some(1));
     assert!(
         err.contains("x.presets.toml") && err.contains("no preset `final`"),
         "{err}"

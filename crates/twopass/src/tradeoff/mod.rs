@@ -3,7 +3,7 @@
 //! Sweeps each method's knobs one at a time around a base setting (and anti-aliasing against
 //! shadow rays as a grid, since they trade against each other), renders every setting,
 //! and measures its time (radiosity solve included) and its error against a converged
-//! reference: the reference path tracer run long, cached on disk ([`reference`]).
+//! reference: the reference path tracer run long, cached on disk ([`mod@reference`]).
 //!
 //! - radiosity: element size, unshot fraction, visibility rays, adaptive subdivision on/off,
 //!   each solve rendered as radiosity alone and by the hybrids, and element size crossed with
