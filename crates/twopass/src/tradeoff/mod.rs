@@ -21,6 +21,7 @@
 pub mod front;
 mod plot;
 pub mod reference;
+mod sweep;
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -38,8 +39,9 @@ use crate::bench::{mib, peak_memory, reset_peak_memory};
 use crate::compare::methods;
 use crate::context::Context;
 use crate::error::CliError;
-use crate::preset::{Preset, PresetFile, RadiosityKnobs, RenderKnobs};
+use crate::preset::{Preset, PresetFile};
 use crate::render::{Method, integrator, load_lit};
+use sweep::{RunSpec, SolveSpec, Sweep, plan_runs};
 
 /// Arguments of `twopass bench tradeoff`.
 #[derive(Debug, Args)]
@@ -81,215 +83,6 @@ fn parse_target(s: &str) -> Result<f64, String> {
 
 /// Names of the presets, in the order of `--targets`.
 const PRESET_NAMES: [&str; 3] = ["draft", "preview", "final"];
-
-/// The knobs swept, and the base setting the others vary around.
-struct Sweep {
-    /// Image width, pixels (height from the scene camera's aspect ratio).
-    width: u32,
-    reference_spp: u32,
-    base_render: RenderKnobs,
-    /// Base radiosity setting with the element size as a divisor of the scene diagonal.
-    base_divisor: f32,
-    base_unshot: f64,
-    base_visibility: (u32, u32),
-    element_divisors: Vec<f32>,
-    unshots: Vec<f64>,
-    visibility: Vec<(u32, u32)>,
-    /// Samples per pixel crossed with shadow grids for Whitted and the hybrids.
-    spps: Vec<u32>,
-    shadow_grids: Vec<u32>,
-    depths: Vec<u32>,
-    /// Samples per pixel crossed with the element sizes for the radiosity-based methods.
-    radiosity_spps: Vec<u32>,
-    reference_spps: Vec<u32>,
-}
-
-impl Sweep {
-    fn full() -> Self {
-        Self {
-            width: 256,
-            reference_spp: 8192,
-            base_render: RenderKnobs {
-                spp: 4,
-                depth: 8,
-                shadow_grid: 2,
-            },
-            base_divisor: 24.0,
-            base_unshot: 1e-3,
-            base_visibility: (4, 16),
-            element_divisors: vec![8.0, 12.0, 16.0, 24.0, 32.0, 48.0],
-            unshots: vec![1e-1, 1e-2, 1e-3, 1e-4],
-            visibility: vec![(1, 1), (4, 16), (16, 64)],
-            spps: vec![1, 4, 16],
-            shadow_grids: vec![1, 2, 4],
-            depths: vec![1, 2, 4, 8],
-            radiosity_spps: vec![1, 4, 16, 64],
-            reference_spps: vec![1, 4, 16, 64, 256, 1024, 2048],
-        }
-    }
-
-    fn quick() -> Self {
-        Self {
-            width: 48,
-            reference_spp: 256,
-            base_render: RenderKnobs {
-                spp: 1,
-                depth: 2,
-                shadow_grid: 1,
-            },
-            base_divisor: 8.0,
-            base_unshot: 1e-2,
-            base_visibility: (1, 4),
-            element_divisors: vec![4.0, 8.0],
-            unshots: vec![1e-1, 1e-2],
-            visibility: vec![(1, 4)],
-            spps: vec![1, 2],
-            shadow_grids: vec![1],
-            depths: vec![2],
-            radiosity_spps: vec![1],
-            reference_spps: vec![1, 4],
-        }
-    }
-}
-
-/// One solve of the sweep: which knob it varies and its settings.
-struct SolveSpec {
-    knob: &'static str,
-    knobs: RadiosityKnobs,
-}
-
-/// One render of the sweep.
-struct RunSpec {
-    method: Method,
-    knob: &'static str,
-    render: RenderKnobs,
-    /// Index into the solves, for the radiosity-based methods.
-    solve: Option<usize>,
-}
-
-/// The solves and runs of a sweep for `methods`.
-fn plan_runs(sweep: &Sweep, diagonal: f32, methods: &[Method]) -> (Vec<SolveSpec>, Vec<RunSpec>) {
-    let knobs =
-        |divisor: f32, unshot: f64, (vmin, vmax): (u32, u32), adaptive: bool| RadiosityKnobs {
-            element_size: diagonal / divisor,
-            unshot,
-            visibility_min: vmin,
-            visibility_max: vmax,
-            adaptive,
-        };
-    let base = knobs(
-        sweep.base_divisor,
-        sweep.base_unshot,
-        sweep.base_visibility,
-        true,
-    );
-    let mut solves = vec![SolveSpec {
-        knob: "base",
-        knobs: base,
-    }];
-    let mut add = |knob: &'static str, k: RadiosityKnobs| {
-        if !solves.iter().any(|s| s.knobs == k) {
-            solves.push(SolveSpec { knob, knobs: k });
-        }
-    };
-    for &d in &sweep.element_divisors {
-        add(
-            "element-size",
-            knobs(d, sweep.base_unshot, sweep.base_visibility, true),
-        );
-    }
-    for &u in &sweep.unshots {
-        add(
-            "unshot",
-            knobs(sweep.base_divisor, u, sweep.base_visibility, true),
-        );
-    }
-    for &v in &sweep.visibility {
-        add(
-            "visibility-rays",
-            knobs(sweep.base_divisor, sweep.base_unshot, v, true),
-        );
-    }
-    add(
-        "adaptive",
-        knobs(
-            sweep.base_divisor,
-            sweep.base_unshot,
-            sweep.base_visibility,
-            false,
-        ),
-    );
-    if !methods.iter().any(|m| m.needs_radiosity()) {
-        solves.clear();
-    }
-
-    let base_render = sweep.base_render;
-    let mut runs = Vec::new();
-    for &method in methods {
-        let mut push = |knob: &'static str, render: RenderKnobs, solve: Option<usize>| {
-            let dup = runs
-                .iter()
-                .any(|r: &RunSpec| r.method == method && r.render == render && r.solve == solve);
-            if !dup {
-                runs.push(RunSpec {
-                    method,
-                    knob,
-                    render,
-                    solve,
-                });
-            }
-        };
-        if method == Method::Reference {
-            for &spp in &sweep.reference_spps {
-                push("spp", RenderKnobs { spp, ..base_render }, None);
-            }
-            continue;
-        }
-        if method.needs_radiosity() {
-            // Every solve at the base render, then the two knobs that dominate the error
-            // (element size and samples per pixel) crossed.
-            for (i, s) in solves.iter().enumerate() {
-                push(s.knob, base_render, Some(i));
-            }
-            for (i, s) in solves.iter().enumerate() {
-                if matches!(s.knob, "base" | "element-size") {
-                    for &spp in &sweep.radiosity_spps {
-                        let render = RenderKnobs { spp, ..base_render };
-                        push("element-size-spp", render, Some(i));
-                    }
-                }
-            }
-            if method == Method::Radiosity {
-                continue; // no shadow rays, no recursion: nothing else to vary
-            }
-        }
-        // Whitted and the hybrids (on the base solve): anti-aliasing against shadow rays, and
-        // the recursion depth.
-        let solve = method.needs_radiosity().then_some(0);
-        push("base", base_render, solve);
-        for &spp in &sweep.spps {
-            for &shadow_grid in &sweep.shadow_grids {
-                let render = RenderKnobs {
-                    spp,
-                    shadow_grid,
-                    ..base_render
-                };
-                push("spp-shadow-grid", render, solve);
-            }
-        }
-        for &depth in &sweep.depths {
-            push(
-                "depth",
-                RenderKnobs {
-                    depth,
-                    ..base_render
-                },
-                solve,
-            );
-        }
-    }
-    (solves, runs)
-}
 
 /// A finished solve.
 struct Solved {
