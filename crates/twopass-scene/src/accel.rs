@@ -360,6 +360,17 @@ impl PacketRay {
     }
 }
 
+/// Takes the leaf's whole primitive group from the traversal (so it is tested at once, four
+/// triangles at a time) and calls `f(packet, lanes)` for every packet holding one of its
+/// slots, until `f` returns `true`.
+#[inline(always)]
+fn for_each_leaf_packet(state: &mut Traversal, f: impl FnMut(usize, u32) -> bool) {
+    let group = state.primitive_group;
+    let bits = group.y | (1 << (state.primitive_id - group.x));
+    state.primitive_group.y = 0;
+    for_each_packet(group.x, bits, f);
+}
+
 /// Calls `f(packet, lanes)` for every packet holding a slot of the primitive group
 /// (`base`, `bits`): bit `i` of `bits` is slot `base + i`.
 #[inline(always)]
@@ -701,11 +712,7 @@ impl Accel {
             state,
             node.intersect(&ray, t_max, state.oct_inv4),
             {
-                // Test the node's whole primitive group at once, four triangles at a time.
-                let group = state.primitive_group;
-                let bits = group.y | (1 << (state.primitive_id - group.x));
-                state.primitive_group.y = 0;
-                for_each_packet(group.x, bits, |p, lanes| {
+                for_each_leaf_packet(&mut state, |p, lanes| {
                     let hits = sheared.intersect(&self.packets[p], lanes, t_max);
                     if hits.mask != 0 {
                         let lane = hits.nearest();
@@ -743,10 +750,7 @@ impl Accel {
                 state,
                 node.intersect(&ray, t_max, state.oct_inv4),
                 {
-                    let group = state.primitive_group;
-                    let bits = group.y | (1 << (state.primitive_id - group.x));
-                    state.primitive_group.y = 0;
-                    for_each_packet(group.x, bits, |p, lanes| {
+                    for_each_leaf_packet(&mut state, |p, lanes| {
                         hit = sheared.intersect(&self.packets[p], lanes, t_max).mask != 0;
                         hit
                     });
