@@ -5,7 +5,7 @@ use std::ops::ControlFlow;
 use std::path::Path;
 
 use glam::DVec3;
-use twopass_radiosity::{Adaptive, Options, SolveError, Solver, Stop, dense_solve};
+use twopass_radiosity::{Adaptive, Options, SolveError, Progressive, Stop, dense_solve};
 use twopass_scene::{DiffuseRadiance, Scene, load, load_toml};
 
 use crate::scene_path;
@@ -35,7 +35,7 @@ fn lambert(name: &str, rho: f64) -> String {
     format!("[[material]]\nname = \"{name}\"\ntype = \"lambert\"\ndiffuse = {rho}\n")
 }
 
-fn run(solver: &mut Solver<'_>) {
+fn run(solver: &mut Progressive<'_>) {
     solver.run(|_| ControlFlow::Continue(()));
     let p = solver.progress();
     assert!(
@@ -46,7 +46,7 @@ fn run(solver: &mut Solver<'_>) {
 }
 
 /// Area-weighted form factor from every patch of object `from` to all patches of object `to`.
-fn object_form_factor(solver: &mut Solver<'_>, from: u32, to: u32) -> f64 {
+fn object_form_factor(solver: &mut Progressive<'_>, from: u32, to: u32) -> f64 {
     let rows = solver.form_factor_rows();
     let weights = solver.patch_weights();
     let areas = solver.patch_areas();
@@ -99,7 +99,7 @@ fn parallel_and_perpendicular_squares_match_siegel_and_howell() {
     );
     let mut coarse = f64::NAN;
     for (k, element) in [None, Some(0.02)].into_iter().enumerate() {
-        let mut solver = Solver::new(
+        let mut solver = Progressive::new(
             &s,
             Options {
                 element_size: element,
@@ -143,7 +143,7 @@ fn parallel_and_perpendicular_squares_match_siegel_and_howell() {
         )),
         &m,
     );
-    let mut solver = Solver::new(&s, Options::default()).unwrap();
+    let mut solver = Progressive::new(&s, Options::default()).unwrap();
     let f = object_form_factor(&mut solver, 1, 0);
     assert!(
         (f - 0.200044).abs() < 5e-3 * 0.200044,
@@ -176,7 +176,7 @@ fn cube(rho: f64, emission: f64) -> Scene {
 #[test]
 fn closed_cube_rows_sum_to_one() {
     let s = cube(0.5, 1.0);
-    let mut solver = Solver::new(&s, Options::default()).unwrap();
+    let mut solver = Progressive::new(&s, Options::default()).unwrap();
     let r = solver.residuals(10_000);
     assert!(
         (r.row_sum_min - 1.0).abs() < 5e-3 && (r.row_sum_max - 1.0).abs() < 5e-3,
@@ -198,7 +198,7 @@ fn furnace_converges_to_e_over_one_minus_rho() {
             },
             ..Options::default()
         };
-        let mut solver = Solver::new(&s, options).unwrap();
+        let mut solver = Progressive::new(&s, options).unwrap();
         run(&mut solver);
         let expected = std::f64::consts::PI / (1.0 - rho); // E = pi L_e with L_e = 1
         for (v, b) in solver.vertex_radiosity().iter().enumerate() {
@@ -231,7 +231,7 @@ fn ambient_term_makes_partial_solutions_plausible() {
         },
         ..Options::default()
     };
-    let mut solver = Solver::new(&s, options).unwrap();
+    let mut solver = Progressive::new(&s, options).unwrap();
     run(&mut solver);
     let expected = std::f32::consts::PI / 0.1;
     let sol = solver.solution();
@@ -279,7 +279,7 @@ fn relative_rms(a: &[DVec3], b: &[DVec3]) -> f64 {
 fn progressive_refinement_converges_to_the_dense_solve() {
     let (s, _) = load(scene_path("cornell-box.toml")).unwrap();
     for (unshot, bound) in [(1e-3, 1e-2), (1e-6, 1e-3)] {
-        let mut solver = Solver::new(&s, cornell_options(unshot)).unwrap();
+        let mut solver = Progressive::new(&s, cornell_options(unshot)).unwrap();
         run(&mut solver);
         assert!(solver.progress().unshot_fraction <= unshot);
         let dense = dense_solve(&mut solver).expect("small enough for the dense solve");
@@ -297,7 +297,7 @@ fn same_seed_same_solution_on_one_or_two_threads() {
             .build()
             .unwrap();
         pool.install(|| {
-            let mut solver = Solver::new(&s, cornell_options(1e-2)).unwrap();
+            let mut solver = Progressive::new(&s, cornell_options(1e-2)).unwrap();
             run(&mut solver);
             solver.vertex_radiosity()
         })
@@ -313,7 +313,7 @@ fn same_seed_same_solution_on_one_or_two_threads() {
 #[test]
 fn cornell_box_lookup_is_continuous_and_finite() {
     let (s, _) = load(scene_path("cornell-box.toml")).unwrap();
-    let mut solver = Solver::new(&s, cornell_options(1e-2)).unwrap();
+    let mut solver = Progressive::new(&s, cornell_options(1e-2)).unwrap();
     run(&mut solver);
     let sol = solver.solution();
     // Walk across the floor's first triangle: no jumps bigger than the gradient allows.
@@ -371,7 +371,7 @@ fn emitters_from_1e_minus_6_to_1e6_scale_linearly() {
             )),
             &lambert("w", 0.7),
         );
-        let mut solver = Solver::new(
+        let mut solver = Progressive::new(
             &s,
             Options {
                 stop: Stop {
@@ -422,7 +422,7 @@ fn receiver_a_micron_from_the_shooter_stays_bounded() {
         )),
         &lambert("w", 0.5),
     );
-    let mut solver = Solver::new(
+    let mut solver = Progressive::new(
         &s,
         Options {
             adaptive: None,
@@ -463,7 +463,7 @@ fn coplanar_touching_patches_exchange_nothing() {
         )),
         &lambert("w", 0.5),
     );
-    let mut solver = Solver::new(&s, Options::default()).unwrap();
+    let mut solver = Progressive::new(&s, Options::default()).unwrap();
     run(&mut solver);
     let sol = solver.solution();
     for t in s.objects[1].triangles.clone() {
@@ -505,7 +505,7 @@ fn elements_of_very_different_sizes_side_by_side() {
         )),
         &lambert("w", 0.5),
     );
-    let mut solver = Solver::new(&s, Options::default()).unwrap();
+    let mut solver = Progressive::new(&s, Options::default()).unwrap();
     run(&mut solver);
     let sol = solver.solution();
     // The tiny quad sits below the light's corner: one bounce gives L = rho F E / pi with the
@@ -533,7 +533,7 @@ fn one_triangle_and_no_emitter() {
                 [[material]]\nname = \"w\"\ntype = \"lambert\"\ndiffuse = 0.5\n\
                 [[object]]\nname = \"t\"\nmaterial = \"w\"\nemission = 2\nshape = { type = \"polygon\", vertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0]] }\n";
     let (s, _) = load_toml(text, Path::new("one.toml")).unwrap();
-    let mut solver = Solver::new(&s, Options::default()).unwrap();
+    let mut solver = Progressive::new(&s, Options::default()).unwrap();
     run(&mut solver);
     let e = solver.progress().energy;
     assert!(
@@ -549,7 +549,7 @@ fn one_triangle_and_no_emitter() {
     let dark = text.replace("emission = 2\n", "");
     let (s, _) = load_toml(&dark, Path::new("dark.toml")).unwrap();
     assert_eq!(
-        Solver::new(&s, Options::default()).err(),
+        Progressive::new(&s, Options::default()).err(),
         Some(SolveError::NoEmitters)
     );
 }
@@ -557,7 +557,7 @@ fn one_triangle_and_no_emitter() {
 #[test]
 fn cancelled_solves_give_usable_intermediate_solutions() {
     let (s, _) = load(scene_path("cornell-box.toml")).unwrap();
-    let mut solver = Solver::new(&s, cornell_options(1e-6)).unwrap();
+    let mut solver = Progressive::new(&s, cornell_options(1e-6)).unwrap();
     let mut taken = None;
     let finish = solver.run(|solver| {
         if solver.progress().shots == 20 {

@@ -5,7 +5,7 @@
 
 use std::ops::ControlFlow;
 
-use twopass_radiosity::{Options, Solver, Stop, dense_solve};
+use twopass_radiosity::{Options, Progressive, Stop, dense_solve};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
@@ -21,7 +21,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         },
         ..Options::default()
     };
-    let mut solver = Solver::new(&scene, options)?;
+    let mut solver = Progressive::new(&scene, options)?;
     let start = solver.progress();
     println!(
         "{} patches, {} elements, {} vertices",

@@ -48,7 +48,7 @@ use twopass_brdf::Rgb;
 use twopass_scene::Scene;
 
 use crate::element::{ElementMesh, Node, Vertex};
-use crate::progressive::{Finish, Options, Progress, Residuals};
+use crate::solver::{Finish, Options, Progress, Residuals};
 use crate::solution::Solution;
 
 /// Version of the bake file layout written by [`encode_bake`]; readers refuse other versions.

@@ -443,7 +443,7 @@ impl ElementMesh {
 }
 
 /// Barycentric weights of `p` in the 2-D triangle `t`.
-fn barycentric_2d(t: [Vec2; 3], p: Vec2) -> [f32; 3] {
+pub(crate) fn barycentric_2d(t: [Vec2; 3], p: Vec2) -> [f32; 3] {
     let (a, b, c) = (t[0].as_dvec2(), t[1].as_dvec2(), t[2].as_dvec2());
     let p = p.as_dvec2();
     let det = (b - a).perp_dot(c - a);

@@ -11,6 +11,12 @@ use twopass_scene::{Scene, SurfacePoint};
 /// about 20 f32 ulps, the rounding of vertices computed in f32.
 const PLANE_TOLERANCE: f64 = 1e-6;
 
+/// Fraction of the way from a receiving vertex toward its element's (or triangle's) centroid
+/// at which it receives: a vertex on a junction lies in the plane of the surface it meets,
+/// which it would see edge-on (F = 0); from just inside its own surface it gets the limit the
+/// form factor converges to.
+pub(crate) const RECEIVER_INSET: f64 = 1e-5;
+
 /// The unoccluded form factor from a differential area at `x` with unit normal `n` to the
 /// polygon `poly` (vertices in order, any winding), seen from the front of the polygon only
 /// when `shooter_normal` is given (one-sided: zero when `x` is behind it).

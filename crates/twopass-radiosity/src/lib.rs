@@ -1,8 +1,13 @@
-//! The view-independent pass of twopass: progressive-refinement radiosity (Cohen, Chen, Wallace
-//! & Greenberg 1988) with exact differential-area-to-polygon form factors and ray-traced
-//! visibility at the receiving vertices (Wallace, Elmquist & Haines 1989), patch/element
-//! substructuring with conforming adaptive subdivision (Cohen et al. 1986), the ambient term
-//! for partial solutions, power bookkeeping at every step, and a dense reference solve.
+//! The view-independent pass of twopass, with two solvers behind one interface ([`Solver`]):
+//! - progressive-refinement radiosity (Cohen, Chen, Wallace & Greenberg 1988) with exact
+//!   differential-area-to-polygon form factors and ray-traced visibility at the receiving
+//!   vertices (Wallace, Elmquist & Haines 1989), patch/element substructuring with conforming
+//!   adaptive subdivision (Cohen et al. 1986) and a dense reference solve ([`Progressive`]);
+//! - hierarchical radiosity with clustering (Hanrahan, Salzman & Aupperle 1991; Smits, Arvo &
+//!   Greenberg 1994; Sillion 1994) for large scenes ([`HierarchicalSolver`]).
+//!
+//! Both keep the ambient term for partial solutions and power bookkeeping, and stop on one
+//! convergence measure: the residual (unshot) power as a fraction of the emitted power.
 //!
 //! Units: radiosity B and irradiance in W/m^2 per RGB channel with areas in the scene's units,
 //! radiance L = B / pi in W/(m^2 sr). Emitters are one-sided with exitance E = pi L_e.
@@ -12,8 +17,8 @@
 //! use twopass_scene::DiffuseRadiance;
 //! let (scene, _) = twopass_scene::load("scenes/cornell-box.toml")?;
 //! let mut solver = Solver::new(&scene, Options::default())?;
-//! let finish = solver.run(|solver| {
-//!     eprintln!("unshot {:.2e}", solver.progress().unshot_fraction);
+//! let finish = solver.run(|progress| {
+//!     eprintln!("residual {:.2e}", progress.unshot_fraction);
 //!     std::ops::ControlFlow::Continue(())
 //! });
 //! let solution = solver.solution();
@@ -23,15 +28,21 @@
 //! ```
 
 pub mod bake;
+pub mod cluster;
 mod direct;
 pub mod element;
 pub mod form_factor;
+mod hierarchical;
 mod progressive;
 mod solution;
+mod solver;
 
 pub use direct::{MAX_DENSE_VERTICES, dense_solve};
 pub use form_factor::VisibilityRays;
-pub use progressive::{
-    Adaptive, Energy, Finish, Options, Progress, Residuals, SolveError, Solver, Stop,
+pub use hierarchical::HierarchicalSolver;
+pub use progressive::Progressive;
+pub use solver::{
+    Adaptive, Energy, Finish, Hierarchical, Method, Options, Progress, Residuals, SolveError,
+    Solver, Stop,
 };
 pub use solution::Solution;

@@ -10,223 +10,13 @@ use twopass_brdf::Rgb;
 use twopass_scene::{Scene, SurfacePoint};
 
 use crate::element::ElementMesh;
-use crate::form_factor::{self, VisibilityRays, hash};
+use crate::form_factor::{self, RECEIVER_INSET, hash};
 use crate::solution::Solution;
-
-/// When the solver stops. The first criterion met ends the solve.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Stop {
-    /// Unshot power as a fraction of the emitted power (sum over channels), default 1e-3.
-    pub unshot_fraction: f64,
-    /// Most shots in all, if set.
-    pub max_shots: Option<u64>,
-    /// Wall-clock budget, if set.
-    pub time_budget: Option<Duration>,
-}
-
-impl Default for Stop {
-    fn default() -> Self {
-        Self {
-            unshot_fraction: 1e-3,
-            max_shots: None,
-            time_budget: None,
-        }
-    }
-}
-
-/// Adaptive subdivision of elements where the radiosity changes fast.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Adaptive {
-    /// Split an element when its vertices' luminances differ by more than this fraction of
-    /// the scene's mean luminance.
-    pub threshold: f32,
-    /// Never split an element whose longest edge is shorter than twice this (scene units);
-    /// `None`: an eighth of the element size.
-    pub min_element_size: Option<f32>,
-    /// Refinement rounds, each followed by shooting down to `at_unshot_fraction`.
-    pub rounds: u32,
-    /// Unshot fraction at which each round looks at the solution.
-    pub at_unshot_fraction: f64,
-}
-
-impl Default for Adaptive {
-    fn default() -> Self {
-        Self {
-            threshold: 0.2,
-            min_element_size: None,
-            rounds: 3,
-            at_unshot_fraction: 1e-2,
-        }
-    }
-}
-
-/// Everything the solver can be told. Defaults suit the Cornell box; sizes default to
-/// fractions of the scene's bounding-box diagonal.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Options {
-    /// Longest patch edge (shooters), scene units; default diagonal / 8.
-    pub patch_size: Option<f32>,
-    /// Longest element edge (receivers) before adaptive subdivision; default diagonal / 24.
-    pub element_size: Option<f32>,
-    /// Adaptive subdivision, or `None` for a fixed mesh.
-    pub adaptive: Option<Adaptive>,
-    /// Shadow rays per visibility estimate.
-    pub visibility: VisibilityRays,
-    /// Measure visibility with shadow rays; `false` treats every pair as unoccluded (exact only
-    /// for scenes where no surface hides another, such as one convex room).
-    pub occlusion: bool,
-    /// Stop criteria.
-    pub stop: Stop,
-    /// Seed of the visibility sampling.
-    pub seed: u64,
-    /// Memory allowed for cached vertex-to-patch form factors, bytes (default 1 GiB).
-    pub cache_bytes: usize,
-}
-
-impl Default for Options {
-    fn default() -> Self {
-        Self {
-            patch_size: None,
-            element_size: None,
-            adaptive: Some(Adaptive::default()),
-            visibility: VisibilityRays::default(),
-            occlusion: true,
-            stop: Stop::default(),
-            seed: 0,
-            cache_bytes: 1 << 30,
-        }
-    }
-}
-
-/// Why a solve cannot start.
-#[derive(Debug, Clone, PartialEq, Eq)]
-#[non_exhaustive]
-pub enum SolveError {
-    /// Nothing in the scene emits light: there is nothing to solve.
-    NoEmitters,
-    /// No surface reflects diffusely or emits: radiosity has nothing to compute.
-    NothingTakesPart,
-    /// An option is out of range.
-    Option {
-        /// The option's name.
-        name: &'static str,
-        /// Why.
-        problem: String,
-    },
-}
-
-impl std::fmt::Display for SolveError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Self::NoEmitters => write!(
-                f,
-                "nothing in the scene emits light, so there is no radiosity to solve"
-            ),
-            Self::NothingTakesPart => write!(
-                f,
-                "no surface reflects diffusely or emits, so radiosity has nothing to compute"
-            ),
-            Self::Option { name, problem } => write!(f, "radiosity option `{name}`: {problem}"),
-        }
-    }
-}
-
-impl std::error::Error for SolveError {}
-
-/// Power bookkeeping, W per channel (scene units): emitted = absorbed + escaped + unshot +
-/// remeshing, exactly up to rounding.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Energy {
-    /// Total emitted power.
-    pub emitted: DVec3,
-    /// Absorbed by surfaces (the (1 - rho) part of what arrived).
-    pub absorbed: DVec3,
-    /// Shot but not received by any element: left through openings, or the discretization
-    /// error of the vertex form factors (can then be slightly negative).
-    pub escaped: DVec3,
-    /// Received and reflected but not shot yet.
-    pub unshot: DVec3,
-    /// Change of the unshot estimate when adaptive subdivision re-estimated patch radiosities.
-    pub remeshing: DVec3,
-}
-
-impl Energy {
-    /// Largest relative imbalance over the channels, |emitted - (sum of the rest)| / emitted.
-    pub fn imbalance(&self) -> f64 {
-        let rest = self.absorbed + self.escaped + self.unshot + self.remeshing;
-        let d = (self.emitted - rest).abs();
-        let e = self.emitted.max(DVec3::splat(f64::MIN_POSITIVE));
-        (d / e).max_element()
-    }
-}
-
-/// Where a solve stands.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Progress {
-    /// Shots so far.
-    pub shots: u64,
-    /// Unshot power / emitted power (sums over channels).
-    pub unshot_fraction: f64,
-    /// Shadow rays cast so far.
-    pub rays: u64,
-    /// Elements (leaves) now.
-    pub elements: usize,
-    /// Vertices now.
-    pub vertices: usize,
-    /// Patches (shooters).
-    pub patches: usize,
-    /// Adaptive rounds done.
-    pub refinement_rounds: u32,
-    /// Wall-clock time since the solver was created.
-    pub elapsed: Duration,
-    /// Time spent building the patch and element mesh.
-    pub meshing: Duration,
-    /// Time spent in adaptive subdivision (including the new vertices' gathering).
-    pub refining: Duration,
-    /// Power bookkeeping.
-    pub energy: Energy,
-    /// Largest energy imbalance seen after any step.
-    pub worst_imbalance: f64,
-}
-
-/// Consistency figures of a solve (see [`Solver::residuals`]).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Residuals {
-    /// Largest relative energy imbalance seen after any shot.
-    pub energy_imbalance: f64,
-    /// Smallest sampled vertex form-factor row sum.
-    pub row_sum_min: f64,
-    /// Mean sampled row sum.
-    pub row_sum_mean: f64,
-    /// Largest sampled row sum.
-    pub row_sum_max: f64,
-    /// Patch pairs with a non-zero form factor among those sampled.
-    pub reciprocity_pairs: usize,
-    /// Largest |A_p F_pq - A_q F_qp| / max of the two over the sampled pairs. Large for pairs
-    /// seen through small gaps, where a few vertices and shadow rays sample visibility.
-    pub reciprocity_spread: f64,
-    /// The same, weighted: sum of |A_p F_pq - A_q F_qp| over sum of the larger of the two.
-    pub reciprocity_mean: f64,
-}
-
-/// Why [`Solver::run`] returned.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Finish {
-    /// The unshot fraction fell below the threshold.
-    Converged,
-    /// The shot limit was reached.
-    MaxShots,
-    /// The time budget ran out.
-    TimeBudget,
-    /// The observer asked to stop.
-    Cancelled,
-    /// No patch had unshot power left.
-    Exhausted,
-}
+use crate::solver::{luminance, Adaptive, Energy, Finish, Options, Progress, Residuals, SolveError};
 
 /// A progressive-refinement radiosity solve over a scene. Deterministic: the same options and
 /// seed give the same solution bit for bit on any number of threads.
-pub struct Solver<'s> {
+pub struct Progressive<'s> {
     scene: &'s Scene,
     options: Options,
     mesh: ElementMesh,
@@ -260,14 +50,12 @@ pub struct Solver<'s> {
     refining: Duration,
 }
 
-/// Fraction of the way from a vertex toward its triangle's centroid at which it receives.
-const RECEIVER_INSET: f64 = 1e-5;
 
 fn rgb(v: Rgb) -> DVec3 {
     v.as_dvec3()
 }
 
-impl<'s> Solver<'s> {
+impl<'s> Progressive<'s> {
     /// Meshes the scene into patches and elements and sets up the emitters' unshot power.
     /// Only objects that reflect diffusely or emit take part; others still cast shadows.
     pub fn new(scene: &'s Scene, options: Options) -> Result<Self, SolveError> {
@@ -547,7 +335,11 @@ impl<'s> Solver<'s> {
     /// Where the solve stands.
     pub fn progress(&self) -> Progress {
         Progress {
+            method: crate::solver::Method::Progressive,
             shots: self.shots,
+            iterations: 0,
+            links: 0,
+            clusters: 0,
             unshot_fraction: self.unshot_fraction(),
             rays: self.rays,
             elements: self.patch_leaves.iter().map(Vec::len).sum(),
@@ -579,7 +371,7 @@ impl<'s> Solver<'s> {
     }
 
     fn refine_round(&mut self, adaptive: &Adaptive) -> usize {
-        let lum = |c: DVec3| 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z;
+        let lum = luminance;
         let (mut total, mut area) = (0.0, 0.0);
         let leaves: Vec<u32> = self.mesh.leaves().collect();
         for &l in &leaves {

@@ -15,7 +15,9 @@ use std::time::{Duration, Instant};
 
 use clap::{Args, ValueEnum};
 use twopass_radiosity::bake::{self, ColorMapping, ColorRecord, FileRecord, Manifest};
-use twopass_radiosity::{Adaptive, Finish, Options, Solver, Stop, VisibilityRays};
+use twopass_radiosity::{
+    Adaptive, Finish, Hierarchical, Method, Options, Solver, Stop, VisibilityRays,
+};
 
 use crate::context::Context;
 use crate::error::CliError;
@@ -74,13 +76,43 @@ pub struct BakeArgs {
     pub residual_samples: usize,
 }
 
+/// A radiosity solver, as the command line names it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum SolverChoice {
+    /// Progressive refinement: exact vertex form factors, cost grows as shooters x receivers.
+    Progressive,
+    /// Hierarchical radiosity with clustering: cost grows about linearly with the scene.
+    Hierarchical,
+    /// Hierarchical above a few thousand participating triangles, progressive below.
+    Auto,
+}
+
+impl SolverChoice {
+    /// The library's method.
+    pub fn method(self) -> Method {
+        match self {
+            Self::Progressive => Method::Progressive,
+            Self::Hierarchical => Method::Hierarchical,
+            Self::Auto => Method::Auto,
+        }
+    }
+}
+
 /// The radiosity solver's settings, shared by every command that solves.
 #[derive(Debug, Clone, Args)]
 pub struct SolveArgs {
-    /// Stop when the unshot power falls below this fraction of the emitted power.
+    /// The radiosity solver [default: auto, by the scene's size; `twopass info` says which].
+    #[arg(long, value_enum, default_value = "auto")]
+    pub solver: SolverChoice,
+    /// Stop when the residual (unshot) power falls below this fraction of the emitted power:
+    /// the convergence measure of both solvers.
     #[arg(long, default_value_t = 1e-3, value_name = "FRACTION")]
     pub unshot: f64,
-    /// Stop after this many shots.
+    /// Hierarchical solver: refine a link while its estimated transport error exceeds this
+    /// fraction of the emitted power.
+    #[arg(long, default_value_t = Hierarchical::default().link_tolerance, value_name = "FRACTION")]
+    pub link_tolerance: f64,
+    /// Stop after this many shots (progressive) or gather iterations (hierarchical).
     #[arg(long, value_name = "N")]
     pub max_shots: Option<u64>,
     /// Stop after this much wall-clock time, seconds (the result is usable but not
@@ -108,6 +140,8 @@ impl SolveArgs {
     /// limits) at their defaults.
     pub fn from_knobs(k: &RadiosityKnobs) -> Self {
         Self {
+            solver: SolverChoice::Auto,
+            link_tolerance: Hierarchical::default().link_tolerance,
             unshot: k.unshot,
             max_shots: None,
             time_budget: None,
@@ -134,6 +168,12 @@ impl SolveArgs {
                 time_budget: self.time_budget,
             },
             seed,
+            method: self.solver.method(),
+            hierarchical: Hierarchical {
+                link_tolerance: self.link_tolerance,
+                ..Hierarchical::default()
+            },
+            memory_limit: crate::context::memory_limit(),
             ..Options::default()
         }
     }
@@ -141,10 +181,9 @@ impl SolveArgs {
     /// Runs `solver` to its stop criteria with a progress bar over the unshot fraction.
     pub fn run(&self, solver: &mut Solver<'_>, ctx: &Context) -> Finish {
         let bar = ctx.progress(STEPS, "radiosity");
-        let finish = solver.run(|s| {
-            let p = s.progress();
+        let finish = solver.run(|p| {
             bar.set_position(bar_position(p.unshot_fraction, self.unshot));
-            bar.set_message(format!("unshot {:.1e}", p.unshot_fraction));
+            bar.set_message(format!("residual {:.1e}", p.unshot_fraction));
             ControlFlow::Continue(())
         });
         bar.finish_and_clear();

@@ -18,8 +18,10 @@ pub enum BenchCommand {
     /// Ray queries per second (camera, incoherent, occlusion) on one and on all threads, and
     /// the BVH build time.
     Rays(RaysArgs),
-    /// Radiosity solves at several element counts: time, shots, rays, peak memory, and the
-    /// error against the dense solve where it fits.
+    /// Radiosity solves at several element counts (progressive refinement): time, shots,
+    /// rays, peak memory, and the error against the dense solve where it fits; or, with
+    /// `--generate`, solves of generated scenes of growing size (by default with the
+    /// hierarchical solver): time, links, rays, peak memory and their growth exponents.
     Radiosity(RadiosityArgs),
     /// Render time and rays per second of every method, and frames per second of new views
     /// rendered from a bake file (radiosity alone).
@@ -48,8 +50,21 @@ pub struct RenderArgs {
 /// Arguments of `twopass bench radiosity`.
 #[derive(Debug, Args)]
 pub struct RadiosityArgs {
-    /// Scene file (.toml or .obj).
-    pub scene: PathBuf,
+    /// Scene file (.toml or .obj); omit it with `--generate`.
+    #[arg(required_unless_present = "generate")]
+    pub scene: Option<PathBuf>,
+    /// Instead of a file, generate scenes of about these many triangles (the Cornell room
+    /// filled with icospheres, as `bench rays --generate`) and solve each.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        conflicts_with = "scene",
+        value_parser = clap::value_parser!(u64).range(1..=20_000_000)
+    )]
+    pub generate: Vec<u64>,
+    /// The solver of the `--generate` runs.
+    #[arg(long, value_enum, default_value = "hierarchical")]
+    pub solver: crate::bake::SolverChoice,
     /// Element counts to aim at (the mesh reaches about these by bisection).
     #[arg(long, value_delimiter = ',', default_values_t = [1000u32, 10_000, 50_000, 200_000])]
     pub elements: Vec<u32>,
@@ -168,9 +183,152 @@ struct SolveRow {
     dense_seconds: Option<f64>,
 }
 
+/// One measured solve of a generated scene.
+#[derive(Debug, Serialize)]
+struct ScaleRow {
+    /// Triangles asked for and made.
+    requested: u64,
+    triangles: usize,
+    solver: &'static str,
+    /// Why the solve stopped.
+    finish: String,
+    elements: usize,
+    vertices: usize,
+    links: usize,
+    clusters: usize,
+    shots: u64,
+    iterations: u64,
+    rays: u64,
+    /// Scene generation and loading, seconds.
+    load_seconds: f64,
+    /// The whole solve, seconds (meshing and link refinement included).
+    seconds: f64,
+    refining_seconds: f64,
+    /// The convergence measure at the end: residual power / emitted power.
+    residual: f64,
+    energy_imbalance: f64,
+    peak_memory_mib: Option<f64>,
+    /// log(time ratio) / log(triangle ratio) against the previous row.
+    time_growth: Option<f64>,
+    /// The same for peak memory.
+    memory_growth: Option<f64>,
+}
+
+fn radiosity_scale(args: &RadiosityArgs, ctx: &Context) -> Result<(), CliError> {
+    use twopass_radiosity::{Options, Solver, Stop};
+    let progress = ctx.progress(args.generate.len() as u64, "bench radiosity");
+    let mut rows: Vec<ScaleRow> = Vec::new();
+    for &n in &args.generate {
+        reset_peak_memory();
+        let started = Instant::now();
+        let (scene, _) = workload::synthetic_scene(n as usize, ctx.seed)?;
+        let load_seconds = started.elapsed().as_secs_f64();
+        let options = Options {
+            method: args.solver.method(),
+            stop: Stop {
+                unshot_fraction: args.unshot,
+                ..Stop::default()
+            },
+            seed: ctx.seed,
+            memory_limit: crate::context::memory_limit(),
+            ..Options::default()
+        };
+        let start = Instant::now();
+        let mut solver = Solver::new(&scene, options).map_err(|source| CliError::Solve {
+            path: PathBuf::from(format!("generated-{n}")),
+            source,
+        })?;
+        let finish = solver.run(|_| std::ops::ControlFlow::Continue(()));
+        let seconds = start.elapsed().as_secs_f64();
+        let p = solver.progress();
+        let peak = mib(peak_memory());
+        let growth = |now: f64, before: f64, prev: &ScaleRow| {
+            (now / before).ln() / (scene.mesh.triangles.len() as f64 / prev.triangles as f64).ln()
+        };
+        let time_growth = rows.last().map(|r| growth(seconds, r.seconds, r));
+        let memory_growth = rows.last().and_then(|r| {
+            Some(growth(peak?, r.peak_memory_mib?, r))
+        });
+        rows.push(ScaleRow {
+            requested: n,
+            triangles: scene.mesh.triangles.len(),
+            solver: p.method.name(),
+            finish: format!("{finish:?}"),
+            elements: p.elements,
+            vertices: p.vertices,
+            links: p.links,
+            clusters: p.clusters,
+            shots: p.shots,
+            iterations: p.iterations,
+            rays: p.rays,
+            load_seconds,
+            seconds,
+            refining_seconds: p.refining.as_secs_f64(),
+            residual: p.unshot_fraction,
+            energy_imbalance: p.worst_imbalance,
+            peak_memory_mib: peak,
+            time_growth,
+            memory_growth,
+        });
+        progress.inc(1);
+    }
+    progress.finish_and_clear();
+    if ctx.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&rows).expect("rows serialize")
+        );
+    } else if !ctx.quiet {
+        println!(
+            "generated scenes: solve to residual {:.0e}, {} threads",
+            args.unshot,
+            rayon::current_num_threads()
+        );
+        println!(
+            "{:>9} {:>12} {:>9} {:>9} {:>10} {:>6} {:>10} {:>8} {:>8} {:>9} {:>9} {:>6} {:>6}",
+            "triangles",
+            "solver",
+            "elements",
+            "vertices",
+            "links",
+            "iters",
+            "rays",
+            "seconds",
+            "refining",
+            "residual",
+            "peak MiB",
+            "t-grow",
+            "m-grow"
+        );
+        let g = |x: Option<f64>| x.map_or_else(|| "-".to_owned(), |g| format!("{g:.2}"));
+        for r in &rows {
+            println!(
+                "{:>9} {:>12} {:>9} {:>9} {:>10} {:>6} {:>10} {:>8.2} {:>8.2} {:>9.1e} {:>9} {:>6} {:>6}",
+                r.triangles,
+                r.solver,
+                r.elements,
+                r.vertices,
+                r.links,
+                r.iterations.max(r.shots),
+                r.rays,
+                r.seconds,
+                r.refining_seconds,
+                r.residual,
+                fmt_mib(r.peak_memory_mib),
+                g(r.time_growth),
+                g(r.memory_growth)
+            );
+        }
+    }
+    Ok(())
+}
+
 fn radiosity(args: &RadiosityArgs, ctx: &Context) -> Result<(), CliError> {
-    use twopass_radiosity::{Options, Solver, Stop, dense_solve};
-    let (scene, _) = twopass_scene::load(&args.scene)?;
+    use twopass_radiosity::{Options, Progressive, Stop, dense_solve};
+    let Some(path) = &args.scene else {
+        return radiosity_scale(args, ctx);
+    };
+    let (scene, _) = twopass_scene::load(path)?;
     let area = scene.total_area();
     let progress = ctx.progress(args.elements.len() as u64, "bench radiosity");
     let mut rows = Vec::new();
@@ -190,8 +348,10 @@ fn radiosity(args: &RadiosityArgs, ctx: &Context) -> Result<(), CliError> {
         };
         reset_peak_memory();
         let start = Instant::now();
-        let mut solver = Solver::new(&scene, options)
-            .map_err(|e| CliError::Input(format!("{}: {e}", args.scene.display())))?;
+        let mut solver = Progressive::new(&scene, options).map_err(|source| CliError::Solve {
+            path: path.clone(),
+            source,
+        })?;
         solver.run(|_| std::ops::ControlFlow::Continue(()));
         let seconds = start.elapsed().as_secs_f64();
         let p = solver.progress();
@@ -242,8 +402,8 @@ fn radiosity(args: &RadiosityArgs, ctx: &Context) -> Result<(), CliError> {
         );
     } else if !ctx.quiet {
         println!(
-            "scene {}: solve to unshot {:.0e}, fixed mesh, {} threads",
-            args.scene.display(),
+            "scene {}: progressive refinement to unshot {:.0e}, fixed mesh, {} threads",
+            path.display(),
             args.unshot,
             rayon::current_num_threads()
         );

@@ -78,6 +78,7 @@ struct Report {
 
 #[derive(Debug, Serialize)]
 struct RadiosityInfo {
+    solver: &'static str,
     elements: usize,
     patches: usize,
     shots: u64,
@@ -146,6 +147,7 @@ pub fn run(args: &CompareArgs, ctx: &Context) -> Result<(), CliError> {
                 ..Stop::default()
             },
             seed: ctx.seed,
+            memory_limit: crate::context::memory_limit(),
             ..Options::default()
         };
         let mut solver = Solver::new(&scene, options).map_err(|source| CliError::Solve {
@@ -157,6 +159,7 @@ pub fn run(args: &CompareArgs, ctx: &Context) -> Result<(), CliError> {
         bar.finish_and_clear();
         let p = solver.progress();
         let info = RadiosityInfo {
+            solver: p.method.name(),
             elements: p.elements,
             patches: p.patches,
             shots: p.shots,

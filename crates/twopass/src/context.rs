@@ -62,3 +62,16 @@ impl Context {
         bar
     }
 }
+
+/// Memory a solve may take, bytes: four fifths of the machine's memory (`MemTotal` of
+/// /proc/meminfo), or 16 GiB where that cannot be read.
+pub fn memory_limit() -> u64 {
+    std::fs::read_to_string("/proc/meminfo")
+        .ok()
+        .and_then(|text| {
+            let line = text.lines().find(|l| l.starts_with("MemTotal:"))?;
+            let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+            Some(kib * 1024 / 5 * 4)
+        })
+        .unwrap_or(16 << 30)
+}

@@ -146,5 +146,11 @@ pub fn run(args: &InfoArgs, ctx: &Context) -> Result<(), CliError> {
     };
     say("diffuse pass  ", &info.plan.diffuse);
     say("specular pass ", &info.plan.specular);
+    if info.plan.diffuse.required {
+        println!(
+            "radiosity      {}: {}",
+            info.plan.solver.method, info.plan.solver.reason
+        );
+    }
     Ok(())
 }

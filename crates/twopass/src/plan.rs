@@ -20,6 +20,17 @@ pub struct Plan {
     pub diffuse: Decision,
     /// Ray-traced specular terms: needed when a used material has a non-diffuse lobe.
     pub specular: Decision,
+    /// The radiosity solver `--solver auto` runs, and why.
+    pub solver: SolverDecision,
+}
+
+/// Which radiosity solver runs by default, and the reason in words.
+#[derive(Debug, Clone, Serialize, PartialEq, Eq)]
+pub struct SolverDecision {
+    /// `progressive` or `hierarchical`.
+    pub method: String,
+    /// Why, for the user.
+    pub reason: String,
 }
 
 /// Decides the passes from the objects' materials and emission (unused materials don't count).
@@ -74,7 +85,16 @@ pub fn plan(scene: &Scene) -> Plan {
             reason: format!("non-diffuse materials: {}", lobes.join(", ")),
         }
     };
-    Plan { diffuse, specular }
+    let (method, reason) = twopass_radiosity::Method::Auto.choose(scene);
+    let solver = SolverDecision {
+        method: method.name().into(),
+        reason,
+    };
+    Plan {
+        diffuse,
+        specular,
+        solver,
+    }
 }
 
 /// The scene-file name of a lobe's model.

@@ -1,0 +1,1141 @@
+//! Hierarchical radiosity with clustering (Hanrahan, Salzman & Aupperle 1991; Smits, Arvo &
+//! Greenberg 1994; Sillion 1994).
+//!
+//! The hierarchy: a cluster tree over the participating triangles ([`Clusters`]) above the
+//! triangles' bisection trees ([`ElementMesh`]). Light moves along **links** between pairs of
+//! nodes. Linking starts with the root linked to itself and refines a link, by splitting the
+//! larger end, while its estimated transport error (BF refinement: the source's radiosity
+//! times the link's form-factor error times the receiver's area and reflectance) exceeds
+//! [`Hierarchical::link_tolerance`] of the emitted power, or while an end is a cluster too
+//! close to the other end for the far-field estimate. So distant groups exchange light through
+//! one link and the initial linking is not all-pairs.
+//!
+//! Transport of a link, as irradiance at the receiver per unit exitance of the source:
+//! - surface to surface: the exact differential-area-to-polygon form factor (Lambert's contour
+//!   integral) at the receiver's three corners, so irradiance varies linearly over an element
+//!   and the leaves get per-vertex values; its error estimate is the spread of the form factor
+//!   over the corners and the centroid;
+//! - with a cluster at either end: the isotropic cluster (Sillion 1994): a cluster of area A
+//!   seen from any direction shows a projected area A / 4, as a closed convex object does;
+//!   its error estimate is the whole transport;
+//! - times the visible fraction of a few stratified shadow rays between the two ends; a
+//!   partially visible link counts its whole transport as error, so it is refined.
+//!
+//! Each gather iteration (Jacobi) sums every link's transport into its receiver, then
+//! **push-pull** moves irradiance down the hierarchy (linearly interpolated at surface nodes)
+//! and area-averaged radiosity back up. The convergence measure is the one progressive
+//! refinement stops on: the residual power, the change the last iteration made, over the
+//! emitted power. Links are re-refined with the converged radiosities (BF refinement needs B)
+//! until no link needs it. The leaves are the element mesh: bisection with conforming
+//! neighbour splits keeps it free of cracks and T-vertices.
+
+use std::f64::consts::PI;
+use std::ops::ControlFlow;
+use std::time::{Duration, Instant};
+
+use glam::{DVec3, Vec2, Vec3};
+use rayon::prelude::*;
+use twopass_scene::{Scene, SurfacePoint};
+
+use crate::cluster::{Clusters, Kind, NodeRef};
+use crate::element::{ElementMesh, barycentric_2d};
+use crate::form_factor::{self, RECEIVER_INSET, hash};
+use crate::solution::Solution;
+use crate::solver::{
+    Energy, Finish, Method, Options, Progress, Residuals, SolveError, luminance, participating,
+};
+
+/// A link: light from `source` gathered at `receiver`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Link {
+    receiver: NodeRef,
+    source: NodeRef,
+    /// Irradiance per unit source exitance (visibility included) at the receiver's three
+    /// corners for a surface receiver; over the whole receiver (three equal values) for a
+    /// cluster.
+    k: [f32; 3],
+    /// Estimated error of the transport per unit source exitance luminance and receiver
+    /// reflectance, as power: receiver area (scene units squared) times form-factor error.
+    error: f32,
+}
+
+/// What refinement does with a candidate pair.
+enum Step {
+    Keep(Link),
+    Drop,
+    /// A cluster linked to itself: link every pair of its children.
+    SelfPair(NodeRef),
+    SplitReceiver(Link),
+    SplitSource(Link),
+}
+
+/// A link's evaluation.
+struct Eval {
+    k: [f64; 3],
+    error: f64,
+    /// An end is a cluster overlapping the other end's bounding sphere: the far-field estimate
+    /// does not hold, the link must be refined.
+    near: bool,
+    /// Visibility is partial (some rays blocked, some not).
+    partial: bool,
+    rays: u64,
+}
+
+/// Node geometry the link estimates need.
+struct Ends {
+    center: DVec3,
+    radius: f64,
+    area: f64,
+}
+
+/// Approximate bytes per surface node (mesh node, vertex share, per-node sums and corners).
+const BYTES_PER_NODE: u64 = 480;
+/// Approximate bytes per link (the link, sorting and the candidates of a refinement pass).
+const BYTES_PER_LINK: u64 = 96;
+/// Candidates evaluated between two looks at the clock.
+const BATCH: usize = 1 << 16;
+/// A link with a cluster at an end is near, and must be refined, unless the ends' centres
+/// are farther apart than this many times the sum of their bounding radii: the isotropic
+/// far-field estimate holds only well away from a cluster.
+const SEPARATION: f64 = 2.0;
+/// Re-refinements with converged radiosities at most.
+const MAX_ROUNDS: u32 = 6;
+
+/// A hierarchical radiosity solve with clustering over a scene. Deterministic: the same
+/// options and seed give the same solution bit for bit on any number of threads (without a
+/// time budget).
+pub struct HierarchicalSolver<'s> {
+    scene: &'s Scene,
+    options: Options,
+    mesh: ElementMesh,
+    clusters: Clusters,
+    min_size: f32,
+    /// Link error threshold, W (luminance, scene units).
+    eps: f64,
+    /// Per scene triangle: reflectance and emitted exitance E = pi L_e.
+    tri_rho: Vec<DVec3>,
+    tri_emission: Vec<DVec3>,
+    /// Links, sorted by receiver, and where each receiver's run starts.
+    links: Vec<Link>,
+    receivers: Vec<(NodeRef, u32)>,
+    /// Per surface node: irradiance its own links gathered at its corners (from emitted and
+    /// from reflected light), and its area-averaged exitance (emitted, reflected).
+    gathered: Vec<[[DVec3; 3]; 2]>,
+    exitance: Vec<[DVec3; 2]>,
+    /// Per surface node and per cluster: the range (largest less smallest) of the exitance
+    /// luminance of the leaves below, W/m^2: how far from uniform a source is.
+    spread: Vec<f64>,
+    cluster_spread: Vec<f64>,
+    /// Per surface leaf: irradiance at its corners after push (emitted, reflected light).
+    corners_in: Vec<[[DVec3; 3]; 2]>,
+    /// Per cluster: the same, one value per cluster.
+    cluster_gathered: Vec<[DVec3; 2]>,
+    cluster_exitance: Vec<[DVec3; 2]>,
+    /// Residual power of the last iteration per channel (signed), and its fraction.
+    residual: DVec3,
+    residual_fraction: f64,
+    emitted: DVec3,
+    energy: Energy,
+    worst_imbalance: f64,
+    iterations: u64,
+    rays: u64,
+    rounds: u32,
+    linked: bool,
+    max_links: usize,
+    max_nodes: usize,
+    started: Instant,
+    meshing: Duration,
+    refining: Duration,
+}
+
+fn to_f32(v: DVec3) -> Vec3 {
+    Vec3::new(v.x as f32, v.y as f32, v.z as f32)
+}
+
+/// A uniform number in [0, 1) from a hash.
+fn unit(h: u64) -> f64 {
+    (h >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+}
+
+impl<'s> HierarchicalSolver<'s> {
+    /// Builds the cluster tree over the participating triangles. Objects that neither emit
+    /// nor reflect diffusely still cast shadows.
+    pub fn new(scene: &'s Scene, options: Options) -> Result<Self, SolveError> {
+        if scene.emitters.is_empty() {
+            return Err(SolveError::NoEmitters);
+        }
+        let diag = scene.bounds.diagonal();
+        let h = options.hierarchical;
+        let min_size = h.min_element_size.unwrap_or(diag / 200.0);
+        if !(min_size.is_finite() && min_size > 0.0) {
+            return Err(SolveError::Option {
+                name: "min_element_size",
+                problem: format!("{min_size} must be finite and > 0 scene units"),
+            });
+        }
+        if !(h.link_tolerance.is_finite() && h.link_tolerance > 0.0) {
+            return Err(SolveError::Option {
+                name: "link_tolerance",
+                problem: format!("{} must be finite and > 0", h.link_tolerance),
+            });
+        }
+        if options.stop.unshot_fraction.is_nan() || options.stop.unshot_fraction < 0.0 {
+            return Err(SolveError::Option {
+                name: "unshot_fraction",
+                problem: "must be >= 0".into(),
+            });
+        }
+        if options.visibility.min == 0 || options.visibility.max < options.visibility.min {
+            return Err(SolveError::Option {
+                name: "visibility",
+                problem: "needs 1 <= min <= max rays".into(),
+            });
+        }
+        let takes_part = participating(scene);
+        if !takes_part.iter().any(|&t| t) {
+            return Err(SolveError::NothingTakesPart);
+        }
+        let triangles = scene
+            .mesh
+            .triangle_object
+            .iter()
+            .filter(|&&o| takes_part[o as usize])
+            .count() as u64;
+        // The triangles themselves, their clusters, and room for links: refuse up front what
+        // cannot fit.
+        let base = triangles * (BYTES_PER_NODE + 2 * 120);
+        if base > options.memory_limit {
+            return Err(SolveError::TooLarge {
+                what: format!("the hierarchy over {triangles} triangles"),
+                bytes: base,
+                limit: options.memory_limit,
+            });
+        }
+        let started = Instant::now();
+        let mesh = ElementMesh::new(scene, &takes_part);
+        let tri_rho: Vec<DVec3> = (0..scene.mesh.triangles.len())
+            .map(|t| {
+                let o = &scene.objects[scene.mesh.triangle_object[t] as usize];
+                scene.materials[o.material as usize]
+                    .material
+                    .diffuse_albedo()
+                    .as_dvec3()
+            })
+            .collect();
+        let tri_emission: Vec<DVec3> = (0..scene.mesh.triangles.len())
+            .map(|t| {
+                scene.objects[scene.mesh.triangle_object[t] as usize]
+                    .emission
+                    .as_dvec3()
+                    * PI
+            })
+            .collect();
+        let rho_lum: Vec<f64> = tri_rho.iter().map(|&r| luminance(r)).collect();
+        let clusters = Clusters::build(&mesh, &rho_lum).ok_or(SolveError::NothingTakesPart)?;
+        let spare = options.memory_limit - base;
+        let mut s = Self {
+            scene,
+            mesh,
+            clusters,
+            min_size,
+            eps: 0.0,
+            tri_rho,
+            tri_emission,
+            links: Vec::new(),
+            receivers: Vec::new(),
+            gathered: Vec::new(),
+            exitance: Vec::new(),
+            spread: Vec::new(),
+            cluster_spread: Vec::new(),
+            corners_in: Vec::new(),
+            cluster_gathered: Vec::new(),
+            cluster_exitance: Vec::new(),
+            residual: DVec3::ZERO,
+            residual_fraction: 1.0,
+            emitted: DVec3::ZERO,
+            energy: Energy::default(),
+            worst_imbalance: 0.0,
+            iterations: 0,
+            rays: 0,
+            rounds: 0,
+            linked: false,
+            max_links: (spare / 2 / BYTES_PER_LINK) as usize,
+            max_nodes: (spare / 2 / BYTES_PER_NODE) as usize,
+            options,
+            started,
+            meshing: Duration::ZERO,
+            refining: Duration::ZERO,
+        };
+        s.grow_arrays();
+        s.emitted = s
+            .mesh
+            .leaves()
+            .map(|n| {
+                let node = &s.mesh.nodes[n as usize];
+                s.tri_emission[node.scene_triangle as usize] * f64::from(node.area)
+            })
+            .sum();
+        s.eps = h.link_tolerance * luminance(s.emitted).max(f64::MIN_POSITIVE);
+        // Before the first gather every node's exitance is its emission.
+        s.push_pull();
+        s.energy.emitted = s.emitted;
+        s.energy.unshot = s.emitted;
+        s.meshing = started.elapsed();
+        Ok(s)
+    }
+
+    /// Extends the per-node arrays to new surface nodes and clusters.
+    fn grow_arrays(&mut self) {
+        let n = self.mesh.nodes.len();
+        self.gathered.resize(n, [[DVec3::ZERO; 3]; 2]);
+        self.exitance.resize(n, [DVec3::ZERO; 2]);
+        self.spread.resize(n, 0.0);
+        self.corners_in.resize(n, [[DVec3::ZERO; 3]; 2]);
+        let c = self.clusters.nodes.len();
+        self.cluster_gathered.resize(c, [DVec3::ZERO; 2]);
+        self.cluster_exitance.resize(c, [DVec3::ZERO; 2]);
+        self.cluster_spread.resize(c, 0.0);
+    }
+
+    /// The oracle: estimated error of a link's transport, as power (W, luminance).
+    fn link_error(&self, l: &Link) -> f64 {
+        let (e, s) = match l.source.kind() {
+            Kind::Cluster(c) => (self.cluster_exitance[c as usize], self.cluster_spread[c as usize]),
+            Kind::Surface(n) => (self.exitance[n as usize], self.spread[n as usize]),
+        };
+        let mean_k = (f64::from(l.k[0]) + f64::from(l.k[1]) + f64::from(l.k[2])) / 3.0;
+        // Form-factor error at the source's mean exitance, plus the source's own departure
+        // from uniform exitance carried at the link's mean form factor.
+        self.rho_lum(l.receiver)
+            * (luminance(e[0] + e[1]) * f64::from(l.error)
+                + s * mean_k * self.ends(l.receiver).area)
+    }
+
+    fn ends(&self, r: NodeRef) -> Ends {
+        match r.kind() {
+            Kind::Cluster(c) => {
+                let cl = &self.clusters.nodes[c as usize];
+                Ends {
+                    center: cl.center,
+                    radius: cl.radius,
+                    area: cl.area,
+                }
+            }
+            Kind::Surface(n) => {
+                let p = self.mesh.corners(n);
+                let center = (p[0] + p[1] + p[2]) / 3.0;
+                let radius = p.iter().map(|q| (*q - center).length()).fold(0.0, f64::max);
+                Ends {
+                    center,
+                    radius,
+                    area: f64::from(self.mesh.nodes[n as usize].area),
+                }
+            }
+        }
+    }
+
+    /// Reflectance luminance of a receiver (the largest inside a cluster).
+    fn rho_lum(&self, r: NodeRef) -> f64 {
+        match r.kind() {
+            Kind::Cluster(c) => self.clusters.nodes[c as usize].rho_max,
+            Kind::Surface(n) => {
+                luminance(self.tri_rho[self.mesh.nodes[n as usize].scene_triangle as usize])
+            }
+        }
+    }
+
+    /// Current exitance of a node (emitted, reflected), area-averaged, W/m^2.
+    fn source_exitance(&self, r: NodeRef) -> [DVec3; 2] {
+        match r.kind() {
+            Kind::Cluster(c) => self.cluster_exitance[c as usize],
+            Kind::Surface(n) => self.exitance[n as usize],
+        }
+    }
+
+    fn splittable(&self, r: NodeRef) -> bool {
+        match r.kind() {
+            Kind::Cluster(_) => true,
+            Kind::Surface(n) => {
+                self.mesh.nodes[n as usize].children.is_some()
+                    || self.mesh.longest_edge_length(n) > self.min_size
+            }
+        }
+    }
+
+    fn children(&self, r: NodeRef) -> [NodeRef; 2] {
+        match r.kind() {
+            Kind::Cluster(c) => self.clusters.nodes[c as usize].children,
+            Kind::Surface(n) => self.mesh.nodes[n as usize]
+                .children
+                .expect("a split surface node has children")
+                .map(NodeRef::surface),
+        }
+    }
+
+    /// A point on node `r` for three uniform numbers: area-uniform over a surface node; over a
+    /// cluster, a triangle picked by area and a uniform point on it.
+    fn sample_point(&self, r: NodeRef, u: [f64; 3]) -> SurfacePoint {
+        match r.kind() {
+            Kind::Surface(n) => {
+                let node = &self.mesh.nodes[n as usize];
+                let s = u[0].sqrt();
+                let w = [1.0 - s, s * (1.0 - u[1]), s * u[1]];
+                let b = node.uv[0].as_dvec2() * w[0]
+                    + node.uv[1].as_dvec2() * w[1]
+                    + node.uv[2].as_dvec2() * w[2];
+                self.scene.mesh.surface_point(
+                    node.scene_triangle,
+                    [(1.0 - b.x - b.y) as f32, b.x as f32, b.y as f32],
+                )
+            }
+            Kind::Cluster(c) => {
+                let (t, _) = self.clusters.pick_triangle(c, u[0]);
+                self.scene
+                    .mesh
+                    .sample_triangle(t, Vec2::new(u[1] as f32, u[2] as f32))
+            }
+        }
+    }
+
+    /// The visible fraction between two nodes from about `count` stratified shadow rays
+    /// between points on both; pairs of points that face away from each other do not count.
+    fn visibility(&self, r: NodeRef, s: NodeRef, count: u32, seed: u64) -> (f64, u64) {
+        let k = (f64::from(count).sqrt().round() as u32).max(1);
+        let (mut seen, mut total) = (0u32, 0u32);
+        let mut first = None;
+        for i in 0..k {
+            for j in 0..k {
+                let h = hash(seed ^ (u64::from(i) << 32 | u64::from(j)));
+                let (fi, fj, kf) = (f64::from(i), f64::from(j), f64::from(k));
+                let a = self.sample_point(
+                    r,
+                    [(fi + unit(h)) / kf, (fj + unit(hash(h))) / kf, unit(hash(h ^ 1))],
+                );
+                let b = self.sample_point(
+                    s,
+                    [
+                        (fj + unit(hash(h ^ 2))) / kf,
+                        (fi + unit(hash(h ^ 3))) / kf,
+                        unit(hash(h ^ 4)),
+                    ],
+                );
+                let d = b.position - a.position;
+                if d.dot(a.normal) <= 0.0 || d.dot(b.normal) >= 0.0 {
+                    first.get_or_insert((a, b));
+                    continue;
+                }
+                total += 1;
+                if !self.scene.occluded_between(&a, &b) {
+                    seen += 1;
+                }
+            }
+        }
+        if total == 0 {
+            // Only slivers face each other: one ray between the first pair of points.
+            let (a, b) = first.expect("at least one pair was drawn");
+            let blocked = self.scene.occluded_between(&a, &b);
+            return (if blocked { 0.0 } else { 1.0 }, 1);
+        }
+        (f64::from(seen) / f64::from(total), u64::from(total))
+    }
+
+    /// The receiving points of a surface node: its corners, a hair inside (junction vertices
+    /// receive from just inside their own surface, as in progressive refinement), and their
+    /// receiving normals; plus the centroid and its normal.
+    fn receiving_points(&self, n: u32) -> ([DVec3; 4], [DVec3; 4]) {
+        let node = &self.mesh.nodes[n as usize];
+        let p = self.mesh.corners(n);
+        let c = (p[0] + p[1] + p[2]) / 3.0;
+        let normals = node
+            .vertices
+            .map(|v| self.mesh.vertices[v as usize].normal.as_dvec3());
+        let nc = (normals[0] + normals[1] + normals[2])
+            .try_normalize()
+            .unwrap_or(normals[0]);
+        let x = p.map(|q| q + (c - q) * RECEIVER_INSET);
+        ([x[0], x[1], x[2], c], [normals[0], normals[1], normals[2], nc])
+    }
+
+    /// Transport, error estimate and visibility of the link `s -> r`, with `rays` shadow rays.
+    fn evaluate(&self, r: NodeRef, s: NodeRef, rays: u32) -> Eval {
+        let (er, es) = (self.ends(r), self.ends(s));
+        let reach = SEPARATION * (er.radius + es.radius);
+        let d2 = (es.center - er.center).length_squared();
+        let near = d2 <= reach * reach;
+        let far2 = d2.max(reach * reach).max(f64::MIN_POSITIVE);
+        let mut near_cluster = false;
+        let (k, error) = match (r.kind(), s.kind()) {
+            (Kind::Surface(p), Kind::Surface(q)) => {
+                let (x, n) = self.receiving_points(p);
+                let poly = self.mesh.corners(q);
+                let ns = self.scene.mesh.geometric_normals
+                    [self.mesh.nodes[q as usize].scene_triangle as usize]
+                    .as_dvec3();
+                let f: [f64; 4] =
+                    std::array::from_fn(|i| form_factor::point_to_polygon(x[i], n[i], &poly, Some(ns)));
+                // The receiver's area-averaged form factor by the rule exact for quadratics
+                // (corners 1/12 each, centroid 3/4); the corner values are shifted so their
+                // linear interpolant carries exactly that much light (interpolating a curved
+                // F linearly would otherwise lose or add light with a consistent sign).
+                let mean = (f[0] + f[1] + f[2]) / 3.0;
+                let shift = 0.75 * (f[3] - mean);
+                let mut k = [f[0] + shift, f[1] + shift, f[2] + shift];
+                if k.iter().any(|&v| v < 0.0) {
+                    let average = mean + shift;
+                    k = [f[0], f[1], f[2]].map(|v| v * average.max(0.0) / mean.max(f64::MIN_POSITIVE));
+                }
+                let (lo, hi) = f
+                    .iter()
+                    .fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
+                (k, er.area * ((f[3] - mean).abs() + 0.25 * (hi - lo)))
+            }
+            (Kind::Surface(p), Kind::Cluster(_)) => {
+                near_cluster = near;
+                let (x, n) = self.receiving_points(p);
+                let k: [f64; 3] = std::array::from_fn(|i| {
+                    let d = es.center - x[i];
+                    let l2 = d.length_squared().max(far2 * 0.25);
+                    es.area * (n[i].dot(d) / l2.sqrt()).max(0.0) / (4.0 * PI * l2)
+                });
+                (k, er.area * (k[0] + k[1] + k[2]) / 3.0)
+            }
+            (Kind::Cluster(_), Kind::Surface(q)) => {
+                near_cluster = near;
+                let nq = self.scene.mesh.geometric_normals
+                    [self.mesh.nodes[q as usize].scene_triangle as usize]
+                    .as_dvec3();
+                let d = er.center - es.center;
+                let cos = (nq.dot(d) / d2.sqrt().max(f64::MIN_POSITIVE)).max(0.0);
+                let v = es.area * cos / (4.0 * PI * far2);
+                ([v; 3], er.area * v)
+            }
+            (Kind::Cluster(_), Kind::Cluster(_)) => {
+                near_cluster = near;
+                let v = es.area / (16.0 * PI * far2);
+                ([v; 3], er.area * v)
+            }
+        };
+        let mut e = Eval {
+            k,
+            error,
+            near: near_cluster,
+            partial: false,
+            rays: 0,
+        };
+        if e.k.iter().all(|&v| v <= 0.0) || !self.options.occlusion {
+            return e;
+        }
+        let seed = hash(self.options.seed ^ hash(u64::from(r.id()) << 32 | u64::from(s.id())));
+        let (vis, cast) = self.visibility(r, s, rays, seed);
+        e.rays = cast;
+        // A few rays that all miss or all hit say little about a large pair: a blocked link is
+        // counted as uncertain (its unoccluded transport is the error) so that it is refined
+        // until its pieces are small or surely blocked, instead of dropped with its light.
+        e.partial = vis < 1.0;
+        let mean = (e.k[0] + e.k[1] + e.k[2]) / 3.0;
+        e.error = e.error * vis + if e.partial { er.area * mean } else { 0.0 };
+        e.k = e.k.map(|v| v * vis);
+        e
+    }
+
+    /// Whether a node can ever send light: it emits or reflects.
+    fn may_shine(&self, s: NodeRef) -> bool {
+        match s.kind() {
+            Kind::Cluster(c) => {
+                let cl = &self.clusters.nodes[c as usize];
+                cl.rho_max > 0.0 || self.cluster_exitance[c as usize][0] != DVec3::ZERO
+            }
+            Kind::Surface(n) => {
+                let t = self.mesh.nodes[n as usize].scene_triangle as usize;
+                self.tri_rho[t] != DVec3::ZERO || self.tri_emission[t] != DVec3::ZERO
+            }
+        }
+    }
+
+    /// What to do with the candidate link `s -> r` (pure: safe to run in parallel).
+    fn decide(&self, r: NodeRef, s: NodeRef, allow_split: bool) -> (Step, u64) {
+        if r == s {
+            return match r.kind() {
+                Kind::Cluster(_) => (Step::SelfPair(r), 0),
+                // A planar element sends nothing to itself.
+                Kind::Surface(_) => (Step::Drop, 0),
+            };
+        }
+        if self.rho_lum(r) <= 0.0 || !self.may_shine(s) {
+            return (Step::Drop, 0);
+        }
+        if let (Kind::Surface(p), Kind::Surface(q)) = (r.kind(), s.kind())
+            && self.mesh.nodes[p as usize].scene_triangle
+                == self.mesh.nodes[q as usize].scene_triangle
+        {
+            return (Step::Drop, 0);
+        }
+        let vis = self.options.visibility;
+        let mut e = self.evaluate(r, s, vis.min);
+        let mut rays = e.rays;
+        if !e.near && e.error <= 0.0 && e.k.iter().all(|&v| v <= 0.0) {
+            return (Step::Drop, rays);
+        }
+        let link = |e: &Eval| Link {
+            receiver: r,
+            source: s,
+            k: e.k.map(|v| v as f32),
+            error: e.error as f32,
+        };
+        if e.near || self.link_error(&link(&e)) > self.eps {
+            let (sr, ss) = (self.splittable(r), self.splittable(s));
+            let receiver_first = match (sr, ss) {
+                (false, false) => None,
+                (true, false) => Some(true),
+                (false, true) => Some(false),
+                (true, true) => Some(match (r.kind(), s.kind()) {
+                    (Kind::Surface(p), Kind::Surface(q)) => {
+                        self.mesh.nodes[p as usize].area >= self.mesh.nodes[q as usize].area
+                    }
+                    _ => self.ends(r).radius >= self.ends(s).radius,
+                }),
+            };
+            match receiver_first {
+                Some(true) if allow_split || e.near => return (Step::SplitReceiver(link(&e)), rays),
+                Some(false) if allow_split || e.near => return (Step::SplitSource(link(&e)), rays),
+                _ => {
+                    // Nothing left to split: a finer visibility estimate is all that helps.
+                    if e.partial && vis.max > vis.min && e.error > 0.0 {
+                        let more = self.evaluate(r, s, vis.max);
+                        rays += more.rays;
+                        e = more;
+                    }
+                }
+            }
+        }
+        if e.k.iter().all(|&v| v <= 0.0) {
+            return (Step::Drop, rays);
+        }
+        (Step::Keep(link(&e)), rays)
+    }
+
+    fn deadline_passed(&self) -> bool {
+        self.options
+            .stop
+            .time_budget
+            .is_some_and(|b| self.started.elapsed() >= b)
+    }
+
+    /// Refines candidate pairs into links until every link is accurate enough, the nodes
+    /// cannot be split, or a budget (time, memory) says stop. Returns how many links it made.
+    fn refine(&mut self, mut candidates: Vec<(NodeRef, NodeRef)>) -> usize {
+        let started = Instant::now();
+        let before = self.links.len();
+        while !candidates.is_empty() {
+            let mut next = Vec::new();
+            for batch in candidates.chunks(BATCH) {
+                let allow = !self.deadline_passed()
+                    && self.links.len() + candidates.len() < self.max_links
+                    && self.mesh.nodes.len() < self.max_nodes;
+                let steps: Vec<(Step, u64)> = batch
+                    .par_iter()
+                    .with_min_len(8)
+                    .map(|&(r, s)| self.decide(r, s, allow))
+                    .collect();
+                // Split the surface leaves the steps need (conformingly), in a fixed order.
+                let mut split: Vec<u32> = steps
+                    .iter()
+                    .filter_map(|(st, _)| match st {
+                        Step::SplitReceiver(l) => Some(l.receiver),
+                        Step::SplitSource(l) => Some(l.source),
+                        _ => None,
+                    })
+                    .filter_map(|r| match r.kind() {
+                        Kind::Surface(n) if self.mesh.nodes[n as usize].children.is_none() => {
+                            Some(n)
+                        }
+                        _ => None,
+                    })
+                    .collect();
+                split.sort_unstable();
+                split.dedup();
+                for n in split {
+                    if self.mesh.nodes[n as usize].children.is_none() {
+                        self.mesh.refine(n, self.scene);
+                    }
+                }
+                self.grow_arrays();
+                for (st, rays) in steps {
+                    self.rays += rays;
+                    match st {
+                        Step::Keep(l) => self.links.push(l),
+                        Step::Drop => {}
+                        Step::SelfPair(c) => {
+                            let ch = self.children(c);
+                            for a in ch {
+                                for b in ch {
+                                    next.push((a, b));
+                                }
+                            }
+                        }
+                        Step::SplitReceiver(l) => {
+                            for a in self.children(l.receiver) {
+                                next.push((a, l.source));
+                            }
+                        }
+                        Step::SplitSource(l) => {
+                            for b in self.children(l.source) {
+                                next.push((l.receiver, b));
+                            }
+                        }
+                    }
+                }
+            }
+            candidates = next;
+        }
+        self.sort_links();
+        // New leaves take their ancestors' irradiance (interpolated) until the next gather.
+        self.push_pull();
+        self.refining += started.elapsed();
+        self.links.len().saturating_sub(before)
+    }
+
+    fn sort_links(&mut self) {
+        self.links
+            .par_sort_unstable_by_key(|l| (l.receiver, l.source));
+        self.receivers.clear();
+        for (i, l) in self.links.iter().enumerate() {
+            if self.receivers.last().is_none_or(|&(r, _)| r != l.receiver) {
+                self.receivers.push((l.receiver, i as u32));
+            }
+        }
+    }
+
+    /// Re-checks every link against the oracle with the current radiosities; refines those
+    /// whose error is now too large. Returns how many were refined.
+    fn rerefine(&mut self) -> usize {
+        let eps = self.eps;
+        let (keep, redo): (Vec<Link>, Vec<Link>) = std::mem::take(&mut self.links)
+            .into_iter()
+            .partition(|l| {
+                !(self.link_error(l) > eps
+                    && (self.splittable(l.receiver) || self.splittable(l.source)))
+            });
+        self.links = keep;
+        if redo.is_empty() || self.deadline_passed() {
+            self.links.extend(redo);
+            self.sort_links();
+            return 0;
+        }
+        let n = redo.len();
+        // Each goes through the refinement again from its own ends: it is re-evaluated and
+        // split where the oracle says so.
+        self.refine(redo.iter().map(|l| (l.receiver, l.source)).collect());
+        n
+    }
+
+    /// One Jacobi gather over every link, then push-pull. Updates the residual.
+    fn iterate(&mut self) {
+        let links = &self.links;
+        let receivers = &self.receivers;
+        let sums: Vec<[[DVec3; 3]; 2]> = receivers
+            .par_iter()
+            .enumerate()
+            .with_min_len(64)
+            .map(|(i, &(_, start))| {
+                let end = receivers
+                    .get(i + 1)
+                    .map_or(links.len(), |&(_, e)| e as usize);
+                let mut acc = [[DVec3::ZERO; 3]; 2];
+                for l in &links[start as usize..end] {
+                    let [be, br] = self.source_exitance(l.source);
+                    for c in 0..3 {
+                        let k = f64::from(l.k[c]);
+                        acc[0][c] += be * k;
+                        acc[1][c] += br * k;
+                    }
+                }
+                acc
+            })
+            .collect();
+        for g in &mut self.gathered {
+            *g = [[DVec3::ZERO; 3]; 2];
+        }
+        for g in &mut self.cluster_gathered {
+            *g = [DVec3::ZERO; 2];
+        }
+        for (&(r, _), s) in self.receivers.iter().zip(sums) {
+            match r.kind() {
+                Kind::Surface(n) => self.gathered[n as usize] = s,
+                Kind::Cluster(c) => self.cluster_gathered[c as usize] = [s[0][0], s[1][0]],
+            }
+        }
+        let before = self.leaf_power();
+        self.push_pull();
+        let after = self.leaf_power();
+        // Energy: what the sources sent (their exitance before this gather) against what
+        // arrived, was absorbed, and is reflected but not yet passed on.
+        let (mut arrived, mut absorbed) = (DVec3::ZERO, DVec3::ZERO);
+        for n in self.mesh.leaves() {
+            let node = &self.mesh.nodes[n as usize];
+            let [e, r] = self.corners_in[n as usize];
+            let irr = (e[0] + e[1] + e[2] + r[0] + r[1] + r[2]) / 3.0;
+            let a = f64::from(node.area);
+            arrived += irr * a;
+            absorbed += irr * a * (DVec3::ONE - self.tri_rho[node.scene_triangle as usize]);
+        }
+        self.residual = after - before;
+        self.energy.absorbed = absorbed;
+        self.energy.escaped = before - arrived;
+        self.energy.unshot = self.residual;
+        self.energy.emitted = self.emitted;
+        self.residual_fraction =
+            self.residual.abs().element_sum() / self.emitted.element_sum().max(f64::MIN_POSITIVE);
+        self.worst_imbalance = self.worst_imbalance.max(self.energy.imbalance());
+        self.iterations += 1;
+    }
+
+    /// Power leaving all leaves, W per channel.
+    fn leaf_power(&self) -> DVec3 {
+        self.mesh
+            .leaves()
+            .map(|n| {
+                let [e, r] = self.exitance[n as usize];
+                (e + r) * f64::from(self.mesh.nodes[n as usize].area)
+            })
+            .sum()
+    }
+
+    /// Push irradiance down to the leaves (linearly interpolated inside surfaces), compute the
+    /// leaves' exitance, pull area-averaged exitance back up.
+    fn push_pull(&mut self) {
+        let root = self.clusters.root;
+        match root.kind() {
+            Kind::Cluster(c) => {
+                self.push_cluster(c, [DVec3::ZERO; 2]);
+            }
+            Kind::Surface(n) => {
+                self.push_surface(n, [[DVec3::ZERO; 3]; 2]);
+            }
+        }
+    }
+
+    /// Returns the cluster's area-weighted exitance sum (W) and the range of its leaves'
+    /// exitance luminance.
+    fn push_cluster(&mut self, c: u32, inherited: [DVec3; 2]) -> ([DVec3; 2], (f64, f64)) {
+        let g = self.cluster_gathered[c as usize];
+        let here = [inherited[0] + g[0], inherited[1] + g[1]];
+        let mut power = [DVec3::ZERO; 2];
+        let mut range = (f64::INFINITY, f64::NEG_INFINITY);
+        for child in self.clusters.nodes[c as usize].children {
+            let (p, r) = match child.kind() {
+                Kind::Cluster(cc) => self.push_cluster(cc, here),
+                Kind::Surface(n) => self.push_surface(n, [[here[0]; 3], [here[1]; 3]]),
+            };
+            power[0] += p[0];
+            power[1] += p[1];
+            range = (range.0.min(r.0), range.1.max(r.1));
+        }
+        let area = self.clusters.nodes[c as usize].area.max(f64::MIN_POSITIVE);
+        self.cluster_exitance[c as usize] = [power[0] / area, power[1] / area];
+        self.cluster_spread[c as usize] = range.1 - range.0;
+        (power, range)
+    }
+
+    /// Returns the surface node's area-weighted exitance sum (W) and the range of its leaves'
+    /// exitance luminance.
+    fn push_surface(&mut self, n: u32, inherited: [[DVec3; 3]; 2]) -> ([DVec3; 2], (f64, f64)) {
+        let node = self.mesh.nodes[n as usize];
+        let g = self.gathered[n as usize];
+        let here: [[DVec3; 3]; 2] =
+            std::array::from_fn(|o| std::array::from_fn(|k| inherited[o][k] + g[o][k]));
+        let area = f64::from(node.area);
+        let (power, range) = match node.children {
+            None => {
+                let t = node.scene_triangle as usize;
+                let mean = |o: usize| (here[o][0] + here[o][1] + here[o][2]) / 3.0;
+                let b = [
+                    self.tri_emission[t],
+                    self.tri_rho[t] * (mean(0) + mean(1)),
+                ];
+                self.corners_in[n as usize] = here;
+                let y = luminance(b[0] + b[1]);
+                ([b[0] * area, b[1] * area], (y, y))
+            }
+            Some(children) => {
+                let mut power = [DVec3::ZERO; 2];
+                let mut range = (f64::INFINITY, f64::NEG_INFINITY);
+                for ch in children {
+                    let child_uv = self.mesh.nodes[ch as usize].uv;
+                    let w = child_uv.map(|p| barycentric_2d(node.uv, p));
+                    let down: [[DVec3; 3]; 2] = std::array::from_fn(|o| {
+                        std::array::from_fn(|k| {
+                            here[o][0] * f64::from(w[k][0])
+                                + here[o][1] * f64::from(w[k][1])
+                                + here[o][2] * f64::from(w[k][2])
+                        })
+                    });
+                    let (p, r) = self.push_surface(ch, down);
+                    power[0] += p[0];
+                    power[1] += p[1];
+                    range = (range.0.min(r.0), range.1.max(r.1));
+                }
+                (power, range)
+            }
+        };
+        let a = area.max(f64::MIN_POSITIVE);
+        self.exitance[n as usize] = [power[0] / a, power[1] / a];
+        self.spread[n as usize] = range.1 - range.0;
+        (power, range)
+    }
+
+    /// Links the hierarchy (first call), then gathers to the stop criteria, re-refining links
+    /// with the radiosities found. `observer` sees the solver after every iteration and can
+    /// stop it by returning `Break`; the solution is usable whenever this returns.
+    pub fn run(&mut self, mut observer: impl FnMut(&Self) -> ControlFlow<()>) -> Finish {
+        let stop = self.options.stop;
+        if !self.linked {
+            let root = self.clusters.root;
+            self.refine(vec![(root, root)]);
+            self.linked = true;
+        }
+        // First converge coarsely, re-refine with those radiosities, then to the tolerance.
+        let mut target = stop.unshot_fraction.max(1e-2);
+        let mut last = f64::INFINITY;
+        let mut stalled = 0;
+        loop {
+            if stop.max_shots.is_some_and(|m| self.iterations >= m) {
+                return Finish::MaxShots;
+            }
+            if self.deadline_passed() {
+                return Finish::TimeBudget;
+            }
+            self.iterate();
+            if observer(self).is_break() {
+                return Finish::Cancelled;
+            }
+            if self.residual_fraction <= target {
+                let refined = if self.rounds < MAX_ROUNDS {
+                    self.rounds += 1;
+                    self.rerefine()
+                } else {
+                    0
+                };
+                if refined == 0 && target <= stop.unshot_fraction {
+                    return Finish::Converged;
+                }
+                if refined == 0 {
+                    target = stop.unshot_fraction;
+                }
+                last = f64::INFINITY;
+                stalled = 0;
+                continue;
+            }
+            // Jacobi shrinks the residual by the scene's reflectance every iteration; when it
+            // stops shrinking (rounding), nothing more is to be had.
+            if self.residual_fraction >= last {
+                stalled += 1;
+                if stalled >= 8 {
+                    return Finish::Exhausted;
+                }
+            } else {
+                stalled = 0;
+            }
+            last = self.residual_fraction;
+        }
+    }
+
+    /// Where the solve stands.
+    pub fn progress(&self) -> Progress {
+        Progress {
+            method: Method::Hierarchical,
+            shots: 0,
+            iterations: self.iterations,
+            links: self.links.len(),
+            clusters: self.clusters.nodes.len(),
+            unshot_fraction: self.residual_fraction,
+            rays: self.rays,
+            elements: self.mesh.leaves().count(),
+            vertices: self.mesh.vertices.len(),
+            patches: 0,
+            refinement_rounds: self.rounds,
+            elapsed: self.started.elapsed(),
+            meshing: self.meshing,
+            refining: self.refining,
+            energy: self.energy,
+            worst_imbalance: self.worst_imbalance,
+        }
+    }
+
+    /// The ambient term (as in progressive refinement): the residual power spread over the
+    /// scene times the interreflection factor 1 / (1 - mean reflectance), W/m^2.
+    pub fn ambient(&self) -> DVec3 {
+        if self.iterations == 0 {
+            return DVec3::ZERO;
+        }
+        let (mut rho, mut area) = (DVec3::ZERO, 0.0);
+        for n in self.mesh.leaves() {
+            let node = &self.mesh.nodes[n as usize];
+            let a = f64::from(node.area);
+            rho += self.tri_rho[node.scene_triangle as usize] * a;
+            area += a;
+        }
+        let mean_rho = rho / area;
+        self.residual.max(DVec3::ZERO) / area / (DVec3::ONE - mean_rho).max(DVec3::splat(1e-6))
+    }
+
+    /// The current solution: per-vertex radiosity over the leaves, the area-weighted mean of
+    /// the leaves' corner values at each vertex.
+    pub fn solution(&self) -> Solution {
+        let nv = self.mesh.vertices.len();
+        let mut sum = vec![[DVec3::ZERO; 2]; nv];
+        let mut weight = vec![0.0f64; nv];
+        for n in self.mesh.leaves() {
+            let node = &self.mesh.nodes[n as usize];
+            let a = f64::from(node.area).max(f64::MIN_POSITIVE);
+            let [e, r] = self.corners_in[n as usize];
+            for (k, &v) in node.vertices.iter().enumerate() {
+                sum[v as usize][0] += e[k] * a;
+                sum[v as usize][1] += r[k] * a;
+                weight[v as usize] += a;
+            }
+        }
+        let ambient = self.ambient();
+        let (mut radiosity, mut direct, mut indirect, mut amb) = (
+            Vec::with_capacity(nv),
+            Vec::with_capacity(nv),
+            Vec::with_capacity(nv),
+            Vec::with_capacity(nv),
+        );
+        for (v, vert) in self.mesh.vertices.iter().enumerate() {
+            let t = vert.triangle as usize;
+            let (rho, e) = (self.tri_rho[t], self.tri_emission[t]);
+            let w = weight[v].max(f64::MIN_POSITIVE);
+            let d = rho * sum[v][0] / w;
+            let i = rho * sum[v][1] / w;
+            radiosity.push(to_f32(e + d + i));
+            direct.push(to_f32(d));
+            indirect.push(to_f32(i));
+            amb.push(to_f32(rho * ambient));
+        }
+        Solution::new(self.mesh.clone(), radiosity, direct, indirect, amb)
+    }
+
+    /// Consistency checks, their cost bounded by `samples`: the energy balance; the row sums
+    /// (irradiance per unit exitance of every source: 1 in a closed scene) of up to `samples`
+    /// leaves; and reciprocity A_r K_rs = A_s K_sr of up to `samples` surface-to-surface links,
+    /// each against a fresh estimate of its reverse link.
+    pub fn residuals(&mut self, samples: usize) -> Residuals {
+        // Row sums: gather with every source at unit exitance, pushed down to the leaves.
+        let leaves: Vec<u32> = self.mesh.leaves().collect();
+        let step = (leaves.len() / samples.max(1)).max(1);
+        let picked: Vec<u32> = leaves.iter().copied().step_by(step).take(samples).collect();
+        let sums: Vec<f64> = picked
+            .par_iter()
+            .map(|&leaf| self.row_sum(leaf))
+            .collect();
+        let ss: Vec<Link> = self
+            .links
+            .iter()
+            .filter(|l| {
+                matches!(
+                    (l.receiver.kind(), l.source.kind()),
+                    (Kind::Surface(_), Kind::Surface(_))
+                )
+            })
+            .copied()
+            .collect();
+        let step = (ss.len() / samples.max(1)).max(1);
+        let pairs: Vec<(f64, f64)> = ss
+            .iter()
+            .step_by(step)
+            .take(samples)
+            .collect::<Vec<_>>()
+            .par_iter()
+            .map(|l| {
+                let back = self.evaluate(l.source, l.receiver, self.options.visibility.max);
+                let fwd = self.evaluate(l.receiver, l.source, self.options.visibility.max);
+                let mean = |k: [f64; 3]| (k[0] + k[1] + k[2]) / 3.0;
+                (
+                    self.ends(l.receiver).area * mean(fwd.k),
+                    self.ends(l.source).area * mean(back.k),
+                )
+            })
+            .collect();
+        let (mut spread, mut diff, mut scale, mut n) = (0.0f64, 0.0, 0.0, 0);
+        for (a, b) in pairs {
+            if a.max(b) > 0.0 {
+                spread = spread.max((a - b).abs() / a.max(b));
+                diff += (a - b).abs();
+                scale += a.max(b);
+                n += 1;
+            }
+        }
+        Residuals {
+            energy_imbalance: self.worst_imbalance,
+            row_sum_min: sums.iter().copied().fold(f64::INFINITY, f64::min),
+            row_sum_mean: sums.iter().sum::<f64>() / sums.len().max(1) as f64,
+            row_sum_max: sums.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+            reciprocity_pairs: n,
+            reciprocity_spread: spread,
+            reciprocity_mean: diff / scale.max(f64::MIN_POSITIVE),
+        }
+    }
+
+    /// The sum of the transport coefficients that reach `leaf` (its own links and its
+    /// ancestors', interpolated to it), averaged over its corners.
+    fn row_sum(&self, leaf: u32) -> f64 {
+        // Walk from the root to the leaf, summing the links of every node on the way.
+        let mut path = Vec::new();
+        let t = self.mesh.nodes[leaf as usize].scene_triangle;
+        let root = self.mesh.roots[t as usize];
+        // Surface ancestors: descend the bisection tree toward the leaf's centroid.
+        let uv = self.mesh.nodes[leaf as usize].uv;
+        let centre = (uv[0] + uv[1] + uv[2]) / 3.0;
+        let mut n = root;
+        loop {
+            path.push(n);
+            if n == leaf {
+                break;
+            }
+            let Some([c0, c1]) = self.mesh.nodes[n as usize].children else {
+                break;
+            };
+            let [a, m, c] = self.mesh.nodes[c0 as usize].uv;
+            let side = |q: Vec2| (c - m).perp_dot(q - m);
+            n = if side(centre) * side(a) >= 0.0 { c0 } else { c1 };
+        }
+        let sum_links = |r: NodeRef| -> f64 {
+            let Ok(i) = self.receivers.binary_search_by_key(&r, |&(x, _)| x) else {
+                return 0.0;
+            };
+            let start = self.receivers[i].1 as usize;
+            let end = self
+                .receivers
+                .get(i + 1)
+                .map_or(self.links.len(), |&(_, e)| e as usize);
+            self.links[start..end]
+                .iter()
+                .map(|l| (f64::from(l.k[0]) + f64::from(l.k[1]) + f64::from(l.k[2])) / 3.0)
+                .sum()
+        };
+        let mut total: f64 = path.iter().map(|&n| sum_links(NodeRef::surface(n))).sum();
+        // Then the clusters above the triangle, up to the root.
+        let mut c = self.clusters.triangle_parent[t as usize];
+        while c != u32::MAX {
+            total += sum_links(NodeRef::cluster(c));
+            c = self.clusters.nodes[c as usize].parent;
+        }
+        total
+    }
+
+    /// The element mesh (the leaves of the surface hierarchy).
+    pub fn mesh(&self) -> &ElementMesh {
+        &self.mesh
+    }
+
+    /// The scene being solved.
+    pub fn scene(&self) -> &Scene {
+        self.scene
+    }
+
+    /// Links now.
+    pub fn link_count(&self) -> usize {
+        self.links.len()
+    }
+}
