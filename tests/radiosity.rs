@@ -5,7 +5,7 @@ use std::ops::ControlFlow;
 use std::path::Path;
 
 use glam::DVec3;
-use twopass_radiosity::{Adaptive, Options, SolveError, Progressive, Stop, dense_solve};
+use twopass_radiosity::{Adaptive, Options, Progressive, SolveError, Stop, dense_solve};
 use twopass_scene::{DiffuseRadiance, Scene, load, load_toml};
 
 use crate::scene_path;
@@ -17,7 +17,7 @@ fn scene(objects: &str, materials: &str) -> Scene {
     load_toml(&text, Path::new("inline.toml")).unwrap().0
 }
 
-fn quad(
+pub(crate) fn quad(
     name: &str,
     material: &str,
     origin: [f64; 3],
@@ -31,7 +31,7 @@ fn quad(
     )
 }
 
-fn lambert(name: &str, rho: f64) -> String {
+pub(crate) fn lambert(name: &str, rho: f64) -> String {
     format!("[[material]]\nname = \"{name}\"\ntype = \"lambert\"\ndiffuse = {rho}\n")
 }
 
@@ -151,7 +151,7 @@ fn parallel_and_perpendicular_squares_match_siegel_and_howell() {
     );
 }
 
-fn cube(rho: f64, emission: f64) -> Scene {
+pub(crate) fn cube(rho: f64, emission: f64) -> Scene {
     // Six unit faces, all facing in (edge_u x edge_v points into the cube).
     let faces = [
         ([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]),

@@ -11,7 +11,11 @@ use glam::Vec3;
 use twopass_radiosity::{Hierarchical, Method, Options, Solution, Solver, Stop};
 use twopass_scene::DiffuseRadiance;
 
-fn solve(scene: &twopass_scene::Scene, method: Method, unshot: f64) -> Result<Solution, Box<dyn std::error::Error>> {
+fn solve(
+    scene: &twopass_scene::Scene,
+    method: Method,
+    unshot: f64,
+) -> Result<Solution, Box<dyn std::error::Error>> {
     let options = Options {
         method,
         hierarchical: Hierarchical {

@@ -48,8 +48,8 @@ use twopass_brdf::Rgb;
 use twopass_scene::Scene;
 
 use crate::element::{ElementMesh, Node, Vertex};
-use crate::solver::{Finish, Options, Progress, Residuals};
 use crate::solution::Solution;
+use crate::solver::{Finish, Options, Progress, Residuals};
 
 /// Version of the bake file layout written by [`encode_bake`]; readers refuse other versions.
 pub const BAKE_FORMAT_VERSION: u32 = 1;

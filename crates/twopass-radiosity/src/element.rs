@@ -59,9 +59,15 @@ pub struct ElementMesh {
     /// Patch nodes, indexed by patch id.
     pub patches: Vec<u32>,
     midpoints: HashMap<(u32, u32), u32>,
-    /// Leaves touching each undirected edge (two on a manifold surface).
-    edge_leaves: HashMap<(u32, u32), Vec<u32>>,
+    /// Leaves touching each undirected edge, keyed by the edge's end positions (two leaves on
+    /// a manifold surface). Keyed by position, not vertex id, so that the two sides of a
+    /// crease, which have vertices of their own, are still refined together: no T-vertex
+    /// anywhere, no crack in an exported mesh.
+    edge_leaves: HashMap<PositionEdge, Vec<u32>>,
 }
+
+/// An undirected edge between two positions, by their bits.
+type PositionEdge = ([u32; 3], [u32; 3]);
 
 fn edge(a: u32, b: u32) -> (u32, u32) {
     (a.min(b), a.max(b))
@@ -241,20 +247,30 @@ impl ElementMesh {
         Ok(mesh)
     }
 
+    /// The position edge between vertices `a` and `b`.
+    fn position_edge(&self, a: u32, b: u32) -> PositionEdge {
+        let bits = |v: u32| {
+            self.vertices[v as usize]
+                .position
+                .to_array()
+                .map(f32::to_bits)
+        };
+        let (pa, pb) = (bits(a), bits(b));
+        (pa.min(pb), pa.max(pb))
+    }
+
     fn link(&mut self, n: u32) {
         let v = self.nodes[n as usize].vertices;
         for k in 0..3 {
-            self.edge_leaves
-                .entry(edge(v[k], v[(k + 1) % 3]))
-                .or_default()
-                .push(n);
+            let e = self.position_edge(v[k], v[(k + 1) % 3]);
+            self.edge_leaves.entry(e).or_default().push(n);
         }
     }
 
     fn unlink(&mut self, n: u32) {
         let v = self.nodes[n as usize].vertices;
         for k in 0..3 {
-            let e = edge(v[k], v[(k + 1) % 3]);
+            let e = self.position_edge(v[k], v[(k + 1) % 3]);
             if let Some(list) = self.edge_leaves.get_mut(&e) {
                 list.retain(|&x| x != n);
                 if list.is_empty() {
@@ -264,15 +280,15 @@ impl ElementMesh {
         }
     }
 
-    /// Index k of the node's longest edge (vertices k, k+1), ties broken by vertex ids so that
-    /// neighbours agree.
+    /// Index k of the node's longest edge (vertices k, k+1), ties broken by the positions so
+    /// that neighbours (on both sides of a crease too) agree.
     fn longest_edge(&self, n: u32) -> usize {
         let v = self.nodes[n as usize].vertices;
         let len = |k: usize| {
             let (a, b) = (v[k], v[(k + 1) % 3]);
             let d = self.vertices[a as usize].position.as_dvec3()
                 - self.vertices[b as usize].position.as_dvec3();
-            (d.length_squared(), edge(a, b))
+            (d.length_squared(), self.position_edge(a, b))
         };
         (0..3)
             .max_by(|&i, &j| len(i).partial_cmp(&len(j)).expect("finite lengths"))
@@ -287,14 +303,14 @@ impl ElementMesh {
             .length()
     }
 
-    fn midpoint(&mut self, a: u32, b: u32, scene: &Scene, triangle: u32) -> u32 {
+    fn midpoint(&mut self, a: u32, b: u32, triangle: u32) -> u32 {
         if let Some(&m) = self.midpoints.get(&edge(a, b)) {
             return m;
         }
         let (va, vb) = (self.vertices[a as usize], self.vertices[b as usize]);
+        // The midpoint of a chord of the scene triangle lies in its plane; computed from the
+        // ends alone, it is the same to the bit on both sides of a crease.
         let position = ((va.position.as_dvec3() + vb.position.as_dvec3()) * 0.5).as_vec3();
-        // Snap into the scene triangle's plane (the midpoint of a chord already lies in it).
-        let position = scene.mesh.surface_point_at(triangle, position).position;
         let normal = (va.normal + vb.normal).try_normalize().unwrap_or(va.normal);
         self.vertices.push(Vertex {
             position,
@@ -308,12 +324,12 @@ impl ElementMesh {
     }
 
     /// Bisects leaf `n` across its longest edge. Does not keep conformity by itself.
-    fn bisect(&mut self, n: u32, scene: &Scene) {
+    fn bisect(&mut self, n: u32) {
         let node = self.nodes[n as usize];
         let k = self.longest_edge(n);
         let (i, j, l) = (k, (k + 1) % 3, (k + 2) % 3);
         let (a, b, c) = (node.vertices[i], node.vertices[j], node.vertices[l]);
-        let m = self.midpoint(a, b, scene, node.scene_triangle);
+        let m = self.midpoint(a, b, node.scene_triangle);
         let uvm = (node.uv[i] + node.uv[j]) * 0.5;
         let area = node.area * 0.5;
         let first = self.nodes.len() as u32;
@@ -338,7 +354,7 @@ impl ElementMesh {
     /// Bisects leaf `n` and keeps the mesh conforming: every leaf across the bisected edge is
     /// first refined until that edge is its own longest, then split at the same midpoint.
     /// Returns how many leaves were split.
-    pub fn refine(&mut self, n: u32, scene: &Scene) -> usize {
+    pub fn refine(&mut self, n: u32) -> usize {
         let mut splits = 0;
         let mut stack = vec![n];
         while let Some(&t) = stack.last() {
@@ -348,7 +364,7 @@ impl ElementMesh {
             }
             let v = self.nodes[t as usize].vertices;
             let k = self.longest_edge(t);
-            let e = edge(v[k], v[(k + 1) % 3]);
+            let e = self.position_edge(v[k], v[(k + 1) % 3]);
             let neighbours: Vec<u32> = self.edge_leaves.get(&e).map_or_else(Vec::new, |l| {
                 l.iter().copied().filter(|&x| x != t).collect()
             });
@@ -356,15 +372,15 @@ impl ElementMesh {
             if let Some(&blocker) = neighbours.iter().find(|&&x| {
                 let w = self.nodes[x as usize].vertices;
                 let kk = self.longest_edge(x);
-                edge(w[kk], w[(kk + 1) % 3]) != e
+                self.position_edge(w[kk], w[(kk + 1) % 3]) != e
             }) {
                 stack.push(blocker);
                 continue;
             }
-            self.bisect(t, scene);
+            self.bisect(t);
             splits += 1;
             for x in neighbours {
-                self.bisect(x, scene);
+                self.bisect(x);
                 splits += 1;
             }
             stack.pop();
@@ -373,7 +389,7 @@ impl ElementMesh {
     }
 
     /// Refines (conformingly) until every leaf's longest edge is at most `size`.
-    pub fn refine_to(&mut self, size: f32, scene: &Scene) {
+    pub fn refine_to(&mut self, size: f32) {
         loop {
             let coarse: Vec<u32> = self
                 .leaves()
@@ -383,7 +399,7 @@ impl ElementMesh {
                 return;
             }
             for n in coarse {
-                self.refine(n, scene);
+                self.refine(n);
             }
         }
     }
@@ -499,7 +515,7 @@ mod tests {
         let scene = quad_scene();
         let mut mesh = ElementMesh::new(&scene, &[true]);
         assert_eq!(mesh.vertices.len(), 4, "the quad's diagonal is shared");
-        mesh.refine_to(0.5, &scene);
+        mesh.refine_to(0.5);
         mesh.mark_patches();
         // Refine one corner deeply: propagation must keep neighbours conforming.
         for _ in 0..6 {
@@ -509,7 +525,7 @@ mod tests {
                     .partial_cmp(&mesh.centroid(b).length())
                     .unwrap()
             });
-            mesh.refine(corner.unwrap(), &scene);
+            mesh.refine(corner.unwrap());
         }
         assert_conforming(&mesh);
         let area: f32 = mesh.leaves().map(|n| mesh.nodes[n as usize].area).sum();
@@ -524,7 +540,7 @@ mod tests {
     fn locate_finds_the_leaf_holding_a_point() {
         let scene = quad_scene();
         let mut mesh = ElementMesh::new(&scene, &[true]);
-        mesh.refine_to(0.3, &scene);
+        mesh.refine_to(0.3);
         for (b1, b2) in [(0.1f32, 0.2f32), (0.7, 0.25), (0.0, 0.0), (0.33, 0.33)] {
             let (leaf, w) = mesh.locate(0, b1, b2).unwrap();
             let p = scene

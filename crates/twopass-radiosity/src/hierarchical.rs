@@ -42,7 +42,8 @@ use crate::element::{ElementMesh, barycentric_2d};
 use crate::form_factor::{self, RECEIVER_INSET, hash};
 use crate::solution::Solution;
 use crate::solver::{
-    Energy, Finish, Method, Options, Progress, Residuals, SolveError, luminance, participating,
+    Energy, Finish, Method, Options, Progress, Residuals, SolveError, check_common, luminance,
+    participating,
 };
 
 /// A link: light from `source` gathered at `receiver`.
@@ -52,8 +53,12 @@ struct Link {
     source: NodeRef,
     /// Irradiance per unit source exitance (visibility included) at the receiver's three
     /// corners for a surface receiver; over the whole receiver (three equal values) for a
-    /// cluster.
+    /// cluster. Point values: what the vertices display.
     k: [f32; 3],
+    /// Area-averaged irradiance per unit source exitance less the mean of `k`: what the
+    /// linear interpolant of the corner values misses of the light the receiver gets (surface
+    /// pairs; zero otherwise), added uniformly over the receiver.
+    shift: f32,
     /// Estimated error of the transport per unit source exitance luminance and receiver
     /// reflectance, as power: receiver area (scene units squared) times form-factor error.
     error: f32,
@@ -72,6 +77,7 @@ enum Step {
 /// A link's evaluation.
 struct Eval {
     k: [f64; 3],
+    shift: f64,
     error: f64,
     /// An end is a cluster overlapping the other end's bounding sphere: the far-field estimate
     /// does not hold, the link must be refined.
@@ -120,14 +126,14 @@ pub struct HierarchicalSolver<'s> {
     receivers: Vec<(NodeRef, u32)>,
     /// Per surface node: irradiance its own links gathered at its corners (from emitted and
     /// from reflected light), and its area-averaged exitance (emitted, reflected).
-    gathered: Vec<[[DVec3; 3]; 2]>,
+    gathered: Vec<[[DVec3; 4]; 2]>,
     exitance: Vec<[DVec3; 2]>,
     /// Per surface node and per cluster: the range (largest less smallest) of the exitance
     /// luminance of the leaves below, W/m^2: how far from uniform a source is.
     spread: Vec<f64>,
     cluster_spread: Vec<f64>,
     /// Per surface leaf: irradiance at its corners after push (emitted, reflected light).
-    corners_in: Vec<[[DVec3; 3]; 2]>,
+    corners_in: Vec<[[DVec3; 4]; 2]>,
     /// Per cluster: the same, one value per cluster.
     cluster_gathered: Vec<[DVec3; 2]>,
     cluster_exitance: Vec<[DVec3; 2]>,
@@ -179,18 +185,7 @@ impl<'s> HierarchicalSolver<'s> {
                 problem: format!("{} must be finite and > 0", h.link_tolerance),
             });
         }
-        if options.stop.unshot_fraction.is_nan() || options.stop.unshot_fraction < 0.0 {
-            return Err(SolveError::Option {
-                name: "unshot_fraction",
-                problem: "must be >= 0".into(),
-            });
-        }
-        if options.visibility.min == 0 || options.visibility.max < options.visibility.min {
-            return Err(SolveError::Option {
-                name: "visibility",
-                problem: "needs 1 <= min <= max rays".into(),
-            });
-        }
+        check_common(&options)?;
         let takes_part = participating(scene);
         if !takes_part.iter().any(|&t| t) {
             return Err(SolveError::NothingTakesPart);
@@ -287,10 +282,10 @@ impl<'s> HierarchicalSolver<'s> {
     /// Extends the per-node arrays to new surface nodes and clusters.
     fn grow_arrays(&mut self) {
         let n = self.mesh.nodes.len();
-        self.gathered.resize(n, [[DVec3::ZERO; 3]; 2]);
+        self.gathered.resize(n, [[DVec3::ZERO; 4]; 2]);
         self.exitance.resize(n, [DVec3::ZERO; 2]);
         self.spread.resize(n, 0.0);
-        self.corners_in.resize(n, [[DVec3::ZERO; 3]; 2]);
+        self.corners_in.resize(n, [[DVec3::ZERO; 4]; 2]);
         let c = self.clusters.nodes.len();
         self.cluster_gathered.resize(c, [DVec3::ZERO; 2]);
         self.cluster_exitance.resize(c, [DVec3::ZERO; 2]);
@@ -300,7 +295,10 @@ impl<'s> HierarchicalSolver<'s> {
     /// The oracle: estimated error of a link's transport, as power (W, luminance).
     fn link_error(&self, l: &Link) -> f64 {
         let (e, s) = match l.source.kind() {
-            Kind::Cluster(c) => (self.cluster_exitance[c as usize], self.cluster_spread[c as usize]),
+            Kind::Cluster(c) => (
+                self.cluster_exitance[c as usize],
+                self.cluster_spread[c as usize],
+            ),
             Kind::Surface(n) => (self.exitance[n as usize], self.spread[n as usize]),
         };
         let mean_k = (f64::from(l.k[0]) + f64::from(l.k[1]) + f64::from(l.k[2])) / 3.0;
@@ -409,7 +407,11 @@ impl<'s> HierarchicalSolver<'s> {
                 let (fi, fj, kf) = (f64::from(i), f64::from(j), f64::from(k));
                 let a = self.sample_point(
                     r,
-                    [(fi + unit(h)) / kf, (fj + unit(hash(h))) / kf, unit(hash(h ^ 1))],
+                    [
+                        (fi + unit(h)) / kf,
+                        (fj + unit(hash(h))) / kf,
+                        unit(hash(h ^ 1)),
+                    ],
                 );
                 let b = self.sample_point(
                     s,
@@ -453,7 +455,10 @@ impl<'s> HierarchicalSolver<'s> {
             .try_normalize()
             .unwrap_or(normals[0]);
         let x = p.map(|q| q + (c - q) * RECEIVER_INSET);
-        ([x[0], x[1], x[2], c], [normals[0], normals[1], normals[2], nc])
+        (
+            [x[0], x[1], x[2], c],
+            [normals[0], normals[1], normals[2], nc],
+        )
     }
 
     /// Transport, error estimate and visibility of the link `s -> r`, with `rays` shadow rays.
@@ -464,6 +469,7 @@ impl<'s> HierarchicalSolver<'s> {
         let near = d2 <= reach * reach;
         let far2 = d2.max(reach * reach).max(f64::MIN_POSITIVE);
         let mut near_cluster = false;
+        let mut shift = 0.0;
         let (k, error) = match (r.kind(), s.kind()) {
             (Kind::Surface(p), Kind::Surface(q)) => {
                 let (x, n) = self.receiving_points(p);
@@ -471,23 +477,22 @@ impl<'s> HierarchicalSolver<'s> {
                 let ns = self.scene.mesh.geometric_normals
                     [self.mesh.nodes[q as usize].scene_triangle as usize]
                     .as_dvec3();
-                let f: [f64; 4] =
-                    std::array::from_fn(|i| form_factor::point_to_polygon(x[i], n[i], &poly, Some(ns)));
-                // The receiver's area-averaged form factor by the rule exact for quadratics
-                // (corners 1/12 each, centroid 3/4); the corner values are shifted so their
-                // linear interpolant carries exactly that much light (interpolating a curved
-                // F linearly would otherwise lose or add light with a consistent sign).
+                let f: [f64; 4] = std::array::from_fn(|i| {
+                    form_factor::point_to_polygon(x[i], n[i], &poly, Some(ns))
+                });
+                // The corners keep their exact point values; the receiver's area-averaged
+                // form factor, by the rule exact for quadratics (corners 1/12 each, centroid
+                // 3/4), sets the light it gets: interpolating a curved F linearly would lose
+                // or add light with a consistent sign.
                 let mean = (f[0] + f[1] + f[2]) / 3.0;
-                let shift = 0.75 * (f[3] - mean);
-                let mut k = [f[0] + shift, f[1] + shift, f[2] + shift];
-                if k.iter().any(|&v| v < 0.0) {
-                    let average = mean + shift;
-                    k = [f[0], f[1], f[2]].map(|v| v * average.max(0.0) / mean.max(f64::MIN_POSITIVE));
-                }
+                shift = 0.75 * (f[3] - mean);
                 let (lo, hi) = f
                     .iter()
                     .fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
-                (k, er.area * ((f[3] - mean).abs() + 0.25 * (hi - lo)))
+                (
+                    [f[0], f[1], f[2]],
+                    er.area * ((f[3] - mean).abs() + 0.25 * (hi - lo)),
+                )
             }
             (Kind::Surface(p), Kind::Cluster(_)) => {
                 near_cluster = near;
@@ -517,6 +522,7 @@ impl<'s> HierarchicalSolver<'s> {
         };
         let mut e = Eval {
             k,
+            shift,
             error,
             near: near_cluster,
             partial: false,
@@ -535,6 +541,7 @@ impl<'s> HierarchicalSolver<'s> {
         let mean = (e.k[0] + e.k[1] + e.k[2]) / 3.0;
         e.error = e.error * vis + if e.partial { er.area * mean } else { 0.0 };
         e.k = e.k.map(|v| v * vis);
+        e.shift *= vis;
         e
     }
 
@@ -580,6 +587,7 @@ impl<'s> HierarchicalSolver<'s> {
             receiver: r,
             source: s,
             k: e.k.map(|v| v as f32),
+            shift: e.shift as f32,
             error: e.error as f32,
         };
         if e.near || self.link_error(&link(&e)) > self.eps {
@@ -596,7 +604,9 @@ impl<'s> HierarchicalSolver<'s> {
                 }),
             };
             match receiver_first {
-                Some(true) if allow_split || e.near => return (Step::SplitReceiver(link(&e)), rays),
+                Some(true) if allow_split || e.near => {
+                    return (Step::SplitReceiver(link(&e)), rays);
+                }
                 Some(false) if allow_split || e.near => return (Step::SplitSource(link(&e)), rays),
                 _ => {
                     // Nothing left to split: a finer visibility estimate is all that helps.
@@ -656,7 +666,7 @@ impl<'s> HierarchicalSolver<'s> {
                 split.dedup();
                 for n in split {
                     if self.mesh.nodes[n as usize].children.is_none() {
-                        self.mesh.refine(n, self.scene);
+                        self.mesh.refine(n);
                     }
                 }
                 self.grow_arrays();
@@ -710,9 +720,8 @@ impl<'s> HierarchicalSolver<'s> {
     /// whose error is now too large. Returns how many were refined.
     fn rerefine(&mut self) -> usize {
         let eps = self.eps;
-        let (keep, redo): (Vec<Link>, Vec<Link>) = std::mem::take(&mut self.links)
-            .into_iter()
-            .partition(|l| {
+        let (keep, redo): (Vec<Link>, Vec<Link>) =
+            std::mem::take(&mut self.links).into_iter().partition(|l| {
                 !(self.link_error(l) > eps
                     && (self.splittable(l.receiver) || self.splittable(l.source)))
             });
@@ -733,7 +742,7 @@ impl<'s> HierarchicalSolver<'s> {
     fn iterate(&mut self) {
         let links = &self.links;
         let receivers = &self.receivers;
-        let sums: Vec<[[DVec3; 3]; 2]> = receivers
+        let sums: Vec<[[DVec3; 4]; 2]> = receivers
             .par_iter()
             .enumerate()
             .with_min_len(64)
@@ -741,7 +750,7 @@ impl<'s> HierarchicalSolver<'s> {
                 let end = receivers
                     .get(i + 1)
                     .map_or(links.len(), |&(_, e)| e as usize);
-                let mut acc = [[DVec3::ZERO; 3]; 2];
+                let mut acc = [[DVec3::ZERO; 4]; 2];
                 for l in &links[start as usize..end] {
                     let [be, br] = self.source_exitance(l.source);
                     for c in 0..3 {
@@ -749,12 +758,15 @@ impl<'s> HierarchicalSolver<'s> {
                         acc[0][c] += be * k;
                         acc[1][c] += br * k;
                     }
+                    let s = f64::from(l.shift);
+                    acc[0][3] += be * s;
+                    acc[1][3] += br * s;
                 }
                 acc
             })
             .collect();
         for g in &mut self.gathered {
-            *g = [[DVec3::ZERO; 3]; 2];
+            *g = [[DVec3::ZERO; 4]; 2];
         }
         for g in &mut self.cluster_gathered {
             *g = [DVec3::ZERO; 2];
@@ -774,7 +786,7 @@ impl<'s> HierarchicalSolver<'s> {
         for n in self.mesh.leaves() {
             let node = &self.mesh.nodes[n as usize];
             let [e, r] = self.corners_in[n as usize];
-            let irr = (e[0] + e[1] + e[2] + r[0] + r[1] + r[2]) / 3.0;
+            let irr = (e[0] + e[1] + e[2] + r[0] + r[1] + r[2]) / 3.0 + e[3] + r[3];
             let a = f64::from(node.area);
             arrived += irr * a;
             absorbed += irr * a * (DVec3::ONE - self.tri_rho[node.scene_triangle as usize]);
@@ -810,7 +822,7 @@ impl<'s> HierarchicalSolver<'s> {
                 self.push_cluster(c, [DVec3::ZERO; 2]);
             }
             Kind::Surface(n) => {
-                self.push_surface(n, [[DVec3::ZERO; 3]; 2]);
+                self.push_surface(n, [[DVec3::ZERO; 4]; 2]);
             }
         }
     }
@@ -825,7 +837,13 @@ impl<'s> HierarchicalSolver<'s> {
         for child in self.clusters.nodes[c as usize].children {
             let (p, r) = match child.kind() {
                 Kind::Cluster(cc) => self.push_cluster(cc, here),
-                Kind::Surface(n) => self.push_surface(n, [[here[0]; 3], [here[1]; 3]]),
+                Kind::Surface(n) => self.push_surface(
+                    n,
+                    [
+                        [here[0], here[0], here[0], DVec3::ZERO],
+                        [here[1], here[1], here[1], DVec3::ZERO],
+                    ],
+                ),
             };
             power[0] += p[0];
             power[1] += p[1];
@@ -839,20 +857,19 @@ impl<'s> HierarchicalSolver<'s> {
 
     /// Returns the surface node's area-weighted exitance sum (W) and the range of its leaves'
     /// exitance luminance.
-    fn push_surface(&mut self, n: u32, inherited: [[DVec3; 3]; 2]) -> ([DVec3; 2], (f64, f64)) {
+    fn push_surface(&mut self, n: u32, inherited: [[DVec3; 4]; 2]) -> ([DVec3; 2], (f64, f64)) {
         let node = self.mesh.nodes[n as usize];
         let g = self.gathered[n as usize];
-        let here: [[DVec3; 3]; 2] =
+        let here: [[DVec3; 4]; 2] =
             std::array::from_fn(|o| std::array::from_fn(|k| inherited[o][k] + g[o][k]));
         let area = f64::from(node.area);
         let (power, range) = match node.children {
             None => {
                 let t = node.scene_triangle as usize;
-                let mean = |o: usize| (here[o][0] + here[o][1] + here[o][2]) / 3.0;
-                let b = [
-                    self.tri_emission[t],
-                    self.tri_rho[t] * (mean(0) + mean(1)),
-                ];
+                // The light the leaf gets: its corners' linear interpolant plus the shifts of
+                // the links above it (see `Link::shift`).
+                let mean = |o: usize| (here[o][0] + here[o][1] + here[o][2]) / 3.0 + here[o][3];
+                let b = [self.tri_emission[t], self.tri_rho[t] * (mean(0) + mean(1))];
                 self.corners_in[n as usize] = here;
                 let y = luminance(b[0] + b[1]);
                 ([b[0] * area, b[1] * area], (y, y))
@@ -863,11 +880,14 @@ impl<'s> HierarchicalSolver<'s> {
                 for ch in children {
                     let child_uv = self.mesh.nodes[ch as usize].uv;
                     let w = child_uv.map(|p| barycentric_2d(node.uv, p));
-                    let down: [[DVec3; 3]; 2] = std::array::from_fn(|o| {
-                        std::array::from_fn(|k| {
-                            here[o][0] * f64::from(w[k][0])
-                                + here[o][1] * f64::from(w[k][1])
-                                + here[o][2] * f64::from(w[k][2])
+                    let down: [[DVec3; 4]; 2] = std::array::from_fn(|o| {
+                        std::array::from_fn(|k| match w.get(k) {
+                            Some(w) => {
+                                here[o][0] * f64::from(w[0])
+                                    + here[o][1] * f64::from(w[1])
+                                    + here[o][2] * f64::from(w[2])
+                            }
+                            None => here[o][3],
                         })
                     });
                     let (p, r) = self.push_surface(ch, down);
@@ -990,8 +1010,10 @@ impl<'s> HierarchicalSolver<'s> {
             let a = f64::from(node.area).max(f64::MIN_POSITIVE);
             let [e, r] = self.corners_in[n as usize];
             for (k, &v) in node.vertices.iter().enumerate() {
-                sum[v as usize][0] += e[k] * a;
-                sum[v as usize][1] += r[k] * a;
+                // Corner values plus the links' shifts, so the displayed light is the light
+                // the leaf gets (see `Link::shift`).
+                sum[v as usize][0] += (e[k] + e[3]) * a;
+                sum[v as usize][1] += (r[k] + r[3]) * a;
                 weight[v as usize] += a;
             }
         }
@@ -1025,10 +1047,7 @@ impl<'s> HierarchicalSolver<'s> {
         let leaves: Vec<u32> = self.mesh.leaves().collect();
         let step = (leaves.len() / samples.max(1)).max(1);
         let picked: Vec<u32> = leaves.iter().copied().step_by(step).take(samples).collect();
-        let sums: Vec<f64> = picked
-            .par_iter()
-            .map(|&leaf| self.row_sum(leaf))
-            .collect();
+        let sums: Vec<f64> = picked.par_iter().map(|&leaf| self.row_sum(leaf)).collect();
         let ss: Vec<Link> = self
             .links
             .iter()
@@ -1050,10 +1069,11 @@ impl<'s> HierarchicalSolver<'s> {
             .map(|l| {
                 let back = self.evaluate(l.source, l.receiver, self.options.visibility.max);
                 let fwd = self.evaluate(l.receiver, l.source, self.options.visibility.max);
-                let mean = |k: [f64; 3]| (k[0] + k[1] + k[2]) / 3.0;
+                // Area-averaged form factors: the corners' mean plus the shift.
+                let average = |e: &Eval| (e.k[0] + e.k[1] + e.k[2]) / 3.0 + e.shift;
                 (
-                    self.ends(l.receiver).area * mean(fwd.k),
-                    self.ends(l.source).area * mean(back.k),
+                    self.ends(l.receiver).area * average(&fwd),
+                    self.ends(l.source).area * average(&back),
                 )
             })
             .collect();
@@ -1098,7 +1118,11 @@ impl<'s> HierarchicalSolver<'s> {
             };
             let [a, m, c] = self.mesh.nodes[c0 as usize].uv;
             let side = |q: Vec2| (c - m).perp_dot(q - m);
-            n = if side(centre) * side(a) >= 0.0 { c0 } else { c1 };
+            n = if side(centre) * side(a) >= 0.0 {
+                c0
+            } else {
+                c1
+            };
         }
         let sum_links = |r: NodeRef| -> f64 {
             let Ok(i) = self.receivers.binary_search_by_key(&r, |&(x, _)| x) else {

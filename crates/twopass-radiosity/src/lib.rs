@@ -41,8 +41,8 @@ pub use direct::{MAX_DENSE_VERTICES, dense_solve};
 pub use form_factor::VisibilityRays;
 pub use hierarchical::HierarchicalSolver;
 pub use progressive::Progressive;
-pub use solver::{
-    Adaptive, Energy, Finish, Hierarchical, Method, Options, Progress, Residuals, SolveError,
-    Solver, Stop,
-};
 pub use solution::Solution;
+pub use solver::{
+    Adaptive, Energy, Finish, Hierarchical, MAX_VISIBILITY_RAYS, Method, Options, Progress,
+    Residuals, SolveError, Solver, Stop,
+};

@@ -12,7 +12,14 @@ use twopass_scene::{Scene, SurfacePoint};
 use crate::element::ElementMesh;
 use crate::form_factor::{self, RECEIVER_INSET, hash};
 use crate::solution::Solution;
-use crate::solver::{luminance, Adaptive, Energy, Finish, Options, Progress, Residuals, SolveError};
+use crate::solver::{
+    Adaptive, Energy, Finish, Options, Progress, Residuals, SolveError, check_common, luminance,
+    participating,
+};
+
+/// Approximate bytes per element: the node, its share of vertices with their per-vertex sums
+/// and receiving points, the edge map and the patch lists.
+const BYTES_PER_ELEMENT: f64 = 400.0;
 
 /// A progressive-refinement radiosity solve over a scene. Deterministic: the same options and
 /// seed give the same solution bit for bit on any number of threads.
@@ -50,7 +57,6 @@ pub struct Progressive<'s> {
     refining: Duration,
 }
 
-
 fn rgb(v: Rgb) -> DVec3 {
     v.as_dvec3()
 }
@@ -73,36 +79,41 @@ impl<'s> Progressive<'s> {
                 });
             }
         }
-        if options.stop.unshot_fraction.is_nan() || options.stop.unshot_fraction < 0.0 {
-            return Err(SolveError::Option {
-                name: "unshot_fraction",
-                problem: "must be >= 0".into(),
-            });
-        }
-        if options.visibility.min == 0 || options.visibility.max < options.visibility.min {
-            return Err(SolveError::Option {
-                name: "visibility",
-                problem: "needs 1 <= min <= max rays".into(),
-            });
-        }
-        let takes_part: Vec<bool> = scene
-            .objects
-            .iter()
-            .map(|o| {
-                o.emission.max_element() > 0.0
-                    || scene.materials[o.material as usize]
-                        .material
-                        .reflects_diffusely()
-            })
-            .collect();
+        check_common(&options)?;
+        let takes_part = participating(scene);
         if !takes_part.iter().any(|&t| t) {
             return Err(SolveError::NothingTakesPart);
         }
+        // Bisection leaves of longest edge at most L have an area of L^2 / 8 or more: refuse
+        // up front a mesh that would not fit instead of refining until the allocator gives up.
+        let elements: f64 = scene
+            .mesh
+            .triangle_object
+            .iter()
+            .zip(&scene.mesh.areas)
+            .filter(|&(&o, _)| takes_part[o as usize])
+            .map(|(_, &a)| (8.0 * f64::from(a) / f64::from(element_size).powi(2)).max(1.0))
+            .sum();
+        let patches: f64 = scene
+            .mesh
+            .areas
+            .iter()
+            .map(|&a| (8.0 * f64::from(a) / f64::from(patch_size).powi(2)).max(1.0))
+            .sum();
+        let bytes = elements * BYTES_PER_ELEMENT
+            + (patches * elements * 2.0).min(options.cache_bytes as f64);
+        if bytes > options.memory_limit as f64 {
+            return Err(SolveError::TooLarge {
+                what: format!("about {elements:.3e} elements of {element_size} scene units"),
+                bytes: bytes.min(u64::MAX as f64) as u64,
+                limit: options.memory_limit,
+            });
+        }
         let started = Instant::now();
         let mut mesh = ElementMesh::new(scene, &takes_part);
-        mesh.refine_to(patch_size, scene);
+        mesh.refine_to(patch_size);
         mesh.mark_patches();
-        mesh.refine_to(element_size, scene);
+        mesh.refine_to(element_size);
         let mut s = Self {
             scene,
             options,
@@ -192,15 +203,15 @@ impl<'s> Progressive<'s> {
     /// Form factors (with visibility) from every vertex in `vertices` to patch `p`, and the
     /// shadow rays cast. Parallel over vertices; each value depends only on (seed, vertex,
     /// patch), never on scheduling.
-    fn form_factors(&self, p: usize, vertices: std::ops::Range<usize>) -> (Vec<f32>, u64) {
+    fn form_factors(&self, p: usize, vertices: &[usize]) -> (Vec<f32>, u64) {
         let node = self.mesh.nodes[self.mesh.patches[p] as usize];
         let shooter = self.mesh.corners(self.mesh.patches[p]);
         let shooter_tri = node.scene_triangle;
         let ns = self.scene.mesh.geometric_normals[shooter_tri as usize].as_dvec3();
         let results: Vec<(f32, u64)> = vertices
-            .into_par_iter()
+            .par_iter()
             .with_min_len(64)
-            .map(|v| {
+            .map(|&v| {
                 let vert = &self.mesh.vertices[v];
                 // Evaluated a hair inside the vertex's own triangle: a vertex on a junction
                 // lies in the plane of the surface it meets, which it would see edge-on
@@ -245,7 +256,7 @@ impl<'s> Progressive<'s> {
         if have == n {
             return self.cache[p].clone().expect("cached row");
         }
-        let (fresh, rays) = self.form_factors(p, have..n);
+        let (fresh, rays) = self.form_factors(p, &(have..n).collect::<Vec<_>>());
         self.rays += rays;
         let mut row = self.cache[p].take().unwrap_or_default();
         row.extend_from_slice(&fresh);
@@ -401,7 +412,7 @@ impl<'s> Progressive<'s> {
             .collect();
         let mut splits = 0;
         for l in split {
-            splits += self.mesh.refine(l, self.scene);
+            splits += self.mesh.refine(l);
         }
         if splits == 0 {
             return 0;
@@ -527,20 +538,30 @@ impl<'s> Progressive<'s> {
     /// reciprocity A_p F_pq = A_q F_qp on up to `samples` pairs of patches, with the patch-to-
     /// patch form factors integrated from the vertex ones. Pairs are picked deterministically.
     pub fn residuals(&mut self, samples: usize) -> Residuals {
-        let rows = self.form_factor_rows();
         let weights = self.patch_weights();
         let areas = self.patch_areas();
         let n_v = self.mesh.vertices.len();
         let n_p = self.mesh.patches.len();
-        let step = (n_v / samples.max(1)).max(1);
-        let sums: Vec<f64> = (0..n_v)
-            .step_by(step)
-            .map(|v| rows.iter().map(|r| f64::from(r[v])).sum())
-            .collect();
-        let patch_ff = |p: usize, q: usize| {
+        // A row sum costs one form factor per patch: take no more rows than a tenth of the
+        // rays the solve cast pays for, so the report never rivals the solve.
+        let per_row = (n_p as u64 * u64::from(self.options.visibility.min)).max(1);
+        let rows = (samples as u64).min((self.rays / 10 / per_row).max(1)) as usize;
+        let step = (n_v / rows.max(1)).max(1);
+        let picked: Vec<usize> = (0..n_v).step_by(step).take(rows).collect();
+        let mut sums = vec![0.0f64; picked.len()];
+        for q in 0..n_p {
+            for (s, f) in sums.iter_mut().zip(self.form_factors_at(q, &picked)) {
+                *s += f64::from(f);
+            }
+        }
+        // F_pq from the vertex form factors of p's vertices to q, area-weighted.
+        let patch_ff = |s: &mut Self, p: usize, q: usize| {
+            let vs: Vec<usize> = weights[p].iter().map(|&(v, _)| v as usize).collect();
+            let f = s.form_factors_at(q, &vs);
             weights[p]
                 .iter()
-                .map(|&(v, w)| w * f64::from(rows[q][v as usize]))
+                .zip(f)
+                .map(|(&(_, w), f)| w * f64::from(f))
                 .sum::<f64>()
         };
         let (mut spread, mut diff, mut scale) = (0.0_f64, 0.0, 0.0);
@@ -550,8 +571,14 @@ impl<'s> Progressive<'s> {
                 (hash(k) % n_p as u64) as usize,
                 (hash(k ^ 0xABCD) % n_p as u64) as usize,
             );
-            let (a, b) = (areas[p] * patch_ff(p, q), areas[q] * patch_ff(q, p));
-            if p != q && a.max(b) > 0.0 {
+            if p == q {
+                continue;
+            }
+            let (a, b) = (
+                areas[p] * patch_ff(self, p, q),
+                areas[q] * patch_ff(self, q, p),
+            );
+            if a.max(b) > 0.0 {
                 spread = spread.max((a - b).abs() / a.max(b));
                 diff += (a - b).abs();
                 scale += a.max(b);
@@ -567,6 +594,19 @@ impl<'s> Progressive<'s> {
             reciprocity_spread: spread,
             reciprocity_mean: diff / scale.max(f64::MIN_POSITIVE),
         }
+    }
+
+    /// Form factors of the given vertices to patch `p`: from the cache where the row is
+    /// cached, computed (and counted in the rays) where not.
+    fn form_factors_at(&mut self, p: usize, vertices: &[usize]) -> Vec<f32> {
+        if let Some(row) = &self.cache[p]
+            && vertices.iter().all(|&v| v < row.len())
+        {
+            return vertices.iter().map(|&v| row[v]).collect();
+        }
+        let (f, rays) = self.form_factors(p, vertices);
+        self.rays += rays;
+        f
     }
 
     /// The element mesh.

@@ -329,6 +329,36 @@ pub(crate) fn luminance(c: DVec3) -> f64 {
     0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
 }
 
+/// Checks the options both solvers share.
+pub(crate) fn check_common(options: &Options) -> Result<(), SolveError> {
+    if options.stop.unshot_fraction.is_nan() || options.stop.unshot_fraction < 0.0 {
+        return Err(SolveError::Option {
+            name: "unshot_fraction",
+            problem: "must be >= 0".into(),
+        });
+    }
+    if options.visibility.min == 0 || options.visibility.max < options.visibility.min {
+        return Err(SolveError::Option {
+            name: "visibility",
+            problem: "needs 1 <= min <= max rays".into(),
+        });
+    }
+    if options.visibility.max > MAX_VISIBILITY_RAYS {
+        return Err(SolveError::Option {
+            name: "visibility",
+            problem: format!(
+                "{} rays per estimate is more than the {MAX_VISIBILITY_RAYS} that help",
+                options.visibility.max
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// Most shadow rays one visibility estimate may take: beyond this the estimate's noise is
+/// far below the discretization error, and the solve's time would only grow.
+pub const MAX_VISIBILITY_RAYS: u32 = 4096;
+
 /// Per object: whether it takes part in radiosity (it emits or reflects diffusely); the others
 /// only cast shadows.
 pub(crate) fn participating(scene: &Scene) -> Vec<bool> {

@@ -246,9 +246,9 @@ fn radiosity_scale(args: &RadiosityArgs, ctx: &Context) -> Result<(), CliError> 
             (now / before).ln() / (scene.mesh.triangles.len() as f64 / prev.triangles as f64).ln()
         };
         let time_growth = rows.last().map(|r| growth(seconds, r.seconds, r));
-        let memory_growth = rows.last().and_then(|r| {
-            Some(growth(peak?, r.peak_memory_mib?, r))
-        });
+        let memory_growth = rows
+            .last()
+            .and_then(|r| Some(growth(peak?, r.peak_memory_mib?, r)));
         rows.push(ScaleRow {
             requested: n,
             triangles: scene.mesh.triangles.len(),

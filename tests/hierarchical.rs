@@ -1,0 +1,278 @@
+//! Hierarchical radiosity with clustering against closed forms and against progressive
+//! refinement: the furnace, the energy balance of a closed room, reciprocity of the links,
+//! agreement with progressive refinement on the Cornell box, a crack-free element mesh,
+//! determinism across thread counts and the memory limit.
+
+use std::f64::consts::PI;
+use std::ops::ControlFlow;
+use std::path::Path;
+
+use glam::{DVec3, Vec3};
+use twopass_radiosity::{
+    Finish, Hierarchical, HierarchicalSolver, Method, Options, SolveError, Solver, Stop,
+};
+use twopass_scene::{DiffuseRadiance, Scene, load, load_toml};
+
+use crate::radiosity::{cube, lambert, quad};
+use crate::scene_path;
+
+fn options(unshot: f64) -> Options {
+    Options {
+        method: Method::Hierarchical,
+        stop: Stop {
+            unshot_fraction: unshot,
+            ..Stop::default()
+        },
+        ..Options::default()
+    }
+}
+
+fn solve(scene: &Scene, options: Options) -> HierarchicalSolver<'_> {
+    let mut solver = HierarchicalSolver::new(scene, options).unwrap();
+    let finish = solver.run(|_| ControlFlow::Continue(()));
+    assert_eq!(finish, Finish::Converged);
+    solver
+}
+
+/// The area-weighted mean and the worst relative departure of the solution's vertex radiosity
+/// from `expected`.
+fn departure(solver: &HierarchicalSolver<'_>, expected: f64) -> (f64, f64) {
+    let s = solver.solution();
+    let b = s.vertex_radiosity();
+    let mesh = s.mesh();
+    let (mut sum, mut area, mut worst) = (0.0, 0.0, 0.0f64);
+    for n in mesh.leaves() {
+        let node = &mesh.nodes[n as usize];
+        let a = f64::from(node.area);
+        for &v in &node.vertices {
+            let x = b[v as usize].as_dvec3();
+            sum += x.element_sum() / 3.0 * a / 3.0;
+            worst = worst.max((x - DVec3::splat(expected)).abs().max_element() / expected);
+        }
+        area += a;
+    }
+    ((sum / area - expected).abs() / expected, worst)
+}
+
+#[test]
+fn furnace_converges_to_e_over_one_minus_rho() {
+    // A closed cube, every face emitting L_e = 1 and reflecting rho: B = pi / (1 - rho)
+    // everywhere. Light is conserved link by link (the links from a closed room carry all of
+    // a receiver's light), so the mean is right to the stop criterion and the form-factor
+    // quadrature; the vertices show the linear interpolation of the links' corner values,
+    // whose error shrinks as the link tolerance refines the links.
+    for rho in [0.0, 0.5, 0.9, 0.99] {
+        let s = cube(rho, 1.0);
+        let expected = PI / (1.0 - rho);
+        let mut worst = Vec::new();
+        for tolerance in [2e-5, 2e-6] {
+            let o = Options {
+                hierarchical: Hierarchical {
+                    link_tolerance: tolerance,
+                    ..Hierarchical::default()
+                },
+                ..options(1e-6)
+            };
+            let (mean, w) = departure(&solve(&s, o), expected);
+            eprintln!("furnace rho {rho} tolerance {tolerance:e}: mean {mean:.2e}, worst {w:.2e}");
+            assert!(
+                mean < 1e-3,
+                "rho {rho}: mean radiosity {mean} from {expected}"
+            );
+            worst.push(w);
+        }
+        assert!(
+            rho == 0.0 || worst[1] < 0.75 * worst[0],
+            "rho {rho}: vertex error {worst:?} does not shrink with the link tolerance"
+        );
+    }
+}
+
+#[test]
+fn a_closed_room_loses_no_light() {
+    // One face of a closed cube emits: at convergence everything emitted is absorbed; what
+    // the gathers sent but did not deliver (escaped) is the links' discretization error.
+    let text = format!(
+        "version = 1\n[camera]\nposition = [0.5, 0.5, 0.1]\nlook_at = [0.5, 0.5, 1]\nfov_y = 60\n{}",
+        lambert("w", 0.5)
+    );
+    let faces = [
+        ([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
+        ([0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]),
+        ([0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]),
+        ([0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]),
+        ([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]),
+        ([1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]),
+    ];
+    let objects: String = faces
+        .iter()
+        .enumerate()
+        .map(|(i, (o, u, v))| quad(&format!("f{i}"), "w", *o, *u, *v, (i == 3).then_some(1.0)))
+        .collect();
+    let s = load_toml(&format!("{text}{objects}"), Path::new("room.toml"))
+        .unwrap()
+        .0;
+    let mut solver = solve(&s, options(1e-6));
+    let e = solver.progress().energy;
+    eprintln!("{e:?}");
+    let emitted = e.emitted.element_sum();
+    assert!(e.escaped.abs().element_sum() < 5e-3 * emitted, "{e:?}");
+    assert!(
+        (e.absorbed.element_sum() - emitted).abs() < 5e-3 * emitted,
+        "{e:?}"
+    );
+    assert!(solver.progress().worst_imbalance < 1e-9);
+    let r = solver.residuals(400);
+    eprintln!("{r:?}");
+    // Reciprocity A_r F_rs = A_s F_sr of the surface links, each against a fresh estimate of
+    // its reverse.
+    assert!(r.reciprocity_pairs >= 100, "{r:?}");
+    assert!(r.reciprocity_mean < 0.05, "{r:?}");
+}
+
+fn relative_rms(a: &[Vec3], b: &[Vec3]) -> f64 {
+    let (mut num, mut den) = (0.0, 0.0);
+    for (x, y) in a.iter().zip(b) {
+        num += f64::from((*x - *y).length_squared());
+        den += f64::from(y.length_squared());
+    }
+    (num / den).sqrt()
+}
+
+#[test]
+fn cornell_box_agrees_with_progressive_refinement() {
+    // Progressive refinement agrees with the dense solve to 1 % relative RMS at unshot 1e-3
+    // (tests/radiosity.rs); the hierarchical solver must agree with it as well, looked up at
+    // the hierarchical solver's own vertices.
+    let (s, _) = load(scene_path("cornell-box.toml")).unwrap();
+    let h = solve(&s, options(1e-3)).solution();
+    let mut p = Solver::new(
+        &s,
+        Options {
+            method: Method::Progressive,
+            ..options(1e-3)
+        },
+    )
+    .unwrap();
+    p.run(|_| ControlFlow::Continue(()));
+    let p = p.solution();
+    let at_h: Vec<Vec3> = h
+        .mesh()
+        .vertices
+        .iter()
+        .map(|v| {
+            let b = s
+                .mesh
+                .barycentric(v.triangle, v.position.as_dvec3())
+                .map(|x| x as f32);
+            p.radiance(v.triangle, b) * std::f32::consts::PI
+        })
+        .collect();
+    let rms = relative_rms(&h.vertex_radiosity(), &at_h);
+    eprintln!("hierarchical vs progressive: {rms:.4}");
+    assert!(rms < 1e-2, "relative RMS {rms}");
+}
+
+#[test]
+fn leaves_form_a_crack_free_mesh() {
+    // No vertex of a surface lies inside another leaf's edge of that surface (no T-vertices)
+    // after link refinement split elements all over the Cornell box. (Separate objects, such
+    // as a block standing on the floor, are separate surfaces and may touch anywhere.)
+    let (s, _) = load(scene_path("cornell-box.toml")).unwrap();
+    let solver = solve(&s, options(1e-2));
+    let mesh = solver.mesh();
+    let leaves: Vec<u32> = mesh.leaves().collect();
+    assert!(leaves.len() > 500, "{} leaves", leaves.len());
+    for &n in &leaves {
+        let v = mesh.nodes[n as usize].vertices;
+        for k in 0..3 {
+            let (a, b) = (v[k], v[(k + 1) % 3]);
+            let (pa, pb) = (
+                mesh.vertices[a as usize].position.as_dvec3(),
+                mesh.vertices[b as usize].position.as_dvec3(),
+            );
+            let object = mesh.vertices[a as usize].object;
+            for (i, q) in mesh.vertices.iter().enumerate() {
+                if i as u32 == a || i as u32 == b || q.object != object {
+                    continue;
+                }
+                let q = q.position.as_dvec3();
+                let t = (q - pa).dot(pb - pa) / (pb - pa).length_squared();
+                let off = (pa + (pb - pa) * t - q).length();
+                assert!(
+                    !(t > 1e-4 && t < 1.0 - 1e-4 && off < 1e-3),
+                    "vertex {i} {:?} hangs on edge ({a} {:?}, {b} {:?})",
+                    mesh.vertices[i],
+                    mesh.vertices[a as usize],
+                    mesh.vertices[b as usize]
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn same_solution_on_any_thread_count() {
+    let (s, _) = load(scene_path("cornell-box.toml")).unwrap();
+    let run = |threads| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| solve(&s, options(1e-2)).solution().vertex_radiosity())
+    };
+    assert_eq!(run(1), run(2));
+}
+
+#[test]
+fn auto_picks_the_solver_by_scene_size() {
+    let (small, _) = load(scene_path("cornell-box.toml")).unwrap();
+    assert_eq!(Method::Auto.choose(&small).0, Method::Progressive);
+    let (large, _) = twopass_scene::workload::synthetic_scene(10_000, 0).unwrap();
+    let (method, reason) = Method::Auto.choose(&large);
+    assert_eq!(method, Method::Hierarchical);
+    assert!(reason.contains("triangles take part"), "{reason}");
+}
+
+#[test]
+fn a_scene_that_does_not_fit_is_refused_before_it_is_built() {
+    let (s, _) = load(scene_path("cornell-box.toml")).unwrap();
+    for method in [Method::Progressive, Method::Hierarchical] {
+        let o = Options {
+            method,
+            memory_limit: 1000,
+            ..Options::default()
+        };
+        match Solver::new(&s, o) {
+            Err(SolveError::TooLarge { bytes, limit, .. }) => assert!(bytes > limit),
+            Err(e) => panic!("{method:?}: {e}"),
+            Ok(_) => panic!("{method:?}: accepted"),
+        }
+    }
+    // An element size far below the scene's scale asks for ~10^17 elements.
+    let o = Options {
+        method: Method::Progressive,
+        element_size: Some(1e-6),
+        ..Options::default()
+    };
+    assert!(matches!(
+        Solver::new(&s, o),
+        Err(SolveError::TooLarge { .. })
+    ));
+}
+
+#[test]
+fn emitters_over_twelve_decades_scale_linearly() {
+    // The solve is linear in the emission: 1e-6 and 1e6 give the same solution up to scale,
+    // with nothing non-finite.
+    let s = |e: f64| cube(0.5, e);
+    let (lo, hi) = (s(1e-6), s(1e6));
+    let a = solve(&lo, options(1e-4)).solution().vertex_radiosity();
+    let b = solve(&hi, options(1e-4)).solution().vertex_radiosity();
+    for (x, y) in a.iter().zip(&b) {
+        assert!(x.is_finite() && y.is_finite());
+        let (x, y) = (x.as_dvec3() * 1e6, y.as_dvec3() * 1e-6);
+        assert!((x - y).length() <= 1e-4 * y.length(), "{x} vs {y}");
+    }
+    let _ = DVec3::ZERO;
+}
