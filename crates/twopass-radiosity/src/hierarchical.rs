@@ -922,7 +922,8 @@ impl<'s> HierarchicalSolver<'s> {
             if stop.max_shots.is_some_and(|m| self.iterations >= m) {
                 return Finish::MaxShots;
             }
-            if self.deadline_passed() {
+            // One gather at least, so a solution cut short still has its direct light.
+            if self.deadline_passed() && self.iterations > 0 {
                 return Finish::TimeBudget;
             }
             self.iterate();

@@ -473,6 +473,14 @@ impl<'s> Progressive<'s> {
                 Some(a) if rounds_left > 0 => a.at_unshot_fraction.max(stop.unshot_fraction),
                 _ => stop.unshot_fraction,
             };
+            // An adaptive round computes the new vertices' rows to every patch, which can take
+            // as long as the shots so far: none is started past half the time budget.
+            if stop
+                .time_budget
+                .is_some_and(|b| self.started.elapsed() * 2 >= b)
+            {
+                rounds_left = 0;
+            }
             if self.unshot_fraction() <= target {
                 if let (Some(a), true) = (adaptive, rounds_left > 0) {
                     rounds_left -= 1;

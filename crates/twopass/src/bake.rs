@@ -115,8 +115,9 @@ pub struct SolveArgs {
     /// Stop after this many shots (progressive) or gather iterations (hierarchical).
     #[arg(long, value_name = "N")]
     pub max_shots: Option<u64>,
-    /// Stop after this much wall-clock time, seconds (the result is usable but not
-    /// deterministic then).
+    /// Stop after this much wall-clock time, seconds: for `bake`, the whole process (loading,
+    /// the solve, the residual report and the files); the result is usable but not
+    /// deterministic then.
     #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
     pub time_budget: Option<Duration>,
     /// Longest patch (shooter) edge, scene units [default: scene diagonal / 8].
@@ -255,14 +256,39 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
     };
     let solve = preset_solve.as_ref().unwrap_or(&args.solve);
     let options = solve.options(ctx.seed);
-    let mut solver = Solver::new(&scene, options.clone()).map_err(|source| CliError::Solve {
+    // `--time-budget` bounds the whole process: what loading took is spent, and a tenth (at
+    // most 2 s) is kept for the residual report and the files.
+    let reserve = |total: Duration| (total / 10).min(Duration::from_secs(2));
+    let solve_options = Options {
+        stop: Stop {
+            time_budget: options.stop.time_budget.map(|total| {
+                total
+                    .saturating_sub(started.elapsed())
+                    .saturating_sub(reserve(total))
+            }),
+            ..options.stop
+        },
+        ..options.clone()
+    };
+    let mut solver = Solver::new(&scene, solve_options).map_err(|source| CliError::Solve {
         path: args.scene.clone(),
         source,
     })?;
+    if ctx.chatty() {
+        let (_, reason) = options.method.choose(&scene);
+        eprintln!("radiosity: {} solver ({reason})", solver.method().name());
+    }
     let finish = solve.run(&mut solver, ctx);
     let progress = solver.progress();
     let residuals_started = Instant::now();
-    let residuals = solver.residuals(args.residual_samples);
+    // Out of time: a token report rather than an overrun.
+    let samples = match options.stop.time_budget {
+        Some(total) if started.elapsed() + reserve(total) / 2 > total => {
+            args.residual_samples.min(10)
+        }
+        _ => args.residual_samples,
+    };
+    let residuals = solver.residuals(samples);
     let residuals_time = residuals_started.elapsed();
     let solution = solver.solution();
     let mut manifest = Manifest::new(
@@ -271,7 +297,7 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
         finish,
         &progress,
         &residuals,
-        args.residual_samples,
+        samples,
         residuals_time,
     );
     manifest.timings.load_s = load_time.as_secs_f64();

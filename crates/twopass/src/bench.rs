@@ -65,6 +65,10 @@ pub struct RadiosityArgs {
     /// The solver of the `--generate` runs.
     #[arg(long, value_enum, default_value = "hierarchical")]
     pub solver: crate::bake::SolverChoice,
+    /// With `--generate`: also draw time and peak memory against the triangle count on
+    /// log-log axes into this PNG.
+    #[arg(long, value_name = "FILE", requires = "generate")]
+    pub plot: Option<PathBuf>,
     /// Element counts to aim at (the mesh reaches about these by bisection).
     #[arg(long, value_delimiter = ',', default_values_t = [1000u32, 10_000, 50_000, 200_000])]
     pub elements: Vec<u32>,
@@ -273,6 +277,9 @@ fn radiosity_scale(args: &RadiosityArgs, ctx: &Context) -> Result<(), CliError> 
         progress.inc(1);
     }
     progress.finish_and_clear();
+    if let Some(path) = &args.plot {
+        plot_scale(path, &rows)?;
+    }
     if ctx.json {
         println!(
             "{}",
@@ -321,6 +328,82 @@ fn radiosity_scale(args: &RadiosityArgs, ctx: &Context) -> Result<(), CliError> 
         }
     }
     Ok(())
+}
+
+/// Time and peak memory of the scale runs against the triangle count, log-log, each with a
+/// line of slope 1 (linear growth) through its first point.
+fn plot_scale(path: &std::path::Path, rows: &[ScaleRow]) -> Result<(), CliError> {
+    use plotters::prelude::*;
+    let series: [(&str, &str, Vec<(f64, f64)>); 2] = [
+        (
+            "solve time",
+            "seconds",
+            rows.iter()
+                .map(|r| (r.triangles as f64, r.seconds))
+                .collect(),
+        ),
+        (
+            "peak memory",
+            "MiB",
+            rows.iter()
+                .filter_map(|r| Some((r.triangles as f64, r.peak_memory_mib?)))
+                .collect(),
+        ),
+    ];
+    crate::figure::png(path, 1100, 460, |root| {
+        let panels = root.split_evenly((1, 2));
+        for (area, (name, unit, points)) in panels.iter().zip(&series) {
+            let Some(&(n0, y0)) = points.first() else {
+                continue;
+            };
+            let (nmax, ymax) = points
+                .iter()
+                .fold((n0, y0), |(a, b), &(n, y)| (a.max(n), b.max(y)));
+            let ymin = points.iter().fold(y0, |a, &(_, y)| a.min(y));
+            let mut chart = ChartBuilder::on(area)
+                .caption(
+                    format!("hierarchical radiosity: {name}"),
+                    (crate::figure::FONT, 20),
+                )
+                .margin(12)
+                .x_label_area_size(44)
+                .y_label_area_size(60)
+                .build_cartesian_2d(
+                    (n0 / 1.5..nmax * 1.5).log_scale(),
+                    (ymin / 2.0..ymax * 2.0).log_scale(),
+                )
+                .map_err(|e| e.to_string())?;
+            chart
+                .configure_mesh()
+                .x_desc("triangles")
+                .y_desc(*unit)
+                .label_style((crate::figure::FONT, 13))
+                .axis_desc_style((crate::figure::FONT, 15))
+                .light_line_style(RGBColor(236, 236, 236))
+                .draw()
+                .map_err(|e| e.to_string())?;
+            let grey = RGBColor(150, 150, 150);
+            chart
+                .draw_series(LineSeries::new(
+                    [(n0, y0), (nmax, y0 * nmax / n0)],
+                    grey.stroke_width(1),
+                ))
+                .map_err(|e| e.to_string())?
+                .label("linear growth")
+                .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], grey));
+            let blue = RGBColor(31, 119, 180);
+            chart
+                .draw_series(LineSeries::new(points.clone(), blue.stroke_width(2)))
+                .map_err(|e| e.to_string())?
+                .label("measured")
+                .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], blue));
+            chart
+                .draw_series(points.iter().map(|&p| Circle::new(p, 4, blue.filled())))
+                .map_err(|e| e.to_string())?;
+            crate::figure::legend(&mut chart, SeriesLabelPosition::UpperLeft, 13)?;
+        }
+        Ok(())
+    })
 }
 
 fn radiosity(args: &RadiosityArgs, ctx: &Context) -> Result<(), CliError> {
