@@ -1,6 +1,6 @@
 //! Plain image types: linear RGB [`Image`], display-referred [`Rgb8Image`], and [`Rect`].
 //!
-//! Conventions (DESIGN.md): colour is linear RGB (Rec. 709 / sRGB primaries), `f32` per
+//! Conventions (ARCHITECTURE.md, "Conventions"): colour is linear RGB (Rec. 709 / sRGB primaries), `f32` per
 //! channel, no alpha; pixels are stored row-major with pixel (0, 0) at the top left; sizes and
 //! coordinates are in pixels.
 

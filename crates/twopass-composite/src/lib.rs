@@ -1,5 +1,5 @@
 //! twopass-composite: linear RGB images and named layers in; tone-mapped PNGs, multi-layer EXRs,
-//! comparison sheets and error metrics out. Depends on no renderer crate (STYLE.md A): a
+//! comparison sheets and error metrics out. Depends on no renderer crate (ARCHITECTURE.md, "Architecture invariants"): a
 //! renderer's film converts with [`Image::from_pixels`].
 //!
 //! Conventions: linear RGB (sRGB primaries), `f32`, pixel (0, 0) at the top left, sizes in

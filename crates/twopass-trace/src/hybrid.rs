@@ -2,7 +2,7 @@
 //! Greenberg 1987) and the hybrid with per-pixel direct light (Chen et al. 1991), all on the
 //! Whitted shading core of [`crate::whitted`] with a different source of diffuse light.
 //!
-//! **No double counting** (DESIGN.md): the radiosity solution holds all diffuse light, direct
+//! **No double counting** (ARCHITECTURE.md, "The physics, in brief"): the radiosity solution holds all diffuse light, direct
 //! and indirect, and emission. The hybrid adds only what radiosity cannot hold: glossy lobes
 //! against the emitters and delta reflection and refraction paths, whose rays take the
 //! radiosity where they land. On a scene whose materials are all Lambertian none of those terms

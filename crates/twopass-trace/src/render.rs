@@ -1,4 +1,4 @@
-//! The one render loop (STYLE.md F, pbrt's `ImageTileIntegrator`): square tiles rendered in
+//! The one render loop (ARCHITECTURE.md, "Architecture invariants"; pbrt's `ImageTileIntegrator`): square tiles rendered in
 //! parallel with rayon, one random stream per (seed, pixel, sample) so the image is
 //! bit-identical for any thread count, stratified supersampling within each pixel (box
 //! filter), progress through an atomic counter that another thread may read, and

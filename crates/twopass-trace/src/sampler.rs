@@ -3,7 +3,7 @@
 //!
 //! The generator is SplitMix64 (Steele, Lea & Flood 2014) over a state derived by hashing the
 //! three indices: statistically independent streams for neighbouring pixels and samples, and
-//! nothing that a rayon job could share (CRATES.md: never keep RNG state in `map_init`).
+//! nothing that a rayon job could share (ARCHITECTURE.md, "Conventions": never keep RNG state in `map_init`).
 
 /// The SplitMix64 finaliser: a bijective 64-bit mix with full avalanche.
 #[inline]
