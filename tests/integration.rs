@@ -3,6 +3,7 @@
 use std::path::{Path, PathBuf};
 
 mod accel;
+mod architecture;
 mod bad_input;
 mod radiosity;
 mod scenes;

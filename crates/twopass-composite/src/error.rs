@@ -127,5 +127,26 @@ pub enum CompositeError {
     Font(ab_glyph::InvalidFont),
 }
 
+impl From<WriteError> for CompositeError {
+    fn from(e: WriteError) -> Self {
+        Self::Io {
+            path: e.path,
+            source: e.source,
+        }
+    }
+}
+
+/// A failed atomic write ([`crate::write::write_atomic`]): creating the temporary file, writing,
+/// syncing or renaming it. Every crate that writes outputs converts it into its own error.
+#[derive(Debug, thiserror::Error)]
+#[error("{}: {source}", path.display())]
+pub struct WriteError {
+    /// The file (or, when the temporary file cannot be created, its folder).
+    pub path: PathBuf,
+    /// The operating system's error.
+    #[source]
+    pub source: std::io::Error,
+}
+
 /// The crate's result type.
 pub type Result<T, E = CompositeError> = std::result::Result<T, E>;

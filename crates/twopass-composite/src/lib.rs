@@ -35,7 +35,7 @@ mod text;
 pub mod tonemap;
 pub mod write;
 
-pub use error::{CompositeError, Result};
+pub use error::{CompositeError, Result, WriteError};
 pub use image::{Image, Rect, Rgb8Image};
 pub use layer::Layers;
 pub use metric::Metrics;

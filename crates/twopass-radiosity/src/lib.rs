@@ -2,7 +2,8 @@
 //! & Greenberg 1988) with exact differential-area-to-polygon form factors and ray-traced
 //! visibility at the receiving vertices (Wallace, Elmquist & Haines 1989), patch/element
 //! substructuring with conforming adaptive subdivision (Cohen et al. 1986), the ambient term
-//! for partial solutions, power bookkeeping at every step, and a dense reference solve.
+//! for partial solutions, power bookkeeping at every step, and a dense reference solve. It
+//! computes only: files and file formats (the bake file, glTF, PLY) are twopass-bake's.
 //!
 //! Units: radiosity B and irradiance in W/m^2 per RGB channel with areas in the scene's units,
 //! radiance L = B / pi in W/(m^2 sr). Emitters are one-sided with exitance E = pi L_e.
@@ -22,15 +23,16 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-pub mod bake;
 mod direct;
 pub mod element;
 pub mod form_factor;
+mod mesh_error;
 mod progressive;
 mod solution;
 
 pub use direct::{MAX_DENSE_VERTICES, dense_solve};
 pub use form_factor::VisibilityRays;
+pub use mesh_error::{InvalidMesh, MeshPart};
 pub use progressive::{
     Adaptive, Energy, Finish, Options, Progress, Residuals, SolveError, Solver, Stop,
 };

@@ -6,7 +6,7 @@
 //! Files, in `--output DIR` (default `bake/`, created if missing), named after the scene file:
 //! `<stem>.glb`, `<stem>.ply`, `<stem>.bake` and `<stem>.manifest.json`. Each is written
 //! atomically (a temporary file in DIR, then a rename); the manifest comes last and lists the
-//! others. Formats and units: `twopass_radiosity::bake`.
+//! others. Formats and units: `twopass_bake`.
 
 use std::collections::BTreeSet;
 use std::ops::ControlFlow;
@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use clap::{Args, ValueEnum};
-use twopass_radiosity::bake::{self, ColorMapping, ColorRecord, FileRecord, Manifest};
+use twopass_bake::{self as bake, ColorMapping, ColorRecord, FileRecord, Manifest};
 use twopass_radiosity::{Adaptive, Finish, Options, Solver, Stop, VisibilityRays};
 
 use crate::context::Context;

@@ -2,30 +2,19 @@
 //! run never leaves a half-written file behind.
 
 use std::fs;
-use std::io::Write;
 use std::path::Path;
 
 use crate::error::CliError;
 
-/// Writes `bytes` to `path` atomically, creating the parent directory if missing.
+/// Writes `bytes` to `path` atomically (the workspace's one atomic write,
+/// [`twopass_composite::write::write_atomic`]), creating the parent directory if missing.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), CliError> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
     fs::create_dir_all(dir).map_err(|e| CliError::io(dir, e))?;
-    let mut builder = tempfile::Builder::new();
-    builder.prefix(".twopass-").suffix(".tmp");
-    // The usual mode of a new file (0666 less the umask), not the temporary file's 0600.
-    #[cfg(unix)]
-    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
-    let mut tmp = builder.tempfile_in(dir).map_err(|e| CliError::io(dir, e))?;
-    tmp.write_all(bytes).map_err(|e| CliError::io(path, e))?;
-    tmp.as_file()
-        .sync_all()
-        .map_err(|e| CliError::io(path, e))?;
-    tmp.persist(path).map_err(|e| CliError::io(path, e.error))?;
-    Ok(())
+    Ok(twopass_composite::write::write_atomic(path, bytes)?)
 }
 
 /// Encodes an 8-bit sRGB image (`rgb.len() == 3 * width * height`, rows top to bottom) as PNG

@@ -6,9 +6,8 @@ use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
-use twopass_radiosity::bake::{
-    self, BakeError, BakeProblem, ColorMapping, Fingerprint, Manifest, MeshPart,
-};
+use twopass_bake::{self as bake, BakeError, BakeProblem, ColorMapping, Fingerprint, Manifest};
+use twopass_radiosity::MeshPart;
 use twopass_radiosity::element::ElementMesh;
 use twopass_radiosity::{Options, Solution, Solver, Stop};
 use twopass_scene::{DiffuseRadiance, Scene};
