@@ -1,6 +1,7 @@
-//! The hybrid invariant (ARCHITECTURE.md, "Hybrid without double counting"): on a scene whose materials are all Lambertian, the
-//! hybrid renders exactly what radiosity alone renders, with a test double and with a real
-//! solution; and the hybrid against the reference path tracer on the diffuse Cornell box.
+//! The hybrid invariant (ARCHITECTURE.md, "Hybrid without double counting"): on a scene whose
+//! materials are all Lambertian, the hybrid renders exactly what radiosity alone renders, with a
+//! test double and with a real solution; and the hybrid against the reference path tracer on the
+//! diffuse Cornell box.
 
 use std::ops::ControlFlow;
 

@@ -29,7 +29,7 @@
 //! [`lighting_fingerprint`]), the element mesh (vertices, tree nodes, roots, patches) and the
 //! radiosity, direct, indirect and ambient parts per vertex as `f32` bit patterns. Reading checks
 //! the header, the length, the checksum, the fingerprints against the scene it is loaded for and
-//! every index of the mesh ([`ElementMesh::from_parts`](twopass_radiosity::element::ElementMesh::from_parts)): a corrupt or foreign file is an
+//! every index of the mesh ([`ElementMesh::from_parts`]): a corrupt or foreign file is an
 //! error, never a panic. The payload is decoded into private mirror structs rather than serde
 //! derives on the solver's types, so the file format changes only when this module says so
 //! (and bumps the version), and glam needs no serde feature.

@@ -25,7 +25,7 @@ use glam::{DVec3, Vec2, Vec3};
 
 use crate::Rgb;
 use crate::frame::{Frame, reflect, spherical_direction};
-use crate::model::Brdf;
+use crate::interface::Brdf;
 
 /// Resolution of the hemisphere quadrature: cells along the polar parameter and the azimuth.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

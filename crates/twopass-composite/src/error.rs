@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use crate::image::Rect;
+use crate::rect::Rect;
 
 /// Everything that can go wrong in this crate. Variants carry context fields (the file, the
 /// layer, the pixel, the sizes), not preformatted strings.

@@ -1,9 +1,9 @@
 //! Deterministic random numbers: one independent stream per (seed, pixel, sample), so an image
 //! does not depend on which thread rendered which pixel, or in which order.
 //!
-//! The generator is SplitMix64 (Steele, Lea & Flood 2014) over a state derived by hashing the
-//! three indices: statistically independent streams for neighbouring pixels and samples, and
-//! nothing that a rayon job could share (ARCHITECTURE.md, "Conventions": never keep RNG state in `map_init`).
+//! The generator is SplitMix64 (Steele, Lea & Flood 2014) over a state derived by hashing the three
+//! indices: statistically independent streams for neighbouring pixels and samples, and nothing that
+//! a rayon job could share (ARCHITECTURE.md, "Conventions": never keep RNG state in `map_init`).
 
 /// The SplitMix64 finaliser: a bijective 64-bit mix with full avalanche.
 #[inline]
