@@ -3,6 +3,7 @@
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 use twopass_brdf::Rgb;
+use twopass_brdf::colour::luminance;
 use twopass_radiosity::Solution;
 
 /// How radiance becomes glTF `COLOR_0`, a linear multiplier that engines expect in [0, 1]:
@@ -45,8 +46,4 @@ impl ColorMapping {
     /// The mapping as a formula, as recorded in the manifest and the glTF asset extras.
     pub const FORMULA: &'static str = "COLOR_0 = min(1, exposure * L) per linear RGB channel, \
          L = B / pi the radiance leaving the surface in W/(m^2 sr)";
-}
-
-fn luminance(c: Rgb) -> f32 {
-    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
 }

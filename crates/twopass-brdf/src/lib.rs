@@ -47,6 +47,7 @@
 pub mod beckmann;
 pub mod blinn_phong;
 pub mod check;
+pub mod colour;
 pub mod cook_torrance;
 pub mod delta;
 mod error;
@@ -60,6 +61,7 @@ pub mod model;
 pub mod modified_phong;
 mod param;
 pub mod phong;
+pub mod random;
 pub mod sample;
 pub mod v_cavity;
 

@@ -9,13 +9,7 @@ use glam::Vec3;
 use crate::error::{CompositeError, Result};
 pub use crate::rect::Rect;
 
-/// Rec. 709 luminance weights for linear RGB with sRGB primaries.
-pub const LUMINANCE: Vec3 = Vec3::new(0.2126, 0.7152, 0.0722);
-
-/// Relative luminance `Y = 0.2126 R + 0.7152 G + 0.0722 B` of a linear RGB value.
-pub fn luminance(rgb: Vec3) -> f32 {
-    rgb.dot(LUMINANCE)
-}
+pub use twopass_brdf::colour::{LUMINANCE, luminance};
 
 /// `rect` as a region of a `width` x `height` image: an error unless it lies inside.
 pub(crate) fn check_region(rect: Rect, width: u32, height: u32) -> Result<()> {
