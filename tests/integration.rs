@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 mod accel;
 mod architecture;
 mod bad_input;
+mod closed_form;
 mod radiosity;
 mod scenes;
 mod trace;
