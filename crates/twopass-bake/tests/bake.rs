@@ -209,6 +209,36 @@ fn bake_for_another_scene_is_refused() {
 }
 
 #[test]
+fn scene_fingerprint_follows_everything_an_image_depends_on() {
+    let text = cornell_text();
+    let base = bake::scene_fingerprint(&variant(&text));
+    assert_eq!(base, bake::scene_fingerprint(&variant(&text)), "stable");
+    // Geometry and lighting, as the bake's fingerprints.
+    let moved = variant(&text.replace("548.7", "548.6"));
+    assert_ne!(bake::scene_fingerprint(&moved), base);
+    // Same geometry and diffuse light, another view or another glossy lobe: the bake's
+    // fingerprints stay, the image fingerprint changes.
+    let camera = variant(&text.replace("[278, 273, -800]", "[278, 273, -801]"));
+    assert_eq!(
+        bake::lighting_fingerprint(&camera),
+        bake::lighting_fingerprint(&variant(&text))
+    );
+    assert_ne!(bake::scene_fingerprint(&camera), base);
+    let glossy = text.replacen(
+        "type = \"lambert\"\ndiffuse = [0.725, 0.71, 0.68]",
+        "type = \"phong\"\ndiffuse = [0.725, 0.71, 0.68]\nspecular = 0.1\nexponent = 20",
+        1,
+    );
+    assert_ne!(glossy, text, "the white material is in the scene file");
+    let glossy = variant(&glossy);
+    assert_eq!(
+        bake::lighting_fingerprint(&glossy),
+        bake::lighting_fingerprint(&variant(&text))
+    );
+    assert_ne!(bake::scene_fingerprint(&glossy), base);
+}
+
+#[test]
 fn inconsistent_meshes_are_rejected_by_from_parts() {
     let (_, solution, _) = solved();
     let m = solution.mesh();
