@@ -3,7 +3,9 @@
 use std::path::{Path, PathBuf};
 
 mod accel;
+mod architecture;
 mod bad_input;
+mod closed_form;
 mod hierarchical;
 mod radiosity;
 mod scenes;

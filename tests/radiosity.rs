@@ -4,6 +4,7 @@
 use std::ops::ControlFlow;
 use std::path::Path;
 
+use crate::closed_form::corner_form_factor;
 use glam::DVec3;
 use twopass_radiosity::{Adaptive, Options, Progressive, SolveError, Stop, dense_solve};
 use twopass_scene::{DiffuseRadiance, Scene, load, load_toml};
@@ -510,10 +511,7 @@ fn elements_of_very_different_sizes_side_by_side() {
     let sol = solver.solution();
     // The tiny quad sits below the light's corner: one bounce gives L = rho F E / pi with the
     // closed-form corner factor F = 1/(2 pi) sum X/sqrt(1+X^2) atan(Y/sqrt(1+X^2)), X = Y = 1/2.
-    let (x, y) = (0.5_f64, 0.5_f64);
-    let f = (x / (1.0 + x * x).sqrt() * (y / (1.0 + x * x).sqrt()).atan()
-        + y / (1.0 + y * y).sqrt() * (x / (1.0 + y * y).sqrt()).atan())
-        / (2.0 * std::f64::consts::PI);
+    let f = corner_form_factor(0.5, 0.5);
     let one_bounce = 0.5 * f; // rho F E / pi with E = pi
     let tiny = f64::from(sol.radiance(s.objects[1].triangles.start, [1.0 / 3.0; 3]).x);
     // Interreflection with the (reflecting) light only adds a little.

@@ -9,6 +9,7 @@ use twopass_trace::{
 };
 
 use super::common::{mean_and_error, scene};
+use crate::closed_form::corner_form_factor;
 
 const RHO: f32 = 0.5;
 const L_E: f32 = 10.0;
@@ -31,11 +32,7 @@ fn plane_scene() -> twopass_scene::Scene {
 /// Form factor from a differential area facing up at the origin to the rectangle
 /// [x0, x1] x [z0, z1] at height `HEIGHT`, parallel to it.
 fn form_factor(x0: f64, x1: f64, z0: f64, z1: f64) -> f64 {
-    let corner = |x: f64, y: f64| {
-        let (x, y) = (x / HEIGHT, y / HEIGHT);
-        let (a, b) = ((1.0 + x * x).sqrt(), (1.0 + y * y).sqrt());
-        (x / a * (y / a).atan() + y / b * (x / b).atan()) / (2.0 * std::f64::consts::PI)
-    };
+    let corner = |x: f64, y: f64| corner_form_factor(x / HEIGHT, y / HEIGHT);
     corner(x1, z1) - corner(x0, z1) - corner(x1, z0) + corner(x0, z0)
 }
 

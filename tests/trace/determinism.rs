@@ -1,4 +1,4 @@
-//! Determinism (STYLE.md G.7) and the handling of non-finite samples.
+//! Determinism (ARCHITECTURE.md, "Conventions", seeds) and the handling of non-finite samples.
 
 use twopass_scene::{Ray, Scene};
 use twopass_trace::{

@@ -1,6 +1,7 @@
-//! The hybrid invariant (STYLE.md G.4): on a scene whose materials are all Lambertian, the
-//! hybrid renders exactly what radiosity alone renders, with a test double and with a real
-//! solution; and the hybrid against the reference path tracer on the diffuse Cornell box.
+//! The hybrid invariant (ARCHITECTURE.md, "Hybrid without double counting"): on a scene whose
+//! materials are all Lambertian, the hybrid renders exactly what radiosity alone renders, with a
+//! test double and with a real solution; and the hybrid against the reference path tracer on the
+//! diffuse Cornell box.
 
 use std::ops::ControlFlow;
 
@@ -76,7 +77,8 @@ fn hybrid_with_a_real_solution_matches_radiosity_alone_and_the_reference() {
     let camera = scene.camera.with_resolution(Some(24), Some(24));
     let mut solver =
         twopass_radiosity::Solver::new(&scene, twopass_radiosity::Options::default()).unwrap();
-    let _ = solver.run(|_| ControlFlow::Continue(()));
+    let finish = solver.run(|_| ControlFlow::Continue(()));
+    assert_eq!(finish, twopass_radiosity::Finish::Converged);
     let solution = solver.solution();
     let p = Progress::new();
     let alone = render(
@@ -154,7 +156,12 @@ fn hybrid_error_against_the_reference_shrinks_as_the_mesh_is_refined() {
             ..Default::default()
         };
         let mut solver = twopass_radiosity::Solver::new(&scene, options).unwrap();
-        let _ = solver.run(|_| ControlFlow::Continue(()));
+        let finish = solver.run(|_| ControlFlow::Continue(()));
+        assert_eq!(
+            finish,
+            twopass_radiosity::Finish::Converged,
+            "element size {element_size}: the solve must reach unshot 1e-4"
+        );
         let solution = solver.solution();
         // As many pixel samples as the reference: the light's edge pixels then agree, and what
         // remains is the mesh's discretisation error.

@@ -1,12 +1,12 @@
 //! The Whitted tracer against exact optics: a mirror shows the mirrored scene pixel for pixel;
 //! a glass slab transmits (1 - R) / (1 + R) of what is behind it, R the exact Fresnel
-//! reflectance at each ray's incidence (both interfaces and every internal reflection); rays
-//! leaving a surface never hit it again.
+//! reflectance at each ray's incidence (both interfaces and every internal reflection). That
+//! rays leaving a surface never hit it again is `accel::spawned_rays_never_rehit_their_own_surface`.
 
 use glam::{Vec2, Vec3};
 use twopass_trace::{Layer, Progress, RenderSettings, Whitted, WhittedSettings, render};
 
-use super::common::{repo_scene, scene};
+use super::common::scene;
 
 const PATTERN: &str = "[[material]]\nname = \"black\"\ntype = \"lambert\"\ndiffuse = 0\n\
     [[object]]\nname = \"a\"\nmaterial = \"black\"\nemission = [3, 1, 0.5]\n\
@@ -109,31 +109,4 @@ fn glass_slab_transmits_per_exact_fresnel() {
     assert!((twopass_brdf::fresnel::dielectric(1.0, 1.5) - 0.04).abs() < 1e-6);
     // Nothing reflected toward the camera comes back: the scene behind the camera is empty.
     assert_eq!(out.layers.layer(Layer::Reflection).mean(), Vec3::ZERO);
-}
-
-#[test]
-fn spawned_rays_never_rehit_their_surface() {
-    let scene = repo_scene("cornell-spheres.toml");
-    let mut sampler = twopass_trace::Sampler::new(5, 0, 0);
-    let n = scene.mesh.triangles.len() as u32;
-    let mut hits = 0;
-    for _ in 0..20_000 {
-        let t = sampler.next_below(n);
-        let p = scene.mesh.sample_triangle(t, sampler.next_2d());
-        // Uniform direction on the sphere: both sides of the surface.
-        let u = sampler.next_2d();
-        let z = 1.0 - 2.0 * u.x;
-        let r = (1.0 - z * z).max(0.0).sqrt();
-        let phi = std::f32::consts::TAU * u.y;
-        let d = Vec3::new(r * phi.cos(), r * phi.sin(), z);
-        if let Some(h) = scene.intersect_from(&p, d) {
-            hits += 1;
-            assert_ne!(
-                h.point.triangle, t,
-                "ray from triangle {t} at {p:?} along {d} re-hit it"
-            );
-            assert!(h.t > 0.0);
-        }
-    }
-    assert!(hits > 10_000, "{hits}");
 }

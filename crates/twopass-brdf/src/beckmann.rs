@@ -9,13 +9,12 @@
 //! | --- | --- | --- |
 //! | `m` (roughness) | dimensionless (RMS slope) | finite, > 0 (useful 1e-4 to 2) |
 
-use std::f32::consts::PI;
+use std::f32::consts::{PI, TAU};
 
 use glam::{Vec2, Vec3};
 
 use crate::ParamError;
-use crate::frame::sin2_theta;
-use crate::sample::{beckmann_pdf, square_to_beckmann};
+use crate::frame::{azimuth01, sin2_theta, spherical_direction, tan2_theta};
 
 /// The Beckmann distribution of microfacet normals.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -57,13 +56,28 @@ impl Beckmann {
         if d.is_finite() { d } else { 0.0 }
     }
 
-    /// A microfacet normal distributed as D(h) cos(theta_h).
+    /// A microfacet normal distributed as D(h) cos(theta_h), from `u` in [0, 1)^2:
+    /// tan^2 theta = -m^2 ln(1 - u.x), phi = 2 pi u.y.
     pub fn sample(&self, u: Vec2) -> Vec3 {
-        square_to_beckmann(u, self.m)
+        let m = self.m;
+        let t2 = -m * m * (-u.x.clamp(0.0, 1.0)).ln_1p();
+        let (sin, cos) = if t2.is_finite() {
+            let inv = 1.0 / (1.0 + t2).sqrt();
+            ((t2 / (1.0 + t2)).sqrt(), inv)
+        } else {
+            (1.0, 0.0)
+        };
+        spherical_direction(sin, cos, TAU * u.y)
     }
 
     /// Density (1/sr) of [`Beckmann::sample`]: D(h) cos(theta_h).
     pub fn pdf(&self, h: Vec3) -> f32 {
-        beckmann_pdf(h, self.m)
+        self.d(h) * h.z.max(0.0)
+    }
+
+    /// The inverse of [`Beckmann::sample`]: the `u` that gives the normal `h`.
+    pub fn sample_inverse(&self, h: Vec3) -> Vec2 {
+        let t2 = tan2_theta(h);
+        Vec2::new(-(-t2 / (self.m * self.m)).exp_m1(), azimuth01(h))
     }
 }

@@ -21,9 +21,11 @@
 
 use glam::{Vec2, Vec3};
 
-use crate::frame::{COS_FLOOR, half_sin2, half_vector, pow_one_minus, reflect_about};
-use crate::material::{check_diffuse, check_exponent, check_sum, check_unit};
-use crate::model::{Glossy, impl_brdf_via_glossy};
+use crate::frame::{
+    COS_FLOOR, half_sin2, half_vector, pow_one_minus, reflect_about, symmetric_dot,
+};
+use crate::interface::{Glossy, impl_brdf_via_glossy};
+use crate::param::{check_diffuse, check_exponent, check_sum, check_unit};
 use crate::sample::square_to_phong_lobe;
 use crate::{ParamError, Rgb};
 
@@ -78,12 +80,6 @@ impl BlinnPhong {
     pub fn normalized(&self) -> bool {
         self.normalized
     }
-}
-
-/// wo.h computed symmetrically in wo and wi (they are equal for the half vector).
-#[inline]
-pub(crate) fn symmetric_dot(wo: Vec3, wi: Vec3, h: Vec3) -> f32 {
-    0.5 * (wo.dot(h) + wi.dot(h))
 }
 
 impl Glossy for BlinnPhong {

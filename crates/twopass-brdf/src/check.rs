@@ -25,7 +25,8 @@ use glam::{DVec3, Vec2, Vec3};
 
 use crate::Rgb;
 use crate::frame::{Frame, reflect, spherical_direction};
-use crate::model::Brdf;
+use crate::interface::Brdf;
+pub use crate::random::Pcg32;
 
 /// Resolution of the hemisphere quadrature: cells along the polar parameter and the azimuth.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -257,50 +258,6 @@ pub fn plausibility<B: Brdf + ?Sized>(brdf: &B, options: &CheckOptions) -> Plaus
         non_finite,
         reciprocity_error,
         albedo,
-    }
-}
-
-/// A small seeded generator (PCG32, O'Neill 2014, XSH-RR output) so that the checks need no
-/// dependency and give the same numbers everywhere.
-#[derive(Debug, Clone)]
-pub struct Pcg32 {
-    state: u64,
-    inc: u64,
-}
-
-impl Pcg32 {
-    const MUL: u64 = 6364136223846793005;
-
-    /// A generator for `seed` on stream `stream`.
-    pub fn new(seed: u64, stream: u64) -> Self {
-        let mut g = Self {
-            state: 0,
-            inc: (stream << 1) | 1,
-        };
-        g.next_u32();
-        g.state = g.state.wrapping_add(seed);
-        g.next_u32();
-        g
-    }
-
-    /// The next 32 uniformly distributed bits.
-    pub fn next_u32(&mut self) -> u32 {
-        let old = self.state;
-        self.state = old.wrapping_mul(Self::MUL).wrapping_add(self.inc);
-        let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
-        let rot = (old >> 59) as u32;
-        xorshifted.rotate_right(rot)
-    }
-
-    /// A uniform float in [0, 1) with 24 random bits.
-    pub fn next_f32(&mut self) -> f32 {
-        (self.next_u32() >> 8) as f32 * (1.0 / 16_777_216.0)
-    }
-
-    /// A uniform point in [0, 1)^2.
-    pub fn next_vec2(&mut self) -> Vec2 {
-        let x = self.next_f32();
-        Vec2::new(x, self.next_f32())
     }
 }
 

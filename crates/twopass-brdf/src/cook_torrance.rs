@@ -16,10 +16,9 @@
 use glam::{Vec2, Vec3};
 
 use crate::beckmann::Beckmann;
-use crate::blinn_phong::symmetric_dot;
-use crate::frame::{COS_FLOOR, half_vector, reflect_about};
-use crate::material::{check_diffuse, check_sum, check_unit};
-use crate::model::{Glossy, impl_brdf_via_glossy};
+use crate::frame::{COS_FLOOR, half_vector, reflect_about, symmetric_dot};
+use crate::interface::{Glossy, impl_brdf_via_glossy};
+use crate::param::{check_diffuse, check_sum, check_unit};
 use crate::{ComplexIor, FresnelModel, ParamError, Rgb, fresnel, v_cavity};
 
 /// The Cook-Torrance BRDF.

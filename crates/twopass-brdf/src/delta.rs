@@ -9,7 +9,7 @@
 use glam::{Vec2, Vec3};
 
 use crate::frame::reflect;
-use crate::model::{BrdfSample, SampleKind};
+use crate::interface::{BrdfSample, SampleKind};
 use crate::{ComplexIor, Rgb, fresnel};
 
 /// A ray a delta lobe sends: the direction to trace (unit, local frame) and what the radiance

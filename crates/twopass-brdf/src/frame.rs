@@ -84,6 +84,22 @@ pub fn spherical_direction(sin_theta: f32, cos_theta: f32, phi: f32) -> Vec3 {
     Vec3::new(sin_theta * cp, sin_theta * sp, cos_theta)
 }
 
+/// The azimuth of `w` as a fraction of a turn, in [0, 1]: the inverse of the `phi = 2 pi u`
+/// of [`spherical_direction`] that the warps use.
+#[inline]
+pub(crate) fn azimuth01(w: Vec3) -> f32 {
+    let phi = w.y.atan2(w.x);
+    let u = phi / std::f32::consts::TAU;
+    if u < 0.0 { u + 1.0 } else { u.min(1.0) }
+}
+
+/// wo.h computed symmetrically in wo and wi (they are equal for the half vector `h`), so a
+/// model that uses it stays exactly reciprocal.
+#[inline]
+pub(crate) fn symmetric_dot(wo: Vec3, wi: Vec3, h: Vec3) -> f32 {
+    0.5 * (wo.dot(h) + wi.dot(h))
+}
+
 /// Whether a BRDF is defined for the pair: both directions strictly above the surface.
 #[inline]
 pub(crate) fn both_above(wo: Vec3, wi: Vec3) -> bool {

@@ -11,9 +11,9 @@ use std::f32::consts::FRAC_1_PI;
 use glam::{Vec2, Vec3};
 
 use crate::frame::both_above;
-use crate::model::{Brdf, BrdfSample, SampleKind};
+use crate::interface::{Brdf, BrdfSample, SampleKind};
 use crate::sample::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
-use crate::{ParamError, Rgb, material};
+use crate::{ParamError, Rgb, param};
 
 /// The Lambertian BRDF rho / pi.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -24,7 +24,7 @@ pub struct Lambert {
 impl Lambert {
     /// A Lambertian BRDF of reflectance `rho` (per channel, in [0, 1)).
     pub fn new(rho: Rgb) -> Result<Self, ParamError> {
-        material::check_diffuse(rho)?;
+        param::check_diffuse(rho)?;
         Ok(Self { rho })
     }
 

@@ -47,17 +47,21 @@
 pub mod beckmann;
 pub mod blinn_phong;
 pub mod check;
+pub mod colour;
 pub mod cook_torrance;
 pub mod delta;
 mod error;
 pub mod frame;
 pub mod fresnel;
+pub mod interface;
 pub mod ior;
 pub mod lambert;
 mod material;
 pub mod model;
 pub mod modified_phong;
+mod param;
 pub mod phong;
+pub mod random;
 pub mod sample;
 pub mod v_cavity;
 

@@ -6,9 +6,11 @@ use glam::{Vec2, Vec3};
 use crate::blinn_phong::BlinnPhong;
 use crate::cook_torrance::CookTorrance;
 use crate::delta::DeltaLobe;
+use crate::interface::{Brdf, BrdfSample};
 use crate::lambert::Lambert;
-use crate::model::{Brdf, BrdfModel, BrdfSample};
+use crate::model::BrdfModel;
 use crate::modified_phong::ModifiedPhong;
+use crate::param::{check_diffuse, check_exponent, check_sum, check_unit};
 use crate::phong::Phong;
 use crate::{ComplexIor, ParamError, Rgb};
 
@@ -123,51 +125,6 @@ pub struct Material {
     diffuse: Rgb,
     ambient: Rgb,
     lobe: Option<Lobe>,
-}
-
-const EXPONENT_MAX: f32 = 1e6;
-
-fn check_rgb(
-    name: &'static str,
-    v: Rgb,
-    ok: impl Fn(f32) -> bool,
-    expected: &'static str,
-) -> Result<(), ParamError> {
-    match v
-        .to_array()
-        .into_iter()
-        .find(|&c| !(c.is_finite() && ok(c)))
-    {
-        Some(c) => Err(ParamError::new(name, c.into(), expected)),
-        None => Ok(()),
-    }
-}
-
-pub(crate) fn check_diffuse(v: Rgb) -> Result<(), ParamError> {
-    check_rgb("diffuse", v, |c| (0.0..1.0).contains(&c), "in [0, 1)")
-}
-
-pub(crate) fn check_unit(name: &'static str, v: Rgb) -> Result<(), ParamError> {
-    check_rgb(name, v, |c| (0.0..=1.0).contains(&c), "in [0, 1]")
-}
-
-pub(crate) fn check_exponent(n: f32) -> Result<(), ParamError> {
-    if n.is_finite() && (0.0..=EXPONENT_MAX).contains(&n) {
-        Ok(())
-    } else {
-        Err(ParamError::new("exponent", n.into(), "in [0, 1e6]"))
-    }
-}
-
-/// A plausible model must not reflect more than it receives: diffuse + specular <= 1.
-pub(crate) fn check_sum(diffuse: Rgb, specular: Rgb) -> Result<(), ParamError> {
-    let sum = diffuse + specular;
-    check_rgb(
-        "specular",
-        sum,
-        |c| c <= 1.0,
-        "such that diffuse + specular <= 1 on every channel",
-    )
 }
 
 impl Material {

@@ -15,8 +15,8 @@ use std::f32::consts::TAU;
 
 use glam::{Vec2, Vec3};
 
-use crate::material::{check_diffuse, check_exponent, check_sum, check_unit};
-use crate::model::{Glossy, impl_brdf_via_glossy};
+use crate::interface::{Glossy, impl_brdf_via_glossy};
+use crate::param::{check_diffuse, check_exponent, check_sum, check_unit};
 use crate::phong::{lobe, lobe_around_mirror_pdf, sample_lobe_around_mirror};
 use crate::{ParamError, Rgb};
 

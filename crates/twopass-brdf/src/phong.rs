@@ -18,8 +18,8 @@
 use glam::{Vec2, Vec3};
 
 use crate::frame::{COS_FLOOR, Frame, both_above, pow_one_minus, reflect};
-use crate::material::{check_diffuse, check_exponent, check_unit};
-use crate::model::{Glossy, impl_brdf_via_glossy};
+use crate::interface::{Glossy, impl_brdf_via_glossy};
+use crate::param::{check_diffuse, check_exponent, check_unit};
 use crate::sample::square_to_phong_lobe;
 use crate::{Material, ParamError, Rgb};
 

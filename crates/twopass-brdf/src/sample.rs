@@ -2,19 +2,14 @@
 //!
 //! Every warp takes `u` in [0, 1)^2 and returns a unit direction in the local frame (+z up);
 //! densities are per unit solid angle (1/sr). The inverses map a direction back to the `u` that
-//! produces it, which the tests use to prove each warp is a bijection.
+//! produces it, which the tests use to prove each warp is a bijection. The warp of a microfacet
+//! distribution lives with the distribution ([`crate::beckmann::Beckmann::sample`]).
 
 use std::f32::consts::{FRAC_1_PI, PI, TAU};
 
 use glam::{Vec2, Vec3};
 
-use crate::frame::spherical_direction;
-
-fn azimuth01(w: Vec3) -> f32 {
-    let phi = w.y.atan2(w.x);
-    let u = phi / TAU;
-    if u < 0.0 { u + 1.0 } else { u.min(1.0) }
-}
+use crate::frame::{azimuth01, spherical_direction};
 
 /// Cosine-weighted hemisphere (density cos theta / pi): sin^2 theta = u.x, phi = 2 pi u.y.
 pub fn square_to_cosine_hemisphere(u: Vec2) -> Vec3 {
@@ -51,30 +46,6 @@ pub fn phong_lobe_pdf(cos_alpha: f32, n: f32) -> f32 {
 /// Inverse of [`square_to_phong_lobe`].
 pub fn phong_lobe_to_square(w: Vec3, n: f32) -> Vec2 {
     Vec2::new(crate::frame::pow_lobe(w.z, n + 1.0), azimuth01(w))
-}
-
-/// Beckmann microfacet normals of RMS slope `m` > 0, density D(h) cos theta_h (1/sr):
-/// tan^2 theta = -m^2 ln(1 - u.x), phi = 2 pi u.y.
-pub fn square_to_beckmann(u: Vec2, m: f32) -> Vec3 {
-    let t2 = -m * m * (-u.x.clamp(0.0, 1.0)).ln_1p();
-    let (sin, cos) = if t2.is_finite() {
-        let inv = 1.0 / (1.0 + t2).sqrt();
-        ((t2 / (1.0 + t2)).sqrt(), inv)
-    } else {
-        (1.0, 0.0)
-    };
-    spherical_direction(sin, cos, TAU * u.y)
-}
-
-/// Density of [`square_to_beckmann`] (1/sr): D(h) cos theta_h.
-pub fn beckmann_pdf(h: Vec3, m: f32) -> f32 {
-    crate::beckmann::Beckmann::new_unchecked(m).d(h) * h.z.max(0.0)
-}
-
-/// Inverse of [`square_to_beckmann`].
-pub fn beckmann_to_square(h: Vec3, m: f32) -> Vec2 {
-    let t2 = crate::frame::tan2_theta(h);
-    Vec2::new(-(-t2 / (m * m)).exp_m1(), azimuth01(h))
 }
 
 /// Uniform density over the hemisphere, 1 / (2 pi) (1/sr).

@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use crate::image::Rect;
+use crate::rect::Rect;
 
 /// Everything that can go wrong in this crate. Variants carry context fields (the file, the
 /// layer, the pixel, the sizes), not preformatted strings.
@@ -125,6 +125,27 @@ pub enum CompositeError {
     /// The embedded font could not be parsed (a build problem, not an input problem).
     #[error("embedded font: {0}")]
     Font(ab_glyph::InvalidFont),
+}
+
+impl From<WriteError> for CompositeError {
+    fn from(e: WriteError) -> Self {
+        Self::Io {
+            path: e.path,
+            source: e.source,
+        }
+    }
+}
+
+/// A failed atomic write ([`crate::write::write_atomic`]): creating the temporary file, writing,
+/// syncing or renaming it. Every crate that writes outputs converts it into its own error.
+#[derive(Debug, thiserror::Error)]
+#[error("{}: {source}", path.display())]
+pub struct WriteError {
+    /// The file (or, when the temporary file cannot be created, its folder).
+    pub path: PathBuf,
+    /// The operating system's error.
+    #[source]
+    pub source: std::io::Error,
 }
 
 /// The crate's result type.

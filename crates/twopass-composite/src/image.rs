@@ -1,94 +1,26 @@
 //! Plain image types: linear RGB [`Image`], display-referred [`Rgb8Image`], and [`Rect`].
 //!
-//! Conventions (DESIGN.md): colour is linear RGB (Rec. 709 / sRGB primaries), `f32` per
-//! channel, no alpha; pixels are stored row-major with pixel (0, 0) at the top left; sizes and
-//! coordinates are in pixels.
+//! Conventions (ARCHITECTURE.md, "Conventions"): colour is linear RGB (Rec. 709 / sRGB
+//! primaries), `f32` per channel, no alpha; pixels are stored row-major with pixel (0, 0) at the
+//! top left; sizes and coordinates are in pixels.
 
 use glam::Vec3;
 
 use crate::error::{CompositeError, Result};
+pub use crate::rect::Rect;
 
-/// Rec. 709 luminance weights for linear RGB with sRGB primaries.
-pub const LUMINANCE: Vec3 = Vec3::new(0.2126, 0.7152, 0.0722);
+pub use twopass_brdf::colour::{LUMINANCE, luminance};
 
-/// Relative luminance `Y = 0.2126 R + 0.7152 G + 0.0722 B` of a linear RGB value.
-pub fn luminance(rgb: Vec3) -> f32 {
-    rgb.dot(LUMINANCE)
-}
-
-/// An axis-aligned rectangle of pixels: columns `x .. x + width`, rows `y .. y + height`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct Rect {
-    /// Left column.
-    pub x: u32,
-    /// Top row.
-    pub y: u32,
-    /// Width in pixels.
-    pub width: u32,
-    /// Height in pixels.
-    pub height: u32,
-}
-
-impl Rect {
-    /// The rectangle at (`x`, `y`) of `width` x `height` pixels.
-    pub const fn new(x: u32, y: u32, width: u32, height: u32) -> Self {
-        Self {
-            x,
-            y,
+/// `rect` as a region of a `width` x `height` image: an error unless it lies inside.
+pub(crate) fn check_region(rect: Rect, width: u32, height: u32) -> Result<()> {
+    if rect.fits_in(width, height) {
+        Ok(())
+    } else {
+        Err(CompositeError::Region {
+            rect,
             width,
             height,
-        }
-    }
-
-    /// The whole of a `width` x `height` image.
-    pub const fn full(width: u32, height: u32) -> Self {
-        Self::new(0, 0, width, height)
-    }
-
-    /// Number of pixels.
-    pub fn area(&self) -> u64 {
-        u64::from(self.width) * u64::from(self.height)
-    }
-
-    /// Whether the rectangle lies inside a `width` x `height` image.
-    pub fn fits_in(&self, width: u32, height: u32) -> bool {
-        u64::from(self.x) + u64::from(self.width) <= u64::from(width)
-            && u64::from(self.y) + u64::from(self.height) <= u64::from(height)
-    }
-
-    /// Whether pixel (`px`, `py`) is inside.
-    pub fn contains(&self, px: u32, py: u32) -> bool {
-        px >= self.x && py >= self.y && px - self.x < self.width && py - self.y < self.height
-    }
-
-    /// Whether two rectangles share a pixel.
-    pub fn overlaps(&self, other: &Rect) -> bool {
-        let (a0, a1) = (u64::from(self.x), u64::from(self.x) + u64::from(self.width));
-        let (b0, b1) = (
-            u64::from(other.x),
-            u64::from(other.x) + u64::from(other.width),
-        );
-        let (c0, c1) = (
-            u64::from(self.y),
-            u64::from(self.y) + u64::from(self.height),
-        );
-        let (d0, d1) = (
-            u64::from(other.y),
-            u64::from(other.y) + u64::from(other.height),
-        );
-        a0 < b1 && b0 < a1 && c0 < d1 && d0 < c1
-    }
-
-    pub(crate) fn check(&self, width: u32, height: u32) -> Result<()> {
-        if self.fits_in(width, height) {
-            Ok(())
-        } else {
-            Err(CompositeError::Region {
-                rect: *self,
-                width,
-                height,
-            })
-        }
+        })
     }
 }
 
@@ -226,7 +158,7 @@ impl Image {
 
     /// A copy of the pixels inside `rect`.
     pub fn crop(&self, rect: Rect) -> Result<Image> {
-        rect.check(self.width, self.height)?;
+        check_region(rect, self.width, self.height)?;
         Ok(Image::from_fn(rect.width, rect.height, |x, y| {
             self.get(rect.x + x, rect.y + y)
         }))
@@ -372,7 +304,7 @@ impl Rgb8Image {
 
     /// A copy of the pixels inside `rect`.
     pub fn crop(&self, rect: Rect) -> Result<Rgb8Image> {
-        rect.check(self.width, self.height)?;
+        check_region(rect, self.width, self.height)?;
         Ok(Rgb8Image::from_fn(rect.width, rect.height, |x, y| {
             self.get(rect.x + x, rect.y + y)
         }))

@@ -1,7 +1,7 @@
 //! Named layers of one size, and merging them into a final image.
 //!
 //! A pass (radiosity, direct specular, mirror paths, ...) renders into its own layer; the final
-//! image is their sum, since the passes split the light without overlap (DESIGN.md, "Hybrid
+//! image is their sum, since the passes split the light without overlap (ARCHITECTURE.md, "Hybrid
 //! without double counting"). Layer order is kept, and is the order written to EXR.
 
 use crate::error::{CompositeError, Result};

@@ -1,6 +1,6 @@
 //! twopass-composite: linear RGB images and named layers in; tone-mapped PNGs, multi-layer EXRs,
-//! comparison sheets and error metrics out. Depends on no renderer crate (STYLE.md A): a
-//! renderer's film converts with [`Image::from_pixels`].
+//! comparison sheets and error metrics out. Depends on no renderer crate (ARCHITECTURE.md,
+//! "Architecture invariants"): a renderer's film converts with [`Image::from_pixels`].
 //!
 //! Conventions: linear RGB (sRGB primaries), `f32`, pixel (0, 0) at the top left, sizes in
 //! pixels. EXRs are written linear; PNGs are tone mapped (exposure, curve, sRGB transfer) and
@@ -30,12 +30,13 @@ pub mod false_colour;
 pub mod image;
 pub mod layer;
 pub mod metric;
+mod rect;
 pub mod sheet;
 mod text;
 pub mod tonemap;
 pub mod write;
 
-pub use error::{CompositeError, Result};
+pub use error::{CompositeError, Result, WriteError};
 pub use image::{Image, Rect, Rgb8Image};
 pub use layer::Layers;
 pub use metric::Metrics;

@@ -19,7 +19,7 @@ use exr::prelude as ex;
 use exr::prelude::{ReadChannels, ReadLayers, WritableImage};
 use glam::Vec3;
 
-use crate::error::{CompositeError, Result};
+use crate::error::{CompositeError, Result, WriteError};
 use crate::image::{Image, Rgb8Image};
 use crate::layer::Layers;
 use crate::tonemap::ToneMap;
@@ -27,27 +27,28 @@ use crate::tonemap::ToneMap;
 /// Writes `bytes` to `path` atomically: a temporary file in the same folder (which must exist),
 /// synced, then renamed over `path`, with the mode a new file would get (0666 less the umask).
 /// On failure the temporary file is removed and `path` is untouched.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+///
+/// This is the one atomic write of the workspace (ARCHITECTURE.md, "Where each idea lives"):
+/// images, bake files, reports and presets all go through it.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::result::Result<(), WriteError> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
     let io = |p: &Path| {
         let p = p.to_path_buf();
-        move |source| CompositeError::Io { path: p, source }
+        move |source| WriteError { path: p, source }
     };
     let mut builder = tempfile::Builder::new();
-    builder.prefix(".twopass-composite-").suffix(".tmp");
+    builder.prefix(".twopass-").suffix(".tmp");
     // Temporary files are private (0600) by default; an output gets the usual mode.
     #[cfg(unix)]
     builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
     let mut tmp = builder.tempfile_in(dir).map_err(io(dir))?;
     tmp.write_all(bytes).map_err(io(path))?;
     tmp.as_file().sync_all().map_err(io(path))?;
-    tmp.persist(path).map_err(|e| CompositeError::Io {
-        path: path.to_path_buf(),
-        source: e.error,
-    })?;
+    // On error the returned temporary file is dropped, which deletes it.
+    tmp.persist(path).map_err(|e| io(path)(e.error))?;
     Ok(())
 }
 
@@ -118,14 +119,14 @@ fn encode_exr(path: &Path, parts: &[(&str, &Image)]) -> Result<Vec<u8>> {
 /// Writes one linear image as an EXR with channels `R`, `G`, `B` (32-bit float), atomically.
 pub fn write_exr(path: &Path, image: &Image) -> Result<()> {
     let bytes = encode_exr(path, &[("", image)])?;
-    write_atomic(path, &bytes)
+    Ok(write_atomic(path, &bytes)?)
 }
 
 /// Writes every layer into one EXR (channels `<layer>.R/G/B`, 32-bit float), atomically.
 pub fn write_exr_layers(path: &Path, layers: &Layers) -> Result<()> {
     let parts: Vec<(&str, &Image)> = layers.iter().collect();
     let bytes = encode_exr(path, &parts)?;
-    write_atomic(path, &bytes)
+    Ok(write_atomic(path, &bytes)?)
 }
 
 /// Reads every part and channel of an EXR as `(full channel name, width, height, samples)`;
@@ -266,7 +267,7 @@ pub fn encode_png(path: &Path, image: &Rgb8Image, description: Option<&str>) -> 
 /// `description` goes into a `Description` text chunk (say how the pixels were made).
 pub fn write_png(path: &Path, image: &Rgb8Image, description: Option<&str>) -> Result<()> {
     let bytes = encode_png(path, image, description)?;
-    write_atomic(path, &bytes)
+    Ok(write_atomic(path, &bytes)?)
 }
 
 /// Tone maps a linear image with `map` and writes it as a PNG whose `Description` says so

@@ -141,8 +141,8 @@ impl ElementMesh {
         nodes: Vec<Node>,
         roots: Vec<u32>,
         patches: Vec<u32>,
-    ) -> Result<Self, crate::bake::InvalidMesh> {
-        use crate::bake::{InvalidMesh, MeshPart};
+    ) -> Result<Self, crate::InvalidMesh> {
+        use crate::{InvalidMesh, MeshPart};
         let bad = |part, index: usize, problem| Err(InvalidMesh::new(part, index, problem));
         let (n_v, n_n, n_t) = (vertices.len(), nodes.len(), roots.len());
         for (i, v) in vertices.iter().enumerate() {

@@ -94,14 +94,9 @@ impl Default for VisibilityRays {
     }
 }
 
-/// A small counter-based hash (SplitMix64 finalizer): random numbers from (seed, ids) that do
-/// not depend on thread scheduling.
-pub(crate) fn hash(mut x: u64) -> u64 {
-    x = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    x = (x ^ (x >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    x = (x ^ (x >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    x ^ (x >> 31)
-}
+/// A small counter-based hash (SplitMix64): random numbers from (seed, ids) that do not depend
+/// on thread scheduling; the workspace's one home of random streams.
+pub(crate) use twopass_brdf::random::hash;
 
 fn unit(h: u64) -> f32 {
     (h >> 40) as f32 * (1.0 / (1u64 << 24) as f32)

@@ -7,7 +7,8 @@
 //!   Greenberg 1994; Sillion 1994) for large scenes ([`HierarchicalSolver`]).
 //!
 //! Both keep the ambient term for partial solutions and power bookkeeping, and stop on one
-//! convergence measure: the residual (unshot) power as a fraction of the emitted power.
+//! convergence measure: the residual (unshot) power as a fraction of the emitted power. It
+//! computes only: files and file formats (the bake file, glTF, PLY) are twopass-bake's.
 //!
 //! Units: radiosity B and irradiance in W/m^2 per RGB channel with areas in the scene's units,
 //! radiance L = B / pi in W/(m^2 sr). Emitters are one-sided with exitance E = pi L_e.
@@ -27,12 +28,12 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-pub mod bake;
 pub mod cluster;
 mod direct;
 pub mod element;
 pub mod form_factor;
 mod hierarchical;
+mod mesh_error;
 mod progressive;
 mod solution;
 mod solver;
@@ -41,6 +42,7 @@ pub use direct::{MAX_DENSE_VERTICES, dense_solve};
 pub use form_factor::VisibilityRays;
 pub use hierarchical::HierarchicalSolver;
 pub use progressive::Progressive;
+pub use mesh_error::{InvalidMesh, MeshPart};
 pub use solution::Solution;
 pub use solver::{
     Adaptive, Energy, Finish, Hierarchical, MAX_VISIBILITY_RAYS, Method, Options, Progress,

@@ -1,8 +1,9 @@
-//! The integrator boundary (STYLE.md F): one required method that turns a camera ray into
-//! layered radiance, plus the shared pieces every integrator uses: the shading context at a hit
-//! (local frame, one-sided surfaces) and direct lighting from the area emitters with stratified
-//! shadow rays. Visibility and ray-origin offsetting belong to the scene (`Scene::intersect_from`,
-//! `Scene::occluded_between`); nothing here holds an epsilon. Integrators never spawn threads.
+//! The integrator boundary (ARCHITECTURE.md, "Architecture invariants"): one required method that
+//! turns a camera ray into layered radiance, plus the shared pieces every integrator uses: the
+//! shading context at a hit (local frame, one-sided surfaces) and direct lighting from the area
+//! emitters with stratified shadow rays. Visibility and ray-origin offsetting belong to the scene
+//! (`Scene::intersect_from`, `Scene::occluded_between`); nothing here holds an epsilon. Integrators
+//! never spawn threads.
 
 use glam::Vec3;
 use twopass_brdf::frame::Frame;

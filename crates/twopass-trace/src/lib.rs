@@ -29,6 +29,7 @@
 //! # Ok::<(), twopass_scene::SceneError>(())
 //! ```
 
+pub mod diffuse;
 pub mod film;
 pub mod hybrid;
 pub mod integrator;

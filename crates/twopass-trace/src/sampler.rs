@@ -1,47 +1,41 @@
 //! Deterministic random numbers: one independent stream per (seed, pixel, sample), so an image
 //! does not depend on which thread rendered which pixel, or in which order.
 //!
-//! The generator is SplitMix64 (Steele, Lea & Flood 2014) over a state derived by hashing the
-//! three indices: statistically independent streams for neighbouring pixels and samples, and
-//! nothing that a rayon job could share (CRATES.md: never keep RNG state in `map_init`).
+//! The generator is SplitMix64 (Steele, Lea & Flood 2014, [`twopass_brdf::random`], the
+//! workspace's one home of random streams) over a state derived by hashing the three
+//! indices: statistically independent streams for neighbouring pixels and samples, and nothing that
+//! a rayon job could share (ARCHITECTURE.md, "Conventions": never keep RNG state in `map_init`).
 
-/// The SplitMix64 finaliser: a bijective 64-bit mix with full avalanche.
-#[inline]
-fn mix64(mut z: u64) -> u64 {
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^ (z >> 31)
-}
-
-const GOLDEN: u64 = 0x9e37_79b9_7f4a_7c15;
+use twopass_brdf::random::{SplitMix64, hash, mix64};
 
 /// A stream of uniform numbers in [0, 1) for one camera sample of one pixel.
 #[derive(Debug, Clone)]
 pub struct Sampler {
-    state: u64,
+    stream: SplitMix64,
 }
 
 impl Sampler {
     /// The stream of sample `sample` of pixel `pixel` (row-major index) under `seed`.
     pub fn new(seed: u64, pixel: u64, sample: u64) -> Self {
-        let h = mix64(seed.wrapping_add(GOLDEN));
+        let h = hash(seed);
         let h = mix64(h ^ pixel.wrapping_mul(0xd6e8_feb8_6659_fd93));
         let h = mix64(h ^ sample.wrapping_mul(0xa076_1d64_78bd_642f));
-        Self { state: h }
+        Self {
+            stream: SplitMix64::new(h),
+        }
     }
 
     /// The next 64 random bits.
     #[inline]
     pub fn next_u64(&mut self) -> u64 {
-        self.state = self.state.wrapping_add(GOLDEN);
-        mix64(self.state)
+        self.stream.next_u64()
     }
 
     /// A uniform number in [0, 1) with 24 random bits (every value exactly representable, never
     /// 1.0).
     #[inline]
     pub fn next_f32(&mut self) -> f32 {
-        (self.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
+        self.stream.next_f32()
     }
 
     /// Two uniform numbers in [0, 1).

@@ -18,8 +18,8 @@
 use twopass_brdf::Rgb;
 use twopass_scene::{Ray, Scene};
 
+use crate::diffuse::DiffuseSource;
 use crate::film::{Layer, Radiance};
-use crate::hybrid::DiffuseSource;
 use crate::integrator::{Integrator, Lights, Shading, Tally, direct_light, trace_from};
 use crate::sampler::Sampler;
 

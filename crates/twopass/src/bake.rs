@@ -6,7 +6,7 @@
 //! Files, in `--output DIR` (default `bake/`, created if missing), named after the scene file:
 //! `<stem>.glb`, `<stem>.ply`, `<stem>.bake` and `<stem>.manifest.json`. Each is written
 //! atomically (a temporary file in DIR, then a rename); the manifest comes last and lists the
-//! others. Formats and units: `twopass_radiosity::bake`.
+//! others. Formats and units: `twopass_bake`.
 
 use std::collections::BTreeSet;
 use std::ops::ControlFlow;
@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use clap::{Args, ValueEnum};
-use twopass_radiosity::bake::{self, ColorMapping, ColorRecord, FileRecord, Manifest};
+use twopass_bake::{self as bake, ColorMapping, ColorRecord, FileRecord, Manifest};
 use twopass_radiosity::{
     Adaptive, Finish, Hierarchical, Method, Options, Solver, Stop, VisibilityRays,
 };
@@ -353,12 +353,17 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
 
 fn print_summary(m: &Manifest, manifest_path: &Path) {
     let t = &m.timings;
+    let steps = if m.solver == "hierarchical" {
+        format!("{} gather iterations", m.counts.iterations)
+    } else {
+        format!("{} shots", m.shots)
+    };
     println!(
-        "{}: {} after {} shots in {:.2} s (load {:.2}, meshing {:.2}, shooting {:.2}, \
+        "{}: {} solver, {} after {steps} in {:.2} s (load {:.2}, meshing {:.2}, solving {:.2}, \
          refining {:.2}, residuals {:.2}, writing {:.2})",
         m.scene.display(),
+        m.solver,
         m.finish.replace('_', " "),
-        m.shots,
         t.total_s,
         t.load_s,
         t.meshing_s,
@@ -369,12 +374,13 @@ fn print_summary(m: &Manifest, manifest_path: &Path) {
     );
     let c = &m.counts;
     println!(
-        "  {} patches, {} elements, {} vertices, {} refinement rounds; {:.3e} shadow rays",
-        c.patches, c.elements, c.vertices, c.refinement_rounds, m.rays as f64
+        "  {} patches, {} clusters, {} links, {} elements, {} vertices, {} refinement rounds; \
+         {:.3e} shadow rays",
+        c.patches, c.clusters, c.links, c.elements, c.vertices, c.refinement_rounds, m.rays as f64
     );
     let r = &m.residuals;
     println!(
-        "  unshot fraction {:.2e}; energy imbalance {:.1e}; form-factor row sums {:.3}..{:.3} \
+        "  residual {:.2e}; energy imbalance {:.1e}; form-factor row sums {:.3}..{:.3} \
          (mean {:.3}); reciprocity spread {:.2e} (weighted {:.2e}, {} pairs)",
         m.unshot_fraction,
         r.energy_imbalance,

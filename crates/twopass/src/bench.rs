@@ -729,8 +729,7 @@ fn render(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
     let started = Instant::now();
     let (solution, source) = match &args.bake {
         Some(path) => (
-            twopass_radiosity::bake::read_bake(path, &scene)
-                .map_err(|e| CliError::Input(e.to_string()))?,
+            twopass_bake::read_bake(path, &scene).map_err(|e| CliError::Input(e.to_string()))?,
             "bake",
         ),
         None => {

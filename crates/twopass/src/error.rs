@@ -38,13 +38,22 @@ pub enum CliError {
     },
     /// Encoding, writing or reading a bake output failed (the error names the file).
     #[error(transparent)]
-    Bake(#[from] twopass_radiosity::bake::BakeError),
+    Bake(#[from] twopass_bake::BakeError),
     /// Writing or composing an image failed.
     #[error(transparent)]
     Composite(#[from] twopass_composite::error::CompositeError),
     /// The command's arguments are valid syntax but make no sense together or for this input.
     #[error("{0}")]
     Input(String),
+}
+
+impl From<twopass_composite::WriteError> for CliError {
+    fn from(e: twopass_composite::WriteError) -> Self {
+        Self::Io {
+            path: e.path,
+            source: e.source,
+        }
+    }
 }
 
 impl CliError {

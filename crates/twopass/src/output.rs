@@ -2,48 +2,38 @@
 //! run never leaves a half-written file behind.
 
 use std::fs;
-use std::io::Write;
 use std::path::Path;
+
+use twopass_composite::Rgb8Image;
 
 use crate::error::CliError;
 
-/// Writes `bytes` to `path` atomically, creating the parent directory if missing.
+/// Writes `bytes` to `path` atomically (the workspace's one atomic write,
+/// [`twopass_composite::write::write_atomic`]), creating the parent directory if missing.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), CliError> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
     fs::create_dir_all(dir).map_err(|e| CliError::io(dir, e))?;
-    let mut builder = tempfile::Builder::new();
-    builder.prefix(".twopass-").suffix(".tmp");
-    // The usual mode of a new file (0666 less the umask), not the temporary file's 0600.
-    #[cfg(unix)]
-    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
-    let mut tmp = builder.tempfile_in(dir).map_err(|e| CliError::io(dir, e))?;
-    tmp.write_all(bytes).map_err(|e| CliError::io(path, e))?;
-    tmp.as_file()
-        .sync_all()
-        .map_err(|e| CliError::io(path, e))?;
-    tmp.persist(path).map_err(|e| CliError::io(path, e.error))?;
-    Ok(())
+    Ok(twopass_composite::write::write_atomic(path, bytes)?)
 }
 
-/// Encodes an 8-bit sRGB image (`rgb.len() == 3 * width * height`, rows top to bottom) as PNG
-/// and writes it atomically to `path`.
+/// Writes an 8-bit sRGB image (`rgb.len() == 3 * width * height`, rows top to bottom) as PNG,
+/// atomically, creating the parent directory if missing. The encoding is the workspace's one
+/// PNG encoder ([`twopass_composite::write::encode_png`]).
 pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(), CliError> {
-    let encode_err = |e: png::EncodingError| CliError::Encode {
-        path: path.to_owned(),
-        message: e.to_string(),
-    };
-    let mut bytes = Vec::new();
-    {
-        let mut enc = png::Encoder::new(&mut bytes, width, height);
-        enc.set_color(png::ColorType::Rgb);
-        enc.set_depth(png::BitDepth::Eight);
-        enc.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
-        let mut w = enc.write_header().map_err(encode_err)?;
-        w.write_image_data(rgb).map_err(encode_err)?;
+    if rgb.len() as u64 != 3 * u64::from(width) * u64::from(height) {
+        return Err(CliError::Encode {
+            path: path.to_owned(),
+            message: format!("{} bytes for a {width} x {height} RGB image", rgb.len()),
+        });
     }
+    let image = Rgb8Image::from_fn(width, height, |x, y| {
+        let i = 3 * (y as usize * width as usize + x as usize);
+        [rgb[i], rgb[i + 1], rgb[i + 2]]
+    });
+    let bytes = twopass_composite::write::encode_png(path, &image, None)?;
     write_atomic(path, &bytes)
 }
 

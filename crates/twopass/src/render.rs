@@ -164,7 +164,7 @@ pub fn radiosity(
     ctx: &Context,
 ) -> Result<(Solution, &'static str), CliError> {
     match bake {
-        Some(file) => Ok((twopass_radiosity::bake::read_bake(file, scene)?, "bake")),
+        Some(file) => Ok((twopass_bake::read_bake(file, scene)?, "bake")),
         None => {
             let mut solver =
                 Solver::new(scene, solve.options(ctx.seed)).map_err(|source| CliError::Solve {

@@ -7,7 +7,7 @@ use common::{repo, twopass};
 
 use std::path::{Path, PathBuf};
 
-use twopass_radiosity::bake;
+use twopass_bake as bake;
 
 fn file_names(dir: &Path) -> Vec<String> {
     let mut names: Vec<String> = std::fs::read_dir(dir)

@@ -88,11 +88,31 @@ fn bench_rays_reports_every_query_kind() {
     );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let rows = v["rows"].as_array().unwrap();
-    assert_eq!(rows.len(), 3);
-    assert_eq!(rows[0]["rays"], 32 * 32);
+    let queries: Vec<&str> = rows.iter().map(|r| r["query"].as_str().unwrap()).collect();
+    assert_eq!(queries, ["camera (coherent)", "incoherent", "occlusion"]);
+    // One camera ray per pixel of the 32 x 32 image, then the --rays batch.
+    let rays: Vec<u64> = rows.iter().map(|r| r["rays"].as_u64().unwrap()).collect();
+    assert_eq!(rays, [32 * 32, 1000, 1000]);
+    let (loaded, _) = twopass_scene::load(&scene).unwrap();
+    assert_eq!(
+        v["triangles"].as_u64(),
+        Some(loaded.mesh.triangles.len() as u64)
+    );
     for r in rows {
-        assert!(r["mrays_1"].as_f64().unwrap() > 0.0 && r["mrays_n"].as_f64().unwrap() > 0.0);
+        let (one, all) = (
+            r["mrays_1"].as_f64().unwrap(),
+            r["mrays_n"].as_f64().unwrap(),
+        );
+        assert!(one.is_finite() && one > 0.0 && all.is_finite() && all > 0.0);
+        let speedup = r["speedup"].as_f64().unwrap();
+        assert!((speedup - all / one).abs() <= 1e-9 * speedup, "{r}");
+        let hit = r["hit_fraction"].as_f64().unwrap();
+        assert!((0.0..=1.0).contains(&hit), "{r}");
     }
+    // The camera looks into the box: most camera rays hit it, and some occlusion rays are
+    // blocked between two points on its walls.
+    assert!(rows[0]["hit_fraction"].as_f64().unwrap() > 0.5);
+    assert!(rows[2]["hit_fraction"].as_f64().unwrap() > 0.0);
 }
 
 #[test]
@@ -117,10 +137,16 @@ fn bench_radiosity_reports_each_mesh_with_the_dense_check() {
     let rows: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let rows = rows.as_array().unwrap();
     assert_eq!(rows.len(), 2);
-    assert!(
-        rows[1]["elements"].as_u64() > rows[0]["elements"].as_u64(),
-        "more elements asked, more made"
-    );
+    let elements: Vec<u64> = rows
+        .iter()
+        .map(|r| r["elements"].as_u64().expect("an element count"))
+        .collect();
+    assert!(elements[1] > elements[0], "more elements asked, more made");
+    let targets: Vec<u64> = rows
+        .iter()
+        .map(|r| r["target_elements"].as_u64().unwrap())
+        .collect();
+    assert_eq!(targets, [300, 600]);
     for r in rows {
         assert!(r["unshot_fraction"].as_f64().unwrap() <= 1e-2);
         assert!(r["rays"].as_u64().unwrap() > 0);

@@ -38,7 +38,8 @@ const REFERENCE_SEED_MIX: u64 = 0x7265_6665_7265_6e63;
 pub struct ReferenceKey {
     /// The scene file as given.
     pub scene: PathBuf,
-    /// CRC-32 of the loaded scene's geometry, materials, objects, emitters and camera.
+    /// [`twopass_bake::scene_fingerprint`] of the loaded scene (geometry, lighting, materials,
+    /// camera), 16 hex digits.
     pub scene_checksum: String,
     /// Image width, pixels.
     pub width: u32,
@@ -84,27 +85,6 @@ pub struct Converged {
     pub exr: PathBuf,
 }
 
-/// CRC-32 of everything in the loaded scene that changes an image.
-fn scene_checksum(scene: &Scene) -> String {
-    let mut h = crc32fast::Hasher::new();
-    for p in &scene.mesh.positions {
-        for c in p.to_array() {
-            h.update(&c.to_le_bytes());
-        }
-    }
-    for t in &scene.mesh.triangles {
-        for i in t {
-            h.update(&i.to_le_bytes());
-        }
-    }
-    let described = format!(
-        "{:?}{:?}{:?}{:?}{:?}",
-        scene.mesh.normals, scene.materials, scene.objects, scene.emitters, scene.camera
-    );
-    h.update(described.as_bytes());
-    format!("{:08x}", h.finalize())
-}
-
 /// The key of a reference for this scene, camera size and settings.
 pub fn key(
     scene: &Scene,
@@ -117,7 +97,7 @@ pub fn key(
     let settings = ReferenceSettings::default();
     ReferenceKey {
         scene: path.to_owned(),
-        scene_checksum: scene_checksum(scene),
+        scene_checksum: format!("{:016x}", twopass_bake::scene_fingerprint(scene)),
         width,
         height,
         spp,

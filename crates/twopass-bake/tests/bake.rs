@@ -6,9 +6,8 @@ use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
-use twopass_radiosity::bake::{
-    self, BakeError, BakeProblem, ColorMapping, Fingerprint, Manifest, MeshPart,
-};
+use twopass_bake::{self as bake, BakeError, BakeProblem, ColorMapping, Fingerprint, Manifest};
+use twopass_radiosity::MeshPart;
 use twopass_radiosity::element::ElementMesh;
 use twopass_radiosity::{Options, Solution, Solver, Stop};
 use twopass_scene::{DiffuseRadiance, Scene};
@@ -207,6 +206,36 @@ fn bake_for_another_scene_is_refused() {
     ));
     // The same scene loaded again is accepted.
     assert!(bake::decode_bake(&bytes, &variant(&text)).is_ok());
+}
+
+#[test]
+fn scene_fingerprint_follows_everything_an_image_depends_on() {
+    let text = cornell_text();
+    let base = bake::scene_fingerprint(&variant(&text));
+    assert_eq!(base, bake::scene_fingerprint(&variant(&text)), "stable");
+    // Geometry and lighting, as the bake's fingerprints.
+    let moved = variant(&text.replace("548.7", "548.6"));
+    assert_ne!(bake::scene_fingerprint(&moved), base);
+    // Same geometry and diffuse light, another view or another glossy lobe: the bake's
+    // fingerprints stay, the image fingerprint changes.
+    let camera = variant(&text.replace("[278, 273, -800]", "[278, 273, -801]"));
+    assert_eq!(
+        bake::lighting_fingerprint(&camera),
+        bake::lighting_fingerprint(&variant(&text))
+    );
+    assert_ne!(bake::scene_fingerprint(&camera), base);
+    let glossy = text.replacen(
+        "type = \"lambert\"\ndiffuse = [0.725, 0.71, 0.68]",
+        "type = \"phong\"\ndiffuse = [0.725, 0.71, 0.68]\nspecular = 0.1\nexponent = 20",
+        1,
+    );
+    assert_ne!(glossy, text, "the white material is in the scene file");
+    let glossy = variant(&glossy);
+    assert_eq!(
+        bake::lighting_fingerprint(&glossy),
+        bake::lighting_fingerprint(&variant(&text))
+    );
+    assert_ne!(bake::scene_fingerprint(&glossy), base);
 }
 
 #[test]

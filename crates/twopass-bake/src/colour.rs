@@ -1,0 +1,49 @@
+//! How radiance becomes glTF `COLOR_0`.
+
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+use twopass_brdf::Rgb;
+use twopass_brdf::colour::luminance;
+use twopass_radiosity::Solution;
+
+/// How radiance becomes glTF `COLOR_0`, a linear multiplier that engines expect in [0, 1]:
+/// `COLOR_0 = min(1, exposure * L)` per linear RGB channel, with `L = B / pi` the radiance
+/// leaving the surface in W/(m^2 sr). Negative values (rounding) become 0.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ColorMapping {
+    /// Multiplier on radiance, sr m^2 / W (1 / the radiance that maps to white).
+    pub exposure: f32,
+}
+
+/// Percentile of the vertices' radiance luminance that [`ColorMapping::auto`] maps to 1.
+pub const AUTO_EXPOSURE_PERCENTILE: f64 = 0.99;
+
+impl ColorMapping {
+    /// An exposure that maps the 99th percentile (over vertices) of the displayed radiance's
+    /// luminance (Rec. 709 weights) to 1, so that only the brightest percent (typically the
+    /// emitters) saturates. 1 when everything is black.
+    pub fn auto(solution: &Solution) -> Self {
+        let mut lum: Vec<f32> = solution
+            .vertex_radiosity()
+            .iter()
+            .map(|b| luminance(*b) * std::f32::consts::FRAC_1_PI)
+            .filter(|l| l.is_finite() && *l > 0.0)
+            .collect();
+        if lum.is_empty() {
+            return Self { exposure: 1.0 };
+        }
+        let k = ((lum.len() - 1) as f64 * AUTO_EXPOSURE_PERCENTILE).round() as usize;
+        let (_, &mut at, _) = lum.select_nth_unstable_by(k, f32::total_cmp);
+        Self { exposure: 1.0 / at }
+    }
+
+    /// `COLOR_0` of a radiance `l` (W/(m^2 sr)), and whether a channel was clipped at 1.
+    pub fn color(&self, l: Rgb) -> (Rgb, bool) {
+        let c = (l * self.exposure).max(Vec3::ZERO);
+        (c.min(Vec3::ONE), c.max_element() > 1.0)
+    }
+
+    /// The mapping as a formula, as recorded in the manifest and the glTF asset extras.
+    pub const FORMULA: &'static str = "COLOR_0 = min(1, exposure * L) per linear RGB channel, \
+         L = B / pi the radiance leaving the surface in W/(m^2 sr)";
+}

@@ -1,0 +1,344 @@
+//! The bake manifest (JSON): what was solved, how, how long it took and how good it is.
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+use serde::{Deserialize, Serialize};
+use twopass_radiosity::{Finish, Options, Progress, Residuals};
+use twopass_scene::Scene;
+
+use crate::error::BakeError;
+use crate::fingerprint::{geometry_fingerprint, lighting_fingerprint};
+
+/// Version of the [`Manifest`] JSON layout.
+pub const MANIFEST_VERSION: u32 = 2;
+
+/// The solver settings a bake was made with (`null`: the solver's default).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SettingsRecord {
+    /// Requested longest patch edge, scene units (default: diagonal / 8).
+    pub patch_size: Option<f32>,
+    /// Requested longest element edge, scene units (default: diagonal / 24).
+    pub element_size: Option<f32>,
+    /// The scene's bounding-box diagonal, scene units (what the defaults derive from).
+    pub scene_diagonal: f32,
+    /// Adaptive subdivision, or `null` when off.
+    pub adaptive: Option<AdaptiveRecord>,
+    /// Shadow rays per visibility estimate: first estimate.
+    pub visibility_rays_min: u32,
+    /// Shadow rays per visibility estimate: most.
+    pub visibility_rays_max: u32,
+    /// Whether visibility was measured with shadow rays.
+    pub occlusion: bool,
+    /// Stop at this unshot fraction of the emitted power.
+    pub unshot_fraction: f64,
+    /// Hierarchical solver: refine links whose estimated error exceeds this fraction of the
+    /// emitted power.
+    #[serde(default)]
+    pub link_tolerance: f64,
+    /// Hierarchical solver: smallest element edge, scene units (`null`: diagonal / 200).
+    #[serde(default)]
+    pub min_element_size: Option<f32>,
+    /// Stop after this many shots, if set.
+    pub max_shots: Option<u64>,
+    /// Stop after this wall-clock time, seconds, if set.
+    pub time_budget_s: Option<f64>,
+    /// Seed of the visibility sampling.
+    pub seed: u64,
+    /// Worker threads (the result does not depend on it).
+    pub threads: usize,
+}
+
+/// Adaptive subdivision settings (see `Adaptive`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct AdaptiveRecord {
+    /// Split when vertex luminances differ by more than this fraction of the mean.
+    pub threshold: f32,
+    /// Smallest element edge / 2, scene units (`null`: element size / 8).
+    pub min_element_size: Option<f32>,
+    /// Refinement rounds allowed.
+    pub rounds: u32,
+    /// Unshot fraction at which each round looks at the solution.
+    pub at_unshot_fraction: f64,
+}
+
+/// Wall-clock time per phase, seconds.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct TimingsRecord {
+    /// Loading the scene and building its accelerator.
+    pub load_s: f64,
+    /// Building the patch and element mesh.
+    pub meshing_s: f64,
+    /// Shooting (solve time less meshing and refining).
+    pub shooting_s: f64,
+    /// Adaptive subdivision, with the new vertices' gathering.
+    pub refining_s: f64,
+    /// Computing the residual report.
+    pub residuals_s: f64,
+    /// Encoding and writing the output files (all but the manifest).
+    pub writing_s: f64,
+    /// Everything, up to writing the manifest.
+    pub total_s: f64,
+}
+
+/// Mesh sizes at the end of the solve.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CountsRecord {
+    /// Scene triangles.
+    pub scene_triangles: usize,
+    /// Patches (shooters).
+    pub patches: usize,
+    /// Elements (displayed triangles).
+    pub elements: usize,
+    /// Element vertices (where radiosity is stored).
+    pub vertices: usize,
+    /// Adaptive rounds (progressive) or link re-refinements (hierarchical) done.
+    pub refinement_rounds: u32,
+    /// Links between hierarchy nodes (hierarchical).
+    #[serde(default)]
+    pub links: usize,
+    /// Clusters above the surfaces (hierarchical).
+    #[serde(default)]
+    pub clusters: usize,
+    /// Gather iterations (hierarchical).
+    #[serde(default)]
+    pub iterations: u64,
+}
+
+/// Power bookkeeping, W per RGB channel (scene units, so mm^2 scenes give W * 1e-6 per m^2).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct EnergyRecord {
+    /// Emitted.
+    pub emitted: [f64; 3],
+    /// Absorbed by surfaces.
+    pub absorbed: [f64; 3],
+    /// Shot but received by no element.
+    pub escaped: [f64; 3],
+    /// Received but not shot yet.
+    pub unshot: [f64; 3],
+    /// Change of the unshot estimate by adaptive subdivision.
+    pub remeshing: [f64; 3],
+    /// Largest relative imbalance after any step.
+    pub worst_imbalance: f64,
+}
+
+/// The residual report (see `Residuals`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ResidualsRecord {
+    /// Vertices and patch pairs sampled.
+    pub samples: usize,
+    /// Largest relative energy imbalance.
+    pub energy_imbalance: f64,
+    /// Smallest sampled form-factor row sum.
+    pub row_sum_min: f64,
+    /// Mean sampled row sum.
+    pub row_sum_mean: f64,
+    /// Largest sampled row sum.
+    pub row_sum_max: f64,
+    /// Patch pairs with a non-zero form factor among those sampled.
+    pub reciprocity_pairs: usize,
+    /// Largest relative reciprocity difference.
+    pub reciprocity_spread: f64,
+    /// Area-weighted mean relative reciprocity difference.
+    pub reciprocity_mean: f64,
+}
+
+/// The `.glb` colour mapping used.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ColorRecord {
+    /// The mapping, as a formula.
+    pub mapping: String,
+    /// Multiplier on radiance, sr m^2 / W.
+    pub exposure: f32,
+    /// `"auto"` (99th-percentile luminance to 1) or `"fixed"` (given by the user).
+    pub exposure_mode: String,
+    /// Vertices with a channel clipped at 1.
+    pub clamped_vertices: usize,
+}
+
+/// The convergence measure at the end of the solve.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct ConvergenceRecord {
+    /// What is measured, in words.
+    pub measure: String,
+    /// Its value at the end.
+    pub value: f64,
+    /// The tolerance the solve stopped on.
+    pub tolerance: f64,
+    /// Whether the value reached the tolerance.
+    pub converged: bool,
+}
+
+/// One written file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FileRecord {
+    /// `"glb"`, `"ply"` or `"bake"`.
+    pub format: String,
+    /// Where it was written.
+    pub path: PathBuf,
+    /// Size, bytes.
+    pub bytes: u64,
+}
+
+/// The bake manifest (JSON): what was solved, how, how long it took and how good it is.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Manifest {
+    /// [`MANIFEST_VERSION`].
+    pub manifest_version: u32,
+    /// `twopass <version>`.
+    pub generator: String,
+    /// The scene file.
+    pub scene: PathBuf,
+    /// [`geometry_fingerprint`] of the scene, 16 hex digits.
+    pub geometry_fingerprint: String,
+    /// [`lighting_fingerprint`] of the scene, 16 hex digits.
+    pub lighting_fingerprint: String,
+    /// The solver that ran: `progressive` or `hierarchical`.
+    #[serde(default)]
+    pub solver: String,
+    /// Solver settings.
+    pub settings: SettingsRecord,
+    /// The convergence measure both solvers stop on.
+    #[serde(default)]
+    pub convergence: ConvergenceRecord,
+    /// Why the solve stopped: `converged`, `max_shots`, `time_budget`, `cancelled`,
+    /// `exhausted`.
+    pub finish: String,
+    /// Time per phase.
+    pub timings: TimingsRecord,
+    /// Shots (patches shot, with repeats).
+    pub shots: u64,
+    /// Shadow rays cast.
+    pub rays: u64,
+    /// Mesh sizes.
+    pub counts: CountsRecord,
+    /// Unshot power over emitted power at the end (sums over channels).
+    pub unshot_fraction: f64,
+    /// Power bookkeeping.
+    pub energy: EnergyRecord,
+    /// The residual report.
+    pub residuals: ResidualsRecord,
+    /// The `.glb` colour mapping, when a `.glb` was written.
+    pub color: Option<ColorRecord>,
+    /// The files written (the manifest not included).
+    pub files: Vec<FileRecord>,
+}
+
+fn seconds(d: Duration) -> f64 {
+    d.as_secs_f64()
+}
+
+impl Manifest {
+    /// A manifest of a finished solve of `scene` with `options`: `progress` is the solver's
+    /// final progress, `residuals` its residual report over `samples` samples, computed in
+    /// `residuals_time`. Timings of loading and writing, the colour record and the files are
+    /// left for the caller to fill in.
+    pub fn new(
+        scene: &Scene,
+        options: &Options,
+        finish: Finish,
+        progress: &Progress,
+        residuals: &Residuals,
+        samples: usize,
+        residuals_time: Duration,
+    ) -> Self {
+        let e = &progress.energy;
+        let shooting = progress
+            .elapsed
+            .saturating_sub(progress.meshing)
+            .saturating_sub(progress.refining);
+        Self {
+            manifest_version: MANIFEST_VERSION,
+            generator: format!("twopass {}", env!("CARGO_PKG_VERSION")),
+            scene: scene.path.clone(),
+            geometry_fingerprint: format!("{:016x}", geometry_fingerprint(scene)),
+            lighting_fingerprint: format!("{:016x}", lighting_fingerprint(scene)),
+            solver: progress.method.name().into(),
+            convergence: ConvergenceRecord {
+                measure: "residual (unshot) power / emitted power, sums over channels".into(),
+                value: progress.unshot_fraction,
+                tolerance: options.stop.unshot_fraction,
+                converged: progress.unshot_fraction <= options.stop.unshot_fraction,
+            },
+            settings: SettingsRecord {
+                patch_size: options.patch_size,
+                element_size: options.element_size,
+                scene_diagonal: scene.bounds.diagonal(),
+                adaptive: options.adaptive.map(|a| AdaptiveRecord {
+                    threshold: a.threshold,
+                    min_element_size: a.min_element_size,
+                    rounds: a.rounds,
+                    at_unshot_fraction: a.at_unshot_fraction,
+                }),
+                visibility_rays_min: options.visibility.min,
+                visibility_rays_max: options.visibility.max,
+                occlusion: options.occlusion,
+                unshot_fraction: options.stop.unshot_fraction,
+                link_tolerance: options.hierarchical.link_tolerance,
+                min_element_size: options.hierarchical.min_element_size,
+                max_shots: options.stop.max_shots,
+                time_budget_s: options.stop.time_budget.map(seconds),
+                seed: options.seed,
+                threads: rayon::current_num_threads(),
+            },
+            finish: match finish {
+                Finish::Converged => "converged",
+                Finish::MaxShots => "max_shots",
+                Finish::TimeBudget => "time_budget",
+                Finish::Cancelled => "cancelled",
+                Finish::Exhausted => "exhausted",
+            }
+            .into(),
+            timings: TimingsRecord {
+                meshing_s: seconds(progress.meshing),
+                shooting_s: seconds(shooting),
+                refining_s: seconds(progress.refining),
+                residuals_s: seconds(residuals_time),
+                ..TimingsRecord::default()
+            },
+            shots: progress.shots,
+            rays: progress.rays,
+            counts: CountsRecord {
+                scene_triangles: scene.mesh.triangles.len(),
+                patches: progress.patches,
+                elements: progress.elements,
+                vertices: progress.vertices,
+                refinement_rounds: progress.refinement_rounds,
+                links: progress.links,
+                clusters: progress.clusters,
+                iterations: progress.iterations,
+            },
+            unshot_fraction: progress.unshot_fraction,
+            energy: EnergyRecord {
+                emitted: e.emitted.to_array(),
+                absorbed: e.absorbed.to_array(),
+                escaped: e.escaped.to_array(),
+                unshot: e.unshot.to_array(),
+                remeshing: e.remeshing.to_array(),
+                worst_imbalance: progress.worst_imbalance,
+            },
+            residuals: ResidualsRecord {
+                samples,
+                energy_imbalance: residuals.energy_imbalance,
+                row_sum_min: residuals.row_sum_min,
+                row_sum_mean: residuals.row_sum_mean,
+                row_sum_max: residuals.row_sum_max,
+                reciprocity_pairs: residuals.reciprocity_pairs,
+                reciprocity_spread: residuals.reciprocity_spread,
+                reciprocity_mean: residuals.reciprocity_mean,
+            },
+            color: None,
+            files: Vec::new(),
+        }
+    }
+
+    /// The manifest as pretty-printed JSON (non-finite numbers become `null`).
+    pub fn to_json(&self) -> Result<Vec<u8>, BakeError> {
+        let mut bytes = serde_json::to_vec_pretty(self).map_err(|e| BakeError::Encode {
+            path: PathBuf::from("manifest"),
+            message: e.to_string(),
+        })?;
+        bytes.push(b'\n');
+        Ok(bytes)
+    }
+}
