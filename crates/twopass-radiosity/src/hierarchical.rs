@@ -51,10 +51,13 @@ use crate::solver::{
 struct Link {
     receiver: NodeRef,
     source: NodeRef,
-    /// Irradiance per unit source exitance (visibility included) at the receiver's three
-    /// corners for a surface receiver; over the whole receiver (three equal values) for a
-    /// cluster. Point values: what the vertices display.
+    /// Transport per unit of what the source sends (its exitance for a surface, its radiant
+    /// table entry `dir` for a cluster), visibility included: irradiance at the receiver's
+    /// three corners for a surface receiver (point values: what the vertices display); flux
+    /// density from direction `dir ^ 16` for a cluster receiver (three equal values).
     k: [f32; 3],
+    /// Table bin of the direction from the source's centre to the receiver's.
+    dir: u8,
     /// Area-averaged irradiance per unit source exitance less the mean of `k`: what the
     /// linear interpolant of the corner values misses of the light the receiver gets (surface
     /// pairs; zero otherwise), added uniformly over the receiver.
@@ -77,6 +80,7 @@ enum Step {
 /// A link's evaluation.
 struct Eval {
     k: [f64; 3],
+    dir: u8,
     shift: f64,
     error: f64,
     /// An end is a cluster overlapping the other end's bounding sphere: the far-field estimate
@@ -85,6 +89,60 @@ struct Eval {
     /// Visibility is partial (some rays blocked, some not).
     partial: bool,
     rays: u64,
+}
+
+/// Directions of the clusters' tables: 16 spread over a hemisphere (a Fibonacci spiral) and
+/// their opposites, so that bin `j ^ 16` is the opposite of bin `j`.
+const DIRECTIONS: usize = 32;
+
+fn directions() -> [DVec3; DIRECTIONS] {
+    let half = DIRECTIONS / 2;
+    let golden = PI * (3.0 - 5f64.sqrt());
+    std::array::from_fn(|j| {
+        let i = j % half;
+        let z = 1.0 - (i as f64 + 0.5) / half as f64;
+        let r = (1.0 - z * z).sqrt();
+        let phi = golden * i as f64;
+        let d = DVec3::new(r * phi.cos(), r * phi.sin(), z);
+        if j < half { d } else { -d }
+    })
+}
+
+/// The bin of unit direction `u` (the nearest table direction).
+fn bin(dirs: &[DVec3; DIRECTIONS], u: DVec3) -> u8 {
+    let mut best = (0, f64::NEG_INFINITY);
+    for (j, d) in dirs.iter().enumerate() {
+        let c = d.dot(u);
+        if c > best.1 {
+            best = (j, c);
+        }
+    }
+    best.0 as u8
+}
+
+/// A table over the directions, per origin (emitted, reflected light), in f32 to keep
+/// clusters small.
+type Table = [[Vec3; DIRECTIONS]; 2];
+
+const EMPTY: Table = [[Vec3::ZERO; DIRECTIONS]; 2];
+
+fn add_tables(a: &Table, b: &Table) -> Table {
+    std::array::from_fn(|o| std::array::from_fn(|j| a[o][j] + b[o][j]))
+}
+
+/// Irradiance on a surface facing `n` from the flux densities (W/m^2 through a plane facing
+/// each direction) arriving from the table's directions.
+fn facing(flux: &Table, dirs: &[DVec3; DIRECTIONS], n: DVec3) -> [DVec3; 2] {
+    std::array::from_fn(|o| {
+        let mut e = DVec3::ZERO;
+        for (j, d) in dirs.iter().enumerate() {
+            let c = n.dot(*d);
+            if c > 0.0 && flux[o][j] != Vec3::ZERO {
+                e += flux[o][j].as_dvec3() * c;
+            }
+        }
+        e
+    })
 }
 
 /// Node geometry the link estimates need.
@@ -135,8 +193,17 @@ pub struct HierarchicalSolver<'s> {
     /// Per surface leaf: irradiance at its corners after push (emitted, reflected light).
     corners_in: Vec<[[DVec3; 4]; 2]>,
     /// Per cluster: the same, one value per cluster.
-    cluster_gathered: Vec<[DVec3; 2]>,
+    /// Per cluster: the flux density arriving from each table direction (from the cluster
+    /// toward the sources), gathered by its own links; pushed down, each surface inside takes
+    /// it by its orientation.
+    cluster_gathered: Vec<Table>,
     cluster_exitance: Vec<[DVec3; 2]>,
+    /// Per cluster: its radiant intensity times pi toward each table direction, W: the sum
+    /// over its triangles of exitance x area x clamped cosine. A cluster source sends this.
+    radiant: Vec<Table>,
+    /// Per cluster: its projected area toward each table direction, scene units squared.
+    projected: Vec<[f32; DIRECTIONS]>,
+    dirs: [DVec3; DIRECTIONS],
     /// Residual power of the last iteration per channel (signed), and its fraction.
     residual: DVec3,
     residual_fraction: f64,
@@ -245,6 +312,9 @@ impl<'s> HierarchicalSolver<'s> {
             corners_in: Vec::new(),
             cluster_gathered: Vec::new(),
             cluster_exitance: Vec::new(),
+            radiant: Vec::new(),
+            projected: Vec::new(),
+            dirs: directions(),
             residual: DVec3::ZERO,
             residual_fraction: 1.0,
             emitted: DVec3::ZERO,
@@ -262,6 +332,7 @@ impl<'s> HierarchicalSolver<'s> {
             refining: Duration::ZERO,
         };
         s.grow_arrays();
+        s.project();
         s.emitted = s
             .mesh
             .leaves()
@@ -279,6 +350,35 @@ impl<'s> HierarchicalSolver<'s> {
         Ok(s)
     }
 
+    /// Each cluster's projected area toward the table directions (children come after their
+    /// parent, so a reverse sweep sees every child first).
+    fn project(&mut self) {
+        let mut projected = vec![[0.0f32; DIRECTIONS]; self.clusters.nodes.len()];
+        for c in (0..self.clusters.nodes.len()).rev() {
+            let mut sum = [0.0f64; DIRECTIONS];
+            for child in self.clusters.nodes[c].children {
+                match child.kind() {
+                    Kind::Cluster(cc) => {
+                        for (s, p) in sum.iter_mut().zip(&projected[cc as usize]) {
+                            *s += f64::from(*p);
+                        }
+                    }
+                    Kind::Surface(n) => {
+                        let node = &self.mesh.nodes[n as usize];
+                        let normal = self.scene.mesh.geometric_normals
+                            [node.scene_triangle as usize]
+                            .as_dvec3();
+                        for (s, d) in sum.iter_mut().zip(&self.dirs) {
+                            *s += f64::from(node.area) * normal.dot(*d).max(0.0);
+                        }
+                    }
+                }
+            }
+            projected[c] = sum.map(|s| s as f32);
+        }
+        self.projected = projected;
+    }
+
     /// Extends the per-node arrays to new surface nodes and clusters.
     fn grow_arrays(&mut self) {
         let n = self.mesh.nodes.len();
@@ -287,19 +387,20 @@ impl<'s> HierarchicalSolver<'s> {
         self.spread.resize(n, 0.0);
         self.corners_in.resize(n, [[DVec3::ZERO; 4]; 2]);
         let c = self.clusters.nodes.len();
-        self.cluster_gathered.resize(c, [DVec3::ZERO; 2]);
+        self.cluster_gathered.resize(c, EMPTY);
         self.cluster_exitance.resize(c, [DVec3::ZERO; 2]);
+        self.radiant.resize(c, EMPTY);
         self.cluster_spread.resize(c, 0.0);
     }
 
     /// The oracle: estimated error of a link's transport, as power (W, luminance).
     fn link_error(&self, l: &Link) -> f64 {
-        let (e, s) = match l.source.kind() {
-            Kind::Cluster(c) => (
-                self.cluster_exitance[c as usize],
-                self.cluster_spread[c as usize],
-            ),
-            Kind::Surface(n) => (self.exitance[n as usize], self.spread[n as usize]),
+        let e = self.source_value(l);
+        // A surface source's departure from uniform exitance (a cluster link's error is its
+        // whole transport already).
+        let s = match l.source.kind() {
+            Kind::Cluster(_) => 0.0,
+            Kind::Surface(n) => self.spread[n as usize],
         };
         let mean_k = (f64::from(l.k[0]) + f64::from(l.k[1]) + f64::from(l.k[2])) / 3.0;
         // Form-factor error at the source's mean exitance, plus the source's own departure
@@ -342,10 +443,16 @@ impl<'s> HierarchicalSolver<'s> {
         }
     }
 
-    /// Current exitance of a node (emitted, reflected), area-averaged, W/m^2.
-    fn source_exitance(&self, r: NodeRef) -> [DVec3; 2] {
-        match r.kind() {
-            Kind::Cluster(c) => self.cluster_exitance[c as usize],
+    /// What a link's source sends (emitted, reflected light), per unit of the link's `k`:
+    /// a surface's area-averaged exitance (W/m^2), a cluster's radiant table entry toward
+    /// the receiver (W).
+    fn source_value(&self, l: &Link) -> [DVec3; 2] {
+        match l.source.kind() {
+            Kind::Cluster(c) => {
+                let t = &self.radiant[c as usize];
+                let j = usize::from(l.dir);
+                [t[0][j].as_dvec3(), t[1][j].as_dvec3()]
+            }
             Kind::Surface(n) => self.exitance[n as usize],
         }
     }
@@ -396,49 +503,48 @@ impl<'s> HierarchicalSolver<'s> {
     }
 
     /// The visible fraction between two nodes from about `count` stratified shadow rays
-    /// between points on both; pairs of points that face away from each other do not count.
+    /// between points on both. Pairs of points that face away from each other do not count:
+    /// orientation is the form factor's business (and the isotropic cluster's 1/4), the rays
+    /// only look for what stands between. When no pair faces, grids four and sixteen times as
+    /// fine are drawn (a few samples can all land on the far side of a cluster by chance); when
+    /// they find none either, the two ends do not face each other (two parts of one convex
+    /// object, say) and nothing passes.
     fn visibility(&self, r: NodeRef, s: NodeRef, count: u32, seed: u64) -> (f64, u64) {
-        let k = (f64::from(count).sqrt().round() as u32).max(1);
-        let (mut seen, mut total) = (0u32, 0u32);
-        let mut first = None;
-        for i in 0..k {
-            for j in 0..k {
-                let h = hash(seed ^ (u64::from(i) << 32 | u64::from(j)));
-                let (fi, fj, kf) = (f64::from(i), f64::from(j), f64::from(k));
-                let a = self.sample_point(
-                    r,
-                    [
-                        (fi + unit(h)) / kf,
-                        (fj + unit(hash(h))) / kf,
-                        unit(hash(h ^ 1)),
-                    ],
-                );
-                let b = self.sample_point(
-                    s,
-                    [
-                        (fj + unit(hash(h ^ 2))) / kf,
-                        (fi + unit(hash(h ^ 3))) / kf,
-                        unit(hash(h ^ 4)),
-                    ],
-                );
-                let d = b.position - a.position;
-                if d.dot(a.normal) <= 0.0 || d.dot(b.normal) >= 0.0 {
-                    first.get_or_insert((a, b));
-                    continue;
-                }
-                total += 1;
-                if !self.scene.occluded_between(&a, &b) {
-                    seen += 1;
+        let mut k = (f64::from(count).sqrt().round() as u32).max(1);
+        for _ in 0..3 {
+            let (mut seen, mut total) = (0u32, 0u32);
+            for i in 0..k {
+                for j in 0..k {
+                    let h = hash(seed ^ (u64::from(k) << 48 | u64::from(i) << 24 | u64::from(j)));
+                    let (fi, fj, kf) = (f64::from(i), f64::from(j), f64::from(k));
+                    let a = self.sample_point(
+                        r,
+                        [(fi + unit(h)) / kf, (fj + unit(hash(h))) / kf, unit(hash(h ^ 1))],
+                    );
+                    let b = self.sample_point(
+                        s,
+                        [
+                            (fj + unit(hash(h ^ 2))) / kf,
+                            (fi + unit(hash(h ^ 3))) / kf,
+                            unit(hash(h ^ 4)),
+                        ],
+                    );
+                    let d = b.position - a.position;
+                    if d.dot(a.normal) <= 0.0 || d.dot(b.normal) >= 0.0 {
+                        continue;
+                    }
+                    total += 1;
+                    if !self.scene.occluded_between(&a, &b) {
+                        seen += 1;
+                    }
                 }
             }
+            if total > 0 {
+                return (f64::from(seen) / f64::from(total), u64::from(total));
+            }
+            k *= 2;
         }
-        if total == 0 {
-            // Only slivers face each other: one ray between the first pair of points.
-            let (a, b) = first.expect("at least one pair was drawn");
-            let blocked = self.scene.occluded_between(&a, &b);
-            return (if blocked { 0.0 } else { 1.0 }, 1);
-        }
-        (f64::from(seen) / f64::from(total), u64::from(total))
+        (0.0, 0)
     }
 
     /// The receiving points of a surface node: its corners, a hair inside (junction vertices
@@ -468,6 +574,7 @@ impl<'s> HierarchicalSolver<'s> {
         let d2 = (es.center - er.center).length_squared();
         let near = d2 <= reach * reach;
         let far2 = d2.max(reach * reach).max(f64::MIN_POSITIVE);
+        let dir = bin(&self.dirs, (er.center - es.center).normalize_or(DVec3::Z));
         let mut near_cluster = false;
         let mut shift = 0.0;
         let (k, error) = match (r.kind(), s.kind()) {
@@ -495,33 +602,38 @@ impl<'s> HierarchicalSolver<'s> {
                 )
             }
             (Kind::Surface(p), Kind::Cluster(_)) => {
+                // Irradiance at each corner per unit of the cluster's radiant table entry
+                // toward it (intensity x pi): cos / (pi l^2).
                 near_cluster = near;
                 let (x, n) = self.receiving_points(p);
                 let k: [f64; 3] = std::array::from_fn(|i| {
                     let d = es.center - x[i];
                     let l2 = d.length_squared().max(far2 * 0.25);
-                    es.area * (n[i].dot(d) / l2.sqrt()).max(0.0) / (4.0 * PI * l2)
+                    (n[i].dot(d) / l2.sqrt()).max(0.0) / (PI * l2)
                 });
                 (k, er.area * (k[0] + k[1] + k[2]) / 3.0)
             }
-            (Kind::Cluster(_), Kind::Surface(q)) => {
+            (Kind::Cluster(c), Kind::Surface(q)) => {
+                // Flux density at the cluster per unit source exitance: A cos / (pi l^2).
                 near_cluster = near;
                 let nq = self.scene.mesh.geometric_normals
                     [self.mesh.nodes[q as usize].scene_triangle as usize]
                     .as_dvec3();
                 let d = er.center - es.center;
                 let cos = (nq.dot(d) / d2.sqrt().max(f64::MIN_POSITIVE)).max(0.0);
-                let v = es.area * cos / (4.0 * PI * far2);
-                ([v; 3], er.area * v)
+                let v = es.area * cos / (PI * far2);
+                ([v; 3], v * f64::from(self.projected[c as usize][usize::from(dir ^ 16)]))
             }
-            (Kind::Cluster(_), Kind::Cluster(_)) => {
+            (Kind::Cluster(c), Kind::Cluster(_)) => {
+                // Flux density per unit of the source's radiant table entry: 1 / (pi l^2).
                 near_cluster = near;
-                let v = es.area / (16.0 * PI * far2);
-                ([v; 3], er.area * v)
+                let v = 1.0 / (PI * far2);
+                ([v; 3], v * f64::from(self.projected[c as usize][usize::from(dir ^ 16)]))
             }
         };
         let mut e = Eval {
             k,
+            dir,
             shift,
             error,
             near: near_cluster,
@@ -587,6 +699,7 @@ impl<'s> HierarchicalSolver<'s> {
             receiver: r,
             source: s,
             k: e.k.map(|v| v as f32),
+            dir: e.dir,
             shift: e.shift as f32,
             error: e.error as f32,
         };
@@ -742,17 +855,27 @@ impl<'s> HierarchicalSolver<'s> {
     fn iterate(&mut self) {
         let links = &self.links;
         let receivers = &self.receivers;
-        let sums: Vec<[[DVec3; 4]; 2]> = receivers
+        let sums: Vec<([[DVec3; 4]; 2], Table)> = receivers
             .par_iter()
             .enumerate()
             .with_min_len(64)
-            .map(|(i, &(_, start))| {
+            .map(|(i, &(r, start))| {
                 let end = receivers
                     .get(i + 1)
                     .map_or(links.len(), |&(_, e)| e as usize);
                 let mut acc = [[DVec3::ZERO; 4]; 2];
+                let mut flux = [[DVec3::ZERO; DIRECTIONS]; 2];
+                let cluster = matches!(r.kind(), Kind::Cluster(_));
                 for l in &links[start as usize..end] {
-                    let [be, br] = self.source_exitance(l.source);
+                    let [be, br] = self.source_value(l);
+                    if cluster {
+                        // Arriving from the source's side: the opposite of `dir`.
+                        let j = usize::from(l.dir ^ 16);
+                        let k = f64::from(l.k[0]);
+                        flux[0][j] += be * k;
+                        flux[1][j] += br * k;
+                        continue;
+                    }
                     for c in 0..3 {
                         let k = f64::from(l.k[c]);
                         acc[0][c] += be * k;
@@ -762,19 +885,21 @@ impl<'s> HierarchicalSolver<'s> {
                     acc[0][3] += be * s;
                     acc[1][3] += br * s;
                 }
-                acc
+                let table: Table =
+                    std::array::from_fn(|o| std::array::from_fn(|j| flux[o][j].as_vec3()));
+                (acc, table)
             })
             .collect();
         for g in &mut self.gathered {
             *g = [[DVec3::ZERO; 4]; 2];
         }
         for g in &mut self.cluster_gathered {
-            *g = [DVec3::ZERO; 2];
+            *g = EMPTY;
         }
-        for (&(r, _), s) in self.receivers.iter().zip(sums) {
+        for (&(r, _), (s, table)) in self.receivers.iter().zip(sums) {
             match r.kind() {
                 Kind::Surface(n) => self.gathered[n as usize] = s,
-                Kind::Cluster(c) => self.cluster_gathered[c as usize] = [s[0][0], s[1][0]],
+                Kind::Cluster(c) => self.cluster_gathered[c as usize] = table,
             }
         }
         let before = self.leaf_power();
@@ -819,7 +944,7 @@ impl<'s> HierarchicalSolver<'s> {
         let root = self.clusters.root;
         match root.kind() {
             Kind::Cluster(c) => {
-                self.push_cluster(c, [DVec3::ZERO; 2]);
+                self.push_cluster(c, &EMPTY);
             }
             Kind::Surface(n) => {
                 self.push_surface(n, [[DVec3::ZERO; 4]; 2]);
@@ -829,21 +954,42 @@ impl<'s> HierarchicalSolver<'s> {
 
     /// Returns the cluster's area-weighted exitance sum (W) and the range of its leaves'
     /// exitance luminance.
-    fn push_cluster(&mut self, c: u32, inherited: [DVec3; 2]) -> ([DVec3; 2], (f64, f64)) {
-        let g = self.cluster_gathered[c as usize];
-        let here = [inherited[0] + g[0], inherited[1] + g[1]];
+    fn push_cluster(&mut self, c: u32, inherited: &Table) -> ([DVec3; 2], (f64, f64)) {
+        let here = add_tables(inherited, &self.cluster_gathered[c as usize]);
+        let mut radiant = EMPTY;
         let mut power = [DVec3::ZERO; 2];
         let mut range = (f64::INFINITY, f64::NEG_INFINITY);
         for child in self.clusters.nodes[c as usize].children {
             let (p, r) = match child.kind() {
-                Kind::Cluster(cc) => self.push_cluster(cc, here),
-                Kind::Surface(n) => self.push_surface(
-                    n,
-                    [
-                        [here[0], here[0], here[0], DVec3::ZERO],
-                        [here[1], here[1], here[1], DVec3::ZERO],
-                    ],
-                ),
+                Kind::Cluster(cc) => {
+                    let out = self.push_cluster(cc, &here);
+                    radiant = add_tables(&radiant, &self.radiant[cc as usize]);
+                    out
+                }
+                Kind::Surface(n) => {
+                    // Each corner gets the cluster's light by its receiving normal.
+                    let normals = self.mesh.nodes[n as usize]
+                        .vertices
+                        .map(|v| self.mesh.vertices[v as usize].normal.as_dvec3());
+                    let at = normals.map(|nk| facing(&here, &self.dirs, nk));
+                    let out = self.push_surface(
+                        n,
+                        std::array::from_fn(|o| [at[0][o], at[1][o], at[2][o], DVec3::ZERO]),
+                    );
+                    // The triangle's power toward each direction: exitance x area x cos.
+                    let normal = self.scene.mesh.geometric_normals
+                        [self.mesh.nodes[n as usize].scene_triangle as usize]
+                        .as_dvec3();
+                    for (j, d) in self.dirs.iter().enumerate() {
+                        let c = normal.dot(*d);
+                        if c > 0.0 {
+                            for (o, p) in out.0.iter().enumerate() {
+                                radiant[o][j] += (*p * c).as_vec3();
+                            }
+                        }
+                    }
+                    out
+                }
             };
             power[0] += p[0];
             power[1] += p[1];
@@ -852,6 +998,7 @@ impl<'s> HierarchicalSolver<'s> {
         let area = self.clusters.nodes[c as usize].area.max(f64::MIN_POSITIVE);
         self.cluster_exitance[c as usize] = [power[0] / area, power[1] / area];
         self.cluster_spread[c as usize] = range.1 - range.0;
+        self.radiant[c as usize] = radiant;
         (power, range)
     }
 
