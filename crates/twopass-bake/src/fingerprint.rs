@@ -51,22 +51,23 @@ impl Fnv {
     fn lobe(&mut self, lobe: Option<&Lobe>) {
         match lobe {
             None => self.u32(0),
-            Some(Lobe::Phong {
-                specular,
-                exponent,
-                normalized,
-            }) => {
-                self.u32(1);
-                self.vec3(*specular);
-                self.f32(*exponent);
-                self.u32(u32::from(*normalized));
-            }
-            Some(Lobe::BlinnPhong {
-                specular,
-                exponent,
-                normalized,
-            }) => {
-                self.u32(2);
+            Some(
+                lobe @ (Lobe::Phong {
+                    specular,
+                    exponent,
+                    normalized,
+                }
+                | Lobe::BlinnPhong {
+                    specular,
+                    exponent,
+                    normalized,
+                }),
+            ) => {
+                self.u32(if matches!(lobe, Lobe::Phong { .. }) {
+                    1
+                } else {
+                    2
+                });
                 self.vec3(*specular);
                 self.f32(*exponent);
                 self.u32(u32::from(*normalized));

@@ -37,7 +37,7 @@
 //! This crate is the I/O edge of the radiosity solver (ARCHITECTURE.md, "Architecture
 //! invariants"): twopass-radiosity computes and never touches a file or a file format; this
 //! crate encodes, decodes, reads and writes. Modules, one job each: [`error`], [`fingerprint`],
-//! [`format`] (the bake file), [`colour`] (radiance to `COLOR_0`), [`gltf`], [`ply`],
+//! [`format`](mod@format) (the bake file), [`colour`] (radiance to `COLOR_0`), [`gltf`], [`ply`],
 //! [`manifest`].
 //!
 //! ```no_run
@@ -52,6 +52,9 @@
 //! # let _ = again;
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
+//!
+//! [`ElementMesh::from_parts`]: twopass_radiosity::element::ElementMesh::from_parts
+//! [`Solution`]: twopass_radiosity::Solution
 
 pub mod colour;
 pub mod error;

@@ -1,5 +1,5 @@
 //! The BRDF interface ([`Brdf`], [`BrdfSample`], [`SampleKind`]) and the diffuse-plus-glossy
-//! mixture every glossy model shares ([`Glossy`], implemented into [`Brdf`] by one macro). The
+//! mixture every glossy model shares (`Glossy`, implemented into [`Brdf`] by one macro). The
 //! closed set of models is [`crate::model::BrdfModel`].
 //!
 //! # Conventions

@@ -19,7 +19,8 @@ pub enum MeshPart {
     Patch,
 }
 
-/// An element mesh whose parts do not fit together ([`ElementMesh::from_parts`]).
+/// An element mesh whose parts do not fit together
+/// ([`ElementMesh::from_parts`](crate::element::ElementMesh::from_parts)).
 #[derive(Debug, Clone, PartialEq, Eq)]
 #[non_exhaustive]
 pub struct InvalidMesh {
