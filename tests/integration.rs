@@ -4,6 +4,7 @@ use std::path::{Path, PathBuf};
 
 mod accel;
 mod bad_input;
+mod hardening;
 mod radiosity;
 mod scenes;
 mod trace;

@@ -32,6 +32,6 @@ mod solution;
 pub use direct::{MAX_DENSE_VERTICES, dense_solve};
 pub use form_factor::VisibilityRays;
 pub use progressive::{
-    Adaptive, Energy, Finish, Options, Progress, Residuals, SolveError, Solver, Stop,
+    Adaptive, Energy, Finish, MAX_ELEMENTS, Options, Progress, Residuals, SolveError, Solver, Stop,
 };
 pub use solution::Solution;

@@ -60,6 +60,10 @@ impl Default for Adaptive {
     }
 }
 
+/// Most patches or elements a solve meshes before adaptive subdivision (about 2 GB of mesh,
+/// form-factor rows and radiosities); smaller patch or element sizes are refused up front.
+pub const MAX_ELEMENTS: usize = 4_000_000;
+
 /// Everything the solver can be told. Defaults suit the Cornell box; sizes default to
 /// fractions of the scene's bounding-box diagonal.
 #[derive(Debug, Clone, PartialEq)]
@@ -282,6 +286,40 @@ impl<'s> Solver<'s> {
                 return Err(SolveError::Option {
                     name,
                     problem: format!("{v} must be finite and > 0 scene units"),
+                });
+            }
+        }
+        // Refinement to a size makes at least one element per sqrt(3)/4 size^2 of area (the
+        // largest triangle whose longest edge is `size`), and at least one per triangle: refuse
+        // up front what cannot fit rather than refine until memory runs out.
+        let area = |o: &twopass_scene::Object| -> f64 {
+            o.triangles
+                .clone()
+                .map(|t| f64::from(scene.mesh.areas[t as usize]))
+                .sum()
+        };
+        let (part_area, part_triangles) = scene
+            .objects
+            .iter()
+            .filter(|o| {
+                o.emission.max_element() > 0.0
+                    || scene.materials[o.material as usize]
+                        .material
+                        .reflects_diffusely()
+            })
+            .fold((0.0, 0usize), |(a, n), o| {
+                (a + area(o), n + o.triangles.len())
+            });
+        for (name, v) in [("patch_size", patch_size), ("element_size", element_size)] {
+            let at_least = (part_area / (3f64.sqrt() / 4.0 * f64::from(v) * f64::from(v)))
+                .max(part_triangles as f64);
+            if at_least > MAX_ELEMENTS as f64 {
+                return Err(SolveError::Option {
+                    name,
+                    problem: format!(
+                        "{v} scene units would make at least {at_least:.3e} elements on {part_area:.3e} units^2 of surface, more than the {MAX_ELEMENTS} a solve holds; give a size of at least {:.3e}",
+                        (part_area / (3f64.sqrt() / 4.0 * MAX_ELEMENTS as f64)).sqrt()
+                    ),
                 });
             }
         }

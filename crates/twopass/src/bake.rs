@@ -70,7 +70,7 @@ pub struct BakeArgs {
     #[arg(long, value_name = "SR_M2_PER_W", value_parser = parse_exposure)]
     pub exposure: Option<f32>,
     /// Vertices and patch pairs sampled for the residual report.
-    #[arg(long, default_value_t = 200, value_name = "N")]
+    #[arg(long, default_value_t = 200, value_name = "N", value_parser = parse_residual_samples)]
     pub residual_samples: usize,
 }
 
@@ -78,7 +78,7 @@ pub struct BakeArgs {
 #[derive(Debug, Clone, Args)]
 pub struct SolveArgs {
     /// Stop when the unshot power falls below this fraction of the emitted power.
-    #[arg(long, default_value_t = 1e-3, value_name = "FRACTION")]
+    #[arg(long, default_value_t = 1e-3, value_name = "FRACTION", value_parser = parse_fraction)]
     pub unshot: f64,
     /// Stop after this many shots.
     #[arg(long, value_name = "N")]
@@ -88,11 +88,11 @@ pub struct SolveArgs {
     #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
     pub time_budget: Option<Duration>,
     /// Longest patch (shooter) edge, scene units [default: scene diagonal / 8].
-    #[arg(long, value_name = "LENGTH")]
+    #[arg(long, value_name = "LENGTH", value_parser = parse_length)]
     pub patch_size: Option<f32>,
     /// Longest element (receiver) edge before adaptive subdivision, scene units
     /// [default: scene diagonal / 24].
-    #[arg(long, value_name = "LENGTH")]
+    #[arg(long, value_name = "LENGTH", value_parser = parse_length)]
     pub element_size: Option<f32>,
     /// Keep the element mesh fixed: no adaptive subdivision where the light changes fast.
     #[arg(long)]
@@ -166,10 +166,48 @@ fn parse_rays(s: &str) -> Result<VisibilityRays, String> {
         .ok_or_else(|| format!("`{s}`: expected MIN,MAX such as 4,16"))?;
     let parse = |x: &str| x.trim().parse::<u32>().map_err(|e| format!("`{x}`: {e}"));
     let (min, max) = (parse(min)?, parse(max)?);
-    if min == 0 || max < min {
-        return Err(format!("{min},{max}: needs 1 <= MIN <= MAX"));
+    if min == 0 || max < min || max > MAX_VISIBILITY_RAYS {
+        return Err(format!(
+            "{min},{max}: needs 1 <= MIN <= MAX <= {MAX_VISIBILITY_RAYS}"
+        ));
     }
     Ok(VisibilityRays { min, max })
+}
+
+/// Most shadow rays per visibility estimate (a 32 x 32 grid; 16 is the default).
+const MAX_VISIBILITY_RAYS: u32 = 1024;
+
+/// Most vertices and patch pairs the residual report samples.
+const MAX_RESIDUAL_SAMPLES: usize = 100_000;
+
+fn parse_residual_samples(s: &str) -> Result<usize, String> {
+    let n: usize = s.parse().map_err(|e| format!("{e}"))?;
+    if (1..=MAX_RESIDUAL_SAMPLES).contains(&n) {
+        Ok(n)
+    } else {
+        Err(format!("{n} must be 1 to {MAX_RESIDUAL_SAMPLES}"))
+    }
+}
+
+/// A fraction in [0, 1) (the unshot power at which to stop).
+pub fn parse_fraction(s: &str) -> Result<f64, String> {
+    let x: f64 = s.parse().map_err(|e| format!("{e}"))?;
+    if (0.0..1.0).contains(&x) {
+        Ok(x)
+    } else {
+        Err(format!("{x} must be a fraction >= 0 and < 1"))
+    }
+}
+
+/// A length in scene units: finite and > 0 (whether it fits the scene is checked by the
+/// solver, which knows the scene's area).
+fn parse_length(s: &str) -> Result<f32, String> {
+    let x: f32 = s.parse().map_err(|e| format!("{e}"))?;
+    if x.is_finite() && x > 0.0 {
+        Ok(x)
+    } else {
+        Err(format!("{x} must be a finite length > 0 scene units"))
+    }
 }
 
 fn parse_exposure(s: &str) -> Result<f32, String> {
@@ -193,10 +231,10 @@ fn bar_position(unshot: f64, target: f64) -> u64 {
 /// Solves the scene and writes the selected outputs and the manifest.
 pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
     let started = Instant::now();
-    let (scene, warnings) = twopass_scene::load(&args.scene)?;
+    let (scene, warnings) = ctx.load_scene(&args.scene)?;
     if !ctx.quiet {
         for w in &warnings {
-            eprintln!("warning: {w}");
+            errln!("warning: {w}");
         }
     }
     let load_time = started.elapsed();
@@ -279,16 +317,16 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
     bake::write_atomic(&manifest_path, &json)?;
 
     if ctx.json {
-        print!("{}", String::from_utf8_lossy(&json));
+        out!("{}", String::from_utf8_lossy(&json));
     } else if ctx.chatty() {
-        print_summary(&manifest, &manifest_path);
+        print_summary(&manifest, &manifest_path)?;
     }
     Ok(())
 }
 
-fn print_summary(m: &Manifest, manifest_path: &Path) {
+fn print_summary(m: &Manifest, manifest_path: &Path) -> Result<(), CliError> {
     let t = &m.timings;
-    println!(
+    outln!(
         "{}: {} after {} shots in {:.2} s (load {:.2}, meshing {:.2}, shooting {:.2}, \
          refining {:.2}, residuals {:.2}, writing {:.2})",
         m.scene.display(),
@@ -303,12 +341,16 @@ fn print_summary(m: &Manifest, manifest_path: &Path) {
         t.writing_s
     );
     let c = &m.counts;
-    println!(
+    outln!(
         "  {} patches, {} elements, {} vertices, {} refinement rounds; {:.3e} shadow rays",
-        c.patches, c.elements, c.vertices, c.refinement_rounds, m.rays as f64
+        c.patches,
+        c.elements,
+        c.vertices,
+        c.refinement_rounds,
+        m.rays as f64
     );
     let r = &m.residuals;
-    println!(
+    outln!(
         "  unshot fraction {:.2e}; energy imbalance {:.1e}; form-factor row sums {:.3}..{:.3} \
          (mean {:.3}); reciprocity spread {:.2e} (weighted {:.2e}, {} pairs)",
         m.unshot_fraction,
@@ -321,13 +363,16 @@ fn print_summary(m: &Manifest, manifest_path: &Path) {
         r.reciprocity_pairs
     );
     if let Some(color) = &m.color {
-        println!(
+        outln!(
             "  glb COLOR_0 = min(1, {:.4e} * L) ({} exposure), {} vertices clipped",
-            color.exposure, color.exposure_mode, color.clamped_vertices
+            color.exposure,
+            color.exposure_mode,
+            color.clamped_vertices
         );
     }
     for f in &m.files {
-        println!("  wrote {} ({} bytes)", f.path.display(), f.bytes);
+        outln!("  wrote {} ({} bytes)", f.path.display(), f.bytes);
     }
-    println!("  wrote {}", manifest_path.display());
+    outln!("  wrote {}", manifest_path.display());
+    Ok(())
 }

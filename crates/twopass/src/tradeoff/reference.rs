@@ -197,7 +197,7 @@ pub fn converged(
             &settings,
             &format!("reference {}/2", half + 1),
             ctx,
-        );
+        )?;
         let img = out.layers.composite();
         halves.push(Image::from_pixels(img.width, img.height, img.pixels)?);
     }
