@@ -279,6 +279,11 @@ fn unknown_key_offset(text: &str, from: usize, message: &str) -> Option<usize> {
         .map(|(i, _)| from + i)
 }
 
+/// Whether a coordinate is finite and within [`MAX_COORDINATE`].
+fn in_range(c: f32) -> bool {
+    c.abs() <= MAX_COORDINATE
+}
+
 /// Refuses positions beyond [`MAX_COORDINATE`] (and non-finite ones), naming the object.
 fn check_range(
     path: &Path,
@@ -287,7 +292,7 @@ fn check_range(
     positions: &[Vec3],
 ) -> Result<(), SceneError> {
     for (index, p) in positions.iter().enumerate() {
-        if let Some(&value) = p.to_array().iter().find(|c| !(c.abs() <= MAX_COORDINATE)) {
+        if let Some(&value) = p.to_array().iter().find(|c| !in_range(**c)) {
             return Err(SceneError::Range {
                 path: path.to_owned(),
                 line,
@@ -529,7 +534,7 @@ impl Loader {
                     value,
                 });
             }
-            if let Some(c) = v.iter().find(|c| !(c.abs() <= MAX_COORDINATE)) {
+            if let Some(c) = v.iter().find(|c| !in_range(**c)) {
                 return Err(SceneError::Range {
                     path: self.path.clone(),
                     line: Some(line),
@@ -704,7 +709,7 @@ impl Loader {
         }
         Camera::check_resolution(u64::from(w), u64::from(h)).map_err(err)?;
         for (key, v) in [("position", d.position), ("look_at", d.look_at)] {
-            if let Some(c) = v.iter().find(|c| !(c.abs() <= MAX_COORDINATE)) {
+            if let Some(c) = v.iter().find(|c| !in_range(**c)) {
                 return Err(SceneError::Toml {
                     path: self.path.clone(),
                     line,
@@ -770,7 +775,7 @@ impl Loader {
                             if corner & 4 == 0 { -1.0 } else { 1.0 },
                         );
                         let q = p.transform.point(*center + s * *radius);
-                        if !(q.abs().max_element() <= MAX_COORDINATE) {
+                        if !q.to_array().into_iter().all(in_range) {
                             return Err(SceneError::Range {
                                 path: self.path.clone(),
                                 line: p.part.line,
@@ -874,7 +879,7 @@ impl Loader {
                     value,
                 });
             }
-            if !(q.abs().max_element() <= MAX_COORDINATE) {
+            if !q.to_array().into_iter().all(in_range) {
                 return Err(SceneError::Range {
                     path: self.path.clone(),
                     line,
@@ -946,7 +951,7 @@ impl Loader {
                 .map(|&a| f64::from(a))
                 .sum();
             let power = f64::from(emission.max_element()) * std::f64::consts::PI * area;
-            if !(power <= MAX_EMITTED_POWER) {
+            if power.is_nan() || power > MAX_EMITTED_POWER {
                 return Err(SceneError::Range {
                     path: self.path.clone(),
                     line,

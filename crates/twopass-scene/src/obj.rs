@@ -340,11 +340,9 @@ fn scan(
                 current.all_normals &= normals == corners.len();
             }
             "l" | "p" => faces += 1,
-            "o" | "g" => {
-                if faces > 0 {
-                    push_model(&mut models, &mut current);
-                    faces = 0;
-                }
+            "o" | "g" if faces > 0 => {
+                push_model(&mut models, &mut current);
+                faces = 0;
             }
             "usemtl" => {
                 let name = line.split_once(' ').unwrap_or_default().1.trim();
@@ -456,31 +454,29 @@ fn load_mtl(
                     }
                 }
             }
-            "Ns" | "Ni" | "d" | "Tr" => {
-                if !matches!(numbers.as_deref(), Some([_])) {
-                    return Err(err(
-                        n,
-                        format!("`{keyword}` needs one number, got `{}`", values.join(" ")),
-                    ));
-                }
+            "Ns" | "Ni" | "d" | "Tr" if !matches!(numbers.as_deref(), Some([_])) => {
+                return Err(err(
+                    n,
+                    format!("`{keyword}` needs one number, got `{}`", values.join(" ")),
+                ));
             }
-            "illum" => {
-                if !matches!(values.as_slice(), [v] if v.parse::<u8>().is_ok_and(|i| i <= 10)) {
-                    return Err(err(
-                        n,
-                        format!(
-                            "`illum` needs an illumination model 0 to 10, got `{}`",
-                            values.join(" ")
-                        ),
-                    ));
-                }
+            "illum" if !matches!(values.as_slice(), [v] if v.parse::<u8>().is_ok_and(|i| i <= 10)) =>
+            {
+                return Err(err(
+                    n,
+                    format!(
+                        "`illum` needs an illumination model 0 to 10, got `{}`",
+                        values.join(" ")
+                    ),
+                ));
             }
             _ => {}
         }
-        if !keyword.is_empty() && keyword != "newmtl" {
-            if let Some(o) = origins.last_mut() {
-                o.keys.entry(keyword.to_owned()).or_insert(n);
-            }
+        if let Some(o) = origins
+            .last_mut()
+            .filter(|_| !keyword.is_empty() && keyword != "newmtl")
+        {
+            o.keys.entry(keyword.to_owned()).or_insert(n);
         }
         normalized.push_str(&out);
         normalized.push('\n');
