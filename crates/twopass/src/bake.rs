@@ -276,7 +276,7 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
     manifest.timings.load_s = load_time.as_secs_f64();
 
     let dir = ctx.output_or(Path::new("bake"));
-    std::fs::create_dir_all(dir).map_err(|e| CliError::io(dir, e))?;
+    crate::output::create_dir(dir)?;
     let stem = args
         .scene
         .file_stem()

@@ -128,7 +128,7 @@ pub fn run(args: &CompareArgs, ctx: &Context) -> Result<(), CliError> {
         .output
         .clone()
         .unwrap_or_else(|| PathBuf::from("compare"));
-    std::fs::create_dir_all(&dir).map_err(|e| CliError::io(&dir, e))?;
+    crate::output::create_dir(&dir)?;
     let stem = args
         .scene
         .file_stem()

@@ -7,13 +7,32 @@ use std::path::Path;
 
 use crate::error::CliError;
 
+/// Creates `dir` and its missing parents. When a part of the path exists but is not a folder
+/// (`-o scene.toml/x.exr`), says so instead of the system's "File exists".
+pub fn create_dir(dir: &Path) -> Result<(), CliError> {
+    fs::create_dir_all(dir).map_err(|e| {
+        let file = dir.ancestors().find(|a| a.is_file()).filter(|_| {
+            e.kind() == std::io::ErrorKind::AlreadyExists || e.raw_os_error() == Some(20)
+        });
+        match file {
+            Some(file) => CliError::Input(format!(
+                "{}: cannot create the output folder {}: {} is a file, not a directory",
+                file.display(),
+                dir.display(),
+                file.display()
+            )),
+            None => CliError::io(dir, e),
+        }
+    })
+}
+
 /// Writes `bytes` to `path` atomically, creating the parent directory if missing.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), CliError> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
-    fs::create_dir_all(dir).map_err(|e| CliError::io(dir, e))?;
+    create_dir(dir)?;
     let mut builder = tempfile::Builder::new();
     builder.prefix(".twopass-").suffix(".tmp");
     // The usual mode of a new file (0666 less the umask), not the temporary file's 0600.

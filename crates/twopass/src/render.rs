@@ -357,7 +357,7 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
         None => PathBuf::from(format!("{stem}-{}.exr", method.name())),
     };
     if let Some(dir) = exr.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(|e| CliError::io(dir, e))?;
+        crate::output::create_dir(dir)?;
     }
     write_exr_layers(&exr, &layers)?;
     let png = if args.png {

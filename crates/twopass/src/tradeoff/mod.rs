@@ -215,7 +215,7 @@ pub fn run(args: &TradeoffArgs, ctx: &Context) -> Result<(), CliError> {
         .output
         .clone()
         .unwrap_or_else(|| PathBuf::from("tradeoff"));
-    std::fs::create_dir_all(&dir).map_err(|e| CliError::io(&dir, e))?;
+    crate::output::create_dir(&dir)?;
     let cache = args.cache.clone().unwrap_or_else(|| dir.join("cache"));
     let stem = args
         .scene

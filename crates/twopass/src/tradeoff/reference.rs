@@ -209,7 +209,7 @@ pub fn converged(
     let display = ToneMap::auto_default(&mean)?;
     let noise_rel_rmse = compare(&halves[0], &mean, &display)?.rel_rmse;
     let (exr, json) = files(dir, &key);
-    std::fs::create_dir_all(dir).map_err(|e| CliError::io(dir, e))?;
+    crate::output::create_dir(dir)?;
     write_exr(&exr, &mean)?;
     let record = Record {
         key: key.clone(),
