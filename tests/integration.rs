@@ -4,6 +4,7 @@ use std::path::{Path, PathBuf};
 
 mod accel;
 mod bad_input;
+mod fuzz;
 mod hardening;
 mod radiosity;
 mod scenes;
