@@ -219,6 +219,48 @@ fn parse_exposure(s: &str) -> Result<f32, String> {
     }
 }
 
+/// Checks a bake file against the manifest of its set, when one lies beside it
+/// (`<stem>.manifest.json`): a file whose size or CRC-32 differs from the manifest's record is
+/// from another bake (one interrupted between its files), and the set is refused.
+pub fn check_in_set(file: &Path) -> Result<(), CliError> {
+    let (Some(dir), Some(stem), Some(name)) = (file.parent(), file.file_stem(), file.file_name())
+    else {
+        return Ok(());
+    };
+    let manifest_path = dir.join(format!("{}.manifest.json", stem.to_string_lossy()));
+    let Ok(text) = std::fs::read(&manifest_path) else {
+        return Ok(());
+    };
+    let manifest: Manifest = serde_json::from_slice(&text).map_err(|e| {
+        CliError::Input(format!(
+            "{}: not a bake manifest ({e}); remove it or bake again",
+            manifest_path.display()
+        ))
+    })?;
+    let Some(record) = manifest
+        .files
+        .iter()
+        .find(|f| f.path.file_name() == Some(name))
+    else {
+        return Ok(());
+    };
+    let bytes = std::fs::read(file).map_err(|e| CliError::io(file, e))?;
+    let size_ok = record.bytes == bytes.len() as u64;
+    let crc_ok = record.crc32.is_none_or(|c| c == crc32fast::hash(&bytes));
+    if size_ok && crc_ok {
+        return Ok(());
+    }
+    Err(CliError::Input(format!(
+        "{}: does not match its manifest {} ({} bytes, recorded {}{}): the bake set is mixed, \
+         probably from a bake stopped between its files; bake again",
+        file.display(),
+        manifest_path.display(),
+        bytes.len(),
+        record.bytes,
+        if crc_ok { "" } else { ", CRC-32 differs" }
+    )))
+}
+
 /// Bar position of an unshot fraction on a log scale: 0 at 1, `STEPS` at the target.
 const STEPS: u64 = 1000;
 
@@ -282,6 +324,16 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
         .file_stem()
         .map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned());
     let writing_started = Instant::now();
+    // The manifest is the set's seal: the old one goes before any file of the new set is
+    // written and the new one comes last, with every file's size and CRC-32. A bake stopped
+    // between its files leaves no manifest (visibly incomplete), never an old manifest beside
+    // new files.
+    let manifest_path = dir.join(format!("{stem}.manifest.json"));
+    match std::fs::remove_file(&manifest_path) {
+        Ok(()) => {}
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+        Err(e) => return Err(CliError::io(&manifest_path, e)),
+    }
     let formats: BTreeSet<Format> = args.format.iter().copied().collect();
     for format in formats {
         let path = dir.join(format!("{stem}.{}", format.extension()));
@@ -308,11 +360,11 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
             format: format.extension().into(),
             path,
             bytes: bytes.len() as u64,
+            crc32: Some(crc32fast::hash(&bytes)),
         });
     }
     manifest.timings.writing_s = writing_started.elapsed().as_secs_f64();
     manifest.timings.total_s = started.elapsed().as_secs_f64();
-    let manifest_path = dir.join(format!("{stem}.manifest.json"));
     let json = manifest.to_json()?;
     bake::write_atomic(&manifest_path, &json)?;
 

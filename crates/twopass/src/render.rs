@@ -164,7 +164,10 @@ pub fn radiosity(
     ctx: &Context,
 ) -> Result<(Solution, &'static str), CliError> {
     match bake {
-        Some(file) => Ok((twopass_radiosity::bake::read_bake(file, scene)?, "bake")),
+        Some(file) => {
+            crate::bake::check_in_set(file)?;
+            Ok((twopass_radiosity::bake::read_bake(file, scene)?, "bake"))
+        }
         None => {
             let mut solver =
                 Solver::new(scene, solve.options(ctx.seed)).map_err(|source| CliError::Solve {
@@ -356,9 +359,7 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
         Some(dir) => dir.join(format!("{stem}-{}.exr", method.name())),
         None => PathBuf::from(format!("{stem}-{}.exr", method.name())),
     };
-    if let Some(dir) = exr.parent().filter(|d| !d.as_os_str().is_empty()) {
-        crate::output::create_dir(dir)?;
-    }
+    crate::output::create_dir(exr.parent().unwrap_or(Path::new("")))?;
     write_exr_layers(&exr, &layers)?;
     let png = if args.png {
         let image = layers.require("image")?;
