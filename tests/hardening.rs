@@ -357,3 +357,46 @@ fn control_characters_in_names_are_escaped() {
     assert_eq!(scene.objects[0].name, "a\\u{1b}[2Jb");
     assert_eq!(scene.emitters.len(), 1);
 }
+
+#[test]
+fn sizes_that_cost_without_bound_are_refused_before_the_work() {
+    // 40 spheres of 20 * 4^8 triangles: counted before any is built.
+    match err("many-spheres.toml") {
+        SceneError::Input { problem, .. } => {
+            assert!(
+                problem.contains(&(40u64 * 20 * 4u64.pow(8)).to_string()),
+                "{problem}"
+            );
+            assert!(
+                problem.contains(&twopass_scene::MAX_TRIANGLES.to_string()),
+                "{problem}"
+            );
+        }
+        e => panic!("wrong error: {e:?}"),
+    }
+    // A polygon too long to ear-clip in bounded time.
+    let n = twopass_scene::shape::MAX_POLYGON_VERTICES + 1;
+    let vertices: Vec<String> = (0..n)
+        .map(|i| {
+            let a = std::f64::consts::TAU * i as f64 / n as f64;
+            format!("[{}, {}, 0]", a.cos(), a.sin())
+        })
+        .collect();
+    let text = format!(
+        "version = 1\n[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\nfov_y = 40\n\
+         [[material]]\nname = \"w\"\ntype = \"lambert\"\ndiffuse = 0.5\n\
+         [[object]]\nname = \"disc\"\nmaterial = \"w\"\n\
+         shape = {{ type = \"polygon\", vertices = [{}] }}\n",
+        vertices.join(", ")
+    );
+    match twopass_scene::load_toml(&text, std::path::Path::new("disc.toml")) {
+        Err(SceneError::Shape {
+            object, problem, ..
+        }) => {
+            assert_eq!(object, "disc");
+            assert!(problem.contains("at most 1024 vertices"), "{problem}");
+        }
+        Err(e) => panic!("wrong error: {e:?}"),
+        Ok(_) => panic!("a {n}-vertex polygon loaded"),
+    }
+}

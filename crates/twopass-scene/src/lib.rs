@@ -40,7 +40,8 @@ pub use camera::Camera;
 pub use error::{CameraProblem, SceneError, Warning};
 pub use input::{MAX_MTL_BYTES, MAX_OBJ_BYTES, MAX_SCENE_BYTES, ReadPolicy, printable};
 pub use load::{
-    MAX_COORDINATE, MAX_EMITTED_POWER, SPHERE_TOLERANCE, load, load_toml, load_toml_with, load_with,
+    MAX_COORDINATE, MAX_EMITTED_POWER, MAX_TRIANGLES, SPHERE_TOLERANCE, load, load_toml,
+    load_toml_with, load_with,
 };
 pub use radiance::DiffuseRadiance;
 pub use scene::{Bounds, Emitter, Hit, Mesh, Object, Scene, SceneMaterial};

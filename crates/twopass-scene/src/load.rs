@@ -32,6 +32,10 @@ pub const SPHERE_TOLERANCE: f32 = 2e-4;
 /// in this range renders the same image at any scale (checked at 1e9 times the Cornell box).
 pub const MAX_COORDINATE: f32 = 1e12;
 
+/// Most triangles of a scene with built-in spheres, checked before each sphere is built (an
+/// OBJ's triangles are bounded by the size of its file): 50 million hold about 5 GB.
+pub const MAX_TRIANGLES: u64 = 50_000_000;
+
 /// Largest emitted power of one object per channel, pi * L_e * area (W in scene units). Sums
 /// over emitters and the estimators' intermediate products need headroom below f32's 3.4e38,
 /// so a brighter object is refused at load rather than rendered as infinities dropped to black.
@@ -791,31 +795,57 @@ impl Loader {
             }
         }
         let tolerance = SPHERE_TOLERANCE * bounds.diagonal();
+        // Each sphere's icosphere level, from its world radius (at most the largest axis scale
+        // times the radius) unless given; level l has 20 * 4^l triangles. The whole scene's
+        // count is checked before any sphere is built.
+        let levels: Vec<Option<u32>> =
+            parts
+                .iter()
+                .map(|p| match &p.part.geometry {
+                    Geometry::Mesh(_) => None,
+                    Geometry::Sphere {
+                        radius,
+                        subdivisions,
+                        ..
+                    } => {
+                        let scale = p.transform.matrix.to_scale_rotation_translation().0;
+                        let world_radius = radius * scale.abs().max_element();
+                        Some(subdivisions.unwrap_or_else(|| {
+                            shape::sphere_subdivisions_for(world_radius, tolerance)
+                        }))
+                    }
+                })
+                .collect();
+        let triangles: u64 = parts
+            .iter()
+            .zip(&levels)
+            .map(|(p, level)| match (&p.part.geometry, level) {
+                (Geometry::Mesh(m), _) => m.triangles.len() as u64,
+                (_, Some(l)) => 20u64 << (2 * l),
+                (_, None) => 0,
+            })
+            .sum();
+        if triangles > MAX_TRIANGLES {
+            return Err(SceneError::Input {
+                path: self.path.clone(),
+                problem: format!(
+                    "the scene would have {triangles} triangles, more than the {MAX_TRIANGLES} loaded at most (give fewer spheres or lower their `subdivisions`)"
+                ),
+            });
+        }
         let mut mesh = Mesh::default();
         let mut objects = Vec::with_capacity(parts.len());
-        for PlacedPart { part, transform } in parts {
+        for (PlacedPart { part, transform }, level) in parts.into_iter().zip(levels) {
             let local = match part.geometry {
                 Geometry::Mesh(m) => m,
-                Geometry::Sphere {
-                    center,
-                    radius,
-                    subdivisions,
-                } => {
-                    // The world radius is at most the largest axis scale times the radius.
-                    let world_radius = radius
-                        * transform
-                            .matrix
-                            .to_scale_rotation_translation()
-                            .0
-                            .abs()
-                            .max_element();
-                    let level = subdivisions
-                        .unwrap_or_else(|| shape::sphere_subdivisions_for(world_radius, tolerance));
-                    shape::sphere(center, radius, level).map_err(|p| SceneError::Shape {
-                        path: self.path.clone(),
-                        line: part.line.unwrap_or(1),
-                        object: part.name.clone(),
-                        problem: p,
+                Geometry::Sphere { center, radius, .. } => {
+                    shape::sphere(center, radius, level.unwrap_or(0)).map_err(|p| {
+                        SceneError::Shape {
+                            path: self.path.clone(),
+                            line: part.line.unwrap_or(1),
+                            object: part.name.clone(),
+                            problem: p,
+                        }
                     })?
                 }
             };

@@ -441,3 +441,50 @@ fn parse_stops(s: &str) -> Result<f32, String> {
         ))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn stats(samples: u64, non_finite: u64) -> RenderStats {
+        RenderStats {
+            method: "reference",
+            width: 10,
+            height: 10,
+            samples_per_pixel: 1,
+            samples,
+            non_finite,
+            rays: 0,
+            shadow_rays: 0,
+            elapsed: Duration::ZERO,
+        }
+    }
+
+    fn quiet() -> Context {
+        Context {
+            output: None,
+            width: None,
+            height: None,
+            seed: 0,
+            threads: None,
+            quiet: true,
+            json: false,
+            confine: false,
+        }
+    }
+
+    #[test]
+    fn dropped_samples_warn_then_fail() {
+        let scene = Path::new("s.toml");
+        assert!(check_dropped(&stats(1000, 0), scene, &quiet()).is_ok());
+        // 1 % dropped is still an image worth having (with a warning).
+        assert!(check_dropped(&stats(1000, 10), scene, &quiet()).is_ok());
+        match check_dropped(&stats(1000, 11), scene, &quiet()) {
+            Err(CliError::Input(m)) => {
+                assert!(m.contains("s.toml") && m.contains("11 of 1000"), "{m}");
+            }
+            other => panic!("more than 1 % dropped must fail: {other:?}"),
+        }
+        assert!(check_dropped(&stats(100, 100), scene, &quiet()).is_err());
+    }
+}
