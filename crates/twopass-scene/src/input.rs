@@ -56,6 +56,37 @@ impl ReadPolicy {
     }
 }
 
+/// Reads `path` whole if it is a regular file of at most `limit` bytes. Anything else (a
+/// device such as `/dev/zero`, a pipe, a directory, a larger file, a file that grows past the
+/// limit while it is read) is an error of kind [`std::io::ErrorKind::InvalidInput`] that says
+/// why, so no input makes a reader run without bound. Every file reader of the workspace
+/// (scenes, meshes, libraries, bakes, manifests, presets) goes through it.
+pub fn read_bounded(path: &Path, limit: u64) -> std::io::Result<Vec<u8>> {
+    let refuse = |m: String| std::io::Error::new(std::io::ErrorKind::InvalidInput, m);
+    let file = std::fs::File::open(path)?;
+    let meta = file.metadata()?;
+    if !meta.is_file() {
+        return Err(refuse(
+            "not a regular file (a device, pipe or directory is not read as one)".into(),
+        ));
+    }
+    if meta.len() > limit {
+        return Err(refuse(format!(
+            "{} bytes, more than the {limit} bytes read at most",
+            meta.len()
+        )));
+    }
+    // The file may grow while it is read: never take more than the limit.
+    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    file.take(limit + 1).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > limit {
+        return Err(refuse(format!(
+            "grew past the {limit} bytes read at most while being read"
+        )));
+    }
+    Ok(bytes)
+}
+
 /// What kind of input a file is, for its size limit and messages.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum InputKind {
@@ -107,32 +138,13 @@ pub(crate) fn read_text(
             )));
         }
     }
-    let file = std::fs::File::open(path).map_err(io)?;
-    let meta = file.metadata().map_err(io)?;
-    if !meta.is_file() {
-        return Err(refuse(format!(
-            "{} is not a regular file (a device, pipe or directory cannot be read as one)",
-            kind.name()
-        )));
-    }
-    let limit = kind.limit();
-    if meta.len() > limit {
-        return Err(refuse(format!(
-            "{} is {} bytes, more than the {} bytes read at most",
-            kind.name(),
-            meta.len(),
-            limit
-        )));
-    }
-    // The file may grow while it is read: never take more than the limit.
-    let mut bytes = Vec::with_capacity(meta.len() as usize);
-    file.take(limit + 1).read_to_end(&mut bytes).map_err(io)?;
-    if bytes.len() as u64 > limit {
-        return Err(refuse(format!(
-            "{} grew past the {limit} bytes read at most while being read",
-            kind.name()
-        )));
-    }
+    let bytes = read_bounded(path, kind.limit()).map_err(|e| {
+        if e.kind() == std::io::ErrorKind::InvalidInput {
+            refuse(format!("{}: {e}", kind.name()))
+        } else {
+            io(e)
+        }
+    })?;
     String::from_utf8(bytes).map_err(|e| {
         let valid = &e.as_bytes()[..e.utf8_error().valid_up_to()];
         let line = valid.iter().filter(|&&b| b == b'\n').count() + 1;

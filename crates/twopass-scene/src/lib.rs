@@ -38,7 +38,9 @@ pub mod workload;
 pub use accel::{Accel, Ray, SurfacePoint, TriangleHit};
 pub use camera::Camera;
 pub use error::{CameraProblem, SceneError, Warning};
-pub use input::{MAX_MTL_BYTES, MAX_OBJ_BYTES, MAX_SCENE_BYTES, ReadPolicy, printable};
+pub use input::{
+    MAX_MTL_BYTES, MAX_OBJ_BYTES, MAX_SCENE_BYTES, ReadPolicy, printable, read_bounded,
+};
 pub use load::{
     MAX_COORDINATE, MAX_EMITTED_POWER, MAX_TRIANGLES, SPHERE_TOLERANCE, load, load_toml,
     load_toml_with, load_with,

@@ -228,8 +228,10 @@ pub fn check_in_set(file: &Path) -> Result<(), CliError> {
         return Ok(());
     };
     let manifest_path = dir.join(format!("{}.manifest.json", stem.to_string_lossy()));
-    let Ok(text) = std::fs::read(&manifest_path) else {
-        return Ok(());
+    let text = match crate::output::read_small(&manifest_path) {
+        Ok(text) => text,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
+        Err(e) => return Err(CliError::io(&manifest_path, e)),
     };
     let manifest: Manifest = serde_json::from_slice(&text).map_err(|e| {
         CliError::Input(format!(
@@ -244,7 +246,8 @@ pub fn check_in_set(file: &Path) -> Result<(), CliError> {
     else {
         return Ok(());
     };
-    let bytes = std::fs::read(file).map_err(|e| CliError::io(file, e))?;
+    let bytes = twopass_scene::read_bounded(file, bake::MAX_BAKE_BYTES)
+        .map_err(|e| CliError::io(file, e))?;
     let size_ok = record.bytes == bytes.len() as u64;
     let crc_ok = record.crc32.is_none_or(|c| c == crc32fast::hash(&bytes));
     if size_ok && crc_ok {

@@ -9,6 +9,20 @@ use crate::error::CliError;
 
 /// Creates `dir` and its missing parents. When a part of the path exists but is not a folder
 /// (`-o scene.toml/x.exr`), says so instead of the system's "File exists".
+/// Largest small input the CLI reads (presets, manifests, cache records), bytes.
+pub const MAX_SMALL_INPUT: u64 = 16 << 20;
+
+/// Reads a small input file (at most [`MAX_SMALL_INPUT`] bytes, a regular file).
+pub fn read_small(path: &Path) -> std::io::Result<Vec<u8>> {
+    twopass_scene::read_bounded(path, MAX_SMALL_INPUT)
+}
+
+/// Reads a small input file as UTF-8 text (see [`read_small`]).
+pub fn read_text(path: &Path) -> std::io::Result<String> {
+    String::from_utf8(read_small(path)?)
+        .map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidData, e))
+}
+
 /// Temporary files of atomic writes (every crate's `.twopass-*.tmp`) older than this are
 /// leftovers of a killed run: a live one is written from memory and renamed within seconds.
 pub const STALE_TEMPORARY: std::time::Duration = std::time::Duration::from_secs(600);

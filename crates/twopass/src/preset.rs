@@ -106,7 +106,7 @@ impl PresetFile {
 
     /// Reads a presets file, naming the file in every error.
     pub fn read(path: &Path) -> Result<Self, CliError> {
-        let text = std::fs::read_to_string(path).map_err(|e| {
+        let text = crate::output::read_text(path).map_err(|e| {
             CliError::Input(format!(
                 "{}: cannot read the presets ({e}); `twopass bench tradeoff SCENE \
                  --install-presets` measures and writes them",

@@ -150,6 +150,32 @@ fn special_files_are_refused_as_scenes() {
             &["not a regular file"],
         );
     }
+    // Every other file a command reads: a bake, a presets file.
+    let scene = cornell();
+    expect(
+        &[
+            "render",
+            &scene,
+            "--method",
+            "radiosity",
+            "--bake",
+            "/dev/zero",
+        ],
+        1,
+        &["/dev/zero", "not a regular file"],
+    );
+    expect(
+        &[
+            "render",
+            &scene,
+            "--preset",
+            "preview",
+            "--presets",
+            "/dev/zero",
+        ],
+        1,
+        &["/dev/zero", "not a regular file"],
+    );
 }
 
 #[test]

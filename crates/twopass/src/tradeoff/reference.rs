@@ -151,7 +151,7 @@ fn files(dir: &Path, key: &ReferenceKey) -> (PathBuf, PathBuf) {
 /// The cached entry for `key`, when there is a complete one.
 fn cached(dir: &Path, key: &ReferenceKey) -> Option<Converged> {
     let (exr, json) = files(dir, key);
-    let record: Record = serde_json::from_slice(&std::fs::read(&json).ok()?).ok()?;
+    let record: Record = serde_json::from_slice(&crate::output::read_small(&json).ok()?).ok()?;
     if &record.key != key {
         return None;
     }
