@@ -175,7 +175,7 @@ fn parse_rays(s: &str) -> Result<VisibilityRays, String> {
 }
 
 /// Most shadow rays per visibility estimate (a 32 x 32 grid; 16 is the default).
-const MAX_VISIBILITY_RAYS: u32 = 1024;
+pub const MAX_VISIBILITY_RAYS: u32 = 1024;
 
 /// Most vertices and patch pairs the residual report samples.
 const MAX_RESIDUAL_SAMPLES: usize = 100_000;

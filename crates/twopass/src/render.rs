@@ -77,7 +77,9 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
     pub spp: u32,
     /// Recursion depth of mirror and refraction paths (Whitted and the hybrids).
-    #[arg(long, default_value_t = WhittedSettings::default().max_depth)]
+    /// At most 64: the recursion holds a stack frame per bounce, and a path trapped by total
+    /// internal reflection keeps its full weight, so only the depth ends it.
+    #[arg(long, default_value_t = WhittedSettings::default().max_depth, value_parser = clap::value_parser!(u32).range(0..=MAX_DEPTH as i64))]
     pub depth: u32,
     /// Shadow rays per emitter and hit, as an N x N stratified grid (Whitted and the hybrids).
     #[arg(long, default_value_t = WhittedSettings::default().shadow_grid, value_parser = clap::value_parser!(u32).range(1..=64))]
@@ -426,6 +428,9 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
     }
     Ok(())
 }
+
+/// Deepest recursion of mirror and refraction paths (`--depth`, presets).
+pub const MAX_DEPTH: u32 = 64;
 
 /// Most stops of exposure either way: 2^64 spans far more than any radiance a scene can emit.
 const MAX_STOPS: f32 = 64.0;

@@ -253,3 +253,30 @@ fn a_closed_or_full_stdout_is_no_panic() {
         assert!(stderr.contains("standard output"), "{stderr}");
     }
 }
+
+#[test]
+fn a_presets_file_cannot_ask_for_more_than_the_options() {
+    let text = std::fs::read_to_string(repo("scenes/cornell-box.presets.toml")).unwrap();
+    let first = text.find("depth = ").expect("a preset has a depth");
+    let end = first + text[first..].find('\n').unwrap();
+    let bad = format!("{}depth = 4000000000{}", &text[..first], &text[end..]);
+    let dir = tempfile::tempdir().unwrap();
+    let presets = dir.path().join("bad.presets.toml");
+    std::fs::write(&presets, bad).unwrap();
+    let name_at = text[..first].rfind("name = \"").unwrap() + 8;
+    let name = &text[name_at..name_at + text[name_at..].find('"').unwrap()];
+    expect(
+        &[
+            "render",
+            &cornell(),
+            "--preset",
+            name,
+            "--presets",
+            presets.to_str().unwrap(),
+            "-o",
+            dir.path().join("x.exr").to_str().unwrap(),
+        ],
+        1,
+        &["bad.presets.toml", name, "depth 4000000000", "at most 64"],
+    );
+}
