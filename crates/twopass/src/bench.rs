@@ -57,8 +57,8 @@ pub struct RadiosityArgs {
     #[arg(long, default_value_t = 1e-3, value_parser = crate::bake::parse_fraction)]
     pub unshot: f64,
     /// Compare with the dense solve when the mesh has at most this many vertices (its cost
-    /// grows as the cube).
-    #[arg(long, default_value_t = 3000)]
+    /// grows as the cube; at most 20000, where its matrix holds 3.2 GB).
+    #[arg(long, default_value_t = 3000, value_parser = parse_dense_max)]
     pub dense_max_vertices: usize,
 }
 
@@ -333,6 +333,18 @@ impl Batch {
         }
         let rate = (passes * self.len()) as f64 / start.elapsed().as_secs_f64();
         (rate, hits as f64 / self.len().max(1) as f64)
+    }
+}
+
+/// Most vertices of the dense comparison solve.
+const MAX_DENSE_VERTICES: usize = 20_000;
+
+fn parse_dense_max(s: &str) -> Result<usize, String> {
+    let n: usize = s.parse().map_err(|e| format!("{e}"))?;
+    if n <= MAX_DENSE_VERTICES {
+        Ok(n)
+    } else {
+        Err(format!("{n} must be at most {MAX_DENSE_VERTICES}"))
     }
 }
 
