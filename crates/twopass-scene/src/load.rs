@@ -32,8 +32,8 @@ pub const SPHERE_TOLERANCE: f32 = 2e-4;
 /// in this range renders the same image at any scale (checked at 1e9 times the Cornell box).
 pub const MAX_COORDINATE: f32 = 1e12;
 
-/// Most triangles of a scene with built-in spheres, checked before each sphere is built (an
-/// OBJ's triangles are bounded by the size of its file): 50 million hold about 5 GB.
+/// Most triangles of a scene, counted before any sphere is built (a sphere by its icosphere
+/// level, 20 * 4^level): 50 million hold about 5 GB with the BVH.
 pub const MAX_TRIANGLES: u64 = 50_000_000;
 
 /// Largest emitted power of one object per channel, pi * L_e * area (W in scene units). Sums
