@@ -10,7 +10,9 @@
 //! CI runs a bounded number of cases from a fixed seed, so it is cheap and reproducible. By
 //! hand, for a long run: `TWOPASS_FUZZ_CASES=20000 TWOPASS_FUZZ_SEED=$RANDOM cargo test
 //! --release -p twopass-tests fuzz`. Every crash ever found becomes a file in `tests/data/`
-//! (see its README), and [`every_fixture_loads_or_fails_cleanly`] runs them all.
+//! (see its README), and [`every_fixture_loads_or_fails_cleanly`] runs them all. With
+//! `TWOPASS_FUZZ_DUMP=FILE`, each case's text is written to FILE before it runs, so a case that
+//! hangs can be taken from there.
 
 use std::path::{Path, PathBuf};
 
@@ -166,6 +168,13 @@ fn apply(text: &str, m: &Mutation) -> String {
     }
 }
 
+/// Writes the case about to run to `TWOPASS_FUZZ_DUMP`, when set.
+fn dump(parts: &[&str]) {
+    if let Some(path) = std::env::var_os("TWOPASS_FUZZ_DUMP") {
+        std::fs::write(path, parts.join("\n=== next file ===\n")).unwrap();
+    }
+}
+
 fn runner() -> TestRunner {
     let env = |k: &str| std::env::var(k).ok().and_then(|v| v.parse::<u64>().ok());
     TestRunner::new(Config {
@@ -234,6 +243,7 @@ fn mutated_scenes_load_or_fail_cleanly() {
         .run(&strategy, |(which, mutations)| {
             let (path, text) = &scenes[which];
             let text = mutations.iter().fold(text.clone(), |t, m| apply(&t, m));
+            dump(&[&path.display().to_string(), &text]);
             // Loaded as if from the scene's own path, so its mesh paths resolve.
             exercise(twopass_scene::load_toml(&text, path));
             Ok(())
@@ -268,6 +278,7 @@ fn mutated_meshes_load_or_fail_cleanly() {
             let (obj, mtl) = &meshes[which];
             let obj = obj_edits.iter().fold(obj.clone(), |t, m| apply(&t, m));
             let mtl = mtl_edits.iter().fold(mtl.clone(), |t, m| apply(&t, m));
+            dump(&[&obj, &mtl]);
             // Every library the OBJ may name gets the mutated text.
             for line in obj.lines() {
                 if let Some(name) = line.strip_prefix("mtllib ") {

@@ -400,3 +400,55 @@ fn sizes_that_cost_without_bound_are_refused_before_the_work() {
         Ok(_) => panic!("a {n}-vertex polygon loaded"),
     }
 }
+
+#[test]
+fn a_radiosity_mesh_too_fine_for_memory_is_refused_before_meshing() {
+    // A 1000 x 1000 square: element size 0.1 needs at least 1e6 / (sqrt(3)/4 * 0.01) = 2.3e8
+    // elements (the largest triangle with edges <= 0.1 has area sqrt(3)/4 * 0.01).
+    let text = "version = 1\n[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\nfov_y = 40\n\
+                [[material]]\nname = \"w\"\ntype = \"lambert\"\ndiffuse = 0.5\n\
+                [[object]]\nname = \"square\"\nmaterial = \"w\"\nemission = 1\n\
+                shape = { type = \"quad\", origin = [0, 0, 0], edge_u = [1000, 0, 0], edge_v = [0, 1000, 0] }\n";
+    let (scene, _) = twopass_scene::load_toml(text, std::path::Path::new("square.toml")).unwrap();
+    let options = |size: f32| twopass_radiosity::Options {
+        patch_size: Some(2000.0),
+        element_size: Some(size),
+        ..Default::default()
+    };
+    match twopass_radiosity::Solver::new(&scene, options(0.1)) {
+        Err(twopass_radiosity::SolveError::Option { name, problem }) => {
+            assert_eq!(name, "element_size");
+            let expected = 1e6 / (3f64.sqrt() / 4.0 * 0.01);
+            assert!(problem.contains(&format!("{expected:.3e}")), "{problem}");
+        }
+        Err(e) => panic!("wrong error: {e}"),
+        Ok(_) => panic!("a mesh of 2.3e8 elements was started"),
+    }
+    // A size the mesh can hold is accepted.
+    assert!(twopass_radiosity::Solver::new(&scene, options(100.0)).is_ok());
+}
+
+#[test]
+fn a_needle_triangle_is_dropped_and_the_solve_ends() {
+    // Found by the fuzz test: the radiosity mesher bisected this needle without end.
+    let (scene, warnings) = load(data("fuzz-needle.obj")).unwrap();
+    let dropped: Vec<&str> = warnings
+        .iter()
+        .filter_map(|w| match w {
+            twopass_scene::Warning::DegenerateTriangles { object, .. } => Some(object.as_str()),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(dropped, ["ceiling"]);
+    let options = twopass_radiosity::Options {
+        adaptive: None,
+        stop: twopass_radiosity::Stop {
+            max_shots: Some(4),
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let mut solver = twopass_radiosity::Solver::new(&scene, options).unwrap();
+    solver.run(|_| std::ops::ControlFlow::Continue(()));
+    assert!(solver.progress().shots >= 4);
+}

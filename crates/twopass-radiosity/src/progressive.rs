@@ -289,16 +289,11 @@ impl<'s> Solver<'s> {
                 });
             }
         }
-        // Refinement to a size makes at least one element per sqrt(3)/4 size^2 of area (the
-        // largest triangle whose longest edge is `size`), and at least one per triangle: refuse
-        // up front what cannot fit rather than refine until memory runs out.
-        let area = |o: &twopass_scene::Object| -> f64 {
-            o.triangles
-                .clone()
-                .map(|t| f64::from(scene.mesh.areas[t as usize]))
-                .sum()
-        };
-        let (part_area, part_triangles) = scene
+        // Refinement to a size makes, per triangle, at least one element per sqrt(3)/4 size^2
+        // of area (the largest triangle whose longest edge is `size`), at least one per `size`
+        // along its longest edge (a sliver is cut across), and at least one: refuse up front
+        // what cannot fit rather than refine until memory runs out.
+        let participating: Vec<(f64, f64)> = scene
             .objects
             .iter()
             .filter(|o| {
@@ -307,18 +302,30 @@ impl<'s> Solver<'s> {
                         .material
                         .reflects_diffusely()
             })
-            .fold((0.0, 0usize), |(a, n), o| {
-                (a + area(o), n + o.triangles.len())
-            });
+            .flat_map(|o| o.triangles.clone())
+            .map(|t| {
+                let [a, b, c] = scene.mesh.corners(t);
+                let longest = (b - a).length().max((c - b).length()).max((a - c).length());
+                (f64::from(scene.mesh.areas[t as usize]), f64::from(longest))
+            })
+            .collect();
+        let part_area: f64 = participating.iter().map(|p| p.0).sum();
         for (name, v) in [("patch_size", patch_size), ("element_size", element_size)] {
-            let at_least = (part_area / (3f64.sqrt() / 4.0 * f64::from(v) * f64::from(v)))
-                .max(part_triangles as f64);
+            let s = f64::from(v);
+            let at_least: f64 = participating
+                .iter()
+                .map(|&(area, longest)| {
+                    (area / (3f64.sqrt() / 4.0 * s * s))
+                        .max((longest / s).ceil())
+                        .max(1.0)
+                })
+                .sum();
             if at_least > MAX_ELEMENTS as f64 {
                 return Err(SolveError::Option {
                     name,
                     problem: format!(
-                        "{v} scene units would make at least {at_least:.3e} elements on {part_area:.3e} units^2 of surface, more than the {MAX_ELEMENTS} a solve holds; give a size of at least {:.3e}",
-                        (part_area / (3f64.sqrt() / 4.0 * MAX_ELEMENTS as f64)).sqrt()
+                        "{v} scene units would make at least {at_least:.3e} elements on {} triangles ({part_area:.3e} units^2), more than the {MAX_ELEMENTS} a solve holds; give a larger size",
+                        participating.len()
                     ),
                 });
             }
