@@ -114,7 +114,7 @@ fn nan_vertex_in_toml_is_refused() {
     match err("nan-vertex.toml") {
         // The key as written (`origin = [-1, nan, 0]`), before any arithmetic on it.
         SceneError::NonFinite { object, what, .. } => {
-            assert_eq!((object.as_str(), what), ("floor", "origin"))
+            assert_eq!((object.as_str(), what), ("floor", "`origin` component"))
         }
         e => panic!("wrong error: {e:?}"),
     }

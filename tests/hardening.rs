@@ -183,7 +183,10 @@ fn coordinates_beyond_the_range_are_refused_with_the_object() {
             value,
             ..
         } => {
-            assert_eq!((object.as_str(), what, index), ("floor", "vertices", 1));
+            assert_eq!(
+                (object.as_str(), what, index),
+                ("floor", "polygon vertex", 1)
+            );
             assert_eq!(value, f32::INFINITY);
         }
         e => panic!("wrong error: {e:?}"),

@@ -510,32 +510,42 @@ impl Loader {
         };
         let v3 = Vec3::from_array;
         // Every coordinate as written, finite and within range, before any arithmetic on it.
-        let written: Vec<(&'static str, [f32; 3])> = match &o.shape {
+        // Each entry: the key as written, what a non-finite value is called (the key's
+        // component, or the polygon's vertex), and the three numbers.
+        let written: Vec<(&'static str, &'static str, [f32; 3])> = match &o.shape {
             ShapeDesc::Quad {
                 origin,
                 edge_u,
                 edge_v,
             } => vec![
-                ("origin", *origin),
-                ("edge_u", *edge_u),
-                ("edge_v", *edge_v),
+                ("origin", "`origin` component", *origin),
+                ("edge_u", "`edge_u` component", *edge_u),
+                ("edge_v", "`edge_v` component", *edge_v),
             ],
-            ShapeDesc::Polygon { vertices } => vertices.iter().map(|v| ("vertices", *v)).collect(),
-            ShapeDesc::Box { min, max } => vec![("min", *min), ("max", *max)],
-            ShapeDesc::Sphere { center, radius, .. } => {
-                vec![("center", *center), ("radius", [*radius; 3])]
-            }
+            ShapeDesc::Polygon { vertices } => vertices
+                .iter()
+                .map(|v| ("vertices", "polygon vertex", *v))
+                .collect(),
+            ShapeDesc::Box { min, max } => vec![
+                ("min", "`min` component", *min),
+                ("max", "`max` component", *max),
+            ],
+            ShapeDesc::Sphere { center, radius, .. } => vec![
+                ("center", "`center` component", *center),
+                ("radius", "`radius`", [*radius; 3]),
+            ],
             ShapeDesc::Obj { .. } => Vec::new(),
         };
-        for (index, (key, v)) in written.into_iter().enumerate() {
-            if let Some(&value) = v.iter().find(|c| !c.is_finite()) {
+        for (entry, (key, what, v)) in written.into_iter().enumerate() {
+            if let Some(component) = v.iter().position(|c| !c.is_finite()) {
                 return Err(SceneError::NonFinite {
                     path: self.path.clone(),
                     line: Some(line),
                     object: name.to_owned(),
-                    what: key,
-                    index,
-                    value,
+                    what,
+                    // The polygon's vertex, or the component of a point.
+                    index: if key == "vertices" { entry } else { component },
+                    value: v[component],
                 });
             }
             if let Some(c) = v.iter().find(|c| !in_range(**c)) {
@@ -544,7 +554,7 @@ impl Loader {
                     line: Some(line),
                     object: name.to_owned(),
                     problem: format!(
-                        "`{key}` value {c:e} is not finite or outside the supported range of +-{MAX_COORDINATE:e} scene units"
+                        "`{key}` value {c:e} is outside the supported range of +-{MAX_COORDINATE:e} scene units"
                     ),
                 });
             }
