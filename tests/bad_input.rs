@@ -112,8 +112,9 @@ fn negative_emission_names_the_channel() {
 #[test]
 fn nan_vertex_in_toml_is_refused() {
     match err("nan-vertex.toml") {
+        // The key as written (`origin = [-1, nan, 0]`), before any arithmetic on it.
         SceneError::NonFinite { object, what, .. } => {
-            assert_eq!((object.as_str(), what), ("floor", "vertex"))
+            assert_eq!((object.as_str(), what), ("floor", "`origin` component"))
         }
         e => panic!("wrong error: {e:?}"),
     }
@@ -121,7 +122,14 @@ fn nan_vertex_in_toml_is_refused() {
 
 #[test]
 fn nan_vertex_in_obj_names_file_and_line() {
-    match err("nan-obj.toml") {
+    let e = match err("nan-obj.toml") {
+        SceneError::InObject { object, source, .. } => {
+            assert_eq!(object, "mesh");
+            *source
+        }
+        e => panic!("not located at the scene's object: {e:?}"),
+    };
+    match e {
         SceneError::NonFinite {
             path,
             line,
@@ -141,9 +149,14 @@ fn nan_vertex_in_obj_names_file_and_line() {
 #[test]
 fn broken_obj_face_names_the_line() {
     match err("broken-face.obj") {
-        SceneError::Obj { path, line, .. } => {
+        SceneError::Statement {
+            path,
+            line,
+            problem,
+        } => {
             assert!(path.ends_with("broken-face.obj"));
-            assert_eq!(line, Some(6));
+            assert_eq!(line, 6);
+            assert!(problem.contains("vertex index `9`"), "{problem}");
         }
         e => panic!("wrong error: {e:?}"),
     }
@@ -180,9 +193,22 @@ fn degenerate_obj_triangles_are_dropped_with_a_warning() {
 #[test]
 fn missing_mtl_is_an_error_when_the_scene_relies_on_it() {
     match err("missing-mtl.toml") {
-        SceneError::MissingMtl { path, mtl, .. } => {
-            assert!(path.ends_with("missing-mtl.obj"));
-            assert!(mtl.unwrap().ends_with("nowhere.mtl"));
+        SceneError::InObject {
+            path,
+            line,
+            object,
+            source,
+        } => {
+            assert!(path.ends_with("missing-mtl.toml"));
+            assert!((7..=8).contains(&line), "line {line} is not the object's");
+            assert_eq!(object, "mesh");
+            match *source {
+                SceneError::MissingMtl { path, mtl, .. } => {
+                    assert!(path.ends_with("missing-mtl.obj"));
+                    assert!(mtl.unwrap().ends_with("nowhere.mtl"));
+                }
+                e => panic!("wrong inner error: {e:?}"),
+            }
         }
         e => panic!("wrong error: {e:?}"),
     }
@@ -201,8 +227,22 @@ fn missing_mtl_is_an_error_when_the_scene_relies_on_it() {
 
 #[test]
 fn missing_obj_names_the_mesh_file() {
+    // The mesh's path, and the scene file and line of the object that names it.
     match err("missing-obj.toml") {
-        SceneError::Io { path, .. } => assert!(path.ends_with("nowhere.obj")),
+        SceneError::InObject {
+            path,
+            line,
+            object,
+            source,
+        } => {
+            assert!(path.ends_with("missing-obj.toml"));
+            assert!((12..=13).contains(&line), "line {line} is not the object's");
+            assert_eq!(object, "mesh");
+            match *source {
+                SceneError::Io { path, .. } => assert!(path.ends_with("nowhere.obj")),
+                e => panic!("wrong inner error: {e:?}"),
+            }
+        }
         e => panic!("wrong error: {e:?}"),
     }
 }

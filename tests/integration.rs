@@ -6,6 +6,8 @@ mod accel;
 mod architecture;
 mod bad_input;
 mod closed_form;
+mod fuzz;
+mod hardening;
 mod hierarchical;
 mod radiosity;
 mod scenes;

@@ -234,9 +234,14 @@ pub fn decode_bake(bytes: &[u8], scene: &Scene) -> Result<Solution, BakeProblem>
     ))
 }
 
+/// Largest bake file read, bytes (4 GiB: far above the bake of
+/// [`twopass_radiosity::MAX_ELEMENTS`]).
+pub const MAX_BAKE_BYTES: u64 = 4 << 30;
+
 /// Reads the bake file at `path` for `scene` (see [`decode_bake`]).
 pub fn read_bake(path: &Path, scene: &Scene) -> Result<Solution, BakeError> {
-    let bytes = std::fs::read(path).map_err(|e| BakeError::io(path, e))?;
+    let bytes =
+        twopass_scene::read_bounded(path, MAX_BAKE_BYTES).map_err(|e| BakeError::io(path, e))?;
     decode_bake(&bytes, scene).map_err(|problem| BakeError::Invalid {
         path: path.to_owned(),
         problem,

@@ -67,7 +67,7 @@ pub mod ply;
 pub use colour::{AUTO_EXPOSURE_PERCENTILE, ColorMapping};
 pub use error::{BakeError, BakeProblem};
 pub use fingerprint::{Fingerprint, geometry_fingerprint, lighting_fingerprint, scene_fingerprint};
-pub use format::{BAKE_FORMAT_VERSION, decode_bake, encode_bake, read_bake};
+pub use format::{BAKE_FORMAT_VERSION, MAX_BAKE_BYTES, decode_bake, encode_bake, read_bake};
 pub use gltf::{Glb, encode_glb};
 pub use manifest::{
     AdaptiveRecord, ColorRecord, CountsRecord, EnergyRecord, FileRecord, MANIFEST_VERSION,

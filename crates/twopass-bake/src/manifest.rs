@@ -178,6 +178,10 @@ pub struct FileRecord {
     pub path: PathBuf,
     /// Size, bytes.
     pub bytes: u64,
+    /// CRC-32 (IEEE) of the file's bytes, so a reader can tell a file of this set from one a
+    /// later, interrupted bake left beside it (absent in manifests from before it was kept).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub crc32: Option<u32>,
 }
 
 /// The bake manifest (JSON): what was solved, how, how long it took and how good it is.

@@ -41,8 +41,8 @@ mod solver;
 pub use direct::{MAX_DENSE_VERTICES, dense_solve};
 pub use form_factor::VisibilityRays;
 pub use hierarchical::HierarchicalSolver;
-pub use progressive::Progressive;
 pub use mesh_error::{InvalidMesh, MeshPart};
+pub use progressive::{MAX_ELEMENTS, Progressive};
 pub use solution::Solution;
 pub use solver::{
     Adaptive, Energy, Finish, Hierarchical, MAX_VISIBILITY_RAYS, Method, Options, Progress,

@@ -17,6 +17,10 @@ use crate::solver::{
     participating,
 };
 
+/// Most patches or elements a solve meshes before adaptive subdivision (about 2 GB of mesh,
+/// form-factor rows and radiosities); smaller patch or element sizes are refused up front.
+pub const MAX_ELEMENTS: usize = 4_000_000;
+
 /// Approximate bytes per element: the node, its share of vertices with their per-vertex sums
 /// and receiving points, the edge map and the patch lists.
 const BYTES_PER_ELEMENT: f64 = 400.0;
@@ -83,6 +87,41 @@ impl<'s> Progressive<'s> {
         let takes_part = participating(scene);
         if !takes_part.iter().any(|&t| t) {
             return Err(SolveError::NothingTakesPart);
+        }
+        // Refinement to a size makes, per triangle, at least one element per sqrt(3)/4 size^2
+        // of area (the largest triangle whose longest edge is `size`), at least one per `size`
+        // along its longest edge (a sliver is cut across), and at least one: refuse up front
+        // what cannot fit rather than refine until memory runs out.
+        let part: Vec<(f64, f64)> = (0..scene.mesh.triangles.len() as u32)
+            .filter(|&t| takes_part[scene.mesh.triangle_object[t as usize] as usize])
+            .map(|t| {
+                let [a, b, c] = scene.mesh.corners(t);
+                let longest = (b - a).length().max((c - b).length()).max((a - c).length());
+                (f64::from(scene.mesh.areas[t as usize]), f64::from(longest))
+            })
+            .collect();
+        let part_area: f64 = part.iter().map(|p| p.0).sum();
+        for (name, v) in [("patch_size", patch_size), ("element_size", element_size)] {
+            let s = f64::from(v);
+            let at_least: f64 = part
+                .iter()
+                .map(|&(area, longest)| {
+                    (area / (3f64.sqrt() / 4.0 * s * s))
+                        .max((longest / s).ceil())
+                        .max(1.0)
+                })
+                .sum();
+            if at_least > MAX_ELEMENTS as f64 {
+                return Err(SolveError::Option {
+                    name,
+                    problem: format!(
+                        "{v} scene units would make at least {at_least:.3e} elements on {} \
+                         triangles ({part_area:.3e} units^2), more than the {MAX_ELEMENTS} a \
+                         solve holds; give a larger size",
+                        part.len()
+                    ),
+                });
+            }
         }
         // Bisection leaves of longest edge at most L have an area of L^2 / 8 or more: refuse
         // up front a mesh that would not fit instead of refining until the allocator gives up.

@@ -25,6 +25,41 @@ pub struct Camera {
 }
 
 impl Camera {
+    /// Longest image side, pixels.
+    pub const MAX_SIDE: u32 = 65536;
+    /// Most pixels in an image (2^25: 8K UHD, 7680 x 4320, fits). A render holds about 150
+    /// bytes per pixel (six RGB layers while tracing and again as images), so this bounds a
+    /// render's image memory at about 5 GB.
+    pub const MAX_PIXELS: u64 = 1 << 25;
+    /// Side of the largest square image, pixels.
+    pub const MAX_PIXELS_SQUARE: u32 = 5792;
+
+    /// Checks that a `width` x `height` image is within [`Camera::MAX_SIDE`] and
+    /// [`Camera::MAX_PIXELS`] (and at least 1 x 1).
+    pub fn check_resolution(width: u64, height: u64) -> Result<(), CameraProblem> {
+        if width == 0
+            || height == 0
+            || width > u64::from(Self::MAX_SIDE)
+            || height > u64::from(Self::MAX_SIDE)
+            || width * height > Self::MAX_PIXELS
+        {
+            return Err(CameraProblem::Resolution { width, height });
+        }
+        Ok(())
+    }
+
+    /// [`Camera::with_resolution`], refusing a size beyond [`Camera::check_resolution`].
+    pub fn try_with_resolution(
+        self,
+        width: Option<u32>,
+        height: Option<u32>,
+    ) -> Result<Self, CameraProblem> {
+        let c = self.with_resolution(width, height);
+        // The derived side saturates at u32::MAX, so it is refused rather than wrapped.
+        Self::check_resolution(u64::from(c.width), u64::from(c.height))?;
+        Ok(c)
+    }
+
     /// A camera at `position` looking at `look_at` with `up` on top, vertical field of view
     /// `fov_y` (radians) and `width` x `height` pixels.
     pub fn look_at(

@@ -184,6 +184,64 @@ pub enum SceneError {
         /// The scene file.
         path: PathBuf,
     },
+    /// A file was refused before parsing: not a regular file, too large, not UTF-8, or outside
+    /// the folder reads are confined to.
+    #[error("{}: {problem}", path.display())]
+    Input {
+        /// The file.
+        path: PathBuf,
+        /// Why it was refused.
+        problem: String,
+    },
+    /// A malformed statement in an OBJ or MTL file (a face with too few corners, an index out
+    /// of range, a colour with the wrong number of values, ...).
+    #[error("{}:{line}: {problem}", path.display())]
+    Statement {
+        /// The OBJ or MTL file.
+        path: PathBuf,
+        /// 1-based line of the statement.
+        line: usize,
+        /// What is wrong.
+        problem: String,
+    },
+    /// An MTL material that cannot be used (negative or non-finite emission, ...).
+    #[error("{}{}: MTL material `{material}`: {problem}", path.display(), line_suffix(*line))]
+    MtlMaterial {
+        /// The MTL library.
+        path: PathBuf,
+        /// Line of the offending statement (or of `newmtl`), when known.
+        line: Option<usize>,
+        /// The MTL material's name.
+        material: String,
+        /// What is wrong.
+        problem: String,
+    },
+    /// A number outside the range the engine represents: coordinates beyond
+    /// [`crate::MAX_COORDINATE`], or emission whose power overflows single precision.
+    #[error("{}{}: object `{object}`: {problem}", path.display(), line_suffix(*line))]
+    Range {
+        /// The scene or OBJ file.
+        path: PathBuf,
+        /// The line, when known.
+        line: Option<usize>,
+        /// The object.
+        object: String,
+        /// Which value and the range it must lie in.
+        problem: String,
+    },
+    /// An error in a file an object of the scene refers to (its OBJ mesh or MTL library),
+    /// located at that object.
+    #[error("{}:{line}: object `{object}`: {source}", path.display())]
+    InObject {
+        /// The scene file.
+        path: PathBuf,
+        /// Line of the object.
+        line: usize,
+        /// The object.
+        object: String,
+        /// The error in the referenced file (it names that file).
+        source: Box<SceneError>,
+    },
 }
 
 /// What is wrong with a camera.
@@ -202,6 +260,14 @@ pub enum CameraProblem {
     FovAndFocalLength,
     /// A position, target or up vector has a NaN or infinite component.
     NonFinite,
+    /// The image would have more pixels than [`crate::Camera::MAX_PIXELS`] or a side longer
+    /// than [`crate::Camera::MAX_SIDE`].
+    Resolution {
+        /// Requested width, pixels.
+        width: u64,
+        /// Requested height, pixels.
+        height: u64,
+    },
 }
 
 impl fmt::Display for CameraProblem {
@@ -216,6 +282,14 @@ impl fmt::Display for CameraProblem {
             ),
             Self::FovAndFocalLength => write!(f, "give either `fov_y` or `focal_length`, not both"),
             Self::NonFinite => write!(f, "a position or direction is not finite"),
+            Self::Resolution { width, height } => write!(
+                f,
+                "resolution {width} x {height} is out of range: each side must be 1 to {} pixels and the image at most {} pixels (8K UHD, 7680 x 4320, fits; a square at most {} x {})",
+                crate::Camera::MAX_SIDE,
+                crate::Camera::MAX_PIXELS,
+                crate::Camera::MAX_PIXELS_SQUARE,
+                crate::Camera::MAX_PIXELS_SQUARE
+            ),
         }
     }
 }

@@ -26,6 +26,7 @@ mod accel;
 mod camera;
 pub mod description;
 mod error;
+mod input;
 mod load;
 mod obj;
 mod radiance;
@@ -37,7 +38,13 @@ pub mod workload;
 pub use accel::{Accel, Ray, SurfacePoint, TriangleHit};
 pub use camera::Camera;
 pub use error::{CameraProblem, SceneError, Warning};
-pub use load::{SPHERE_TOLERANCE, load, load_toml};
+pub use input::{
+    MAX_MTL_BYTES, MAX_OBJ_BYTES, MAX_SCENE_BYTES, ReadPolicy, printable, read_bounded,
+};
+pub use load::{
+    MAX_COORDINATE, MAX_EMITTED_POWER, MAX_TRIANGLES, SPHERE_TOLERANCE, load, load_toml,
+    load_toml_with, load_with,
+};
 pub use radiance::DiffuseRadiance;
 pub use scene::{Bounds, Emitter, Hit, Mesh, Object, Scene, SceneMaterial};
 pub use transform::Transform;

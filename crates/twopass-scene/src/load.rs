@@ -15,6 +15,7 @@ use crate::description::{
     CameraDesc, FresnelDesc, MaterialDesc, ObjectDesc, SceneFile, ShapeDesc, Triple, VERSION,
 };
 use crate::error::{CameraProblem, SceneError, Warning};
+use crate::input::{self, InputKind, LineIndex, ReadPolicy, printable};
 use crate::obj;
 use crate::scene::{Bounds, Mesh, Object, Scene, SceneMaterial};
 use crate::shape::{self, ShapeMesh};
@@ -24,9 +25,35 @@ use crate::transform::Transform;
 /// the scene's bounding-box diagonal.
 pub const SPHERE_TOLERANCE: f32 = 2e-4;
 
+/// Largest magnitude of a world coordinate, scene units. Ray queries run in f32: the
+/// watertight triangle test forms products of three coordinates relative to the ray origin
+/// (up to (2e12)^3 = 8e36 here, below f32's 3.4e38), and the BVH's quantized boxes fail from
+/// about 1e19. Positions beyond this are refused at load with the object and the value; a scene
+/// in this range renders the same image at any scale (checked at 1e9 times the Cornell box).
+pub const MAX_COORDINATE: f32 = 1e12;
+
+/// Most triangles of a scene, counted before any sphere is built (a sphere by its icosphere
+/// level, 20 * 4^level): 50 million hold about 5 GB with the BVH.
+pub const MAX_TRIANGLES: u64 = 50_000_000;
+
+/// Largest emitted power of one object per channel, pi * L_e * area (W in scene units). Sums
+/// over emitters and the estimators' intermediate products need headroom below f32's 3.4e38,
+/// so a brighter object is refused at load rather than rendered as infinities dropped to black.
+pub const MAX_EMITTED_POWER: f64 = 1e34;
+
 /// Loads a scene: a `.toml` scene file, or a bare `.obj` mesh (framed by a default camera, with
 /// its MTL materials or a default grey). Returns the scene and the recoverable problems found.
+/// Any path the scene names is read (see [`load_with`] to confine reads).
 pub fn load(path: impl AsRef<Path>) -> Result<(Scene, Vec<Warning>), SceneError> {
+    load_with(path, &ReadPolicy::unconfined())
+}
+
+/// [`load`] under a [`ReadPolicy`]: with [`ReadPolicy::confined`], meshes and material
+/// libraries outside the scene's folder are refused.
+pub fn load_with(
+    path: impl AsRef<Path>,
+    policy: &ReadPolicy,
+) -> Result<(Scene, Vec<Warning>), SceneError> {
     let path = path.as_ref();
     match path
         .extension()
@@ -35,13 +62,10 @@ pub fn load(path: impl AsRef<Path>) -> Result<(Scene, Vec<Warning>), SceneError>
         .as_deref()
     {
         Some("toml") => {
-            let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
-                path: path.to_owned(),
-                source,
-            })?;
-            load_toml(&text, path)
+            let text = input::read_text(path, InputKind::Scene, policy)?;
+            load_toml_with(&text, path, policy)
         }
-        Some("obj") => load_bare_obj(path),
+        Some("obj") => load_bare_obj(path, policy),
         _ => Err(SceneError::UnsupportedFormat {
             path: path.to_owned(),
         }),
@@ -51,10 +75,20 @@ pub fn load(path: impl AsRef<Path>) -> Result<(Scene, Vec<Warning>), SceneError>
 /// Loads a TOML scene from `text`, as if read from `path` (relative mesh paths resolve against
 /// its folder; errors name it).
 pub fn load_toml(text: &str, path: &Path) -> Result<(Scene, Vec<Warning>), SceneError> {
+    load_toml_with(text, path, &ReadPolicy::unconfined())
+}
+
+/// [`load_toml`] under a [`ReadPolicy`] for the meshes and libraries the scene names.
+pub fn load_toml_with(
+    text: &str,
+    path: &Path,
+    policy: &ReadPolicy,
+) -> Result<(Scene, Vec<Warning>), SceneError> {
+    let lines = LineIndex::new(text);
     let file: SceneFile = toml::from_str(text).map_err(|e| {
         let start = e.span().map_or(0, |s| s.start);
         let start = unknown_key_offset(text, start, e.message()).unwrap_or(start);
-        let (line, column) = line_col(text, start);
+        let (line, column) = lines.line_col(start);
         SceneError::Toml {
             path: path.to_owned(),
             line,
@@ -71,7 +105,8 @@ pub fn load_toml(text: &str, path: &Path) -> Result<(Scene, Vec<Warning>), Scene
     }
     let mut ld = Loader {
         path: path.to_owned(),
-        text,
+        lines,
+        policy: policy.clone(),
         warnings: Vec::new(),
         materials: Vec::new(),
         material_ids: HashMap::new(),
@@ -120,28 +155,30 @@ pub fn load_toml(text: &str, path: &Path) -> Result<(Scene, Vec<Warning>), Scene
     ld.finish(parts, camera)
 }
 
-fn load_bare_obj(path: &Path) -> Result<(Scene, Vec<Warning>), SceneError> {
+fn load_bare_obj(path: &Path, policy: &ReadPolicy) -> Result<(Scene, Vec<Warning>), SceneError> {
     let mut ld = Loader {
         path: path.to_owned(),
-        text: "",
+        lines: LineIndex::new(""),
+        policy: policy.clone(),
         warnings: Vec::new(),
         materials: Vec::new(),
         material_ids: HashMap::new(),
         used: Vec::new(),
     };
-    let file = obj::load(path)?;
+    let file = obj::load(path, policy)?;
     let materials = match &file.materials {
-        Ok(m) => ld.mtl_materials(m, path)?,
-        Err(_) => {
-            if !file.mtllibs.is_empty() {
-                ld.warnings.push(Warning::MissingMtl {
-                    path: path.to_owned(),
-                    mtl: file.mtllibs.first().cloned(),
-                });
-            }
-            Vec::new()
-        }
+        Ok(m) => ld.mtl_materials(m, &file.origins, path)?,
+        Err(_) => Vec::new(),
     };
+    if let Some(mtl) = &file.missing_mtl {
+        ld.warnings.push(Warning::MissingMtl {
+            path: path.to_owned(),
+            mtl: Some(mtl.clone()),
+        });
+    }
+    for m in &file.models {
+        check_range(path, None, &m.name, &m.mesh.positions)?;
+    }
     let mut parts = Vec::new();
     let mut seen: HashMap<String, usize> = HashMap::new();
     for m in file.models {
@@ -221,9 +258,10 @@ struct PlacedPart {
     transform: Transform,
 }
 
-struct Loader<'a> {
+struct Loader {
     path: PathBuf,
-    text: &'a str,
+    lines: LineIndex,
+    policy: ReadPolicy,
     warnings: Vec<Warning>,
     materials: Vec<SceneMaterial>,
     material_ids: HashMap<String, u32>,
@@ -245,26 +283,50 @@ fn unknown_key_offset(text: &str, from: usize, message: &str) -> Option<usize> {
         .map(|(i, _)| from + i)
 }
 
-fn line_col(text: &str, offset: usize) -> (usize, usize) {
-    let before = &text[..offset.min(text.len())];
-    let line = before.matches('\n').count() + 1;
-    let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
-    (line, column)
+/// Whether a coordinate is finite and within [`MAX_COORDINATE`].
+fn in_range(c: f32) -> bool {
+    c.abs() <= MAX_COORDINATE
+}
+
+/// Refuses positions beyond [`MAX_COORDINATE`] (and non-finite ones), naming the object.
+fn check_range(
+    path: &Path,
+    line: Option<usize>,
+    object: &str,
+    positions: &[Vec3],
+) -> Result<(), SceneError> {
+    for (index, p) in positions.iter().enumerate() {
+        if let Some(&value) = p.to_array().iter().find(|c| !in_range(**c)) {
+            return Err(SceneError::Range {
+                path: path.to_owned(),
+                line,
+                object: object.to_owned(),
+                problem: format!(
+                    "vertex {index} at {p} has coordinate {value:e}, outside the supported range of +-{MAX_COORDINATE:e} scene units"
+                ),
+            });
+        }
+    }
+    Ok(())
 }
 
 fn rgb(t: Triple) -> Rgb {
     Rgb::from_array(t.get())
 }
 
-impl Loader<'_> {
+impl Loader {
     fn line<T>(&self, s: &Spanned<T>) -> usize {
-        line_col(self.text, s.span().start).0
+        self.lines.line_col(s.span().start).0
     }
 
     fn add_material(&mut self, name: String, material: Material) -> u32 {
         let id = self.materials.len() as u32;
         self.material_ids.insert(name.clone(), id);
-        self.materials.push(SceneMaterial { name, material });
+        // Names reach terminals and output files: control characters are stored escaped.
+        self.materials.push(SceneMaterial {
+            name: printable(&name),
+            material,
+        });
         self.used.push(false);
         id
     }
@@ -383,14 +445,16 @@ impl Loader<'_> {
     fn mtl_materials(
         &mut self,
         mtl: &[tobj::Material],
+        origins: &[obj::MtlOrigin],
         obj_path: &Path,
     ) -> Result<Vec<(u32, Rgb)>, SceneError> {
         let file = obj_path
             .file_name()
             .map_or_else(String::new, |f| f.to_string_lossy().into_owned());
         let mut out = Vec::with_capacity(mtl.len());
-        for m in mtl {
-            let (material, emission) = obj::convert_material(m, obj_path, &mut self.warnings)?;
+        for (i, m) in mtl.iter().enumerate() {
+            let (material, emission) =
+                obj::convert_material(m, origins.get(i), obj_path, &mut self.warnings)?;
             let name = format!("{file}:{}", m.name);
             let id = match self.material_ids.get(&name) {
                 Some(&id) => id,
@@ -445,6 +509,56 @@ impl Loader<'_> {
             None => Err(ld.shape_err(line, name, "needs a `material`".into())),
         };
         let v3 = Vec3::from_array;
+        // Every coordinate as written, finite and within range, before any arithmetic on it.
+        // Each entry: the key as written, what a non-finite value is called (the key's
+        // component, or the polygon's vertex), and the three numbers.
+        let written: Vec<(&'static str, &'static str, [f32; 3])> = match &o.shape {
+            ShapeDesc::Quad {
+                origin,
+                edge_u,
+                edge_v,
+            } => vec![
+                ("origin", "`origin` component", *origin),
+                ("edge_u", "`edge_u` component", *edge_u),
+                ("edge_v", "`edge_v` component", *edge_v),
+            ],
+            ShapeDesc::Polygon { vertices } => vertices
+                .iter()
+                .map(|v| ("vertices", "polygon vertex", *v))
+                .collect(),
+            ShapeDesc::Box { min, max } => vec![
+                ("min", "`min` component", *min),
+                ("max", "`max` component", *max),
+            ],
+            ShapeDesc::Sphere { center, radius, .. } => vec![
+                ("center", "`center` component", *center),
+                ("radius", "`radius`", [*radius; 3]),
+            ],
+            ShapeDesc::Obj { .. } => Vec::new(),
+        };
+        for (entry, (key, what, v)) in written.into_iter().enumerate() {
+            if let Some(component) = v.iter().position(|c| !c.is_finite()) {
+                return Err(SceneError::NonFinite {
+                    path: self.path.clone(),
+                    line: Some(line),
+                    object: name.to_owned(),
+                    what,
+                    // The polygon's vertex, or the component of a point.
+                    index: if key == "vertices" { entry } else { component },
+                    value: v[component],
+                });
+            }
+            if let Some(c) = v.iter().find(|c| !in_range(**c)) {
+                return Err(SceneError::Range {
+                    path: self.path.clone(),
+                    line: Some(line),
+                    object: name.to_owned(),
+                    problem: format!(
+                        "`{key}` value {c:e} is outside the supported range of +-{MAX_COORDINATE:e} scene units"
+                    ),
+                });
+            }
+        }
         let geometry = match &o.shape {
             ShapeDesc::Quad { origin, edge_u, edge_v } => shape::quad(v3(*origin), v3(*edge_u), v3(*edge_v)),
             ShapeDesc::Polygon { vertices } => {
@@ -481,17 +595,33 @@ impl Loader<'_> {
             }
             ShapeDesc::Obj { file } => {
                 let obj_path = self.path.parent().unwrap_or(Path::new(".")).join(file);
-                let loaded = obj::load(&obj_path)?;
+                let in_object = |e: SceneError| SceneError::InObject {
+                    path: self.path.clone(),
+                    line,
+                    object: name.to_owned(),
+                    source: Box::new(e),
+                };
+                let loaded = obj::load(&obj_path, &self.policy).map_err(in_object)?;
                 let needs_mtl = (o.material.is_none()
                     && (!loaded.mtllibs.is_empty() || loaded.models.iter().any(|m| m.material.is_some())))
                     || !o.material_map.is_empty();
                 let mtl = match (&loaded.materials, needs_mtl) {
-                    (Ok(m), _) => self.mtl_materials(m, &obj_path)?,
+                    (Ok(m), _) => self.mtl_materials(m, &loaded.origins, &obj_path).map_err(|e| SceneError::InObject {
+                        path: self.path.clone(),
+                        line,
+                        object: name.to_owned(),
+                        source: Box::new(e),
+                    })?,
                     (Err(source), true) => {
-                        return Err(SceneError::MissingMtl {
-                            path: obj_path,
-                            mtl: loaded.mtllibs.first().cloned(),
-                            source: *source,
+                        return Err(SceneError::InObject {
+                            path: self.path.clone(),
+                            line,
+                            object: name.to_owned(),
+                            source: Box::new(SceneError::MissingMtl {
+                                path: obj_path.clone(),
+                                mtl: loaded.missing_mtl.clone().or_else(|| loaded.mtllibs.first().cloned()),
+                                source: *source,
+                            }),
                         });
                     }
                     (Err(_), false) => Vec::new(),
@@ -505,8 +635,15 @@ impl Loader<'_> {
                         (None, None) => match m.material.and_then(|i| mtl.get(i)) {
                             Some(&(id, e)) => (self.use_material(id), e),
                             None => {
+                                let why = match &m.usemtl {
+                                    Some((mtl, at)) => format!(
+                                        "uses MTL material `{mtl}` ({}:{at}) but the OBJ names no material library that loads",
+                                        obj_path.display()
+                                    ),
+                                    None => "has no material (no `usemtl`)".to_owned(),
+                                };
                                 return Err(self.shape_err(line, name, format!(
-                                    "OBJ group `{}` in {} has no material (no usemtl); give the object a `material`",
+                                    "OBJ group `{}` in {} {why}; give the object a `material`",
                                     m.name,
                                     obj_path.display()
                                 )));
@@ -584,6 +721,19 @@ impl Loader<'_> {
                 message: format!("camera resolution {w} x {h} must be at least 1 x 1"),
             });
         }
+        Camera::check_resolution(u64::from(w), u64::from(h)).map_err(err)?;
+        for (key, v) in [("position", d.position), ("look_at", d.look_at)] {
+            if let Some(c) = v.iter().find(|c| !in_range(**c)) {
+                return Err(SceneError::Toml {
+                    path: self.path.clone(),
+                    line,
+                    column: 1,
+                    message: format!(
+                        "camera `{key}` value {c:e} is not finite or outside the supported range of +-{MAX_COORDINATE:e} scene units"
+                    ),
+                });
+            }
+        }
         let fov_y = match (d.fov_y, d.focal_length) {
             (Some(_), Some(_)) => return Err(err(CameraProblem::FovAndFocalLength)),
             (Some(f), None) => f.to_radians(),
@@ -638,37 +788,74 @@ impl Loader<'_> {
                             if corner & 2 == 0 { -1.0 } else { 1.0 },
                             if corner & 4 == 0 { -1.0 } else { 1.0 },
                         );
-                        bounds = bounds.grow(p.transform.point(*center + s * *radius));
+                        let q = p.transform.point(*center + s * *radius);
+                        if !q.to_array().into_iter().all(in_range) {
+                            return Err(SceneError::Range {
+                                path: self.path.clone(),
+                                line: p.part.line,
+                                object: p.part.name.clone(),
+                                problem: format!(
+                                    "the sphere reaches {q} in the world, outside the supported range of +-{MAX_COORDINATE:e} scene units"
+                                ),
+                            });
+                        }
+                        bounds = bounds.grow(q);
                     }
                 }
             }
         }
         let tolerance = SPHERE_TOLERANCE * bounds.diagonal();
+        // Each sphere's icosphere level, from its world radius (at most the largest axis scale
+        // times the radius) unless given; level l has 20 * 4^l triangles. The whole scene's
+        // count is checked before any sphere is built.
+        let levels: Vec<Option<u32>> =
+            parts
+                .iter()
+                .map(|p| match &p.part.geometry {
+                    Geometry::Mesh(_) => None,
+                    Geometry::Sphere {
+                        radius,
+                        subdivisions,
+                        ..
+                    } => {
+                        let scale = p.transform.matrix.to_scale_rotation_translation().0;
+                        let world_radius = radius * scale.abs().max_element();
+                        Some(subdivisions.unwrap_or_else(|| {
+                            shape::sphere_subdivisions_for(world_radius, tolerance)
+                        }))
+                    }
+                })
+                .collect();
+        let triangles: u64 = parts
+            .iter()
+            .zip(&levels)
+            .map(|(p, level)| match (&p.part.geometry, level) {
+                (Geometry::Mesh(m), _) => m.triangles.len() as u64,
+                (_, Some(l)) => 20u64 << (2 * l),
+                (_, None) => 0,
+            })
+            .sum();
+        if triangles > MAX_TRIANGLES {
+            return Err(SceneError::Input {
+                path: self.path.clone(),
+                problem: format!(
+                    "the scene would have {triangles} triangles, more than the {MAX_TRIANGLES} loaded at most (give fewer spheres or lower their `subdivisions`)"
+                ),
+            });
+        }
         let mut mesh = Mesh::default();
         let mut objects = Vec::with_capacity(parts.len());
-        for PlacedPart { part, transform } in parts {
+        for (PlacedPart { part, transform }, level) in parts.into_iter().zip(levels) {
             let local = match part.geometry {
                 Geometry::Mesh(m) => m,
-                Geometry::Sphere {
-                    center,
-                    radius,
-                    subdivisions,
-                } => {
-                    // The world radius is at most the largest axis scale times the radius.
-                    let world_radius = radius
-                        * transform
-                            .matrix
-                            .to_scale_rotation_translation()
-                            .0
-                            .abs()
-                            .max_element();
-                    let level = subdivisions
-                        .unwrap_or_else(|| shape::sphere_subdivisions_for(world_radius, tolerance));
-                    shape::sphere(center, radius, level).map_err(|p| SceneError::Shape {
-                        path: self.path.clone(),
-                        line: part.line.unwrap_or(1),
-                        object: part.name.clone(),
-                        problem: p,
+                Geometry::Sphere { center, radius, .. } => {
+                    shape::sphere(center, radius, level.unwrap_or(0)).map_err(|p| {
+                        SceneError::Shape {
+                            path: self.path.clone(),
+                            line: part.line.unwrap_or(1),
+                            object: part.name.clone(),
+                            problem: p,
+                        }
                     })?
                 }
             };
@@ -732,6 +919,16 @@ impl Loader<'_> {
                     value,
                 });
             }
+            if !q.to_array().into_iter().all(in_range) {
+                return Err(SceneError::Range {
+                    path: self.path.clone(),
+                    line,
+                    object: name,
+                    problem: format!(
+                        "vertex {index} lands at {q} in the world, outside the supported range of +-{MAX_COORDINATE:e} scene units"
+                    ),
+                });
+            }
             mesh.positions.push(q);
         }
         let normal_base = mesh.normals.len() as u32;
@@ -787,8 +984,26 @@ impl Loader<'_> {
                 first,
             });
         }
+        // The power this object emits, pi * L_e * area, must stay far inside f32.
+        if emission.max_element() > 0.0 {
+            let area: f64 = mesh.areas[tri_start as usize..]
+                .iter()
+                .map(|&a| f64::from(a))
+                .sum();
+            let power = f64::from(emission.max_element()) * std::f64::consts::PI * area;
+            if power.is_nan() || power > MAX_EMITTED_POWER {
+                return Err(SceneError::Range {
+                    path: self.path.clone(),
+                    line,
+                    object: name,
+                    problem: format!(
+                        "emitted power pi * L_e * area = {power:e} W (scene units) exceeds the {MAX_EMITTED_POWER:e} W the renderers represent; lower the emission or the scene's scale"
+                    ),
+                });
+            }
+        }
         objects.push(Object {
-            name,
+            name: printable(&name),
             material,
             emission,
             triangles: tri_start..tri_start + kept,

@@ -35,12 +35,21 @@ pub fn quad(origin: Vec3, edge_u: Vec3, edge_v: Vec3) -> Result<ShapeMesh, Strin
     })
 }
 
+/// Most vertices of a `polygon` shape: ear clipping takes up to cubic time in the count.
+pub const MAX_POLYGON_VERTICES: usize = 1024;
+
 /// A simple polygon, triangulated by ear clipping in its plane of best fit (Newell's normal),
 /// so convex and concave polygons and slightly non-planar measured data all work.
 pub fn polygon(vertices: &[Vec3]) -> Result<ShapeMesh, String> {
     if vertices.len() < 3 {
         return Err(format!(
             "a polygon needs at least 3 vertices, got {}",
+            vertices.len()
+        ));
+    }
+    if vertices.len() > MAX_POLYGON_VERTICES {
+        return Err(format!(
+            "a polygon has at most {MAX_POLYGON_VERTICES} vertices, got {} (its triangulation takes time cubic in the count; give a large mesh as an OBJ)",
             vertices.len()
         ));
     }

@@ -43,14 +43,17 @@ impl Transform {
             rot = Quat::from_axis_angle(axis.normalize(), degrees.to_radians()) * rot;
         }
         let matrix = Mat4::from_scale_rotation_translation(scale, rot, translate);
-        let linear = Mat3::from_mat4(matrix);
-        let det = linear.determinant();
-        if !(det.is_finite() && det != 0.0) {
-            return Err("transform is singular".into());
+        // The linear part is R S with R a rotation: its determinant is the product of the
+        // scales (in f64, where it cannot overflow) and its inverse transpose is R S^-1, exact
+        // without forming a determinant in f32.
+        let det = scale.as_dvec3().element_product();
+        let inverse_scale = scale.recip();
+        if !inverse_scale.is_finite() {
+            return Err(format!("transform scale {scale} is too small to invert"));
         }
         Ok(Self {
             matrix,
-            normal: linear.inverse().transpose(),
+            normal: Mat3::from_quat(rot) * Mat3::from_diagonal(inverse_scale),
             flips: det < 0.0,
         })
     }

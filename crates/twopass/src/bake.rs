@@ -72,7 +72,7 @@ pub struct BakeArgs {
     #[arg(long, value_name = "SR_M2_PER_W", value_parser = parse_exposure)]
     pub exposure: Option<f32>,
     /// Vertices and patch pairs sampled for the residual report.
-    #[arg(long, default_value_t = 200, value_name = "N")]
+    #[arg(long, default_value_t = 200, value_name = "N", value_parser = parse_residual_samples)]
     pub residual_samples: usize,
 }
 
@@ -106,7 +106,7 @@ pub struct SolveArgs {
     pub solver: SolverChoice,
     /// Stop when the residual (unshot) power falls below this fraction of the emitted power:
     /// the convergence measure of both solvers.
-    #[arg(long, default_value_t = 1e-3, value_name = "FRACTION")]
+    #[arg(long, default_value_t = 1e-3, value_name = "FRACTION", value_parser = parse_fraction)]
     pub unshot: f64,
     /// Hierarchical solver: refine a link while its estimated transport error exceeds this
     /// fraction of the emitted power.
@@ -121,11 +121,11 @@ pub struct SolveArgs {
     #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
     pub time_budget: Option<Duration>,
     /// Longest patch (shooter) edge, scene units [default: scene diagonal / 8].
-    #[arg(long, value_name = "LENGTH")]
+    #[arg(long, value_name = "LENGTH", value_parser = parse_length)]
     pub patch_size: Option<f32>,
     /// Longest element (receiver) edge before adaptive subdivision, scene units
     /// [default: scene diagonal / 24].
-    #[arg(long, value_name = "LENGTH")]
+    #[arg(long, value_name = "LENGTH", value_parser = parse_length)]
     pub element_size: Option<f32>,
     /// Keep the element mesh fixed: no adaptive subdivision where the light changes fast.
     #[arg(long)]
@@ -206,10 +206,48 @@ fn parse_rays(s: &str) -> Result<VisibilityRays, String> {
         .ok_or_else(|| format!("`{s}`: expected MIN,MAX such as 4,16"))?;
     let parse = |x: &str| x.trim().parse::<u32>().map_err(|e| format!("`{x}`: {e}"));
     let (min, max) = (parse(min)?, parse(max)?);
-    if min == 0 || max < min {
-        return Err(format!("{min},{max}: needs 1 <= MIN <= MAX"));
+    if min == 0 || max < min || max > MAX_VISIBILITY_RAYS {
+        return Err(format!(
+            "{min},{max}: needs 1 <= MIN <= MAX <= {MAX_VISIBILITY_RAYS}"
+        ));
     }
     Ok(VisibilityRays { min, max })
+}
+
+/// Most shadow rays per visibility estimate (a 32 x 32 grid; 16 is the default).
+pub const MAX_VISIBILITY_RAYS: u32 = 1024;
+
+/// Most vertices and patch pairs the residual report samples.
+const MAX_RESIDUAL_SAMPLES: usize = 100_000;
+
+fn parse_residual_samples(s: &str) -> Result<usize, String> {
+    let n: usize = s.parse().map_err(|e| format!("{e}"))?;
+    if (1..=MAX_RESIDUAL_SAMPLES).contains(&n) {
+        Ok(n)
+    } else {
+        Err(format!("{n} must be 1 to {MAX_RESIDUAL_SAMPLES}"))
+    }
+}
+
+/// A fraction in [0, 1) (the unshot power at which to stop).
+pub fn parse_fraction(s: &str) -> Result<f64, String> {
+    let x: f64 = s.parse().map_err(|e| format!("{e}"))?;
+    if (0.0..1.0).contains(&x) {
+        Ok(x)
+    } else {
+        Err(format!("{x} must be a fraction >= 0 and < 1"))
+    }
+}
+
+/// A length in scene units: finite and > 0 (whether it fits the scene is checked by the
+/// solver, which knows the scene's area).
+fn parse_length(s: &str) -> Result<f32, String> {
+    let x: f32 = s.parse().map_err(|e| format!("{e}"))?;
+    if x.is_finite() && x > 0.0 {
+        Ok(x)
+    } else {
+        Err(format!("{x} must be a finite length > 0 scene units"))
+    }
 }
 
 fn parse_exposure(s: &str) -> Result<f32, String> {
@@ -219,6 +257,51 @@ fn parse_exposure(s: &str) -> Result<f32, String> {
     } else {
         Err(format!("{x} must be finite and > 0"))
     }
+}
+
+/// Checks a bake file against the manifest of its set, when one lies beside it
+/// (`<stem>.manifest.json`): a file whose size or CRC-32 differs from the manifest's record is
+/// from another bake (one interrupted between its files), and the set is refused.
+pub fn check_in_set(file: &Path) -> Result<(), CliError> {
+    let (Some(dir), Some(stem), Some(name)) = (file.parent(), file.file_stem(), file.file_name())
+    else {
+        return Ok(());
+    };
+    let manifest_path = dir.join(format!("{}.manifest.json", stem.to_string_lossy()));
+    let text = match crate::output::read_small(&manifest_path) {
+        Ok(text) => text,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
+        Err(e) => return Err(CliError::io(&manifest_path, e)),
+    };
+    let manifest: Manifest = serde_json::from_slice(&text).map_err(|e| {
+        CliError::Input(format!(
+            "{}: not a bake manifest ({e}); remove it or bake again",
+            manifest_path.display()
+        ))
+    })?;
+    let Some(record) = manifest
+        .files
+        .iter()
+        .find(|f| f.path.file_name() == Some(name))
+    else {
+        return Ok(());
+    };
+    let bytes = twopass_scene::read_bounded(file, bake::MAX_BAKE_BYTES)
+        .map_err(|e| CliError::io(file, e))?;
+    let size_ok = record.bytes == bytes.len() as u64;
+    let crc_ok = record.crc32.is_none_or(|c| c == crc32fast::hash(&bytes));
+    if size_ok && crc_ok {
+        return Ok(());
+    }
+    Err(CliError::Input(format!(
+        "{}: does not match its manifest {} ({} bytes, recorded {}{}): the bake set is mixed, \
+         probably from a bake stopped between its files; bake again",
+        file.display(),
+        manifest_path.display(),
+        bytes.len(),
+        record.bytes,
+        if crc_ok { "" } else { ", CRC-32 differs" }
+    )))
 }
 
 /// Bar position of an unshot fraction on a log scale: 0 at 1, `STEPS` at the target.
@@ -233,10 +316,10 @@ fn bar_position(unshot: f64, target: f64) -> u64 {
 /// Solves the scene and writes the selected outputs and the manifest.
 pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
     let started = Instant::now();
-    let (scene, warnings) = twopass_scene::load(&args.scene)?;
+    let (scene, warnings) = ctx.load_scene(&args.scene)?;
     if !ctx.quiet {
         for w in &warnings {
-            eprintln!("warning: {w}");
+            errln!("warning: {w}");
         }
     }
     let load_time = started.elapsed();
@@ -276,7 +359,7 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
     })?;
     if ctx.chatty() {
         let (_, reason) = options.method.choose(&scene);
-        eprintln!("radiosity: {} solver ({reason})", solver.method().name());
+        errln!("radiosity: {} solver ({reason})", solver.method().name());
     }
     let finish = solve.run(&mut solver, ctx);
     let progress = solver.progress();
@@ -303,12 +386,22 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
     manifest.timings.load_s = load_time.as_secs_f64();
 
     let dir = ctx.output_or(Path::new("bake"));
-    std::fs::create_dir_all(dir).map_err(|e| CliError::io(dir, e))?;
+    crate::output::create_dir(dir)?;
     let stem = args
         .scene
         .file_stem()
         .map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned());
     let writing_started = Instant::now();
+    // The manifest is the set's seal: the old one goes before any file of the new set is
+    // written and the new one comes last, with every file's size and CRC-32. A bake stopped
+    // between its files leaves no manifest (visibly incomplete), never an old manifest beside
+    // new files.
+    let manifest_path = dir.join(format!("{stem}.manifest.json"));
+    match std::fs::remove_file(&manifest_path) {
+        Ok(()) => {}
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+        Err(e) => return Err(CliError::io(&manifest_path, e)),
+    }
     let formats: BTreeSet<Format> = args.format.iter().copied().collect();
     for format in formats {
         let path = dir.join(format!("{stem}.{}", format.extension()));
@@ -335,30 +428,30 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
             format: format.extension().into(),
             path,
             bytes: bytes.len() as u64,
+            crc32: Some(crc32fast::hash(&bytes)),
         });
     }
     manifest.timings.writing_s = writing_started.elapsed().as_secs_f64();
     manifest.timings.total_s = started.elapsed().as_secs_f64();
-    let manifest_path = dir.join(format!("{stem}.manifest.json"));
     let json = manifest.to_json()?;
     bake::write_atomic(&manifest_path, &json)?;
 
     if ctx.json {
-        print!("{}", String::from_utf8_lossy(&json));
+        out!("{}", String::from_utf8_lossy(&json));
     } else if ctx.chatty() {
-        print_summary(&manifest, &manifest_path);
+        print_summary(&manifest, &manifest_path)?;
     }
     Ok(())
 }
 
-fn print_summary(m: &Manifest, manifest_path: &Path) {
+fn print_summary(m: &Manifest, manifest_path: &Path) -> Result<(), CliError> {
     let t = &m.timings;
     let steps = if m.solver == "hierarchical" {
         format!("{} gather iterations", m.counts.iterations)
     } else {
         format!("{} shots", m.shots)
     };
-    println!(
+    outln!(
         "{}: {} solver, {} after {steps} in {:.2} s (load {:.2}, meshing {:.2}, solving {:.2}, \
          refining {:.2}, residuals {:.2}, writing {:.2})",
         m.scene.display(),
@@ -373,13 +466,13 @@ fn print_summary(m: &Manifest, manifest_path: &Path) {
         t.writing_s
     );
     let c = &m.counts;
-    println!(
+    outln!(
         "  {} patches, {} clusters, {} links, {} elements, {} vertices, {} refinement rounds; \
          {:.3e} shadow rays",
         c.patches, c.clusters, c.links, c.elements, c.vertices, c.refinement_rounds, m.rays as f64
     );
     let r = &m.residuals;
-    println!(
+    outln!(
         "  residual {:.2e}; energy imbalance {:.1e}; form-factor row sums {:.3}..{:.3} \
          (mean {:.3}); reciprocity spread {:.2e} (weighted {:.2e}, {} pairs)",
         m.unshot_fraction,
@@ -392,13 +485,16 @@ fn print_summary(m: &Manifest, manifest_path: &Path) {
         r.reciprocity_pairs
     );
     if let Some(color) = &m.color {
-        println!(
+        outln!(
             "  glb COLOR_0 = min(1, {:.4e} * L) ({} exposure), {} vertices clipped",
-            color.exposure, color.exposure_mode, color.clamped_vertices
+            color.exposure,
+            color.exposure_mode,
+            color.clamped_vertices
         );
     }
     for f in &m.files {
-        println!("  wrote {} ({} bytes)", f.path.display(), f.bytes);
+        outln!("  wrote {} ({} bytes)", f.path.display(), f.bytes);
     }
-    println!("  wrote {}", manifest_path.display());
+    outln!("  wrote {}", manifest_path.display());
+    Ok(())
 }

@@ -70,14 +70,14 @@ pub struct RadiosityArgs {
     #[arg(long, value_name = "FILE", requires = "generate")]
     pub plot: Option<PathBuf>,
     /// Element counts to aim at (the mesh reaches about these by bisection).
-    #[arg(long, value_delimiter = ',', default_values_t = [1000u32, 10_000, 50_000, 200_000])]
+    #[arg(long, value_delimiter = ',', default_values_t = [1000u32, 10_000, 50_000, 200_000], value_parser = clap::value_parser!(u32).range(1..=twopass_radiosity::MAX_ELEMENTS as i64))]
     pub elements: Vec<u32>,
     /// Unshot fraction to solve to.
-    #[arg(long, default_value_t = 1e-3)]
+    #[arg(long, default_value_t = 1e-3, value_parser = crate::bake::parse_fraction)]
     pub unshot: f64,
     /// Compare with the dense solve when the mesh has at most this many vertices (its cost
-    /// grows as the cube).
-    #[arg(long, default_value_t = 3000)]
+    /// grows as the cube; at most 20000, where its matrix holds 3.2 GB).
+    #[arg(long, default_value_t = 3000, value_parser = parse_dense_max)]
     pub dense_max_vertices: usize,
 }
 
@@ -95,7 +95,7 @@ pub struct RaysArgs {
     #[arg(long, default_value_t = 1 << 18, value_parser = clap::value_parser!(u64).range(1..=100_000_000))]
     pub rays: u64,
     /// Minimum measuring time per query and thread count, seconds.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = parse_seconds)]
     pub seconds: f64,
 }
 
@@ -281,17 +281,17 @@ fn radiosity_scale(args: &RadiosityArgs, ctx: &Context) -> Result<(), CliError> 
         plot_scale(path, &rows)?;
     }
     if ctx.json {
-        println!(
+        outln!(
             "{}",
             serde_json::to_string_pretty(&rows).expect("rows serialize")
         );
     } else if !ctx.quiet {
-        println!(
+        outln!(
             "generated scenes: solve to residual {:.0e}, {} threads",
             args.unshot,
             rayon::current_num_threads()
         );
-        println!(
+        outln!(
             "{:>9} {:>12} {:>9} {:>9} {:>10} {:>6} {:>10} {:>8} {:>8} {:>9} {:>9} {:>6} {:>6}",
             "triangles",
             "solver",
@@ -309,7 +309,7 @@ fn radiosity_scale(args: &RadiosityArgs, ctx: &Context) -> Result<(), CliError> 
         );
         let g = |x: Option<f64>| x.map_or_else(|| "-".to_owned(), |g| format!("{g:.2}"));
         for r in &rows {
-            println!(
+            outln!(
                 "{:>9} {:>12} {:>9} {:>9} {:>10} {:>6} {:>10} {:>8.2} {:>8.2} {:>9.1e} {:>9} {:>6} {:>6}",
                 r.triangles,
                 r.solver,
@@ -411,7 +411,7 @@ fn radiosity(args: &RadiosityArgs, ctx: &Context) -> Result<(), CliError> {
     let Some(path) = &args.scene else {
         return radiosity_scale(args, ctx);
     };
-    let (scene, _) = twopass_scene::load(path)?;
+    let (scene, _) = ctx.load_scene(path)?;
     let area = scene.total_area();
     let progress = ctx.progress(args.elements.len() as u64, "bench radiosity");
     let mut rows = Vec::new();
@@ -479,18 +479,18 @@ fn radiosity(args: &RadiosityArgs, ctx: &Context) -> Result<(), CliError> {
     }
     progress.finish_and_clear();
     if ctx.json {
-        println!(
+        outln!(
             "{}",
             serde_json::to_string_pretty(&rows).expect("rows serialize")
         );
     } else if !ctx.quiet {
-        println!(
+        outln!(
             "scene {}: progressive refinement to unshot {:.0e}, fixed mesh, {} threads",
             path.display(),
             args.unshot,
             rayon::current_num_threads()
         );
-        println!(
+        outln!(
             "{:>8} {:>8} {:>8} {:>8} {:>7} {:>11} {:>8} {:>8} {:>8} {:>6} {:>9} {:>11}",
             "elements",
             "vertices",
@@ -506,7 +506,7 @@ fn radiosity(args: &RadiosityArgs, ctx: &Context) -> Result<(), CliError> {
             "dense rRMS"
         );
         for r in &rows {
-            println!(
+            outln!(
                 "{:>8} {:>8} {:>8} {:>8.1} {:>7} {:>11} {:>8.2} {:>8.2} {:>8.1} {:>6} {:>9} {:>11}",
                 r.elements,
                 r.vertices,
@@ -579,23 +579,39 @@ impl Batch {
     }
 }
 
-fn rays(args: &RaysArgs, ctx: &Context) -> Result<(), CliError> {
-    if !(args.seconds.is_finite() && args.seconds > 0.0) {
-        return Err(CliError::Input(format!(
-            "--seconds {} must be > 0",
-            args.seconds
-        )));
+/// Most vertices of the dense comparison solve.
+const MAX_DENSE_VERTICES: usize = 20_000;
+
+fn parse_dense_max(s: &str) -> Result<usize, String> {
+    let n: usize = s.parse().map_err(|e| format!("{e}"))?;
+    if n <= MAX_DENSE_VERTICES {
+        Ok(n)
+    } else {
+        Err(format!("{n} must be at most {MAX_DENSE_VERTICES}"))
     }
+}
+
+/// A measuring time: more than 0 and at most a day, seconds.
+fn parse_seconds(s: &str) -> Result<f64, String> {
+    let x: f64 = s.parse().map_err(|e| format!("{e}"))?;
+    if x > 0.0 && x <= 86_400.0 {
+        Ok(x)
+    } else {
+        Err(format!("{x} must be more than 0 and at most 86400 seconds"))
+    }
+}
+
+fn rays(args: &RaysArgs, ctx: &Context) -> Result<(), CliError> {
     let (scene, name) = match (&args.scene, args.generate) {
         (_, Some(n)) => (
             workload::synthetic_scene(n as usize, ctx.seed)?.0,
             format!("generated ({n} triangles requested)"),
         ),
-        (Some(path), None) => (twopass_scene::load(path)?.0, path.display().to_string()),
+        (Some(path), None) => (ctx.load_scene(path)?.0, path.display().to_string()),
         (None, None) => unreachable!("clap requires a scene or --generate"),
     };
     let mut scene = scene;
-    scene.camera = scene.camera.with_resolution(ctx.width, ctx.height);
+    scene.camera = ctx.camera(&scene.camera)?;
     let n = args.rays as usize;
     let batches = [
         (
@@ -651,16 +667,20 @@ fn rays(args: &RaysArgs, ctx: &Context) -> Result<(), CliError> {
         rows,
     };
     if ctx.json {
-        println!(
+        outln!(
             "{}",
             serde_json::to_string_pretty(&report).expect("report serializes")
         );
     } else if !ctx.quiet {
-        println!(
+        outln!(
             "scene {}: {} triangles, BVH {} nodes built in {:.2} ms (median of 5), {} threads",
-            report.scene, report.triangles, report.bvh_nodes, report.bvh_build_ms, report.threads
+            report.scene,
+            report.triangles,
+            report.bvh_nodes,
+            report.bvh_build_ms,
+            report.threads
         );
-        println!(
+        outln!(
             "{:<18} {:>9} {:>14} {:>14} {:>9} {:>7} {:>9}",
             "query",
             "rays",
@@ -671,7 +691,7 @@ fn rays(args: &RaysArgs, ctx: &Context) -> Result<(), CliError> {
             "peak MiB"
         );
         for r in &report.rows {
-            println!(
+            outln!(
                 "{:<18} {:>9} {:>14.2} {:>14.2} {:>8.2}x {:>6.1}% {:>9}",
                 r.query,
                 r.rays,
@@ -721,11 +741,12 @@ fn render(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
     use twopass_trace::hybrid::radiosity_only;
     use twopass_trace::{Integrator, Progress, RenderSettings, WhittedSettings};
 
-    let (scene, _) = twopass_scene::load(&args.scene)?;
-    let camera = scene.camera.with_resolution(
+    let (scene, _) = ctx.load_scene(&args.scene)?;
+    let camera = crate::context::resized(
+        &scene.camera,
         Some(ctx.width.unwrap_or(512)),
         ctx.height.or(Some(ctx.width.unwrap_or(512))),
-    );
+    )?;
     let started = Instant::now();
     let (solution, source) = match &args.bake {
         Some(path) => (
@@ -823,12 +844,12 @@ fn render(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
         frames_per_second,
     };
     if ctx.json {
-        println!(
+        outln!(
             "{}",
             serde_json::to_string_pretty(&report).expect("report serializes")
         );
     } else if !ctx.quiet {
-        println!(
+        outln!(
             "scene {}: {} x {}, {} spp, {} threads; radiosity from {} in {:.2} s",
             report.scene,
             report.width,
@@ -838,12 +859,17 @@ fn render(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
             report.radiosity_source,
             report.radiosity_seconds
         );
-        println!(
+        outln!(
             "{:<14} {:>9} {:>9} {:>10} {:>10} {:>9}",
-            "method", "seconds", "Mrays/s", "mean", "non-finite", "peak MiB"
+            "method",
+            "seconds",
+            "Mrays/s",
+            "mean",
+            "non-finite",
+            "peak MiB"
         );
         for r in &report.rows {
-            println!(
+            outln!(
                 "{:<14} {:>9.3} {:>9.2} {:>10.4} {:>10} {:>9}",
                 r.method,
                 r.seconds,
@@ -853,9 +879,10 @@ fn render(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
                 fmt_mib(r.peak_memory_mib)
             );
         }
-        println!(
+        outln!(
             "new views from the radiosity solution (radiosity alone, 1 spp): {:.1} frames per second over {} frames",
-            report.frames_per_second, report.frames
+            report.frames_per_second,
+            report.frames
         );
     }
     Ok(())

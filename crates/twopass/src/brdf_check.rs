@@ -234,18 +234,26 @@ pub fn run(args: &BrdfCheckArgs, ctx: &Context) -> Result<(), CliError> {
             _ => {}
         }
     } else if ctx.chatty() {
-        print_table(&rows);
+        print_table(&rows)?;
         for p in &plots {
-            println!("wrote {}", p.display());
+            outln!("wrote {}", p.display());
         }
     }
     Ok(())
 }
 
-fn print_table(rows: &[Row]) {
-    println!(
+fn print_table(rows: &[Row]) -> Result<(), CliError> {
+    outln!(
         "{:<23} {:<22} {:>9} {:>9} {:>7} {:>7} {:>7} {:>7} {:>7}  verdict",
-        "model", "parameters", "min f", "recip err", "a(0)", "a(60)", "a(85)", "a(89.9)", "max a"
+        "model",
+        "parameters",
+        "min f",
+        "recip err",
+        "a(0)",
+        "a(60)",
+        "a(85)",
+        "a(89.9)",
+        "max a"
     );
     let at = |r: &Row, deg: f32| {
         r.result
@@ -255,7 +263,7 @@ fn print_table(rows: &[Row]) {
             .map_or(f32::NAN, |a| a.albedo.max_element())
     };
     for r in rows {
-        println!(
+        outln!(
             "{:<23} {:<22} {:>9.2e} {:>9.2e} {:>7.4} {:>7.4} {:>7.4} {:>7.4} {:>7.4}  {}",
             r.name,
             r.params,
@@ -273,12 +281,13 @@ fn print_table(rows: &[Row]) {
             }
         );
     }
-    println!(
+    outln!(
         "albedo = energy albedo for light from the given incidence (integral of f cos over the outgoing hemisphere), max over RGB;"
     );
-    println!(
+    outln!(
         "plausible = f >= 0, reciprocity error <= {RECIPROCITY_TOLERANCE:e}, albedo <= 1 (+{ALBEDO_TOLERANCE:e} quadrature accuracy) at every incidence."
     );
+    Ok(())
 }
 
 fn plot_models() -> Result<Vec<(&'static str, &'static str, BrdfModel)>, CliError> {

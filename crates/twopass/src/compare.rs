@@ -117,8 +117,8 @@ pub fn run(args: &CompareArgs, ctx: &Context) -> Result<(), CliError> {
     let scene = load_lit(&args.scene, ctx)?;
     let default_width = if args.quick { 256 } else { 512 };
     let camera = match (ctx.width, ctx.height) {
-        (None, None) => scene.camera.with_resolution(Some(default_width), None),
-        (w, h) => scene.camera.with_resolution(w, h),
+        (None, None) => crate::context::resized(&scene.camera, Some(default_width), None)?,
+        (w, h) => crate::context::resized(&scene.camera, w, h)?,
     };
     let spp = args.spp.unwrap_or(if args.quick { 4 } else { 16 });
     let reference_spp = args
@@ -129,7 +129,7 @@ pub fn run(args: &CompareArgs, ctx: &Context) -> Result<(), CliError> {
         .output
         .clone()
         .unwrap_or_else(|| PathBuf::from("compare"));
-    std::fs::create_dir_all(&dir).map_err(|e| CliError::io(&dir, e))?;
+    crate::output::create_dir(&dir)?;
     let stem = args
         .scene
         .file_stem()
@@ -196,7 +196,7 @@ pub fn run(args: &CompareArgs, ctx: &Context) -> Result<(), CliError> {
             &settings,
             method.name(),
             ctx,
-        );
+        )?;
         let layers = to_layers(&out.layers)?;
         let exr = dir.join(format!("{stem}-{}.exr", method.name()));
         write_exr_layers(&exr, &layers)?;
@@ -279,26 +279,35 @@ pub fn run(args: &CompareArgs, ctx: &Context) -> Result<(), CliError> {
     crate::output::write_csv(&dir.join(format!("{stem}-compare.csv")), &report.rows)?;
 
     if ctx.json {
-        println!("{json}");
+        outln!("{json}");
     } else if !ctx.quiet {
         for s in &report.skipped {
-            println!("skipped {s}");
+            outln!("skipped {s}");
         }
         if let Some(r) = &report.radiosity {
-            println!(
+            outln!(
                 "radiosity: {} elements, {} patches, {} shots, unshot {:.1e}, {:.2} s",
-                r.elements, r.patches, r.shots, r.unshot_fraction, r.seconds
+                r.elements,
+                r.patches,
+                r.shots,
+                r.unshot_fraction,
+                r.seconds
             );
         }
-        println!(
+        outln!(
             "{:<14} {:>9} {:>9} {:>10} {:>9} {:>7}",
-            "method", "spp", "seconds", "rel RMSE", "RMSE", "SSIM"
+            "method",
+            "spp",
+            "seconds",
+            "rel RMSE",
+            "RMSE",
+            "SSIM"
         );
         for r in &report.rows {
             let pct =
                 |x: Option<f64>| x.map_or_else(|| "-".to_owned(), |v| format!("{:.2}%", 100.0 * v));
             let num = |x: Option<f64>| x.map_or_else(|| "-".to_owned(), |v| format!("{v:.4}"));
-            println!(
+            outln!(
                 "{:<14} {:>9} {:>9.2} {:>10} {:>9} {:>7}",
                 r.method,
                 r.spp,
@@ -308,7 +317,7 @@ pub fn run(args: &CompareArgs, ctx: &Context) -> Result<(), CliError> {
                 num(r.ssim)
             );
         }
-        println!(
+        outln!(
             "wrote {} and the EXRs, JSON and CSV beside it",
             report.sheet.display()
         );

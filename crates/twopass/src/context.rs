@@ -4,6 +4,9 @@ use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
 use clap::Args;
+use twopass_scene::{Camera, ReadPolicy};
+
+use crate::error::CliError;
 use indicatif::{ProgressBar, ProgressStyle};
 
 /// Options every subcommand accepts, so scripts can drive them the same way.
@@ -30,9 +33,34 @@ pub struct Context {
     /// Print a machine-readable JSON summary on stdout instead of the human report.
     #[arg(long, global = true)]
     pub json: bool,
+    /// Read only files inside the scene's folder: refuse OBJ meshes and MTL libraries that a
+    /// scene names elsewhere (absolute paths, `..`, symbolic links out). Use it for scenes
+    /// from others, which could otherwise make twopass read any file you can.
+    #[arg(long, global = true)]
+    pub confine: bool,
 }
 
 impl Context {
+    /// Loads a scene under the read policy the options ask for (see `--confine`).
+    pub fn load_scene(
+        &self,
+        path: &Path,
+    ) -> Result<(twopass_scene::Scene, Vec<twopass_scene::Warning>), CliError> {
+        let policy = if self.confine {
+            ReadPolicy::confined(path)?
+        } else {
+            ReadPolicy::unconfined()
+        };
+        Ok(twopass_scene::load_with(path, &policy)?)
+    }
+
+    /// `camera` at the resolution `--width`/`--height` ask for, refused (usage error) when
+    /// that image would be larger than [`Camera::MAX_PIXELS`] or a side than
+    /// [`Camera::MAX_SIDE`].
+    pub fn camera(&self, camera: &Camera) -> Result<Camera, CliError> {
+        resized(camera, self.width, self.height)
+    }
+
     /// The output path, or `default` when `--output` was not given.
     pub fn output_or<'a>(&'a self, default: &'a Path) -> &'a Path {
         self.output.as_deref().unwrap_or(default)
@@ -74,4 +102,16 @@ pub fn memory_limit() -> u64 {
             Some(kib * 1024 / 5 * 4)
         })
         .unwrap_or(16 << 30)
+}
+
+/// `camera` at `width` x `height` (either may be absent: see [`Camera::with_resolution`]),
+/// refused as a usage error beyond [`Camera::check_resolution`].
+pub fn resized(
+    camera: &Camera,
+    width: Option<u32>,
+    height: Option<u32>,
+) -> Result<Camera, CliError> {
+    camera
+        .try_with_resolution(width, height)
+        .map_err(|p| CliError::Usage(format!("--width/--height: {p}")))
 }

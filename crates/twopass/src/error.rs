@@ -45,6 +45,10 @@ pub enum CliError {
     /// The command's arguments are valid syntax but make no sense together or for this input.
     #[error("{0}")]
     Input(String),
+    /// An option is out of the range this command can honour (exit code 2, like clap's
+    /// own usage errors).
+    #[error("{0}")]
+    Usage(String),
 }
 
 impl From<twopass_composite::WriteError> for CliError {
@@ -57,6 +61,25 @@ impl From<twopass_composite::WriteError> for CliError {
 }
 
 impl CliError {
+    /// The process exit code: 2 for a usage error (an option out of range, also when only
+    /// the scene shows it, such as an element size too small for its area), 1 otherwise.
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            Self::Usage(_)
+            | Self::Solve {
+                source: twopass_radiosity::SolveError::Option { .. },
+                ..
+            } => 2,
+            _ => 1,
+        }
+    }
+
+    /// Whether this is a failed write to stdout because its reader went away (a closed pipe):
+    /// the command stops quietly.
+    pub fn is_broken_pipe(&self) -> bool {
+        matches!(self, Self::Io { source, .. } if source.kind() == std::io::ErrorKind::BrokenPipe)
+    }
+
     /// An I/O error on `path`.
     pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
         Self::Io {

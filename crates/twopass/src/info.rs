@@ -48,8 +48,8 @@ struct Info {
 
 /// Loads the scene and prints its summary (text, or JSON with `--json`).
 pub fn run(args: &InfoArgs, ctx: &Context) -> Result<(), CliError> {
-    let (scene, warnings) = twopass_scene::load(&args.scene)?;
-    let camera = scene.camera.with_resolution(ctx.width, ctx.height);
+    let (scene, warnings) = ctx.load_scene(&args.scene)?;
+    let camera = ctx.camera(&scene.camera)?;
     let mut materials_by_type = BTreeMap::new();
     for m in &scene.materials {
         let kind = m.material.lobe().map_or("lambert", lobe_name);
@@ -81,30 +81,33 @@ pub fn run(args: &InfoArgs, ctx: &Context) -> Result<(), CliError> {
         warnings: warnings.iter().map(ToString::to_string).collect(),
     };
     if ctx.json {
-        println!(
+        outln!(
             "{}",
             serde_json::to_string_pretty(&info).expect("info serializes")
         );
         return Ok(());
     }
     for w in &info.warnings {
-        eprintln!("warning: {w}");
+        errln!("warning: {w}");
     }
     if ctx.quiet {
         return Ok(());
     }
-    println!("scene      {}", info.scene.display());
-    println!(
+    outln!("scene      {}", info.scene.display());
+    outln!(
         "geometry   {} triangles, {} vertices, {} objects, area {:.6e} units^2",
-        info.triangles, info.vertices, info.objects, info.total_area
+        info.triangles,
+        info.vertices,
+        info.objects,
+        info.total_area
     );
     let kinds: Vec<String> = info
         .materials_by_type
         .iter()
         .map(|(k, n)| format!("{n} {k}"))
         .collect();
-    println!("materials  {}", kinds.join(", "));
-    println!(
+    outln!("materials  {}", kinds.join(", "));
+    outln!(
         "bounds     [{:.1}, {:.1}, {:.1}] to [{:.1}, {:.1}, {:.1}]",
         info.bounds_min[0],
         info.bounds_min[1],
@@ -113,19 +116,21 @@ pub fn run(args: &InfoArgs, ctx: &Context) -> Result<(), CliError> {
         info.bounds_max[1],
         info.bounds_max[2]
     );
-    println!(
+    outln!(
         "camera     {} x {} pixels",
-        info.resolution[0], info.resolution[1]
+        info.resolution[0],
+        info.resolution[1]
     );
-    println!(
+    outln!(
         "bvh        {} nodes, built in {:.2} ms",
-        info.bvh_nodes, info.bvh_build_ms
+        info.bvh_nodes,
+        info.bvh_build_ms
     );
     if info.emitters.is_empty() {
-        println!("emitters   none");
+        outln!("emitters   none");
     }
     for e in &info.emitters {
-        println!(
+        outln!(
             "emitter    {}: radiance ({}, {}, {}) W/(m^2 sr), area {:.6e}, power ({:.6e}, {:.6e}, {:.6e})",
             e.object,
             e.radiance[0],
@@ -137,19 +142,21 @@ pub fn run(args: &InfoArgs, ctx: &Context) -> Result<(), CliError> {
             e.power[2]
         );
     }
-    let say = |name: &str, d: &crate::plan::Decision| {
-        println!(
+    let say = |name: &str, d: &crate::plan::Decision| -> Result<(), CliError> {
+        outln!(
             "{name} {}: {}",
             if d.required { "required" } else { "skipped " },
             d.reason
         );
+        Ok(())
     };
-    say("diffuse pass  ", &info.plan.diffuse);
-    say("specular pass ", &info.plan.specular);
+    say("diffuse pass  ", &info.plan.diffuse)?;
+    say("specular pass ", &info.plan.specular)?;
     if info.plan.diffuse.required {
-        println!(
+        outln!(
             "radiosity      {}: {}",
-            info.plan.solver.method, info.plan.solver.reason
+            info.plan.solver.method,
+            info.plan.solver.reason
         );
     }
     Ok(())

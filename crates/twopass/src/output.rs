@@ -8,6 +8,80 @@ use twopass_composite::Rgb8Image;
 
 use crate::error::CliError;
 
+/// Largest small input the CLI reads (presets, manifests, cache records), bytes.
+pub const MAX_SMALL_INPUT: u64 = 16 << 20;
+
+/// Reads a small input file (at most [`MAX_SMALL_INPUT`] bytes, a regular file).
+pub fn read_small(path: &Path) -> std::io::Result<Vec<u8>> {
+    twopass_scene::read_bounded(path, MAX_SMALL_INPUT)
+}
+
+/// Reads a small input file as UTF-8 text (see [`read_small`]).
+pub fn read_text(path: &Path) -> std::io::Result<String> {
+    String::from_utf8(read_small(path)?)
+        .map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidData, e))
+}
+
+/// Temporary files of atomic writes (every crate's `.twopass-*.tmp`) older than this are
+/// leftovers of a killed run: a live one is written from memory and renamed within seconds.
+pub const STALE_TEMPORARY: std::time::Duration = std::time::Duration::from_secs(600);
+
+/// Creates `dir` and its missing parents. When a part of the path exists but is not a folder
+/// (`-o scene.toml/x.exr`), says so instead of the system's "File exists". Also removes stale
+/// temporary files ([`STALE_TEMPORARY`]) that a killed run left in it.
+pub fn create_dir(dir: &Path) -> Result<(), CliError> {
+    let dir = if dir.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        dir
+    };
+    make_dir(dir)?;
+    remove_stale_temporaries(dir);
+    Ok(())
+}
+
+/// Removes `.twopass-*.tmp` files older than [`STALE_TEMPORARY`] from `dir`; best effort (a
+/// file that cannot be removed stays, and is no reason to fail a run).
+fn remove_stale_temporaries(dir: &Path) {
+    let Ok(entries) = fs::read_dir(dir) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let name = name.to_string_lossy();
+        if !(name.starts_with(".twopass-") && name.ends_with(".tmp")) {
+            continue;
+        }
+        let stale = entry.metadata().is_ok_and(|m| {
+            m.is_file()
+                && m.modified()
+                    .ok()
+                    .and_then(|t| t.elapsed().ok())
+                    .is_some_and(|age| age > STALE_TEMPORARY)
+        });
+        if stale {
+            let _ = fs::remove_file(entry.path());
+        }
+    }
+}
+
+fn make_dir(dir: &Path) -> Result<(), CliError> {
+    fs::create_dir_all(dir).map_err(|e| {
+        let file = dir.ancestors().find(|a| a.is_file()).filter(|_| {
+            e.kind() == std::io::ErrorKind::AlreadyExists || e.raw_os_error() == Some(20)
+        });
+        match file {
+            Some(file) => CliError::Input(format!(
+                "{}: cannot create the output folder {}: {} is a file, not a directory",
+                file.display(),
+                dir.display(),
+                file.display()
+            )),
+            None => CliError::io(dir, e),
+        }
+    })
+}
+
 /// Writes `bytes` to `path` atomically (the workspace's one atomic write,
 /// [`twopass_composite::write::write_atomic`]), creating the parent directory if missing.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), CliError> {
@@ -15,7 +89,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), CliError> {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
-    fs::create_dir_all(dir).map_err(|e| CliError::io(dir, e))?;
+    create_dir(dir)?;
     Ok(twopass_composite::write::write_atomic(path, bytes)?)
 }
 

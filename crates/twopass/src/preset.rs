@@ -106,7 +106,7 @@ impl PresetFile {
 
     /// Reads a presets file, naming the file in every error.
     pub fn read(path: &Path) -> Result<Self, CliError> {
-        let text = std::fs::read_to_string(path).map_err(|e| {
+        let text = crate::output::read_text(path).map_err(|e| {
             CliError::Input(format!(
                 "{}: cannot read the presets ({e}); `twopass bench tradeoff SCENE \
                  --install-presets` measures and writes them",
@@ -130,12 +130,60 @@ impl PresetFile {
 pub fn load(scene: &Path, presets: Option<&Path>, name: &str) -> Result<Preset, CliError> {
     let path = presets.map_or_else(|| PresetFile::beside(scene), Path::to_path_buf);
     let file = PresetFile::read(&path)?;
-    file.get(name).cloned().ok_or_else(|| {
+    let preset = file.get(name).cloned().ok_or_else(|| {
         let names: Vec<&str> = file.presets.iter().map(|p| p.name.as_str()).collect();
         CliError::Input(format!(
             "{}: no preset `{name}` (it has {})",
             path.display(),
             names.join(", ")
         ))
-    })
+    })?;
+    preset.check().map_err(|problem| {
+        CliError::Input(format!("{}: preset `{name}`: {problem}", path.display()))
+    })?;
+    Ok(preset)
+}
+
+impl Preset {
+    /// Checks the knobs against the ranges the command-line options accept, so a presets file
+    /// cannot ask for what `--spp`, `--depth`, `--shadow-grid`, `--element-size`, `--unshot`
+    /// or `--visibility-rays` would refuse.
+    pub fn check(&self) -> Result<(), String> {
+        let r = &self.render;
+        if !(1..=1_000_000).contains(&r.spp) {
+            return Err(format!("spp {} must be 1 to 1000000", r.spp));
+        }
+        if r.depth > crate::render::MAX_DEPTH {
+            return Err(format!(
+                "depth {} must be at most {}",
+                r.depth,
+                crate::render::MAX_DEPTH
+            ));
+        }
+        if !(1..=64).contains(&r.shadow_grid) {
+            return Err(format!("shadow_grid {} must be 1 to 64", r.shadow_grid));
+        }
+        if let Some(k) = &self.radiosity {
+            if !(k.element_size.is_finite() && k.element_size > 0.0) {
+                return Err(format!(
+                    "element_size {} must be finite and > 0",
+                    k.element_size
+                ));
+            }
+            if !(0.0..1.0).contains(&k.unshot) {
+                return Err(format!("unshot {} must be >= 0 and < 1", k.unshot));
+            }
+            let max = crate::bake::MAX_VISIBILITY_RAYS;
+            if k.visibility_min == 0
+                || k.visibility_max < k.visibility_min
+                || k.visibility_max > max
+            {
+                return Err(format!(
+                    "visibility rays {},{} need 1 <= min <= max <= {max}",
+                    k.visibility_min, k.visibility_max
+                ));
+            }
+        }
+        Ok(())
+    }
 }

@@ -19,7 +19,7 @@ use twopass_trace::hybrid::{hybrid, hybrid_direct, radiosity_only};
 use twopass_trace::whitted::ambient_estimate;
 use twopass_trace::{
     Integrator, Layer, LayerImages, Progress, Reference, ReferenceSettings, RenderOutput,
-    RenderSettings, Whitted, WhittedSettings,
+    RenderSettings, RenderStats, Whitted, WhittedSettings,
 };
 
 use crate::bake::SolveArgs;
@@ -77,7 +77,9 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
     pub spp: u32,
     /// Recursion depth of mirror and refraction paths (Whitted and the hybrids).
-    #[arg(long, default_value_t = WhittedSettings::default().max_depth)]
+    /// At most 64: the recursion holds a stack frame per bounce, and a path trapped by total
+    /// internal reflection keeps its full weight, so only the depth ends it.
+    #[arg(long, default_value_t = WhittedSettings::default().max_depth, value_parser = clap::value_parser!(u32).range(0..=MAX_DEPTH as i64))]
     pub depth: u32,
     /// Shadow rays per emitter and hit, as an N x N stratified grid (Whitted and the hybrids).
     #[arg(long, default_value_t = WhittedSettings::default().shadow_grid, value_parser = clap::value_parser!(u32).range(1..=64))]
@@ -86,7 +88,7 @@ pub struct RenderArgs {
     #[arg(long)]
     pub png: bool,
     /// PNG exposure in stops (EV) [default: auto, the 99th-percentile luminance maps to 1].
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(long, allow_hyphen_values = true, value_parser = parse_stops)]
     pub exposure: Option<f32>,
     /// The radiosity solver's settings, for a fresh solve.
     #[command(flatten)]
@@ -140,10 +142,10 @@ struct Summary {
 /// Loads a scene to render with several methods: prints its warnings unless quiet, and refuses
 /// a scene where nothing emits (every image would be black).
 pub fn load_lit(path: &Path, ctx: &Context) -> Result<Scene, CliError> {
-    let (scene, warnings) = twopass_scene::load(path)?;
+    let (scene, warnings) = ctx.load_scene(path)?;
     if !ctx.quiet {
         for w in &warnings {
-            eprintln!("warning: {w}");
+            errln!("warning: {w}");
         }
     }
     if scene.emitters.is_empty() {
@@ -164,7 +166,10 @@ pub fn radiosity(
     ctx: &Context,
 ) -> Result<(Solution, &'static str), CliError> {
     match bake {
-        Some(file) => Ok((twopass_bake::read_bake(file, scene)?, "bake")),
+        Some(file) => {
+            crate::bake::check_in_set(file)?;
+            Ok((twopass_bake::read_bake(file, scene)?, "bake"))
+        }
         None => {
             let mut solver =
                 Solver::new(scene, solve.options(ctx.seed)).map_err(|source| CliError::Solve {
@@ -177,7 +182,8 @@ pub fn radiosity(
     }
 }
 
-/// Renders with a progress bar drawn from the render loop's counters.
+/// Renders with a progress bar drawn from the render loop's counters, then checks the
+/// samples it had to drop (see [`check_dropped`]).
 pub fn render_with_bar(
     scene: &Scene,
     camera: &twopass_scene::Camera,
@@ -185,7 +191,7 @@ pub fn render_with_bar(
     settings: &RenderSettings,
     label: &str,
     ctx: &Context,
-) -> RenderOutput {
+) -> Result<RenderOutput, CliError> {
     let progress = Progress::new();
     let bar = ctx.progress(1000, label);
     let done = std::sync::atomic::AtomicBool::new(false);
@@ -201,7 +207,38 @@ pub fn render_with_bar(
         out
     });
     bar.finish_and_clear();
-    out
+    check_dropped(&out.stats, &scene.path, ctx)?;
+    Ok(out)
+}
+
+/// Most of a render's samples that may be non-finite (and dropped) before the render is
+/// refused: beyond this the image says more about the overflow than about the scene.
+pub const MAX_DROPPED_FRACTION: f64 = 0.01;
+
+/// Says loudly when a render dropped non-finite samples, and fails when it dropped more than
+/// [`MAX_DROPPED_FRACTION`] of them: the image would be wrong (black where light overflowed).
+pub fn check_dropped(stats: &RenderStats, scene: &Path, ctx: &Context) -> Result<(), CliError> {
+    if stats.non_finite == 0 {
+        return Ok(());
+    }
+    let fraction = stats.non_finite as f64 / stats.samples.max(1) as f64;
+    let what = format!(
+        "{}: the {} render dropped {} of {} samples ({:.3}%) as non-finite (NaN or infinite radiance)",
+        scene.display(),
+        stats.method,
+        stats.non_finite,
+        stats.samples,
+        100.0 * fraction
+    );
+    if fraction > MAX_DROPPED_FRACTION {
+        return Err(CliError::Input(format!(
+            "{what}; the image would be wrong, so none is written (lower the emission or the scene's scale)"
+        )));
+    }
+    if !ctx.quiet {
+        errln!("warning: {what}; their pixels average the remaining samples");
+    }
+    Ok(())
 }
 
 /// The tracer's layers as named compositor layers, plus the final image as `image`.
@@ -235,10 +272,10 @@ pub fn integrator<'a>(
 
 /// Renders the scene and writes the EXR (and PNG).
 pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
-    let (scene, warnings) = twopass_scene::load(&args.scene)?;
+    let (scene, warnings) = ctx.load_scene(&args.scene)?;
     if !ctx.quiet {
         for w in &warnings {
-            eprintln!("warning: {w}");
+            errln!("warning: {w}");
         }
     }
     let preset = args
@@ -266,7 +303,7 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
             method.name()
         )));
     }
-    let camera = scene.camera.with_resolution(ctx.width, ctx.height);
+    let camera = ctx.camera(&scene.camera)?;
     let decisions = plan(&scene);
     let mut skipped = Vec::new();
     if method.needs_radiosity() && !decisions.diffuse.required {
@@ -313,7 +350,7 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
         &settings,
         method.name(),
         ctx,
-    );
+    )?;
     let layers = to_layers(&out.layers)?;
     let stem = args
         .scene
@@ -324,9 +361,7 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
         Some(dir) => dir.join(format!("{stem}-{}.exr", method.name())),
         None => PathBuf::from(format!("{stem}-{}.exr", method.name())),
     };
-    if let Some(dir) = exr.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(|e| CliError::io(dir, e))?;
-    }
+    crate::output::create_dir(exr.parent().unwrap_or(Path::new("")))?;
     write_exr_layers(&exr, &layers)?;
     let png = if args.png {
         let image = layers.require("image")?;
@@ -362,21 +397,21 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
         skipped,
     };
     if ctx.json {
-        println!(
+        outln!(
             "{}",
             serde_json::to_string_pretty(&summary).expect("summary serializes")
         );
     } else if !ctx.quiet {
         for s in &summary.skipped {
-            println!("{s}");
+            outln!("{s}");
         }
         if let Some(source) = summary.radiosity {
-            println!(
+            outln!(
                 "radiosity from {source} in {:.2} s",
                 summary.radiosity_seconds
             );
         }
-        println!(
+        outln!(
             "{} {} x {} at {} spp in {:.2} s ({:.2} Mrays/s, {} non-finite samples dropped)",
             summary.method.name(),
             summary.width,
@@ -386,10 +421,75 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
             summary.mrays_per_s,
             summary.non_finite_samples
         );
-        println!("wrote {}", summary.exr.display());
+        outln!("wrote {}", summary.exr.display());
         if let Some(p) = &summary.png {
-            println!("wrote {}", p.display());
+            outln!("wrote {}", p.display());
         }
     }
     Ok(())
+}
+
+/// Deepest recursion of mirror and refraction paths (`--depth`, presets).
+pub const MAX_DEPTH: u32 = 64;
+
+/// Most stops of exposure either way: 2^64 spans far more than any radiance a scene can emit.
+const MAX_STOPS: f32 = 64.0;
+
+/// An exposure in stops: finite and within +-[`MAX_STOPS`].
+fn parse_stops(s: &str) -> Result<f32, String> {
+    let x: f32 = s.parse().map_err(|e| format!("{e}"))?;
+    if x.abs() <= MAX_STOPS {
+        Ok(x)
+    } else {
+        Err(format!(
+            "{x} must be a finite number of stops from -{MAX_STOPS} to {MAX_STOPS}"
+        ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn stats(samples: u64, non_finite: u64) -> RenderStats {
+        RenderStats {
+            method: "reference",
+            width: 10,
+            height: 10,
+            samples_per_pixel: 1,
+            samples,
+            non_finite,
+            rays: 0,
+            shadow_rays: 0,
+            elapsed: Duration::ZERO,
+        }
+    }
+
+    fn quiet() -> Context {
+        Context {
+            output: None,
+            width: None,
+            height: None,
+            seed: 0,
+            threads: None,
+            quiet: true,
+            json: false,
+            confine: false,
+        }
+    }
+
+    #[test]
+    fn dropped_samples_warn_then_fail() {
+        let scene = Path::new("s.toml");
+        assert!(check_dropped(&stats(1000, 0), scene, &quiet()).is_ok());
+        // 1 % dropped is still an image worth having (with a warning).
+        assert!(check_dropped(&stats(1000, 10), scene, &quiet()).is_ok());
+        match check_dropped(&stats(1000, 11), scene, &quiet()) {
+            Err(CliError::Input(m)) => {
+                assert!(m.contains("s.toml") && m.contains("11 of 1000"), "{m}");
+            }
+            other => panic!("more than 1 % dropped must fail: {other:?}"),
+        }
+        assert!(check_dropped(&stats(100, 100), scene, &quiet()).is_err());
+    }
 }

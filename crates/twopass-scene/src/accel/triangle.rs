@@ -128,11 +128,16 @@ impl ShearedRay {
 
 /// Twice the area of a triangle and its unit normal in f64, `None` when degenerate: the cross
 /// product is zero, not finite, or tiny against the edge lengths (the normal is then noise).
+/// "Tiny" is a sine of the triangle's smallest angle (between its two longest edges) below f32
+/// epsilon: such a needle cannot be resolved in f32 positions, and bisecting it, as the
+/// radiosity mesher does, never ends.
 pub(crate) fn triangle_normal(p: [Vec3; 3]) -> Option<(f64, DVec3)> {
     let (a, b) = ((p[1] - p[0]).as_dvec3(), (p[2] - p[0]).as_dvec3());
     let c = a.cross(b);
     let len = c.length();
-    let scale = a.length() * b.length();
+    let mut edges = [a.length(), b.length(), (b - a).length()];
+    edges.sort_by(f64::total_cmp);
+    let scale = edges[1] * edges[2];
     if !(len.is_finite() && len > 0.0 && len > f64::from(f32::EPSILON) * scale) {
         return None;
     }

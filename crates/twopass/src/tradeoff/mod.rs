@@ -185,8 +185,8 @@ pub fn run(args: &TradeoffArgs, ctx: &Context) -> Result<(), CliError> {
         sweep.reference_spp = spp;
     }
     let camera = match (ctx.width, ctx.height) {
-        (None, None) => scene.camera.with_resolution(Some(sweep.width), None),
-        (w, h) => scene.camera.with_resolution(w, h),
+        (None, None) => crate::context::resized(&scene.camera, Some(sweep.width), None)?,
+        (w, h) => crate::context::resized(&scene.camera, w, h)?,
     };
     let (called_for, skipped) = methods(&scene);
     let chosen: Vec<Method> = if args.methods.is_empty() {
@@ -215,7 +215,7 @@ pub fn run(args: &TradeoffArgs, ctx: &Context) -> Result<(), CliError> {
         .output
         .clone()
         .unwrap_or_else(|| PathBuf::from("tradeoff"));
-    std::fs::create_dir_all(&dir).map_err(|e| CliError::io(&dir, e))?;
+    crate::output::create_dir(&dir)?;
     let cache = args.cache.clone().unwrap_or_else(|| dir.join("cache"));
     let stem = args
         .scene
@@ -232,7 +232,7 @@ pub fn run(args: &TradeoffArgs, ctx: &Context) -> Result<(), CliError> {
     );
     let converged = reference::converged(&scene, &camera, &cache, key, ctx)?;
     if ctx.chatty() {
-        eprintln!(
+        errln!(
             "reference: {} spp, {} ({:.1} s), its own noise {:.2} % relative RMSE",
             sweep.reference_spp,
             if converged.cached {
@@ -369,9 +369,9 @@ pub fn run(args: &TradeoffArgs, ctx: &Context) -> Result<(), CliError> {
     let json = serde_json::to_string_pretty(&report).expect("report serializes");
     crate::output::write_atomic(&dir.join(format!("{stem}-tradeoff.json")), json.as_bytes())?;
     if ctx.json {
-        println!("{json}");
+        outln!("{json}");
     } else if !ctx.quiet {
-        print_report(&report);
+        print_report(&report)?;
     }
     Ok(())
 }
@@ -501,11 +501,11 @@ fn reach_table(rows: &[Row], methods: &[Method], targets: &[f64]) -> Vec<Reach> 
     out
 }
 
-fn print_report(r: &Report) {
+fn print_report(r: &Report) -> Result<(), CliError> {
     for s in &r.skipped {
-        println!("skipped {s}");
+        outln!("skipped {s}");
     }
-    println!(
+    outln!(
         "{}: {} x {}, {} threads; reference {} spp ({:.1} s{}), its noise {:.2} %",
         r.scene.display(),
         r.width,
@@ -516,7 +516,7 @@ fn print_report(r: &Report) {
         if r.reference.cached { ", cached" } else { "" },
         100.0 * r.reference.noise_rel_rmse
     );
-    println!(
+    outln!(
         "{:<14} {:<16} {:>5} {:>4} {:>4} {:>9} {:>8} {:>8} {:>9} {:>9} {:>9} {:>7}",
         "method",
         "knob",
@@ -533,7 +533,7 @@ fn print_report(r: &Report) {
     );
     for row in &r.rows {
         let opt = |x: Option<String>| x.unwrap_or_else(|| "-".to_owned());
-        println!(
+        outln!(
             "{:<14} {:<16} {:>5} {:>4} {:>4} {:>9} {:>8} {:>8} {:>9.3} {:>9.3} {:>8.2}%{} {:>7}",
             row.method,
             row.knob,
@@ -550,9 +550,9 @@ fn print_report(r: &Report) {
             opt(row.peak_memory_mib.map(|m| format!("{m:.0}"))),
         );
     }
-    println!("* on the Pareto front of all methods");
+    outln!("* on the Pareto front of all methods");
     for reach in &r.reach {
-        println!(
+        outln!(
             "{:<14} reaches {:>5.2} % in {}{}",
             reach.method,
             100.0 * reach.target_rel_rmse,
@@ -568,7 +568,7 @@ fn print_report(r: &Report) {
         );
     }
     for p in &r.presets {
-        println!(
+        outln!(
             "preset {:<8} target {:>5.2} %{}: {} at {} spp, grid {}, depth {}{} -> {:.2} % in {:.3} s",
             p.name,
             100.0 * p.target_rel_rmse,
@@ -585,10 +585,11 @@ fn print_report(r: &Report) {
             p.measured_seconds
         );
     }
-    println!(
+    outln!(
         "wrote {}, {}, {} and the JSON beside them",
         r.csv.display(),
         r.plot.display(),
         r.presets_file.display()
     );
+    Ok(())
 }

@@ -131,7 +131,7 @@ fn files(dir: &Path, key: &ReferenceKey) -> (PathBuf, PathBuf) {
 /// The cached entry for `key`, when there is a complete one.
 fn cached(dir: &Path, key: &ReferenceKey) -> Option<Converged> {
     let (exr, json) = files(dir, key);
-    let record: Record = serde_json::from_slice(&std::fs::read(&json).ok()?).ok()?;
+    let record: Record = serde_json::from_slice(&crate::output::read_small(&json).ok()?).ok()?;
     if &record.key != key {
         return None;
     }
@@ -177,7 +177,7 @@ pub fn converged(
             &settings,
             &format!("reference {}/2", half + 1),
             ctx,
-        );
+        )?;
         let img = out.layers.composite();
         halves.push(Image::from_pixels(img.width, img.height, img.pixels)?);
     }
@@ -189,7 +189,7 @@ pub fn converged(
     let display = ToneMap::auto_default(&mean)?;
     let noise_rel_rmse = compare(&halves[0], &mean, &display)?.rel_rmse;
     let (exr, json) = files(dir, &key);
-    std::fs::create_dir_all(dir).map_err(|e| CliError::io(dir, e))?;
+    crate::output::create_dir(dir)?;
     write_exr(&exr, &mean)?;
     let record = Record {
         key: key.clone(),

@@ -1,0 +1,144 @@
+//! Multi-file outputs stay consistent or visibly incomplete, and what a killed run left
+//! behind is cleaned up (issue 12).
+
+mod common;
+
+use std::time::{Duration, SystemTime};
+
+use common::{repo, twopass};
+use twopass_bake::Manifest;
+
+const COARSE: [&str; 6] = [
+    "--element-size",
+    "80",
+    "--patch-size",
+    "200",
+    "--unshot",
+    "5e-2",
+];
+
+fn bake(dir: &std::path::Path, extra: &[&str]) -> std::process::Output {
+    let scene = repo("scenes/cornell-box.toml");
+    let mut args = vec![
+        "bake",
+        scene.to_str().unwrap(),
+        "--output",
+        dir.to_str().unwrap(),
+        "-q",
+    ];
+    args.extend(COARSE);
+    args.extend(extra);
+    twopass(&args)
+}
+
+#[test]
+fn the_manifest_seals_the_bake_set() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("set");
+    let out = bake(&dir, &[]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let manifest_path = dir.join("cornell-box.manifest.json");
+    let manifest: Manifest =
+        serde_json::from_slice(&std::fs::read(&manifest_path).unwrap()).unwrap();
+    assert_eq!(manifest.files.len(), 3);
+    for f in &manifest.files {
+        let bytes = std::fs::read(&f.path).unwrap();
+        assert_eq!(f.bytes, bytes.len() as u64, "{}", f.path.display());
+        assert_eq!(
+            f.crc32,
+            Some(crc32fast::hash(&bytes)),
+            "{}",
+            f.path.display()
+        );
+    }
+
+    // A bake from other settings, copied over this set's .bake (what a bake killed after its
+    // .bake and before its manifest leaves): rendering from it is refused.
+    let other = tmp.path().join("other");
+    let out = bake(&other, &["--seed", "7"]);
+    assert_eq!(out.status.code(), Some(0));
+    let bake_file = dir.join("cornell-box.bake");
+    std::fs::copy(other.join("cornell-box.bake"), &bake_file).unwrap();
+    let scene = repo("scenes/cornell-box.toml");
+    let render = twopass(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--method",
+        "radiosity",
+        "--bake",
+        bake_file.to_str().unwrap(),
+        "--width",
+        "8",
+        "--spp",
+        "1",
+        "-o",
+        tmp.path().join("r.exr").to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&render.stderr);
+    assert_eq!(render.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("does not match its manifest"), "{stderr}");
+
+    // A bake that fails between its files leaves no manifest: the set is visibly incomplete.
+    let ply = dir.join("cornell-box.ply");
+    std::fs::remove_file(&ply).unwrap();
+    std::fs::create_dir(&ply).unwrap(); // the .ply cannot be renamed into place now
+    let out = bake(&dir, &[]);
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        !manifest_path.exists(),
+        "the old manifest must not survive beside a partial new set"
+    );
+}
+
+#[test]
+fn stale_temporaries_of_a_killed_run_are_removed() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let stale = dir.join(".twopass-composite-killed.tmp");
+    let fresh = dir.join(".twopass-composite-live.tmp");
+    let foreign = dir.join(".other-tool.tmp");
+    for p in [&stale, &fresh, &foreign] {
+        std::fs::write(p, b"partial").unwrap();
+    }
+    let hour_ago = SystemTime::now() - Duration::from_secs(3600);
+    for p in [&stale, &foreign] {
+        std::fs::File::options()
+            .write(true)
+            .open(p)
+            .unwrap()
+            .set_modified(hour_ago)
+            .unwrap();
+    }
+    let scene = repo("scenes/cornell-box.toml");
+    let out = twopass(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--method",
+        "whitted",
+        "--width",
+        "8",
+        "--spp",
+        "1",
+        "-o",
+        dir.join("x.exr").to_str().unwrap(),
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(!stale.exists(), "a leftover of a killed run is removed");
+    assert!(fresh.exists(), "a temporary file that may be live is kept");
+    assert!(foreign.exists(), "other programs' files are not touched");
+}
