@@ -249,7 +249,8 @@ fn a_scene_that_does_not_fit_is_refused_before_it_is_built() {
             Ok(_) => panic!("{method:?}: accepted"),
         }
     }
-    // An element size far below the scene's scale asks for ~10^17 elements.
+    // An element size far below the scene's scale asks for ~10^17 elements: refused as an
+    // option out of range (more than MAX_ELEMENTS) before any memory estimate.
     let o = Options {
         method: Method::Progressive,
         element_size: Some(1e-6),
@@ -257,7 +258,10 @@ fn a_scene_that_does_not_fit_is_refused_before_it_is_built() {
     };
     assert!(matches!(
         Solver::new(&s, o),
-        Err(SolveError::TooLarge { .. })
+        Err(SolveError::Option {
+            name: "element_size",
+            ..
+        })
     ));
 }
 

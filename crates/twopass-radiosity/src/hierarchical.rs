@@ -145,6 +145,30 @@ fn facing(flux: &Table, dirs: &[DVec3; DIRECTIONS], n: DVec3) -> [DVec3; 2] {
     })
 }
 
+/// The angle between two unit vectors, radians.
+fn angle(a: DVec3, b: DVec3) -> f64 {
+    a.dot(b).clamp(-1.0, 1.0).acos()
+}
+
+/// The smallest cone (unit axis, half-angle) around two cones.
+fn merge_cones(a: (DVec3, f64), b: (DVec3, f64)) -> (DVec3, f64) {
+    let between = angle(a.0, b.0);
+    if between + b.1 <= a.1 {
+        return a;
+    }
+    if between + a.1 <= b.1 {
+        return b;
+    }
+    let half = (between + a.1 + b.1) / 2.0;
+    if half >= PI || between < 1e-12 || between > PI - 1e-6 {
+        return (a.0, if between < 1e-12 { half } else { PI });
+    }
+    // Turn a's axis toward b's by (half - a's half-angle).
+    let t = (half - a.1) / between;
+    let axis = (a.0 * ((1.0 - t) * between).sin() + b.0 * (t * between).sin()) / between.sin();
+    (axis.normalize_or(a.0), half)
+}
+
 /// Node geometry the link estimates need.
 struct Ends {
     center: DVec3,
@@ -203,6 +227,9 @@ pub struct HierarchicalSolver<'s> {
     radiant: Vec<Table>,
     /// Per cluster: its projected area toward each table direction, scene units squared.
     projected: Vec<[f32; DIRECTIONS]>,
+    /// Per cluster: a cone (unit axis, half-angle in radians) holding the normals of every
+    /// triangle inside, geometric and shading: what cannot face a node is never linked to it.
+    cones: Vec<(DVec3, f64)>,
     dirs: [DVec3; DIRECTIONS],
     /// Residual power of the last iteration per channel (signed), and its fraction.
     residual: DVec3,
@@ -314,6 +341,7 @@ impl<'s> HierarchicalSolver<'s> {
             cluster_exitance: Vec::new(),
             radiant: Vec::new(),
             projected: Vec::new(),
+            cones: Vec::new(),
             dirs: directions(),
             residual: DVec3::ZERO,
             residual_fraction: 1.0,
@@ -354,9 +382,16 @@ impl<'s> HierarchicalSolver<'s> {
     /// parent, so a reverse sweep sees every child first).
     fn project(&mut self) {
         let mut projected = vec![[0.0f32; DIRECTIONS]; self.clusters.nodes.len()];
+        let mut cones = vec![(DVec3::Z, 0.0); self.clusters.nodes.len()];
         for c in (0..self.clusters.nodes.len()).rev() {
             let mut sum = [0.0f64; DIRECTIONS];
-            for child in self.clusters.nodes[c].children {
+            let children = self.clusters.nodes[c].children;
+            let cone = |x: NodeRef| match x.kind() {
+                Kind::Cluster(cc) => cones[cc as usize],
+                Kind::Surface(n) => self.surface_cone(n),
+            };
+            cones[c] = merge_cones(cone(children[0]), cone(children[1]));
+            for child in children {
                 match child.kind() {
                     Kind::Cluster(cc) => {
                         for (s, p) in sum.iter_mut().zip(&projected[cc as usize]) {
@@ -377,6 +412,47 @@ impl<'s> HierarchicalSolver<'s> {
             projected[c] = sum.map(|s| s as f32);
         }
         self.projected = projected;
+        self.cones = cones;
+    }
+
+    /// The normal cone of a surface node: its geometric normal, widened to its corners'
+    /// shading normals.
+    fn surface_cone(&self, n: u32) -> (DVec3, f64) {
+        let node = &self.mesh.nodes[n as usize];
+        let g = self.scene.mesh.geometric_normals[node.scene_triangle as usize].as_dvec3();
+        let spread = node
+            .vertices
+            .iter()
+            .map(|&v| angle(g, self.mesh.vertices[v as usize].normal.as_dvec3()))
+            .fold(0.0, f64::max);
+        (g, spread)
+    }
+
+    fn cone(&self, r: NodeRef) -> (DVec3, f64) {
+        match r.kind() {
+            Kind::Cluster(c) => self.cones[c as usize],
+            Kind::Surface(n) => self.surface_cone(n),
+        }
+    }
+
+    /// Whether no surface of `s` can send light to any surface of `r` (normal-cone culling,
+    /// Shirman & Abi-Ezzi 1993): every normal of the source points away from every direction
+    /// toward the receiver, or every normal of the receiver away from the source. Two parts of
+    /// one convex object are never linked.
+    fn faces_away(&self, r: NodeRef, s: NodeRef) -> bool {
+        let (er, es) = (self.ends(r), self.ends(s));
+        let d = er.center - es.center;
+        let dist = d.length();
+        let reach = er.radius + es.radius;
+        if dist <= reach {
+            return false;
+        }
+        let u = d / dist;
+        let spread = (reach / dist).asin();
+        let right = std::f64::consts::FRAC_PI_2;
+        let (a_s, t_s) = self.cone(s);
+        let (a_r, t_r) = self.cone(r);
+        angle(a_s, u) - t_s - spread >= right || angle(a_r, -u) - t_r - spread >= right
     }
 
     /// Extends the per-node arrays to new surface nodes and clusters.
@@ -505,13 +581,12 @@ impl<'s> HierarchicalSolver<'s> {
     /// The visible fraction between two nodes from about `count` stratified shadow rays
     /// between points on both. Pairs of points that face away from each other do not count:
     /// orientation is the form factor's business (and the isotropic cluster's 1/4), the rays
-    /// only look for what stands between. When no pair faces, grids four and sixteen times as
-    /// fine are drawn (a few samples can all land on the far side of a cluster by chance); when
-    /// they find none either, the two ends do not face each other (two parts of one convex
-    /// object, say) and nothing passes.
+    /// only look for what stands between. When no pair faces, a grid four times as fine is
+    /// drawn (a few samples can all land on the far side of a cluster by chance); when it finds
+    /// none either, the two ends do not face each other and nothing passes.
     fn visibility(&self, r: NodeRef, s: NodeRef, count: u32, seed: u64) -> (f64, u64) {
         let mut k = (f64::from(count).sqrt().round() as u32).max(1);
-        for _ in 0..3 {
+        for _ in 0..2 {
             let (mut seen, mut total) = (0u32, 0u32);
             for i in 0..k {
                 for j in 0..k {
@@ -519,7 +594,11 @@ impl<'s> HierarchicalSolver<'s> {
                     let (fi, fj, kf) = (f64::from(i), f64::from(j), f64::from(k));
                     let a = self.sample_point(
                         r,
-                        [(fi + unit(h)) / kf, (fj + unit(hash(h))) / kf, unit(hash(h ^ 1))],
+                        [
+                            (fi + unit(h)) / kf,
+                            (fj + unit(hash(h))) / kf,
+                            unit(hash(h ^ 1)),
+                        ],
                     );
                     let b = self.sample_point(
                         s,
@@ -622,13 +701,19 @@ impl<'s> HierarchicalSolver<'s> {
                 let d = er.center - es.center;
                 let cos = (nq.dot(d) / d2.sqrt().max(f64::MIN_POSITIVE)).max(0.0);
                 let v = es.area * cos / (PI * far2);
-                ([v; 3], v * f64::from(self.projected[c as usize][usize::from(dir ^ 16)]))
+                (
+                    [v; 3],
+                    v * f64::from(self.projected[c as usize][usize::from(dir ^ 16)]),
+                )
             }
             (Kind::Cluster(c), Kind::Cluster(_)) => {
                 // Flux density per unit of the source's radiant table entry: 1 / (pi l^2).
                 near_cluster = near;
                 let v = 1.0 / (PI * far2);
-                ([v; 3], v * f64::from(self.projected[c as usize][usize::from(dir ^ 16)]))
+                (
+                    [v; 3],
+                    v * f64::from(self.projected[c as usize][usize::from(dir ^ 16)]),
+                )
             }
         };
         let mut e = Eval {
@@ -640,7 +725,8 @@ impl<'s> HierarchicalSolver<'s> {
             partial: false,
             rays: 0,
         };
-        if e.k.iter().all(|&v| v <= 0.0) || !self.options.occlusion {
+        // A near link is split whatever its visibility: no rays for it.
+        if e.near || e.k.iter().all(|&v| v <= 0.0) || !self.options.occlusion {
             return e;
         }
         let seed = hash(self.options.seed ^ hash(u64::from(r.id()) << 32 | u64::from(s.id())));
@@ -680,7 +766,7 @@ impl<'s> HierarchicalSolver<'s> {
                 Kind::Surface(_) => (Step::Drop, 0),
             };
         }
-        if self.rho_lum(r) <= 0.0 || !self.may_shine(s) {
+        if self.rho_lum(r) <= 0.0 || !self.may_shine(s) || self.faces_away(r, s) {
             return (Step::Drop, 0);
         }
         if let (Kind::Surface(p), Kind::Surface(q)) = (r.kind(), s.kind())
@@ -1283,7 +1369,7 @@ impl<'s> HierarchicalSolver<'s> {
                 .map_or(self.links.len(), |&(_, e)| e as usize);
             self.links[start..end]
                 .iter()
-                .map(|l| (f64::from(l.k[0]) + f64::from(l.k[1]) + f64::from(l.k[2])) / 3.0)
+                .map(|l| self.unit_transport(l))
                 .sum()
         };
         let mut total: f64 = path.iter().map(|&n| sum_links(NodeRef::surface(n))).sum();
@@ -1294,6 +1380,25 @@ impl<'s> HierarchicalSolver<'s> {
             c = self.clusters.nodes[c as usize].parent;
         }
         total
+    }
+
+    /// A link's mean irradiance at its receiver per unit exitance of a uniform source: a
+    /// cluster source sends its projected area toward the receiver, a cluster receiver spreads
+    /// what it intercepts over its area.
+    fn unit_transport(&self, l: &Link) -> f64 {
+        let j = usize::from(l.dir);
+        let mean = (f64::from(l.k[0]) + f64::from(l.k[1]) + f64::from(l.k[2])) / 3.0;
+        let sent = match l.source.kind() {
+            Kind::Cluster(c) => f64::from(self.projected[c as usize][j]),
+            Kind::Surface(_) => 1.0,
+        };
+        match l.receiver.kind() {
+            Kind::Cluster(c) => {
+                mean * sent * f64::from(self.projected[c as usize][j ^ 16])
+                    / self.clusters.nodes[c as usize].area.max(f64::MIN_POSITIVE)
+            }
+            Kind::Surface(_) => (mean + f64::from(l.shift)) * sent,
+        }
     }
 
     /// The element mesh (the leaves of the surface hierarchy).

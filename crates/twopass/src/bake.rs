@@ -469,7 +469,13 @@ fn print_summary(m: &Manifest, manifest_path: &Path) -> Result<(), CliError> {
     outln!(
         "  {} patches, {} clusters, {} links, {} elements, {} vertices, {} refinement rounds; \
          {:.3e} shadow rays",
-        c.patches, c.clusters, c.links, c.elements, c.vertices, c.refinement_rounds, m.rays as f64
+        c.patches,
+        c.clusters,
+        c.links,
+        c.elements,
+        c.vertices,
+        c.refinement_rounds,
+        m.rays as f64
     );
     let r = &m.residuals;
     outln!(
