@@ -160,7 +160,7 @@ fn merge_cones(a: (DVec3, f64), b: (DVec3, f64)) -> (DVec3, f64) {
         return b;
     }
     let half = (between + a.1 + b.1) / 2.0;
-    if half >= PI || between < 1e-12 || between > PI - 1e-6 {
+    if half >= PI || !(1e-12..=PI - 1e-6).contains(&between) {
         return (a.0, if between < 1e-12 { half } else { PI });
     }
     // Turn a's axis toward b's by (half - a's half-angle).
@@ -803,10 +803,10 @@ impl<'s> HierarchicalSolver<'s> {
                 }),
             };
             match receiver_first {
-                Some(true) if allow_split || e.near => {
-                    return (Step::SplitReceiver(link(&e)), rays);
-                }
-                Some(false) if allow_split || e.near => return (Step::SplitSource(link(&e)), rays),
+                // Past the time or memory budget nothing is split, near links included: they
+                // are kept with their (bounded) far-field estimate.
+                Some(true) if allow_split => return (Step::SplitReceiver(link(&e)), rays),
+                Some(false) if allow_split => return (Step::SplitSource(link(&e)), rays),
                 _ => {
                     // Nothing left to split: a finer visibility estimate is all that helps.
                     if e.partial && vis.max > vis.min && e.error > 0.0 {
@@ -962,8 +962,8 @@ impl<'s> HierarchicalSolver<'s> {
                         flux[1][j] += br * k;
                         continue;
                     }
-                    for c in 0..3 {
-                        let k = f64::from(l.k[c]);
+                    for (c, &k) in l.k.iter().enumerate() {
+                        let k = f64::from(k);
                         acc[0][c] += be * k;
                         acc[1][c] += br * k;
                     }

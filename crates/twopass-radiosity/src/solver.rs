@@ -398,9 +398,9 @@ impl Default for Hierarchical {
 /// the commands and tools that solve, whatever the method.
 pub enum Solver<'s> {
     /// Progressive refinement.
-    Progressive(Progressive<'s>),
+    Progressive(Box<Progressive<'s>>),
     /// Hierarchical radiosity with clustering.
-    Hierarchical(HierarchicalSolver<'s>),
+    Hierarchical(Box<HierarchicalSolver<'s>>),
 }
 
 impl<'s> Solver<'s> {
@@ -408,8 +408,10 @@ impl<'s> Solver<'s> {
     pub fn new(scene: &'s Scene, options: Options) -> Result<Self, SolveError> {
         let (method, _) = options.method.choose(scene);
         Ok(match method {
-            Method::Hierarchical => Self::Hierarchical(HierarchicalSolver::new(scene, options)?),
-            _ => Self::Progressive(Progressive::new(scene, options)?),
+            Method::Hierarchical => {
+                Self::Hierarchical(Box::new(HierarchicalSolver::new(scene, options)?))
+            }
+            _ => Self::Progressive(Box::new(Progressive::new(scene, options)?)),
         })
     }
 

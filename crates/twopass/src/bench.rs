@@ -334,7 +334,9 @@ fn radiosity_scale(args: &RadiosityArgs, ctx: &Context) -> Result<(), CliError> 
 /// line of slope 1 (linear growth) through its first point.
 fn plot_scale(path: &std::path::Path, rows: &[ScaleRow]) -> Result<(), CliError> {
     use plotters::prelude::*;
-    let series: [(&str, &str, Vec<(f64, f64)>); 2] = [
+    /// A panel: its name, the y unit and the (triangles, value) points.
+    type Panel<'a> = (&'a str, &'a str, Vec<(f64, f64)>);
+    let series: [Panel; 2] = [
         (
             "solve time",
             "seconds",
