@@ -5,15 +5,14 @@
 
 use std::f64::consts::PI;
 use std::ops::ControlFlow;
-use std::path::Path;
 
 use glam::{DVec3, Vec3};
 use twopass_radiosity::{
     Finish, Hierarchical, HierarchicalSolver, Method, Options, SolveError, Solver, Stop,
 };
-use twopass_scene::{DiffuseRadiance, Scene, load, load_toml};
+use twopass_scene::{DiffuseRadiance, Scene, load};
 
-use crate::radiosity::{cube, lambert, quad};
+use crate::radiosity::{cube, cube_lit};
 use crate::scene_path;
 
 fn options(unshot: f64) -> Options {
@@ -92,26 +91,7 @@ fn furnace_converges_to_e_over_one_minus_rho() {
 fn a_closed_room_loses_no_light() {
     // One face of a closed cube emits: at convergence everything emitted is absorbed; what
     // the gathers sent but did not deliver (escaped) is the links' discretization error.
-    let text = format!(
-        "version = 1\n[camera]\nposition = [0.5, 0.5, 0.1]\nlook_at = [0.5, 0.5, 1]\nfov_y = 60\n{}",
-        lambert("w", 0.5)
-    );
-    let faces = [
-        ([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
-        ([0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]),
-        ([0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]),
-        ([0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]),
-        ([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]),
-        ([1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]),
-    ];
-    let objects: String = faces
-        .iter()
-        .enumerate()
-        .map(|(i, (o, u, v))| quad(&format!("f{i}"), "w", *o, *u, *v, (i == 3).then_some(1.0)))
-        .collect();
-    let s = load_toml(&format!("{text}{objects}"), Path::new("room.toml"))
-        .unwrap()
-        .0;
+    let s = cube_lit(0.5, |i| (i == 3).then_some(1.0));
     let mut solver = solve(&s, options(1e-6));
     let e = solver.progress().energy;
     eprintln!("{e:?}");

@@ -18,7 +18,7 @@ fn scene(objects: &str, materials: &str) -> Scene {
     load_toml(&text, Path::new("inline.toml")).unwrap().0
 }
 
-pub(crate) fn quad(
+fn quad(
     name: &str,
     material: &str,
     origin: [f64; 3],
@@ -32,7 +32,7 @@ pub(crate) fn quad(
     )
 }
 
-pub(crate) fn lambert(name: &str, rho: f64) -> String {
+fn lambert(name: &str, rho: f64) -> String {
     format!("[[material]]\nname = \"{name}\"\ntype = \"lambert\"\ndiffuse = {rho}\n")
 }
 
@@ -153,6 +153,12 @@ fn parallel_and_perpendicular_squares_match_siegel_and_howell() {
 }
 
 pub(crate) fn cube(rho: f64, emission: f64) -> Scene {
+    cube_lit(rho, |_| Some(emission))
+}
+
+/// A closed unit cube, all faces facing in and reflecting `rho`; face `i` emits
+/// `emission(i)` (L_e) where that is `Some`.
+pub(crate) fn cube_lit(rho: f64, emission: impl Fn(usize) -> Option<f64>) -> Scene {
     // Six unit faces, all facing in (edge_u x edge_v points into the cube).
     let faces = [
         ([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
@@ -165,7 +171,7 @@ pub(crate) fn cube(rho: f64, emission: f64) -> Scene {
     let objects: String = faces
         .iter()
         .enumerate()
-        .map(|(i, (o, u, v))| quad(&format!("face{i}"), "w", *o, *u, *v, Some(emission)))
+        .map(|(i, (o, u, v))| quad(&format!("face{i}"), "w", *o, *u, *v, emission(i)))
         .collect();
     let text = format!(
         "version = 1\n[camera]\nposition = [0.5, 0.5, 0.1]\nlook_at = [0.5, 0.5, 1]\nfov_y = 60\n{}\n{objects}",

@@ -1311,24 +1311,7 @@ impl<'s> HierarchicalSolver<'s> {
                 )
             })
             .collect();
-        let (mut spread, mut diff, mut scale, mut n) = (0.0f64, 0.0, 0.0, 0);
-        for (a, b) in pairs {
-            if a.max(b) > 0.0 {
-                spread = spread.max((a - b).abs() / a.max(b));
-                diff += (a - b).abs();
-                scale += a.max(b);
-                n += 1;
-            }
-        }
-        Residuals {
-            energy_imbalance: self.worst_imbalance,
-            row_sum_min: sums.iter().copied().fold(f64::INFINITY, f64::min),
-            row_sum_mean: sums.iter().sum::<f64>() / sums.len().max(1) as f64,
-            row_sum_max: sums.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-            reciprocity_pairs: n,
-            reciprocity_spread: spread,
-            reciprocity_mean: diff / scale.max(f64::MIN_POSITIVE),
-        }
+        Residuals::from_samples(self.worst_imbalance, &sums, pairs)
     }
 
     /// The sum of the transport coefficients that reach `leaf` (its own links and its

@@ -611,8 +611,7 @@ impl<'s> Progressive<'s> {
                 .map(|(&(_, w), f)| w * f64::from(f))
                 .sum::<f64>()
         };
-        let (mut spread, mut diff, mut scale) = (0.0_f64, 0.0, 0.0);
-        let mut pairs = 0;
+        let mut pairs = Vec::new();
         for k in 0..samples as u64 {
             let (p, q) = (
                 (hash(k) % n_p as u64) as usize,
@@ -621,26 +620,12 @@ impl<'s> Progressive<'s> {
             if p == q {
                 continue;
             }
-            let (a, b) = (
+            pairs.push((
                 areas[p] * patch_ff(self, p, q),
                 areas[q] * patch_ff(self, q, p),
-            );
-            if a.max(b) > 0.0 {
-                spread = spread.max((a - b).abs() / a.max(b));
-                diff += (a - b).abs();
-                scale += a.max(b);
-                pairs += 1;
-            }
+            ));
         }
-        Residuals {
-            energy_imbalance: self.worst_imbalance,
-            row_sum_min: sums.iter().copied().fold(f64::INFINITY, f64::min),
-            row_sum_mean: sums.iter().sum::<f64>() / sums.len().max(1) as f64,
-            row_sum_max: sums.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-            reciprocity_pairs: pairs,
-            reciprocity_spread: spread,
-            reciprocity_mean: diff / scale.max(f64::MIN_POSITIVE),
-        }
+        Residuals::from_samples(self.worst_imbalance, &sums, pairs)
     }
 
     /// Form factors of the given vertices to patch `p`: from the cache where the row is

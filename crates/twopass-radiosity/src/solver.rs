@@ -250,6 +250,35 @@ pub struct Residuals {
     pub reciprocity_mean: f64,
 }
 
+impl Residuals {
+    /// The report from its samples: the worst energy imbalance, the sampled row sums, and
+    /// pairs (A_p F_pq, A_q F_qp) of power transfers that reciprocity says are equal.
+    pub fn from_samples(
+        energy_imbalance: f64,
+        row_sums: &[f64],
+        pairs: impl IntoIterator<Item = (f64, f64)>,
+    ) -> Self {
+        let (mut spread, mut diff, mut scale, mut n) = (0.0f64, 0.0, 0.0, 0);
+        for (a, b) in pairs {
+            if a.max(b) > 0.0 {
+                spread = spread.max((a - b).abs() / a.max(b));
+                diff += (a - b).abs();
+                scale += a.max(b);
+                n += 1;
+            }
+        }
+        Self {
+            energy_imbalance,
+            row_sum_min: row_sums.iter().copied().fold(f64::INFINITY, f64::min),
+            row_sum_mean: row_sums.iter().sum::<f64>() / row_sums.len().max(1) as f64,
+            row_sum_max: row_sums.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+            reciprocity_pairs: n,
+            reciprocity_spread: spread,
+            reciprocity_mean: diff / scale.max(f64::MIN_POSITIVE),
+        }
+    }
+}
+
 /// Why [`Solver::run`] returned.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Finish {
