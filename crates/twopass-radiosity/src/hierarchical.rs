@@ -169,6 +169,13 @@ fn merge_cones(a: (DVec3, f64), b: (DVec3, f64)) -> (DVec3, f64) {
     (axis.normalize_or(a.0), half)
 }
 
+impl Eval {
+    /// Whether the link carries no light: no corner and no part of the receiver gets any.
+    fn carries_nothing(&self) -> bool {
+        self.k.iter().all(|&v| v <= 0.0) && self.shift <= 0.0
+    }
+}
+
 /// Node geometry the link estimates need.
 struct Ends {
     center: DVec3,
@@ -726,7 +733,7 @@ impl<'s> HierarchicalSolver<'s> {
             rays: 0,
         };
         // A near link is split whatever its visibility: no rays for it.
-        if e.near || e.k.iter().all(|&v| v <= 0.0) || !self.options.occlusion {
+        if e.near || e.carries_nothing() || !self.options.occlusion {
             return e;
         }
         let seed = hash(self.options.seed ^ hash(u64::from(r.id()) << 32 | u64::from(s.id())));
@@ -736,8 +743,10 @@ impl<'s> HierarchicalSolver<'s> {
         // counted as uncertain (its unoccluded transport is the error) so that it is refined
         // until its pieces are small or surely blocked, instead of dropped with its light.
         e.partial = vis < 1.0;
-        let mean = (e.k[0] + e.k[1] + e.k[2]) / 3.0;
-        e.error = e.error * vis + if e.partial { er.area * mean } else { 0.0 };
+        // The light the receiver gets unoccluded: its area-averaged form factor (the corners
+        // can all miss a source that the inside of a large element sees).
+        let average = ((e.k[0] + e.k[1] + e.k[2]) / 3.0 + e.shift).max(0.0);
+        e.error = e.error * vis + if e.partial { er.area * average } else { 0.0 };
         e.k = e.k.map(|v| v * vis);
         e.shift *= vis;
         e
@@ -778,7 +787,7 @@ impl<'s> HierarchicalSolver<'s> {
         let vis = self.options.visibility;
         let mut e = self.evaluate(r, s, vis.min);
         let mut rays = e.rays;
-        if !e.near && e.error <= 0.0 && e.k.iter().all(|&v| v <= 0.0) {
+        if !e.near && e.error <= 0.0 && e.carries_nothing() {
             return (Step::Drop, rays);
         }
         let link = |e: &Eval| Link {
@@ -817,7 +826,7 @@ impl<'s> HierarchicalSolver<'s> {
                 }
             }
         }
-        if e.k.iter().all(|&v| v <= 0.0) {
+        if e.carries_nothing() {
             return (Step::Drop, rays);
         }
         (Step::Keep(link(&e)), rays)
