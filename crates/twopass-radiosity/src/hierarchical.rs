@@ -636,20 +636,36 @@ impl<'s> HierarchicalSolver<'s> {
     /// The receiving points of a surface node: its corners, a hair inside (junction vertices
     /// receive from just inside their own surface, as in progressive refinement), and their
     /// receiving normals; plus the centroid and its normal.
-    fn receiving_points(&self, n: u32) -> ([DVec3; 4], [DVec3; 4]) {
+    fn receiving_points(&self, n: u32) -> ([DVec3; 7], [DVec3; 7]) {
         let node = &self.mesh.nodes[n as usize];
         let p = self.mesh.corners(n);
         let c = (p[0] + p[1] + p[2]) / 3.0;
         let normals = node
             .vertices
             .map(|v| self.mesh.vertices[v as usize].normal.as_dvec3());
-        let nc = (normals[0] + normals[1] + normals[2])
-            .try_normalize()
-            .unwrap_or(normals[0]);
-        let x = p.map(|q| q + (c - q) * RECEIVER_INSET);
+        let blend = |a: DVec3, b: DVec3| (a + b).try_normalize().unwrap_or(a);
+        let nc = blend(normals[0] + normals[1], normals[2]);
+        let inset = |q: DVec3| q + (c - q) * RECEIVER_INSET;
+        let mid = |i: usize, j: usize| inset((p[i] + p[j]) * 0.5);
         (
-            [x[0], x[1], x[2], c],
-            [normals[0], normals[1], normals[2], nc],
+            [
+                inset(p[0]),
+                inset(p[1]),
+                inset(p[2]),
+                c,
+                mid(0, 1),
+                mid(1, 2),
+                mid(2, 0),
+            ],
+            [
+                normals[0],
+                normals[1],
+                normals[2],
+                nc,
+                blend(normals[0], normals[1]),
+                blend(normals[1], normals[2]),
+                blend(normals[2], normals[0]),
+            ],
         )
     }
 
@@ -670,21 +686,28 @@ impl<'s> HierarchicalSolver<'s> {
                 let ns = self.scene.mesh.geometric_normals
                     [self.mesh.nodes[q as usize].scene_triangle as usize]
                     .as_dvec3();
-                let f: [f64; 4] = std::array::from_fn(|i| {
+                let f: [f64; 7] = std::array::from_fn(|i| {
                     form_factor::point_to_polygon(x[i], n[i], &poly, Some(ns))
                 });
                 // The corners keep their exact point values; the receiver's area-averaged
-                // form factor, by the rule exact for quadratics (corners 1/12 each, centroid
-                // 3/4), sets the light it gets: interpolating a curved F linearly would lose
-                // or add light with a consistent sign.
+                // form factor sets the light it gets (interpolating a curved F linearly would
+                // lose or add light with a consistent sign), by the seven-point rule exact
+                // for cubics (corners 1/20, edge midpoints 2/15, centroid 9/20). The error
+                // estimate: how far that average is from the corners' and from the
+                // quadratic rule's (corners 1/12, centroid 3/4), plus a part of the spread.
                 let mean = (f[0] + f[1] + f[2]) / 3.0;
-                shift = 0.75 * (f[3] - mean);
+                let average = (f[0] + f[1] + f[2]) / 20.0
+                    + (f[4] + f[5] + f[6]) * (2.0 / 15.0)
+                    + f[3] * (9.0 / 20.0);
+                let quadratic = mean / 4.0 + f[3] * 0.75;
+                shift = average - mean;
                 let (lo, hi) = f
                     .iter()
                     .fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
                 (
                     [f[0], f[1], f[2]],
-                    er.area * ((f[3] - mean).abs() + 0.25 * (hi - lo)),
+                    er.area
+                        * ((average - mean).abs() + (average - quadratic).abs() + 0.25 * (hi - lo)),
                 )
             }
             (Kind::Surface(p), Kind::Cluster(_)) => {
