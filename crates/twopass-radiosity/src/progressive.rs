@@ -500,9 +500,9 @@ impl<'s> Progressive<'s> {
 
     /// Runs the whole schedule: shooting, adaptive rounds (if enabled), shooting to the stop
     /// criteria. `observer` sees the solver after every shot: it can read
-    /// [`Solver::progress`], take an intermediate [`Solver::solution`] (with the ambient term)
-    /// or stop the solve early by returning `Break`; the solution is usable whenever this
-    /// returns.
+    /// [`Progressive::progress`], take an intermediate [`Progressive::solution`] (with the
+    /// ambient term) or stop the solve early by returning `Break`; the solution is usable
+    /// whenever this returns.
     pub fn run(&mut self, mut observer: impl FnMut(&Self) -> ControlFlow<()>) -> Finish {
         let stop = self.options.stop;
         let adaptive = self.options.adaptive;
