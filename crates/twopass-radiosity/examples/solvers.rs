@@ -4,6 +4,12 @@
 //! at the same points).
 //!
 //! `cargo run --release -p twopass-radiosity --example solvers -- scenes/cornell-box.toml [unshot]`
+//!
+//! The scene may be `generate:N` (the generated benchmark room of about N triangles). For
+//! diagnosis, environment variables set: `TOL` (link tolerance), `MIN` (smallest element
+//! edge), `ELEM` (progressive element size), `OCCLUSION=0` (no shadow rays), `PER_OBJECT`
+//! (reflected power per object, direct and indirect), `PER_VERTEX` (the same from vertex
+//! values), `HIERARCHICAL_ONLY` (skip progressive refinement, for large scenes).
 
 use std::time::Instant;
 
