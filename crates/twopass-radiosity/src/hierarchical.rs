@@ -80,6 +80,8 @@ enum Step {
 /// A link's evaluation.
 struct Eval {
     k: [f64; 3],
+    /// `k` before visibility.
+    open: [f64; 3],
     dir: u8,
     shift: f64,
     error: f64,
@@ -633,6 +635,45 @@ impl<'s> HierarchicalSolver<'s> {
         (0.0, 0)
     }
 
+    /// The visible fraction of node `s` from surface point `from`, by about `count` stratified
+    /// shadow rays to points of `s` that face it; 1 when none does (the form factor, which is
+    /// zero then or nearly, has the last word).
+    fn point_visibility(
+        &self,
+        from: &SurfacePoint,
+        s: NodeRef,
+        count: u32,
+        seed: u64,
+    ) -> (f64, u64) {
+        let k = (f64::from(count).sqrt().round() as u32).max(1);
+        let (mut seen, mut total) = (0u32, 0u32);
+        for i in 0..k {
+            for j in 0..k {
+                let h = hash(seed ^ (u64::from(i) << 24 | u64::from(j)));
+                let (fi, fj, kf) = (f64::from(i), f64::from(j), f64::from(k));
+                let b = self.sample_point(
+                    s,
+                    [
+                        (fi + unit(h)) / kf,
+                        (fj + unit(hash(h))) / kf,
+                        unit(hash(h ^ 1)),
+                    ],
+                );
+                if (b.position - from.position).dot(b.normal) >= 0.0 {
+                    continue;
+                }
+                total += 1;
+                if !self.scene.occluded_between(from, &b) {
+                    seen += 1;
+                }
+            }
+        }
+        if total == 0 {
+            return (1.0, 0);
+        }
+        (f64::from(seen) / f64::from(total), u64::from(total))
+    }
+
     /// The receiving points of a surface node: its corners, a hair inside (junction vertices
     /// receive from just inside their own surface, as in progressive refinement), and their
     /// receiving normals; plus the centroid and its normal.
@@ -748,6 +789,7 @@ impl<'s> HierarchicalSolver<'s> {
         };
         let mut e = Eval {
             k,
+            open: k,
             dir,
             shift,
             error,
@@ -848,6 +890,29 @@ impl<'s> HierarchicalSolver<'s> {
                     }
                 }
             }
+        }
+        // A kept link between two surfaces that is partly blocked: the element keeps the light
+        // its own visibility lets through (corners' mean plus shift), and the corners show one
+        // visibility each, so that a shadow edge or an occluder standing on the element is
+        // not smeared over the corners it spares.
+        if let (true, Kind::Surface(p), Kind::Surface(_)) = (e.partial, r.kind(), s.kind()) {
+            let (x, _) = self.receiving_points(p);
+            let tri = self.mesh.nodes[p as usize].scene_triangle;
+            let total = (e.k[0] + e.k[1] + e.k[2]) / 3.0 + e.shift;
+            let mut corners = e.open;
+            for (c, k) in corners.iter_mut().enumerate() {
+                let from = self.scene.mesh.surface_point_at(tri, x[c].as_vec3());
+                let seed = hash(
+                    self.options.seed
+                        ^ hash(u64::from(r.id()) << 32 | u64::from(s.id()))
+                        ^ (c as u64 + 1),
+                );
+                let (v, cast) = self.point_visibility(&from, s, vis.max, seed);
+                *k *= v;
+                rays += cast;
+            }
+            e.k = corners;
+            e.shift = total - (corners[0] + corners[1] + corners[2]) / 3.0;
         }
         if e.carries_nothing() {
             return (Step::Drop, rays);
