@@ -281,10 +281,7 @@ fn radiosity_scale(args: &RadiosityArgs, ctx: &Context) -> Result<(), CliError> 
         plot_scale(path, &rows)?;
     }
     if ctx.json {
-        outln!(
-            "{}",
-            serde_json::to_string_pretty(&rows).expect("rows serialize")
-        );
+        crate::output::print_json(&rows)?;
     } else if !ctx.quiet {
         outln!(
             "generated scenes: solve to residual {:.0e}, {} threads",
@@ -481,10 +478,7 @@ fn radiosity(args: &RadiosityArgs, ctx: &Context) -> Result<(), CliError> {
     }
     progress.finish_and_clear();
     if ctx.json {
-        outln!(
-            "{}",
-            serde_json::to_string_pretty(&rows).expect("rows serialize")
-        );
+        crate::output::print_json(&rows)?;
     } else if !ctx.quiet {
         outln!(
             "scene {}: progressive refinement to unshot {:.0e}, fixed mesh, {} threads",
@@ -669,10 +663,7 @@ fn rays(args: &RaysArgs, ctx: &Context) -> Result<(), CliError> {
         rows,
     };
     if ctx.json {
-        outln!(
-            "{}",
-            serde_json::to_string_pretty(&report).expect("report serializes")
-        );
+        crate::output::print_json(&report)?;
     } else if !ctx.quiet {
         outln!(
             "scene {}: {} triangles, BVH {} nodes built in {:.2} ms (median of 5), {} threads",
@@ -846,10 +837,7 @@ fn render(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
         frames_per_second,
     };
     if ctx.json {
-        outln!(
-            "{}",
-            serde_json::to_string_pretty(&report).expect("report serializes")
-        );
+        crate::output::print_json(&report)?;
     } else if !ctx.quiet {
         outln!(
             "scene {}: {} x {}, {} spp, {} threads; radiosity from {} in {:.2} s",

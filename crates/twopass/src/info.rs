@@ -81,10 +81,7 @@ pub fn run(args: &InfoArgs, ctx: &Context) -> Result<(), CliError> {
         warnings: warnings.iter().map(ToString::to_string).collect(),
     };
     if ctx.json {
-        outln!(
-            "{}",
-            serde_json::to_string_pretty(&info).expect("info serializes")
-        );
+        crate::output::print_json(&info)?;
         return Ok(());
     }
     for w in &info.warnings {

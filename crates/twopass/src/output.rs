@@ -124,3 +124,14 @@ pub fn write_csv<T: serde::Serialize>(path: &Path, rows: &[T]) -> Result<(), Cli
     let bytes = w.into_inner().map_err(|e| encode(e.to_string()))?;
     write_atomic(path, &bytes)
 }
+
+/// Prints `value` as pretty JSON on standard output (the `--json` summary of every command);
+/// a write error is the CLI's error, as with `outln!`.
+pub fn print_json<T: serde::Serialize>(value: &T) -> Result<(), CliError> {
+    let text = serde_json::to_string_pretty(value).map_err(|e| CliError::Encode {
+        path: "(standard output)".into(),
+        message: e.to_string(),
+    })?;
+    outln!("{text}");
+    Ok(())
+}

@@ -397,10 +397,7 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
         skipped,
     };
     if ctx.json {
-        outln!(
-            "{}",
-            serde_json::to_string_pretty(&summary).expect("summary serializes")
-        );
+        crate::output::print_json(&summary)?;
     } else if !ctx.quiet {
         for s in &summary.skipped {
             outln!("{s}");
