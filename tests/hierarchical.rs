@@ -260,3 +260,142 @@ fn emitters_over_twelve_decades_scale_linearly() {
     }
     let _ = DVec3::ZERO;
 }
+
+/// Direct reflected power (W, channels summed) of every object by plain Monte Carlo: `n`
+/// uniform point pairs on the object and on each emitter, a shadow ray each. Independent of
+/// the solver: no hierarchy, no links, no direction tables.
+fn direct_power_monte_carlo(scene: &Scene, n: u64) -> Vec<f64> {
+    use twopass_brdf::random::hash;
+    let unit = |h: u64| (h >> 11) as f64 / (1u64 << 53) as f64;
+    let pick = |tris: &std::ops::Range<u32>, u: f64| -> (u32, f64) {
+        let area: f64 = tris
+            .clone()
+            .map(|t| f64::from(scene.mesh.areas[t as usize]))
+            .sum();
+        let mut x = u * area;
+        for t in tris.clone() {
+            x -= f64::from(scene.mesh.areas[t as usize]);
+            if x <= 0.0 {
+                return (t, area);
+            }
+        }
+        (tris.end - 1, area)
+    };
+    let point = |t: u32, h: u64| {
+        scene.mesh.sample_triangle(
+            t,
+            glam::Vec2::new(unit(hash(h)) as f32, unit(hash(h ^ 7)) as f32),
+        )
+    };
+    let mut out = vec![0.0; scene.objects.len()];
+    for (o, obj) in scene.objects.iter().enumerate() {
+        let rho = scene.materials[obj.material as usize]
+            .material
+            .diffuse_albedo();
+        for e in scene.emitters.iter().filter(|e| e.object as usize != o) {
+            let light = &scene.objects[e.object as usize];
+            let mut sum = 0.0;
+            let (mut area_o, mut area_l) = (0.0, 0.0);
+            for i in 0..n {
+                let h = hash(i ^ ((o as u64) << 40));
+                let (t, ao) = pick(&obj.triangles, unit(h));
+                let (tl, al) = pick(&light.triangles, unit(hash(h ^ 1)));
+                (area_o, area_l) = (ao, al);
+                let (x, y) = (point(t, h ^ 2), point(tl, h ^ 4));
+                let d = (y.position - x.position).as_dvec3();
+                let l2 = d.length_squared();
+                let cos = x.normal.as_dvec3().dot(d) * -y.normal.as_dvec3().dot(d) / l2;
+                if x.normal.as_dvec3().dot(d) > 0.0 && cos > 0.0 && !scene.occluded_between(&x, &y)
+                {
+                    sum += cos / l2;
+                }
+            }
+            out[o] +=
+                f64::from((rho * e.radiance).element_sum()) * sum / n as f64 * area_l * area_o;
+        }
+    }
+    out
+}
+
+#[test]
+#[ignore = "known defect (issue 13): the sphere in the penumbra gets 0.40 of its direct light \
+            with the default 4/16 visibility rays (0.76 with 16/16; within 5 % with 64/64)"]
+fn cluster_links_carry_direct_light_and_shadows_as_monte_carlo_does() {
+    // A floor, a light above it, and five spheres of 320 triangles at different heights, some
+    // in another's shadow: the spheres take their light through cluster links (direction
+    // tables, cluster visibility), the floor through surface links with the spheres'
+    // shadows on it. Each object's direct reflected power is checked against plain Monte
+    // Carlo with shadow rays (400k pairs per object, about 0.3 % noise).
+    let scene_toml = r#"
+version = 1
+[camera]
+position = [0, 1, -4]
+look_at = [0, 1, 0]
+fov_y = 50
+[[material]]
+name = "white"
+type = "lambert"
+diffuse = 0.7
+[[object]]
+name = "floor"
+material = "white"
+shape = { type = "quad", origin = [-2, 0, -2], edge_u = [0, 0, 4], edge_v = [4, 0, 0] }
+[[object]]
+name = "light"
+material = "white"
+emission = 10
+shape = { type = "quad", origin = [-0.4, 3, -0.4], edge_u = [0.8, 0, 0], edge_v = [0, 0, 0.8] }
+[[object]]
+name = "high"
+material = "white"
+shape = { type = "sphere", center = [0.1, 2.2, 0], radius = 0.3, subdivisions = 2 }
+[[object]]
+name = "shadowed"
+material = "white"
+shape = { type = "sphere", center = [0.3, 1.0, 0.1], radius = 0.35, subdivisions = 2 }
+[[object]]
+name = "aside"
+material = "white"
+shape = { type = "sphere", center = [-1.2, 0.8, 0.6], radius = 0.3, subdivisions = 2 }
+[[object]]
+name = "low"
+material = "white"
+shape = { type = "sphere", center = [1.1, 0.3, -0.9], radius = 0.25, subdivisions = 2 }
+[[object]]
+name = "corner"
+material = "white"
+shape = { type = "sphere", center = [-1.4, 0.4, -1.3], radius = 0.35, subdivisions = 2 }
+"#;
+    let (scene, _) =
+        twopass_scene::load_toml(scene_toml, std::path::Path::new("spheres.toml")).unwrap();
+    let solver = solve(&scene, options(1e-3));
+    let s = solver.solution();
+    let mesh = s.mesh();
+    let mut power = vec![0.0f64; scene.objects.len()];
+    for n in mesh.leaves() {
+        let node = &mesh.nodes[n as usize];
+        let o = scene.mesh.triangle_object[node.scene_triangle as usize] as usize;
+        for &v in &node.vertices {
+            power[o] +=
+                f64::from(node.area) / 3.0 * f64::from(s.direct()[v as usize].element_sum());
+        }
+    }
+    let mc = direct_power_monte_carlo(&scene, 400_000);
+    for (o, obj) in scene.objects.iter().enumerate() {
+        if obj.emission != Vec3::ZERO {
+            continue;
+        }
+        let ratio = power[o] / mc[o];
+        eprintln!(
+            "{}: hierarchical / Monte Carlo direct power {ratio:.4}",
+            obj.name
+        );
+        assert!(
+            (ratio - 1.0).abs() < 0.05,
+            "{}: direct power {} against Monte Carlo {}",
+            obj.name,
+            power[o],
+            mc[o]
+        );
+    }
+}

@@ -33,7 +33,7 @@ use std::f64::consts::PI;
 use std::ops::ControlFlow;
 use std::time::{Duration, Instant};
 
-use glam::{DVec3, Vec2, Vec3};
+use glam::{DMat3, DVec2, DVec3, Vec2, Vec3};
 use rayon::prelude::*;
 use twopass_scene::{Scene, SurfacePoint};
 
@@ -54,10 +54,10 @@ struct Link {
     /// Transport per unit of what the source sends (its exitance for a surface, its radiant
     /// table entry `dir` for a cluster), visibility included: irradiance at the receiver's
     /// three corners for a surface receiver (point values: what the vertices display); flux
-    /// density from direction `dir ^ 16` for a cluster receiver (three equal values).
+    /// density from direction `dir ^ OPPOSITE` for a cluster receiver (three equal values).
     k: [f32; 3],
-    /// Table bin of the direction from the source's centre to the receiver's.
-    dir: u8,
+    /// The direction from the source's centre to the receiver's, as table bins.
+    dir: Dir,
     /// Area-averaged irradiance per unit source exitance less the mean of `k`: what the
     /// linear interpolant of the corner values misses of the light the receiver gets (surface
     /// pairs; zero otherwise), added uniformly over the receiver.
@@ -65,6 +65,10 @@ struct Link {
     /// Estimated error of the transport per unit source exitance luminance and receiver
     /// reflectance, as power: receiver area (scene units squared) times form-factor error.
     error: f32,
+    /// Shadow rays found the pair partly or wholly blocked: its visibility depends on where
+    /// the source's light comes from, and is estimated again once the radiosities are known
+    /// (see [`HierarchicalSolver::refresh_visibility`]).
+    partial: bool,
 }
 
 /// What refinement does with a candidate pair.
@@ -82,7 +86,7 @@ struct Eval {
     k: [f64; 3],
     /// `k` before visibility.
     open: [f64; 3],
-    dir: u8,
+    dir: Dir,
     shift: f64,
     error: f64,
     /// An end is a cluster overlapping the other end's bounding sphere: the far-field estimate
@@ -94,8 +98,10 @@ struct Eval {
 }
 
 /// Directions of the clusters' tables: 16 spread over a hemisphere (a Fibonacci spiral) and
-/// their opposites, so that bin `j ^ 16` is the opposite of bin `j`.
+/// their opposites, so that bin `j ^ OPPOSITE` is the opposite of bin `j`.
 const DIRECTIONS: usize = 32;
+/// `j ^ OPPOSITE` is the bin opposite bin `j` (`DIRECTIONS / 2`, a power of two).
+const OPPOSITE: u8 = (DIRECTIONS / 2) as u8;
 
 fn directions() -> [DVec3; DIRECTIONS] {
     let half = DIRECTIONS / 2;
@@ -110,16 +116,68 @@ fn directions() -> [DVec3; DIRECTIONS] {
     })
 }
 
-/// The bin of unit direction `u` (the nearest table direction).
-fn bin(dirs: &[DVec3; DIRECTIONS], u: DVec3) -> u8 {
-    let mut best = (0, f64::NEG_INFINITY);
-    for (j, d) in dirs.iter().enumerate() {
-        let c = d.dot(u);
-        if c > best.1 {
-            best = (j, c);
+/// A direction as a blend of the three nearest table directions: weights `w / 255` (summing
+/// to 1) chosen so that the blend points along the direction (barycentric coordinates in the
+/// spherical triangle of the three). A surface facing `n` then takes close to `n . u` of a
+/// beam from `u`, not the cosine to the nearest table direction, up to 20 degrees off with
+/// 32 directions.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Dir {
+    bins: [u8; 3],
+    w: [u8; 3],
+}
+
+impl Dir {
+    /// The blend for unit direction `u`.
+    fn new(dirs: &[DVec3; DIRECTIONS], u: DVec3) -> Self {
+        let mut best = [(0usize, f64::NEG_INFINITY); 3];
+        for (j, d) in dirs.iter().enumerate() {
+            let c = d.dot(u);
+            if c > best[2].1 {
+                best[2] = (j, c);
+                best.sort_by(|a, b| b.1.total_cmp(&a.1));
+            }
+        }
+        let m = DMat3::from_cols(dirs[best[0].0], dirs[best[1].0], dirs[best[2].0]);
+        let raw = if m.determinant().abs() > 1e-9 {
+            (m.inverse() * u).max(DVec3::ZERO)
+        } else {
+            DVec3::X
+        };
+        let sum = raw.element_sum();
+        let raw = if sum > 0.0 { raw / sum } else { DVec3::X };
+        let mut w = raw.to_array().map(|x| (x * 255.0).round() as u8);
+        // Rounding must not lose or add weight: the largest takes the difference.
+        let total: u32 = w.iter().map(|&x| u32::from(x)).sum();
+        w[0] = (i64::from(w[0]) + 255 - i64::from(total)).clamp(0, 255) as u8;
+        Self {
+            bins: best.map(|b| b.0 as u8),
+            w,
         }
     }
-    best.0 as u8
+
+    /// The opposite direction.
+    fn opposite(self) -> Self {
+        Self {
+            bins: self.bins.map(|b| b ^ OPPOSITE),
+            w: self.w,
+        }
+    }
+
+    /// The blend's (bin, weight) pairs.
+    fn parts(self) -> impl Iterator<Item = (usize, f64)> {
+        (0..3).map(move |i| (usize::from(self.bins[i]), f64::from(self.w[i]) / 255.0))
+    }
+
+    /// A per-direction quantity read along this direction.
+    fn read(self, values: &[f32; DIRECTIONS]) -> f64 {
+        self.parts().map(|(j, w)| w * f64::from(values[j])).sum()
+    }
+
+    /// A per-direction colour read along this direction.
+    fn read_rgb(self, values: &[Vec3; DIRECTIONS]) -> DVec3 {
+        self.parts().map(|(j, w)| values[j].as_dvec3() * w).sum()
+    }
 }
 
 /// A table over the directions, per origin (emitted, reflected light), in f32 to keep
@@ -250,6 +308,9 @@ pub struct HierarchicalSolver<'s> {
     rays: u64,
     rounds: u32,
     linked: bool,
+    /// The partly blocked links have had their visibility estimated again with the
+    /// converged radiosities.
+    refreshed: bool,
     max_links: usize,
     max_nodes: usize,
     started: Instant,
@@ -264,6 +325,19 @@ fn to_f32(v: DVec3) -> Vec3 {
 /// A uniform number in [0, 1) from a hash.
 fn unit(h: u64) -> f64 {
     (h >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+}
+
+/// The visible fraction from weighted ray counts `[geometric, geometric x source exitance]`:
+/// by the exitance-weighted sums when the source points sent anything, else by the geometric
+/// ones; 0 when no weight at all (every pair at a grazing angle).
+fn weighted_fraction(seen: [f64; 2], all: [f64; 2]) -> f64 {
+    if all[1] > 0.0 {
+        (seen[1] / all[1]).clamp(0.0, 1.0)
+    } else if all[0] > 0.0 {
+        (seen[0] / all[0]).clamp(0.0, 1.0)
+    } else {
+        0.0
+    }
 }
 
 impl<'s> HierarchicalSolver<'s> {
@@ -361,6 +435,7 @@ impl<'s> HierarchicalSolver<'s> {
             rays: 0,
             rounds: 0,
             linked: false,
+            refreshed: false,
             max_links: (spare / 2 / BYTES_PER_LINK) as usize,
             max_nodes: (spare / 2 / BYTES_PER_NODE) as usize,
             options,
@@ -535,8 +610,7 @@ impl<'s> HierarchicalSolver<'s> {
         match l.source.kind() {
             Kind::Cluster(c) => {
                 let t = &self.radiant[c as usize];
-                let j = usize::from(l.dir);
-                [t[0][j].as_dvec3(), t[1][j].as_dvec3()]
+                [l.dir.read_rgb(&t[0]), l.dir.read_rgb(&t[1])]
             }
             Kind::Surface(n) => self.exitance[n as usize],
         }
@@ -563,9 +637,10 @@ impl<'s> HierarchicalSolver<'s> {
     }
 
     /// A point on node `r` for three uniform numbers: area-uniform over a surface node; over a
-    /// cluster, a triangle picked by area and a uniform point on it.
-    fn sample_point(&self, r: NodeRef, u: [f64; 3]) -> SurfacePoint {
-        match r.kind() {
+    /// cluster, a triangle picked by area and a uniform point on it. Also the leaf of the
+    /// element mesh it lies on.
+    fn sample_point(&self, r: NodeRef, u: [f64; 3]) -> (SurfacePoint, u32) {
+        let (t, uv, from) = match r.kind() {
             Kind::Surface(n) => {
                 let node = &self.mesh.nodes[n as usize];
                 let s = u[0].sqrt();
@@ -573,35 +648,75 @@ impl<'s> HierarchicalSolver<'s> {
                 let b = node.uv[0].as_dvec2() * w[0]
                     + node.uv[1].as_dvec2() * w[1]
                     + node.uv[2].as_dvec2() * w[2];
-                self.scene.mesh.surface_point(
-                    node.scene_triangle,
-                    [(1.0 - b.x - b.y) as f32, b.x as f32, b.y as f32],
-                )
+                (node.scene_triangle, b, n)
             }
             Kind::Cluster(c) => {
                 let (t, _) = self.clusters.pick_triangle(c, u[0]);
-                self.scene
-                    .mesh
-                    .sample_triangle(t, Vec2::new(u[1] as f32, u[2] as f32))
+                let s = u[1].sqrt();
+                let b = DVec2::new(s * (1.0 - u[2]), s * u[2]);
+                (t, b, self.mesh.roots[t as usize])
             }
+        };
+        let point = self
+            .scene
+            .mesh
+            .surface_point(t, [(1.0 - uv.x - uv.y) as f32, uv.x as f32, uv.y as f32]);
+        (point, self.descend(from, uv.as_vec2()))
+    }
+
+    /// The leaf below surface node `n` that holds the point `uv` (triangle parameters).
+    fn descend(&self, mut n: u32, uv: Vec2) -> u32 {
+        while let Some([c0, c1]) = self.mesh.nodes[n as usize].children {
+            // The first child is (a, m, c), cut from its sibling along m-c.
+            let [a, m, c] = self.mesh.nodes[c0 as usize].uv;
+            let side = |q: Vec2| (c - m).perp_dot(q - m);
+            n = if side(uv) * side(a) >= 0.0 { c0 } else { c1 };
         }
+        n
+    }
+
+    /// How much a shadow ray from `to` (on the receiving end) to `from` (on the sending end,
+    /// on `leaf`) stands for: the source's exitance luminance there (W/m^2, its last gathered
+    /// value) times the pair's geometric term cos cos / d^2, the distance held above a tenth of
+    /// the ends' size so that a pair of points at a shared edge does not take all the weight.
+    /// Zero when the source point sends nothing yet (before the first gather); the caller then
+    /// falls back to the geometric term alone.
+    fn ray_weight(
+        &self,
+        to: &SurfacePoint,
+        from: &SurfacePoint,
+        leaf: u32,
+        near2: f64,
+    ) -> [f64; 2] {
+        let d = (from.position - to.position).as_dvec3();
+        let l2 = d.length_squared().max(f64::MIN_POSITIVE);
+        let cos2 = (to.normal.as_dvec3().dot(d) * -from.normal.as_dvec3().dot(d)).max(0.0) / l2;
+        let g = cos2 / l2.max(near2);
+        let [e, r] = self.exitance[leaf as usize];
+        [g, g * luminance(e + r).max(0.0)]
     }
 
     /// The visible fraction between two nodes from about `count` stratified shadow rays
-    /// between points on both. Pairs of points that face away from each other do not count:
-    /// orientation is the form factor's business (and the isotropic cluster's 1/4), the rays
-    /// only look for what stands between. When no pair faces, a grid four times as fine is
-    /// drawn (a few samples can all land on the far side of a cluster by chance); when it finds
-    /// none either, the two ends do not face each other and nothing passes.
+    /// between points on both, each ray weighted by what it carries: the geometric term of its
+    /// two ends and the exitance of its source point (see [`Self::ray_weight`]), so that a
+    /// bright part of the source that the receiver sees and a dark part it does not (the
+    /// floor in a sphere's shadow, hidden by the same sphere) are not averaged into a
+    /// uniform source half seen. Pairs of points that face away from each other do not count:
+    /// orientation is the form factor's business, the rays only look for what stands between.
+    /// When no pair faces, a grid four times as fine is drawn (a few samples can all land on
+    /// the far side of a cluster by chance); when it finds none either, the two ends do not
+    /// face each other and nothing passes.
     fn visibility(&self, r: NodeRef, s: NodeRef, count: u32, seed: u64) -> (f64, u64) {
         let mut k = (f64::from(count).sqrt().round() as u32).max(1);
+        let near = 0.1 * self.ends(r).radius.min(self.ends(s).radius);
         for _ in 0..2 {
-            let (mut seen, mut total) = (0u32, 0u32);
+            let mut total = 0u32;
+            let (mut seen, mut all) = ([0.0f64; 2], [0.0f64; 2]);
             for i in 0..k {
                 for j in 0..k {
                     let h = hash(seed ^ (u64::from(k) << 48 | u64::from(i) << 24 | u64::from(j)));
                     let (fi, fj, kf) = (f64::from(i), f64::from(j), f64::from(k));
-                    let a = self.sample_point(
+                    let (a, _) = self.sample_point(
                         r,
                         [
                             (fi + unit(h)) / kf,
@@ -609,7 +724,7 @@ impl<'s> HierarchicalSolver<'s> {
                             unit(hash(h ^ 1)),
                         ],
                     );
-                    let b = self.sample_point(
+                    let (b, leaf) = self.sample_point(
                         s,
                         [
                             (fj + unit(hash(h ^ 2))) / kf,
@@ -622,13 +737,17 @@ impl<'s> HierarchicalSolver<'s> {
                         continue;
                     }
                     total += 1;
+                    let w = self.ray_weight(&a, &b, leaf, near * near);
                     if !self.scene.occluded_between(&a, &b) {
-                        seen += 1;
+                        seen[0] += w[0];
+                        seen[1] += w[1];
                     }
+                    all[0] += w[0];
+                    all[1] += w[1];
                 }
             }
             if total > 0 {
-                return (f64::from(seen) / f64::from(total), u64::from(total));
+                return (weighted_fraction(seen, all), u64::from(total));
             }
             k *= 2;
         }
@@ -636,8 +755,8 @@ impl<'s> HierarchicalSolver<'s> {
     }
 
     /// The visible fraction of node `s` from surface point `from`, by about `count` stratified
-    /// shadow rays to points of `s` that face it; 1 when none does (the form factor, which is
-    /// zero then or nearly, has the last word).
+    /// shadow rays to points of `s` that face it, weighted as in [`Self::visibility`]; 1 when
+    /// none does (the form factor, which is zero then or nearly, has the last word).
     fn point_visibility(
         &self,
         from: &SurfacePoint,
@@ -646,12 +765,14 @@ impl<'s> HierarchicalSolver<'s> {
         seed: u64,
     ) -> (f64, u64) {
         let k = (f64::from(count).sqrt().round() as u32).max(1);
-        let (mut seen, mut total) = (0u32, 0u32);
+        let near = 0.1 * self.ends(s).radius;
+        let mut total = 0u32;
+        let (mut seen, mut all) = ([0.0f64; 2], [0.0f64; 2]);
         for i in 0..k {
             for j in 0..k {
                 let h = hash(seed ^ (u64::from(i) << 24 | u64::from(j)));
                 let (fi, fj, kf) = (f64::from(i), f64::from(j), f64::from(k));
-                let b = self.sample_point(
+                let (b, leaf) = self.sample_point(
                     s,
                     [
                         (fi + unit(h)) / kf,
@@ -663,15 +784,19 @@ impl<'s> HierarchicalSolver<'s> {
                     continue;
                 }
                 total += 1;
+                let w = self.ray_weight(from, &b, leaf, near * near);
                 if !self.scene.occluded_between(from, &b) {
-                    seen += 1;
+                    seen[0] += w[0];
+                    seen[1] += w[1];
                 }
+                all[0] += w[0];
+                all[1] += w[1];
             }
         }
         if total == 0 {
             return (1.0, 0);
         }
-        (f64::from(seen) / f64::from(total), u64::from(total))
+        (weighted_fraction(seen, all), u64::from(total))
     }
 
     /// The receiving points of a surface node: its corners, a hair inside (junction vertices
@@ -717,7 +842,7 @@ impl<'s> HierarchicalSolver<'s> {
         let d2 = (es.center - er.center).length_squared();
         let near = d2 <= reach * reach;
         let far2 = d2.max(reach * reach).max(f64::MIN_POSITIVE);
-        let dir = bin(&self.dirs, (er.center - es.center).normalize_or(DVec3::Z));
+        let dir = Dir::new(&self.dirs, (er.center - es.center).normalize_or(DVec3::Z));
         let mut near_cluster = false;
         let mut shift = 0.0;
         let (k, error) = match (r.kind(), s.kind()) {
@@ -772,19 +897,13 @@ impl<'s> HierarchicalSolver<'s> {
                 let d = er.center - es.center;
                 let cos = (nq.dot(d) / d2.sqrt().max(f64::MIN_POSITIVE)).max(0.0);
                 let v = es.area * cos / (PI * far2);
-                (
-                    [v; 3],
-                    v * f64::from(self.projected[c as usize][usize::from(dir ^ 16)]),
-                )
+                ([v; 3], v * dir.opposite().read(&self.projected[c as usize]))
             }
             (Kind::Cluster(c), Kind::Cluster(_)) => {
                 // Flux density per unit of the source's radiant table entry: 1 / (pi l^2).
                 near_cluster = near;
                 let v = 1.0 / (PI * far2);
-                (
-                    [v; 3],
-                    v * f64::from(self.projected[c as usize][usize::from(dir ^ 16)]),
-                )
+                ([v; 3], v * dir.opposite().read(&self.projected[c as usize]))
             }
         };
         let mut e = Eval {
@@ -862,7 +981,27 @@ impl<'s> HierarchicalSolver<'s> {
             dir: e.dir,
             shift: e.shift as f32,
             error: e.error as f32,
+            partial: e.partial,
         };
+        // A few rays that all pass say little about a surface pair that carries much light: a
+        // blocker that `n` rays all missed can still take about 1/(n + 1) of it (Laplace's
+        // rule). Such a link is confirmed with the full count before it is trusted. (A
+        // cluster link's error is its whole transport already.)
+        if let (Kind::Surface(_), Kind::Surface(_)) = (r.kind(), s.kind())
+            && !e.partial
+            && e.rays > 0
+            && e.rays < u64::from(vis.max)
+        {
+            let carried = self.ends(r).area * ((e.k[0] + e.k[1] + e.k[2]) / 3.0 + e.shift);
+            let doubt = Link {
+                error: (carried / (e.rays + 1) as f64) as f32,
+                ..link(&e)
+            };
+            if self.link_error(&doubt) > self.eps {
+                e = self.evaluate(r, s, vis.max);
+                rays += e.rays;
+            }
+        }
         if e.near || self.link_error(&link(&e)) > self.eps {
             let (sr, ss) = (self.splittable(r), self.splittable(s));
             let receiver_first = match (sr, ss) {
@@ -1001,6 +1140,38 @@ impl<'s> HierarchicalSolver<'s> {
         self.links.len().saturating_sub(before)
     }
 
+    /// Estimates again the visibility of every partly blocked link, its rays now weighted by
+    /// the converged exitance of the source points (the first estimate, made before the
+    /// light was known, weighted by geometry alone; see [`Self::visibility`]). Returns how
+    /// many links it estimated again.
+    fn refresh_visibility(&mut self) -> usize {
+        let started = Instant::now();
+        let links = std::mem::take(&mut self.links);
+        let redone = links.iter().filter(|l| l.partial).count();
+        let results: Vec<(Option<Link>, u64)> = links
+            .par_iter()
+            .with_min_len(8)
+            .map(|l| {
+                if !l.partial {
+                    return (Some(*l), 0);
+                }
+                match self.decide(l.receiver, l.source, false) {
+                    (Step::Keep(n), rays) => (Some(n), rays),
+                    (Step::Drop, rays) => (None, rays),
+                    // Nothing splits when splitting is not allowed.
+                    (_, rays) => (Some(*l), rays),
+                }
+            })
+            .collect();
+        for (l, rays) in results {
+            self.rays += rays;
+            self.links.extend(l);
+        }
+        self.sort_links();
+        self.refining += started.elapsed();
+        redone
+    }
+
     fn sort_links(&mut self) {
         self.links
             .par_sort_unstable_by_key(|l| (l.receiver, l.source));
@@ -1053,10 +1224,11 @@ impl<'s> HierarchicalSolver<'s> {
                     let [be, br] = self.source_value(l);
                     if cluster {
                         // Arriving from the source's side: the opposite of `dir`.
-                        let j = usize::from(l.dir ^ 16);
                         let k = f64::from(l.k[0]);
-                        flux[0][j] += be * k;
-                        flux[1][j] += br * k;
+                        for (j, w) in l.dir.opposite().parts() {
+                            flux[0][j] += be * k * w;
+                            flux[1][j] += br * k * w;
+                        }
                         continue;
                     }
                     for (c, &k) in l.k.iter().enumerate() {
@@ -1268,7 +1440,13 @@ impl<'s> HierarchicalSolver<'s> {
                     0
                 };
                 if refined == 0 && target <= stop.unshot_fraction {
-                    return Finish::Converged;
+                    if self.refreshed || self.deadline_passed() {
+                        return Finish::Converged;
+                    }
+                    self.refreshed = true;
+                    if self.refresh_visibility() == 0 {
+                        return Finish::Converged;
+                    }
                 }
                 if refined == 0 {
                     target = stop.unshot_fraction;
@@ -1466,15 +1644,14 @@ impl<'s> HierarchicalSolver<'s> {
     /// cluster source sends its projected area toward the receiver, a cluster receiver spreads
     /// what it intercepts over its area.
     fn unit_transport(&self, l: &Link) -> f64 {
-        let j = usize::from(l.dir);
         let mean = (f64::from(l.k[0]) + f64::from(l.k[1]) + f64::from(l.k[2])) / 3.0;
         let sent = match l.source.kind() {
-            Kind::Cluster(c) => f64::from(self.projected[c as usize][j]),
+            Kind::Cluster(c) => l.dir.read(&self.projected[c as usize]),
             Kind::Surface(_) => 1.0,
         };
         match l.receiver.kind() {
             Kind::Cluster(c) => {
-                mean * sent * f64::from(self.projected[c as usize][j ^ 16])
+                mean * sent * l.dir.opposite().read(&self.projected[c as usize])
                     / self.clusters.nodes[c as usize].area.max(f64::MIN_POSITIVE)
             }
             Kind::Surface(_) => (mean + f64::from(l.shift)) * sent,
