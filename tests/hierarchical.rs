@@ -318,14 +318,23 @@ fn direct_power_monte_carlo(scene: &Scene, n: u64) -> Vec<f64> {
 }
 
 #[test]
-#[ignore = "known defect (issue 13): the sphere in the penumbra gets 0.40 of its direct light \
-            with the default 4/16 visibility rays (0.76 with 16/16; within 5 % with 64/64)"]
+#[ignore = "known defect, issue 13: \"shadowed\" gets 0.13 of its direct light. Emitter pieces \
+            split during a refinement pass have no exitance until the next push-pull, so their \
+            links are kept or dropped on four rays, never refined around the shadow, and the rays \
+            that decide to keep a link also set its light. Branch issue-13-shadow-links fixes \
+            both (1.02 here) but then refines a closed room's creases to the smallest elements, \
+            where the corner values drift 10 % (the furnace test fails)."]
 fn cluster_links_carry_direct_light_and_shadows_as_monte_carlo_does() {
-    // A floor, a light above it, and five spheres of 320 triangles at different heights, some
-    // in another's shadow: the spheres take their light through cluster links (direction
-    // tables, cluster visibility), the floor through surface links with the spheres'
-    // shadows on it. Each object's direct reflected power is checked against plain Monte
-    // Carlo with shadow rays (400k pairs per object, about 0.3 % noise).
+    // A floor, a light above it, and five spheres of 1280 triangles at different heights, one
+    // ("shadowed") 84 % hidden from the light by another: the spheres take their light
+    // through cluster links (direction tables, cluster visibility), the floor through
+    // surface links with the spheres' shadows on it. Each object's direct reflected power is
+    // checked against plain Monte Carlo with shadow rays over the same flat triangles (400k
+    // pairs per object, about 0.3 % noise; for "shadowed" it agrees with the ideal spheres
+    // to 0.7 %). The solver's corners receive by the smooth vertex normals, which near a
+    // terminator differ from the flat triangles' by up to half a triangle's angle: about 1 %
+    // of a sphere's light at this tessellation (5 % with 320 triangles, where only a sliver
+    // of the shadowed sphere is lit).
     let scene_toml = r#"
 version = 1
 [camera]
@@ -348,23 +357,23 @@ shape = { type = "quad", origin = [-0.4, 3, -0.4], edge_u = [0.8, 0, 0], edge_v 
 [[object]]
 name = "high"
 material = "white"
-shape = { type = "sphere", center = [0.1, 2.2, 0], radius = 0.3, subdivisions = 2 }
+shape = { type = "sphere", center = [0.1, 2.2, 0], radius = 0.3, subdivisions = 3 }
 [[object]]
 name = "shadowed"
 material = "white"
-shape = { type = "sphere", center = [0.3, 1.0, 0.1], radius = 0.35, subdivisions = 2 }
+shape = { type = "sphere", center = [0.3, 1.0, 0.1], radius = 0.35, subdivisions = 3 }
 [[object]]
 name = "aside"
 material = "white"
-shape = { type = "sphere", center = [-1.2, 0.8, 0.6], radius = 0.3, subdivisions = 2 }
+shape = { type = "sphere", center = [-1.2, 0.8, 0.6], radius = 0.3, subdivisions = 3 }
 [[object]]
 name = "low"
 material = "white"
-shape = { type = "sphere", center = [1.1, 0.3, -0.9], radius = 0.25, subdivisions = 2 }
+shape = { type = "sphere", center = [1.1, 0.3, -0.9], radius = 0.25, subdivisions = 3 }
 [[object]]
 name = "corner"
 material = "white"
-shape = { type = "sphere", center = [-1.4, 0.4, -1.3], radius = 0.35, subdivisions = 2 }
+shape = { type = "sphere", center = [-1.4, 0.4, -1.3], radius = 0.35, subdivisions = 3 }
 "#;
     let (scene, _) =
         twopass_scene::load_toml(scene_toml, std::path::Path::new("spheres.toml")).unwrap();

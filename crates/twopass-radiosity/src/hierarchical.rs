@@ -39,7 +39,7 @@ use twopass_scene::{Scene, SurfacePoint};
 
 use crate::cluster::{Clusters, Kind, NodeRef};
 use crate::element::{ElementMesh, barycentric_2d};
-use crate::form_factor::{self, RECEIVER_INSET, hash};
+use crate::form_factor::{self, hash};
 use crate::solution::Solution;
 use crate::solver::{
     Energy, Finish, Method, Options, Progress, Residuals, SolveError, check_common, luminance,
@@ -253,6 +253,13 @@ const BATCH: usize = 1 << 16;
 /// are farther apart than this many times the sum of their bounding radii: the isotropic
 /// far-field estimate holds only well away from a cluster.
 const SEPARATION: f64 = 2.0;
+/// How far a surface node's receiving corners sit inside it, as a fraction of the way to its
+/// centroid. A corner on an edge that the node shares with a perpendicular surface must lie
+/// clearly in front of that surface's plane, or the form factor counts it as in the plane
+/// and gives 0 where the true value is near 1/2: with the smallest elements 200 times finer
+/// than the largest surfaces and the plane test at 1e-6 of the source's size, 2e-3 keeps a
+/// margin of about 2.5.
+const CORNER_INSET: f64 = 2e-3;
 /// Re-refinements with converged radiosities at most.
 const MAX_ROUNDS: u32 = 6;
 
@@ -811,7 +818,7 @@ impl<'s> HierarchicalSolver<'s> {
             .map(|v| self.mesh.vertices[v as usize].normal.as_dvec3());
         let blend = |a: DVec3, b: DVec3| (a + b).try_normalize().unwrap_or(a);
         let nc = blend(normals[0] + normals[1], normals[2]);
-        let inset = |q: DVec3| q + (c - q) * RECEIVER_INSET;
+        let inset = |q: DVec3| q + (c - q) * CORNER_INSET;
         let mid = |i: usize, j: usize| inset((p[i] + p[j]) * 0.5);
         (
             [
