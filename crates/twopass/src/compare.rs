@@ -18,8 +18,7 @@ use twopass_trace::{RenderSettings, WhittedSettings};
 
 use crate::context::Context;
 use crate::error::CliError;
-use crate::plan::plan;
-use crate::render::{Method, integrator, load_lit, render_with_bar, to_layers};
+use crate::pipeline::{Method, integrator, load_lit, methods, render_with_bar, to_layers};
 
 /// Arguments of `twopass compare`.
 #[derive(Debug, Args)]
@@ -41,7 +40,7 @@ pub struct CompareArgs {
 
 /// What one method cost and how far it is from the reference.
 #[derive(Debug, Serialize)]
-struct Row {
+struct MethodRow {
     method: &'static str,
     width: u32,
     height: u32,
@@ -63,7 +62,7 @@ struct Row {
 }
 
 #[derive(Debug, Serialize)]
-struct Report {
+struct CompareReport {
     scene: PathBuf,
     quick: bool,
     seed: u64,
@@ -73,7 +72,7 @@ struct Report {
     skipped: Vec<String>,
     tone_map: String,
     sheet: PathBuf,
-    rows: Vec<Row>,
+    rows: Vec<MethodRow>,
 }
 
 #[derive(Debug, Serialize)]
@@ -85,31 +84,6 @@ struct RadiosityInfo {
     rays: u64,
     unshot_fraction: f64,
     seconds: f64,
-}
-
-/// The methods a scene calls for, and what was skipped and why.
-pub(crate) fn methods(scene: &twopass_scene::Scene) -> (Vec<Method>, Vec<String>) {
-    let p = plan(scene);
-    let mut methods = vec![Method::Reference, Method::Whitted];
-    let mut skipped = Vec::new();
-    if p.diffuse.required {
-        methods.push(Method::Radiosity);
-        if p.specular.required {
-            methods.push(Method::Hybrid);
-        } else {
-            skipped.push(format!(
-                "hybrid: identical to radiosity alone, the specular pass is skipped ({})",
-                p.specular.reason
-            ));
-        }
-        methods.push(Method::HybridDirect);
-    } else {
-        skipped.push(format!(
-            "radiosity, hybrid, hybrid-direct: {}",
-            p.diffuse.reason
-        ));
-    }
-    (methods, skipped)
 }
 
 /// Renders, compares and writes everything.
@@ -238,12 +212,12 @@ pub fn run(args: &CompareArgs, ctx: &Context) -> Result<(), CliError> {
     let sheet_path = dir.join(format!("{stem}-compare.png"));
     write_png(&sheet_path, &sheet.image, Some(&sheet.describe))?;
 
-    let rows: Vec<Row> = images
+    let rows: Vec<MethodRow> = images
         .iter()
         .enumerate()
         .map(|(i, (m, img, solve, stats, exr))| {
             let metrics = i.checked_sub(1).map(|k| sheet.metrics[k]);
-            Row {
+            MethodRow {
                 method: m.name(),
                 width: img.width(),
                 height: img.height(),
@@ -263,7 +237,7 @@ pub fn run(args: &CompareArgs, ctx: &Context) -> Result<(), CliError> {
             }
         })
         .collect();
-    let report = Report {
+    let report = CompareReport {
         scene: args.scene.clone(),
         quick: args.quick,
         seed: ctx.seed,

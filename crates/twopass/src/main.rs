@@ -42,10 +42,11 @@ mod error;
 mod figure;
 mod info;
 mod output;
+mod pipeline;
 mod plan;
 mod preset;
 mod render;
-mod tradeoff;
+mod solve;
 
 use std::process::ExitCode;
 

@@ -28,19 +28,16 @@ use std::time::Instant;
 
 use clap::Args;
 use serde::Serialize;
-use twopass_composite::image::Image;
 use twopass_composite::metric::{Metrics, compare};
 use twopass_composite::tonemap::ToneMap;
 use twopass_radiosity::{Solution, Solver};
 use twopass_trace::{RenderSettings, RenderStats};
 
-use crate::bake::SolveArgs;
-use crate::bench::{mib, peak_memory, reset_peak_memory};
-use crate::compare::methods;
+use crate::bench::memory::{mib, peak_memory, reset_peak_memory};
 use crate::context::Context;
 use crate::error::CliError;
+use crate::pipeline::{Method, integrator, load_lit, methods, to_image};
 use crate::preset::{Preset, PresetFile};
-use crate::render::{Method, integrator, load_lit};
 use sweep::{RunSpec, SolveSpec, Sweep, plan_runs};
 
 /// Arguments of `twopass bench tradeoff`.
@@ -96,7 +93,7 @@ struct Solved {
 
 /// One measured run: a CSV row.
 #[derive(Debug, Clone, Serialize)]
-struct Row {
+struct SweepRow {
     method: &'static str,
     /// The knob this run varies from the base setting.
     knob: &'static str,
@@ -157,7 +154,7 @@ struct ReferenceInfo {
 }
 
 #[derive(Debug, Serialize)]
-struct Report {
+struct TradeoffReport {
     scene: PathBuf,
     width: u32,
     height: u32,
@@ -165,7 +162,7 @@ struct Report {
     seed: u64,
     reference: ReferenceInfo,
     skipped: Vec<String>,
-    rows: Vec<Row>,
+    rows: Vec<SweepRow>,
     reach: Vec<Reach>,
     presets: Vec<Preset>,
     csv: PathBuf,
@@ -253,10 +250,12 @@ pub fn run(args: &TradeoffArgs, ctx: &Context) -> Result<(), CliError> {
         bar.set_message(format!("solve {}", spec.knob));
         reset_peak_memory();
         let started = Instant::now();
-        let mut solver = Solver::new(&scene, SolveArgs::from_knobs(&spec.knobs).options(ctx.seed))
-            .map_err(|source| CliError::Solve {
-                path: args.scene.clone(),
-                source,
+        let mut solver =
+            Solver::new(&scene, spec.knobs.solve_args().options(ctx.seed)).map_err(|source| {
+                CliError::Solve {
+                    path: args.scene.clone(),
+                    source,
+                }
             })?;
         solver.run(|_| std::ops::ControlFlow::Continue(()));
         let p = solver.progress();
@@ -296,8 +295,7 @@ pub fn run(args: &TradeoffArgs, ctx: &Context) -> Result<(), CliError> {
             &twopass_trace::Progress::new(),
         );
         let render_peak = peak_memory();
-        let img = out.layers.composite();
-        let image = Image::from_pixels(img.width, img.height, img.pixels)?;
+        let image = to_image(out.layers.composite())?;
         image.check_finite(run.method.name())?;
         let metrics = compare(&image, &converged.image, &display)?;
         rows.push(row(run, solve, &out.stats, &metrics, render_peak));
@@ -326,7 +324,7 @@ pub fn run(args: &TradeoffArgs, ctx: &Context) -> Result<(), CliError> {
         threads: rayon::current_num_threads(),
         presets: presets.clone(),
     };
-    let report = Report {
+    let report = TradeoffReport {
         scene: args.scene.clone(),
         width: camera.width,
         height: camera.height,
@@ -382,7 +380,7 @@ fn row(
     stats: &RenderStats,
     m: &Metrics,
     render_peak: Option<u64>,
-) -> Row {
+) -> SweepRow {
     let k = solve.map(|s| s.0.knobs);
     let s = solve.map(|s| s.1);
     let radiosity_seconds = s.map_or(0.0, |s| s.seconds);
@@ -391,7 +389,7 @@ fn row(
         (Some(a), Some(b)) => Some(a.max(b)),
         (a, b) => a.or(b),
     };
-    Row {
+    SweepRow {
         method: run.method.name(),
         knob: run.knob,
         spp: run.render.spp,
@@ -420,12 +418,12 @@ fn row(
     }
 }
 
-fn points(rows: &[Row]) -> Vec<(f64, f64)> {
+fn points(rows: &[SweepRow]) -> Vec<(f64, f64)> {
     rows.iter().map(|r| (r.total_seconds, r.rel_rmse)).collect()
 }
 
 /// Marks the global front and each method's own front.
-fn mark_fronts(rows: &mut [Row]) {
+fn mark_fronts(rows: &mut [SweepRow]) {
     for i in front::pareto_front(&points(rows)) {
         rows[i].pareto = true;
     }
@@ -448,7 +446,7 @@ fn mark_fronts(rows: &mut [Row]) {
 
 /// The presets: for each target, the cheapest run reaching it.
 fn derive_presets(
-    rows: &[Row],
+    rows: &[SweepRow],
     runs: &[RunSpec],
     solves: &[SolveSpec],
     targets: &[f64],
@@ -474,7 +472,7 @@ fn derive_presets(
 }
 
 /// Time to reach each target, per method, with the ratio to the path tracer's.
-fn reach_table(rows: &[Row], methods: &[Method], targets: &[f64]) -> Vec<Reach> {
+fn reach_table(rows: &[SweepRow], methods: &[Method], targets: &[f64]) -> Vec<Reach> {
     let curve = |name: &str| -> Vec<(f64, f64)> {
         rows.iter()
             .filter(|r| r.method == name)
@@ -501,7 +499,7 @@ fn reach_table(rows: &[Row], methods: &[Method], targets: &[f64]) -> Vec<Reach> 
     out
 }
 
-fn print_report(r: &Report) -> Result<(), CliError> {
+fn print_report(r: &TradeoffReport) -> Result<(), CliError> {
     for s in &r.skipped {
         outln!("skipped {s}");
     }
