@@ -185,29 +185,7 @@ pub fn run(args: &TradeoffArgs, ctx: &Context) -> Result<(), CliError> {
         (None, None) => crate::context::resized(&scene.camera, Some(sweep.width), None)?,
         (w, h) => crate::context::resized(&scene.camera, w, h)?,
     };
-    let (called_for, skipped) = methods(&scene);
-    let chosen: Vec<Method> = if args.methods.is_empty() {
-        called_for
-    } else {
-        let mut m: Vec<Method> = Vec::new();
-        for &method in &args.methods {
-            if !m.contains(&method) {
-                m.push(method);
-            }
-        }
-        if let Some(bad) = m
-            .iter()
-            .find(|m| m.needs_radiosity() && !called_for.contains(m))
-        {
-            return Err(CliError::Input(format!(
-                "{}: --methods {}: the scene does not call for it ({})",
-                args.scene.display(),
-                bad.name(),
-                skipped.join("; ")
-            )));
-        }
-        m
-    };
+    let (chosen, skipped) = chosen_methods(args, &scene)?;
     let dir = ctx
         .output
         .clone()
@@ -241,66 +219,20 @@ pub fn run(args: &TradeoffArgs, ctx: &Context) -> Result<(), CliError> {
             100.0 * converged.noise_rel_rmse
         );
     }
-    let display = ToneMap::auto_default(&converged.image)?;
 
     let (solves, runs) = plan_runs(&sweep, scene.bounds.diagonal(), &chosen);
     let bar = ctx.progress((solves.len() + runs.len()) as u64, "tradeoff");
-    let mut solved: Vec<Solved> = Vec::with_capacity(solves.len());
-    for spec in &solves {
-        bar.set_message(format!("solve {}", spec.knob));
-        reset_peak_memory();
-        let started = Instant::now();
-        let mut solver =
-            Solver::new(&scene, spec.knobs.solve_args().options(ctx.seed)).map_err(|source| {
-                CliError::Solve {
-                    path: args.scene.clone(),
-                    source,
-                }
-            })?;
-        solver.run(|_| std::ops::ControlFlow::Continue(()));
-        let p = solver.progress();
-        solved.push(Solved {
-            solution: solver.solution(),
-            seconds: started.elapsed().as_secs_f64(),
-            elements: p.elements,
-            rays: p.rays,
-            unshot_fraction: p.unshot_fraction,
-            peak_bytes: peak_memory(),
-        });
-        bar.inc(1);
-    }
+    let solved = solve_all(&scene, &solves, args, ctx, &bar)?;
 
-    let mut rows = Vec::with_capacity(runs.len());
-    for run in &runs {
-        let solve = run.solve.map(|i| (&solves[i], &solved[i]));
-        let integ = integrator(
-            run.method,
-            &scene,
-            solve.map(|s| &s.1.solution),
-            run.render.whitted(),
-        );
-        let settings = RenderSettings {
-            samples_per_pixel: run.render.spp,
-            seed: ctx.seed,
-            ..RenderSettings::default()
-        };
-        reset_peak_memory();
-        bar.set_message(run.method.name());
-        // One bar for the whole sweep: a second bar per render would fight it for the line.
-        let out = twopass_trace::render(
-            &scene,
-            &camera,
-            integ.as_ref(),
-            &settings,
-            &twopass_trace::Progress::new(),
-        );
-        let render_peak = peak_memory();
-        let image = to_image(out.layers.composite())?;
-        image.check_finite(run.method.name())?;
-        let metrics = compare(&image, &converged.image, &display)?;
-        rows.push(row(run, solve, &out.stats, &metrics, render_peak));
-        bar.inc(1);
-    }
+    let mut rows = measure_runs(
+        &scene,
+        &camera,
+        &runs,
+        (&solves, &solved),
+        &converged,
+        ctx,
+        &bar,
+    )?;
     bar.finish_and_clear();
 
     mark_fronts(&mut rows);
@@ -372,6 +304,121 @@ pub fn run(args: &TradeoffArgs, ctx: &Context) -> Result<(), CliError> {
         print_report(&report)?;
     }
     Ok(())
+}
+
+/// The methods to sweep: those of `--methods` (in order, once each), or every method the scene
+/// calls for; and what the scene skips and why. A radiosity-based method the scene does not
+/// call for is refused.
+fn chosen_methods(
+    args: &TradeoffArgs,
+    scene: &twopass_scene::Scene,
+) -> Result<(Vec<Method>, Vec<String>), CliError> {
+    let (called_for, skipped) = methods(scene);
+    let chosen: Vec<Method> = if args.methods.is_empty() {
+        called_for
+    } else {
+        let mut m: Vec<Method> = Vec::new();
+        for &method in &args.methods {
+            if !m.contains(&method) {
+                m.push(method);
+            }
+        }
+        if let Some(bad) = m
+            .iter()
+            .find(|m| m.needs_radiosity() && !called_for.contains(m))
+        {
+            return Err(CliError::Input(format!(
+                "{}: --methods {}: the scene does not call for it ({})",
+                args.scene.display(),
+                bad.name(),
+                skipped.join("; ")
+            )));
+        }
+        m
+    };
+    Ok((chosen, skipped))
+}
+
+/// Runs every radiosity solve of the sweep once (each serves several runs), measuring its time
+/// and peak memory.
+fn solve_all(
+    scene: &twopass_scene::Scene,
+    solves: &[SolveSpec],
+    args: &TradeoffArgs,
+    ctx: &Context,
+    bar: &indicatif::ProgressBar,
+) -> Result<Vec<Solved>, CliError> {
+    let mut solved: Vec<Solved> = Vec::with_capacity(solves.len());
+    for spec in solves {
+        bar.set_message(format!("solve {}", spec.knob));
+        reset_peak_memory();
+        let started = Instant::now();
+        let mut solver =
+            Solver::new(scene, spec.knobs.solve_args().options(ctx.seed)).map_err(|source| {
+                CliError::Solve {
+                    path: args.scene.clone(),
+                    source,
+                }
+            })?;
+        solver.run(|_| std::ops::ControlFlow::Continue(()));
+        let p = solver.progress();
+        solved.push(Solved {
+            solution: solver.solution(),
+            seconds: started.elapsed().as_secs_f64(),
+            elements: p.elements,
+            rays: p.rays,
+            unshot_fraction: p.unshot_fraction,
+            peak_bytes: peak_memory(),
+        });
+        bar.inc(1);
+    }
+    Ok(solved)
+}
+
+/// Renders every run of the sweep and measures its time, rays, peak memory and error against
+/// the converged reference (compared through the reference's display tone map).
+fn measure_runs(
+    scene: &twopass_scene::Scene,
+    camera: &twopass_scene::Camera,
+    runs: &[RunSpec],
+    (solves, solved): (&[SolveSpec], &[Solved]),
+    converged: &reference::Converged,
+    ctx: &Context,
+    bar: &indicatif::ProgressBar,
+) -> Result<Vec<SweepRow>, CliError> {
+    let display = ToneMap::auto_default(&converged.image)?;
+    let mut rows = Vec::with_capacity(runs.len());
+    for run in runs {
+        let solve = run.solve.map(|i| (&solves[i], &solved[i]));
+        let integ = integrator(
+            run.method,
+            scene,
+            solve.map(|s| &s.1.solution),
+            run.render.whitted(),
+        );
+        let settings = RenderSettings {
+            samples_per_pixel: run.render.spp,
+            seed: ctx.seed,
+            ..RenderSettings::default()
+        };
+        reset_peak_memory();
+        bar.set_message(run.method.name());
+        // One bar for the whole sweep: a second bar per render would fight it for the line.
+        let out = twopass_trace::render(
+            scene,
+            camera,
+            integ.as_ref(),
+            &settings,
+            &twopass_trace::Progress::new(),
+        );
+        let render_peak = peak_memory();
+        let image = to_image(out.layers.composite())?;
+        image.check_finite(run.method.name())?;
+        let metrics = compare(&image, &converged.image, &display)?;
+        rows.push(row(run, solve, &out.stats, &metrics, render_peak));
+        bar.inc(1);
+    }
+    Ok(rows)
 }
 
 fn row(
