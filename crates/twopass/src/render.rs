@@ -1,5 +1,7 @@
 //! `twopass render SCENE --method M`: one image with one method, written as a multi-layer EXR
 //! (every layer of the tracer plus the final image) and, with `--png`, a tone-mapped PNG.
+//! `--output x.exr` names the EXR, `--output x.png` asks for the PNG alone, and any other path
+//! (no image extension, or a trailing `/`) is a directory for `<stem>-<method>.exr`.
 //!
 //! The radiosity-based methods take their diffuse light from a fresh solve, or from a bake file
 //! of `twopass bake` (`--bake FILE`), which renders any view without solving again.
@@ -77,7 +79,8 @@ struct Summary {
     non_finite_samples: u64,
     /// Mean of the final image over pixels, per channel, W/(m^2 sr).
     mean: [f32; 3],
-    exr: PathBuf,
+    /// The multi-layer EXR; none when `--output` names a PNG file.
+    exr: Option<PathBuf>,
     png: Option<PathBuf>,
     skipped: Vec<String>,
 }
@@ -115,6 +118,7 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
             method.name()
         )));
     }
+    let targets = targets(ctx.output.as_deref(), &args.scene, method, args.png)?;
     let camera = ctx.camera(&scene.camera)?;
     let decisions = plan(&scene);
     let mut skipped = Vec::new();
@@ -164,29 +168,20 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
         ctx,
     )?;
     let layers = to_layers(&out.layers)?;
-    let stem = args
-        .scene
-        .file_stem()
-        .map_or_else(|| "render".to_owned(), |s| s.to_string_lossy().into_owned());
-    let exr = match &ctx.output {
-        Some(p) if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")) => p.clone(),
-        Some(dir) => dir.join(format!("{stem}-{}.exr", method.name())),
-        None => PathBuf::from(format!("{stem}-{}.exr", method.name())),
-    };
-    crate::output::create_dir(exr.parent().unwrap_or(Path::new("")))?;
-    write_exr_layers(&exr, &layers)?;
-    let png = if args.png {
+    if let Some(exr) = &targets.exr {
+        crate::output::create_dir(exr.parent().unwrap_or(Path::new("")))?;
+        write_exr_layers(exr, &layers)?;
+    }
+    if let Some(png) = &targets.png {
         let image = layers.require("image")?;
         let map = match args.exposure {
             Some(stops) => ToneMap::from_stops(stops)?,
             None => ToneMap::auto(image, 0.99, 1.0)?,
         };
-        let path = exr.with_extension("png");
-        write_png_tonemapped(&path, image, &map)?;
-        Some(path)
-    } else {
-        None
-    };
+        crate::output::create_dir(png.parent().unwrap_or(Path::new("")))?;
+        write_png_tonemapped(png, image, &map)?;
+    }
+    let Targets { exr, png } = targets;
     let s = &out.stats;
     let mean = out.layers.composite().mean();
     let summary = Summary {
@@ -230,12 +225,75 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
             summary.mrays_per_s,
             summary.non_finite_samples
         );
-        outln!("wrote {}", summary.exr.display());
+        if let Some(p) = &summary.exr {
+            outln!("wrote {}", p.display());
+        }
         if let Some(p) = &summary.png {
             outln!("wrote {}", p.display());
         }
     }
     Ok(())
+}
+
+/// The files `render` writes: the multi-layer EXR and the tone-mapped PNG, each when asked for.
+#[derive(Debug, PartialEq, Eq)]
+struct Targets {
+    exr: Option<PathBuf>,
+    png: Option<PathBuf>,
+}
+
+/// Extensions that name an image file rather than a directory for `--output`.
+const IMAGE_EXTENSIONS: [&str; 10] = [
+    "exr", "png", "jpg", "jpeg", "tif", "tiff", "bmp", "hdr", "tga", "webp",
+];
+
+/// Where `render` writes, from `--output`: `x.exr` is the EXR (with `--png`, `x.png` beside
+/// it), `x.png` is the PNG alone, and a path without an image extension (or ending in `/`) is
+/// a directory for `<stem>-<method>.exr` (and `.png`); without `--output`, the current one. An
+/// image format `render` cannot write is a usage error.
+fn targets(
+    output: Option<&Path>,
+    scene: &Path,
+    method: Method,
+    png: bool,
+) -> Result<Targets, CliError> {
+    let stem = scene
+        .file_stem()
+        .map_or_else(|| "render".to_owned(), |s| s.to_string_lossy().into_owned());
+    let in_dir = |dir: &Path| {
+        let exr = dir.join(format!("{stem}-{}.exr", method.name()));
+        let png = png.then(|| exr.with_extension("png"));
+        Targets {
+            exr: Some(exr),
+            png,
+        }
+    };
+    let Some(path) = output else {
+        return Ok(in_dir(Path::new("")));
+    };
+    let names_dir = path
+        .as_os_str()
+        .to_string_lossy()
+        .ends_with(['/', std::path::MAIN_SEPARATOR]);
+    let extension = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .filter(|e| !names_dir && IMAGE_EXTENSIONS.contains(&e.as_str()));
+    match extension.as_deref() {
+        None => Ok(in_dir(path)),
+        Some("exr") => Ok(Targets {
+            exr: Some(path.to_owned()),
+            png: png.then(|| path.with_extension("png")),
+        }),
+        Some("png") => Ok(Targets {
+            exr: None,
+            png: Some(path.to_owned()),
+        }),
+        Some(other) => Err(CliError::Usage(format!(
+            "--output {}: render writes .exr or .png, not .{other} (or name a directory)",
+            path.display()
+        ))),
+    }
 }
 
 /// Most stops of exposure either way: 2^64 spans far more than any radiance a scene can emit.
@@ -250,5 +308,65 @@ fn parse_stops(s: &str) -> Result<f32, String> {
         Err(format!(
             "{x} must be a finite number of stops from -{MAX_STOPS} to {MAX_STOPS}"
         ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn t(output: Option<&str>, png: bool) -> Result<Targets, CliError> {
+        targets(
+            output.map(Path::new),
+            Path::new("scenes/box.toml"),
+            Method::Hybrid,
+            png,
+        )
+    }
+
+    fn some(p: &str) -> Option<PathBuf> {
+        Some(PathBuf::from(p))
+    }
+
+    #[test]
+    fn output_names_a_file_by_its_image_extension_and_a_directory_otherwise() {
+        let files = |exr: Option<PathBuf>, png: Option<PathBuf>| Targets { exr, png };
+        assert_eq!(t(None, false).unwrap(), files(some("box-hybrid.exr"), None));
+        assert_eq!(
+            t(None, true).unwrap(),
+            files(some("box-hybrid.exr"), some("box-hybrid.png"))
+        );
+        assert_eq!(
+            t(Some("a/out.exr"), false).unwrap(),
+            files(some("a/out.exr"), None)
+        );
+        assert_eq!(
+            t(Some("out.EXR"), true).unwrap(),
+            files(some("out.EXR"), some("out.png"))
+        );
+        assert_eq!(
+            t(Some("out.png"), false).unwrap(),
+            files(None, some("out.png"))
+        );
+        assert_eq!(
+            t(Some("out.png"), true).unwrap(),
+            files(None, some("out.png"))
+        );
+        assert_eq!(
+            t(Some("renders"), false).unwrap(),
+            files(some("renders/box-hybrid.exr"), None)
+        );
+        assert_eq!(
+            t(Some("run.v2"), true).unwrap(),
+            files(some("run.v2/box-hybrid.exr"), some("run.v2/box-hybrid.png"))
+        );
+        assert_eq!(
+            t(Some("out.png/"), false).unwrap(),
+            files(some("out.png/box-hybrid.exr"), None)
+        );
+        match t(Some("out.jpg"), false) {
+            Err(CliError::Usage(m)) => assert!(m.contains(".jpg"), "{m}"),
+            other => panic!("a .jpg output must be a usage error: {other:?}"),
+        }
     }
 }
