@@ -13,14 +13,16 @@ use serde::Serialize;
 use twopass_composite::image::Image;
 use twopass_composite::metric::Metrics;
 use twopass_composite::sheet::{ComparisonOptions, Entry, comparison};
-use twopass_composite::write::{write_atomic, write_exr_layers, write_png};
+use twopass_composite::write::{write_exr_layers, write_png};
 use twopass_radiosity::{Options, Solution, Solver, Stop};
 use twopass_scene::{Camera, Scene};
-use twopass_trace::{RenderSettings, RenderStats, WhittedSettings};
+use twopass_trace::{RenderStats, WhittedSettings};
 
 use crate::context::Context;
 use crate::error::CliError;
-use crate::pipeline::{Method, integrator, load_lit, methods, render_with_bar, to_layers};
+use crate::pipeline::{
+    Method, integrator, load_lit, methods, render_settings, render_with_bar, to_layers,
+};
 
 /// Arguments of `twopass compare`.
 #[derive(Debug, Args)]
@@ -180,16 +182,9 @@ pub fn run(args: &CompareArgs, ctx: &Context) -> Result<(), CliError> {
         sheet: sheet_path,
         rows,
     };
-    let json = serde_json::to_string_pretty(&report).expect("report serializes");
-    write_atomic(&dir.join(format!("{stem}-compare.json")), json.as_bytes())?;
     crate::output::write_csv(&dir.join(format!("{stem}-compare.csv")), &report.rows)?;
-
-    if ctx.json {
-        outln!("{json}");
-    } else if !ctx.quiet {
-        print_report(&report)?;
-    }
-    Ok(())
+    let json = dir.join(format!("{stem}-compare.json"));
+    crate::output::finish_report(&json, &report, ctx, print_report)
 }
 
 /// The one radiosity solve every radiosity-based method shares: a coarse mesh to 1e-2 with
@@ -250,15 +245,14 @@ fn render_methods(
             solved.map(|s| s.0),
             WhittedSettings::default(),
         );
-        let settings = RenderSettings {
-            samples_per_pixel: if method == Method::Reference {
+        let settings = render_settings(
+            if method == Method::Reference {
                 reference_spp
             } else {
                 spp
             },
-            seed: ctx.seed,
-            ..RenderSettings::default()
-        };
+            ctx.seed,
+        );
         let out = render_with_bar(scene, camera, integ.as_ref(), &settings, method.name(), ctx)?;
         let layers = to_layers(&out.layers)?;
         let exr = dir.join(format!("{stem}-{}.exr", method.name()));

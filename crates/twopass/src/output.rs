@@ -135,3 +135,25 @@ pub fn print_json<T: serde::Serialize>(value: &T) -> Result<(), CliError> {
     outln!("{text}");
     Ok(())
 }
+
+/// The ending of the commands that keep a JSON report beside their other files: writes
+/// `report` as pretty JSON to `path` (atomically), then prints the same JSON with `--json`, or
+/// the human summary `print` unless `--quiet`.
+pub fn finish_report<T: serde::Serialize>(
+    path: &Path,
+    report: &T,
+    ctx: &crate::context::Context,
+    print: impl FnOnce(&T) -> Result<(), CliError>,
+) -> Result<(), CliError> {
+    let json = serde_json::to_string_pretty(report).map_err(|e| CliError::Encode {
+        path: path.to_owned(),
+        message: e.to_string(),
+    })?;
+    write_atomic(path, json.as_bytes())?;
+    if ctx.json {
+        outln!("{json}");
+    } else if !ctx.quiet {
+        print(report)?;
+    }
+    Ok(())
+}

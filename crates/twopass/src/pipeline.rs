@@ -130,6 +130,16 @@ pub fn radiosity(
     }
 }
 
+/// The render settings every command uses: `spp` stratified samples per pixel, the run's seed,
+/// the rest at the tracer's defaults.
+pub fn render_settings(spp: u32, seed: u64) -> RenderSettings {
+    RenderSettings {
+        samples_per_pixel: spp,
+        seed,
+        ..RenderSettings::default()
+    }
+}
+
 /// Renders with a progress bar drawn from the render loop's counters, then checks the
 /// samples it had to drop (see [`check_dropped`]).
 pub fn render_with_bar(

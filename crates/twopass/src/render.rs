@@ -13,11 +13,13 @@ use clap::Args;
 use serde::Serialize;
 use twopass_composite::tonemap::ToneMap;
 use twopass_composite::write::{write_exr_layers, write_png_tonemapped};
-use twopass_trace::{RenderSettings, WhittedSettings};
+use twopass_trace::WhittedSettings;
 
 use crate::context::Context;
 use crate::error::CliError;
-use crate::pipeline::{MAX_DEPTH, Method, integrator, radiosity, render_with_bar, to_layers};
+use crate::pipeline::{
+    MAX_DEPTH, Method, integrator, radiosity, render_settings, render_with_bar, to_layers,
+};
 use crate::plan::plan;
 use crate::preset::{PRESET_SETS, RadiosityKnobs, RenderKnobs};
 use crate::solve::SolveArgs;
@@ -154,11 +156,7 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
         solution.as_ref().map(|s| &s.0),
         knobs.whitted(),
     );
-    let settings = RenderSettings {
-        samples_per_pixel: knobs.spp,
-        seed: ctx.seed,
-        ..RenderSettings::default()
-    };
+    let settings = render_settings(knobs.spp, ctx.seed);
     let out = render_with_bar(
         &scene,
         &camera,

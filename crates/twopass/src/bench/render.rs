@@ -59,9 +59,9 @@ struct RenderReport {
 
 /// Renders with every method, then new views from the solution.
 pub fn run(args: &RenderBenchArgs, ctx: &Context) -> Result<(), CliError> {
-    use crate::pipeline::{Method, check_in_set, integrator};
+    use crate::pipeline::{Method, check_in_set, integrator, render_settings};
     use twopass_trace::hybrid::radiosity_only;
-    use twopass_trace::{Integrator, Progress, RenderSettings, WhittedSettings};
+    use twopass_trace::{Integrator, Progress, WhittedSettings};
 
     let (scene, _) = ctx.load_scene(&args.scene)?;
     let camera = crate::context::resized(
@@ -92,11 +92,7 @@ pub fn run(args: &RenderBenchArgs, ctx: &Context) -> Result<(), CliError> {
         }
     };
     let radiosity_seconds = started.elapsed().as_secs_f64();
-    let settings = RenderSettings {
-        samples_per_pixel: args.spp,
-        seed: ctx.seed,
-        ..Default::default()
-    };
+    let settings = render_settings(args.spp, ctx.seed);
     let w = WhittedSettings::default();
     let methods: Vec<Box<dyn Integrator + '_>> = [
         Method::Whitted,
@@ -126,11 +122,7 @@ pub fn run(args: &RenderBenchArgs, ctx: &Context) -> Result<(), CliError> {
     }
     // New views: the camera turned about the vertical through its target, 1 spp each.
     let interactive = radiosity_only(&scene, &solution);
-    let one = RenderSettings {
-        samples_per_pixel: 1,
-        seed: ctx.seed,
-        ..Default::default()
-    };
+    let one = render_settings(1, ctx.seed);
     let target = camera.position
         + camera.forward * (scene.bounds.center() - camera.position).dot(camera.forward);
     let t = Instant::now();

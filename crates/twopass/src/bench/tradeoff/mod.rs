@@ -31,12 +31,12 @@ use serde::Serialize;
 use twopass_composite::metric::{Metrics, compare};
 use twopass_composite::tonemap::ToneMap;
 use twopass_radiosity::{Solution, Solver};
-use twopass_trace::{RenderSettings, RenderStats};
+use twopass_trace::RenderStats;
 
 use crate::bench::memory::{mib, peak_memory, reset_peak_memory};
 use crate::context::Context;
 use crate::error::CliError;
-use crate::pipeline::{Method, integrator, load_lit, methods, to_image};
+use crate::pipeline::{Method, integrator, load_lit, methods, render_settings, to_image};
 use crate::preset::{Preset, PresetFile};
 use sweep::{RunSpec, SolveSpec, Sweep, plan_runs};
 
@@ -296,14 +296,8 @@ pub fn run(args: &TradeoffArgs, ctx: &Context) -> Result<(), CliError> {
     if args.install_presets {
         crate::output::write_atomic(&PresetFile::beside(&args.scene), toml.as_bytes())?;
     }
-    let json = serde_json::to_string_pretty(&report).expect("report serializes");
-    crate::output::write_atomic(&dir.join(format!("{stem}-tradeoff.json")), json.as_bytes())?;
-    if ctx.json {
-        outln!("{json}");
-    } else if !ctx.quiet {
-        print_report(&report)?;
-    }
-    Ok(())
+    let json = dir.join(format!("{stem}-tradeoff.json"));
+    crate::output::finish_report(&json, &report, ctx, print_report)
 }
 
 /// The methods to sweep: those of `--methods` (in order, once each), or every method the scene
@@ -396,11 +390,7 @@ fn measure_runs(
             solve.map(|s| &s.1.solution),
             run.render.whitted(),
         );
-        let settings = RenderSettings {
-            samples_per_pixel: run.render.spp,
-            seed: ctx.seed,
-            ..RenderSettings::default()
-        };
+        let settings = render_settings(run.render.spp, ctx.seed);
         reset_peak_memory();
         bar.set_message(run.method.name());
         // One bar for the whole sweep: a second bar per render would fight it for the line.
