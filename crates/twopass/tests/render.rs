@@ -119,12 +119,7 @@ fn a_bake_renders_the_same_as_a_fresh_solve_with_the_same_settings() {
         args.extend(extra);
         args.extend(["--output", out]);
         let o = twopass(&args);
-        assert_eq!(
-            o.status.code(),
-            Some(0),
-            "{}",
-            String::from_utf8_lossy(&o.stderr)
-        );
+        common::assert_ok(&o);
         read_exr_layers(Path::new(out)).unwrap()
     };
     let baked_file = dir.path().join("cornell-box.bake");
@@ -171,20 +166,9 @@ fn render_refuses_what_makes_no_sense() {
 /// Runs a small Whitted render of the Cornell box with `--output out` and `extra` arguments.
 fn render_to(out: &Path, extra: &[&str]) -> std::process::Output {
     let scene = repo("scenes/cornell-box.toml");
-    let mut args = vec![
-        "render",
-        scene.to_str().unwrap(),
-        "--method",
-        "whitted",
-        "--width",
-        "16",
-        "--spp",
-        "1",
-        "--output",
-        out.to_str().unwrap(),
-    ];
-    args.extend(extra);
-    twopass(&args)
+    let (scene, out) = (scene.to_str().unwrap(), out.to_str().unwrap());
+    let small = ["--method", "whitted", "--width", "16", "--spp", "1"];
+    twopass(&[&["render", scene, "--output", out], &small[..], extra].concat())
 }
 
 #[test]
@@ -192,17 +176,10 @@ fn output_with_an_image_extension_is_that_file() {
     let dir = tempfile::tempdir().unwrap();
     // `-o out.png`: the PNG file alone, not a directory named out.png.
     let png = dir.path().join("out.png");
-    let out = render_to(&png, &["--json"]);
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let v = common::ok_json(&render_to(&png, &["--json"]));
     assert!(png.is_file(), "{} is not a file", png.display());
     let bytes = std::fs::read(&png).unwrap();
     assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "not a PNG");
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["png"].as_str(), png.to_str());
     assert!(v["exr"].is_null(), "no EXR asked for: {v}");
     assert!(!dir.path().join("out.exr").exists());
@@ -210,12 +187,7 @@ fn output_with_an_image_extension_is_that_file() {
     // `-o out.exr`: the EXR file, and with --png the PNG beside it.
     let exr = dir.path().join("sub").join("out.exr");
     let out = render_to(&exr, &["--png"]);
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_ok(&out);
     assert!(exr.is_file(), "{} is not a file", exr.display());
     assert_eq!(
         &std::fs::read(&exr).unwrap()[..4],
@@ -239,12 +211,7 @@ fn output_without_an_image_extension_is_a_directory() {
     for (name, sub) in [("renders", "renders"), ("out.png/", "out.png")] {
         let out_dir = format!("{}/{name}", dir.path().display());
         let out = render_to(Path::new(&out_dir), &["--png"]);
-        assert_eq!(
-            out.status.code(),
-            Some(0),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        common::assert_ok(&out);
         let inside = dir.path().join(sub);
         assert!(inside.is_dir(), "{} is not a directory", inside.display());
         assert!(inside.join("cornell-box-whitted.exr").is_file());
