@@ -322,46 +322,37 @@ mod tests {
         )
     }
 
-    fn some(p: &str) -> Option<PathBuf> {
-        Some(PathBuf::from(p))
-    }
-
     #[test]
     fn output_names_a_file_by_its_image_extension_and_a_directory_otherwise() {
-        let files = |exr: Option<PathBuf>, png: Option<PathBuf>| Targets { exr, png };
-        assert_eq!(t(None, false).unwrap(), files(some("box-hybrid.exr"), None));
-        assert_eq!(
-            t(None, true).unwrap(),
-            files(some("box-hybrid.exr"), some("box-hybrid.png"))
-        );
-        assert_eq!(
-            t(Some("a/out.exr"), false).unwrap(),
-            files(some("a/out.exr"), None)
-        );
-        assert_eq!(
-            t(Some("out.EXR"), true).unwrap(),
-            files(some("out.EXR"), some("out.png"))
-        );
-        assert_eq!(
-            t(Some("out.png"), false).unwrap(),
-            files(None, some("out.png"))
-        );
-        assert_eq!(
-            t(Some("out.png"), true).unwrap(),
-            files(None, some("out.png"))
-        );
-        assert_eq!(
-            t(Some("renders"), false).unwrap(),
-            files(some("renders/box-hybrid.exr"), None)
-        );
-        assert_eq!(
-            t(Some("run.v2"), true).unwrap(),
-            files(some("run.v2/box-hybrid.exr"), some("run.v2/box-hybrid.png"))
-        );
-        assert_eq!(
-            t(Some("out.png/"), false).unwrap(),
-            files(some("out.png/box-hybrid.exr"), None)
-        );
+        // (--output, --png, the EXR and the PNG written)
+        let cases = [
+            (None, false, Some("box-hybrid.exr"), None),
+            (None, true, Some("box-hybrid.exr"), Some("box-hybrid.png")),
+            (Some("a/out.exr"), false, Some("a/out.exr"), None),
+            (Some("out.EXR"), true, Some("out.EXR"), Some("out.png")),
+            (Some("out.png"), false, None, Some("out.png")),
+            (Some("out.png"), true, None, Some("out.png")),
+            (Some("renders"), false, Some("renders/box-hybrid.exr"), None),
+            (
+                Some("run.v2"),
+                true,
+                Some("run.v2/box-hybrid.exr"),
+                Some("run.v2/box-hybrid.png"),
+            ),
+            (
+                Some("out.png/"),
+                false,
+                Some("out.png/box-hybrid.exr"),
+                None,
+            ),
+        ];
+        for (output, png, exr_file, png_file) in cases {
+            let want = Targets {
+                exr: exr_file.map(PathBuf::from),
+                png: png_file.map(PathBuf::from),
+            };
+            assert_eq!(t(output, png).unwrap(), want, "--output {output:?}");
+        }
         match t(Some("out.jpg"), false) {
             Err(CliError::Usage(m)) => assert!(m.contains(".jpg"), "{m}"),
             other => panic!("a .jpg output must be a usage error: {other:?}"),
