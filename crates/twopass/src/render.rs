@@ -201,9 +201,7 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
         png,
         skipped,
     };
-    if ctx.json {
-        crate::output::print_json(&summary)?;
-    } else if !ctx.quiet {
+    crate::output::report(&summary, ctx, || {
         for s in &summary.skipped {
             outln!("{s}");
         }
@@ -229,8 +227,8 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
         if let Some(p) = &summary.png {
             outln!("wrote {}", p.display());
         }
-    }
-    Ok(())
+        Ok(())
+    })
 }
 
 /// The files `render` writes: the multi-layer EXR and the tone-mapped PNG, each when asked for.

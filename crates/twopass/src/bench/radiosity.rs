@@ -166,9 +166,7 @@ fn radiosity_scale(args: &RadiosityArgs, ctx: &Context) -> Result<(), CliError> 
     if let Some(path) = &args.plot {
         plot_scale(path, &rows)?;
     }
-    if ctx.json {
-        crate::output::print_json(&rows)?;
-    } else if !ctx.quiet {
+    crate::output::report(&rows, ctx, || {
         outln!(
             "generated scenes: solve to residual {:.0e}, {} threads",
             args.unshot,
@@ -209,8 +207,8 @@ fn radiosity_scale(args: &RadiosityArgs, ctx: &Context) -> Result<(), CliError> 
                 g(r.memory_growth)
             );
         }
-    }
-    Ok(())
+        Ok(())
+    })
 }
 
 /// Time and peak memory of the scale runs against the triangle count, log-log, each with a
@@ -364,9 +362,7 @@ pub fn run(args: &RadiosityArgs, ctx: &Context) -> Result<(), CliError> {
         progress.inc(1);
     }
     progress.finish_and_clear();
-    if ctx.json {
-        crate::output::print_json(&rows)?;
-    } else if !ctx.quiet {
+    crate::output::report(&rows, ctx, || {
         outln!(
             "scene {}: progressive refinement to unshot {:.0e}, fixed mesh, {} threads",
             path.display(),
@@ -407,8 +403,8 @@ pub fn run(args: &RadiosityArgs, ctx: &Context) -> Result<(), CliError> {
                     .map_or_else(|| "-".to_owned(), |e| format!("{e:.2e}"))
             );
         }
-    }
-    Ok(())
+        Ok(())
+    })
 }
 
 /// Most vertices of the dense comparison solve.

@@ -188,9 +188,7 @@ pub fn run(args: &RaysArgs, ctx: &Context) -> Result<(), CliError> {
         bvh_nodes: scene.accel().node_count(),
         rows,
     };
-    if ctx.json {
-        crate::output::print_json(&report)?;
-    } else if !ctx.quiet {
+    crate::output::report(&report, ctx, || {
         outln!(
             "scene {}: {} triangles, BVH {} nodes built in {:.2} ms (median of 5), {} threads",
             report.scene,
@@ -221,6 +219,6 @@ pub fn run(args: &RaysArgs, ctx: &Context) -> Result<(), CliError> {
                 fmt_mib(r.peak_memory_mib)
             );
         }
-    }
-    Ok(())
+        Ok(())
+    })
 }

@@ -160,9 +160,7 @@ pub fn run(args: &RenderBenchArgs, ctx: &Context) -> Result<(), CliError> {
         frames: args.frames,
         frames_per_second,
     };
-    if ctx.json {
-        crate::output::print_json(&report)?;
-    } else if !ctx.quiet {
+    crate::output::report(&report, ctx, || {
         outln!(
             "scene {}: {} x {}, {} spp, {} threads; radiosity from {} in {:.2} s",
             report.scene,
@@ -198,6 +196,6 @@ pub fn run(args: &RenderBenchArgs, ctx: &Context) -> Result<(), CliError> {
             report.frames_per_second,
             report.frames
         );
-    }
-    Ok(())
+        Ok(())
+    })
 }
