@@ -16,6 +16,7 @@ use clap::{Args, ValueEnum};
 use twopass_bake::{self as bake, ColorMapping, ColorRecord, FileRecord, Manifest};
 use twopass_radiosity::{Options, Solver, Stop};
 
+use crate::args::{checked, positive_finite};
 use crate::context::Context;
 use crate::error::CliError;
 use crate::preset::PRESET_SETS;
@@ -78,21 +79,12 @@ pub struct BakeArgs {
 const MAX_RESIDUAL_SAMPLES: usize = 100_000;
 
 fn parse_residual_samples(s: &str) -> Result<usize, String> {
-    let n: usize = s.parse().map_err(|e| format!("{e}"))?;
-    if (1..=MAX_RESIDUAL_SAMPLES).contains(&n) {
-        Ok(n)
-    } else {
-        Err(format!("{n} must be 1 to {MAX_RESIDUAL_SAMPLES}"))
-    }
+    let needs = format!("must be 1 to {MAX_RESIDUAL_SAMPLES}");
+    checked(s, |n| (1..=MAX_RESIDUAL_SAMPLES).contains(n), &needs)
 }
 
 fn parse_exposure(s: &str) -> Result<f32, String> {
-    let x: f32 = s.parse().map_err(|e| format!("{e}"))?;
-    if x.is_finite() && x > 0.0 {
-        Ok(x)
-    } else {
-        Err(format!("{x} must be finite and > 0"))
-    }
+    checked(s, positive_finite, "must be finite and > 0")
 }
 
 /// Solves the scene and writes the selected outputs and the manifest.

@@ -33,6 +33,7 @@ macro_rules! errln {
     }};
 }
 
+mod args;
 mod bake;
 mod bench;
 mod brdf_check;

@@ -15,6 +15,7 @@ use twopass_composite::tonemap::ToneMap;
 use twopass_composite::write::{write_exr_layers, write_png_tonemapped};
 use twopass_trace::WhittedSettings;
 
+use crate::args::checked;
 use crate::context::Context;
 use crate::error::CliError;
 use crate::pipeline::{
@@ -297,14 +298,8 @@ const MAX_STOPS: f32 = 64.0;
 
 /// An exposure in stops: finite and within +-[`MAX_STOPS`].
 fn parse_stops(s: &str) -> Result<f32, String> {
-    let x: f32 = s.parse().map_err(|e| format!("{e}"))?;
-    if x.abs() <= MAX_STOPS {
-        Ok(x)
-    } else {
-        Err(format!(
-            "{x} must be a finite number of stops from -{MAX_STOPS} to {MAX_STOPS}"
-        ))
-    }
+    let needs = format!("must be a finite number of stops from -{MAX_STOPS} to {MAX_STOPS}");
+    checked(s, |x: &f32| x.abs() <= MAX_STOPS, &needs)
 }
 
 #[cfg(test)]

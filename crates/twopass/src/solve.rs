@@ -10,6 +10,7 @@ use twopass_radiosity::{
     Adaptive, Finish, Hierarchical, Method, Options, Solver, Stop, VisibilityRays,
 };
 
+use crate::args::{checked, positive_finite};
 use crate::context::Context;
 
 /// A radiosity solver, as the command line names it.
@@ -110,10 +111,7 @@ impl SolveArgs {
 }
 
 fn parse_seconds(s: &str) -> Result<Duration, String> {
-    let secs: f64 = s.parse().map_err(|e| format!("{e}"))?;
-    if !(secs.is_finite() && secs > 0.0) {
-        return Err(format!("{secs} must be a finite number of seconds > 0"));
-    }
+    let secs: f64 = checked(s, positive_finite, "must be a finite number of seconds > 0")?;
     Duration::try_from_secs_f64(secs).map_err(|e| e.to_string())
 }
 
@@ -136,23 +134,21 @@ pub const MAX_VISIBILITY_RAYS: u32 = 1024;
 
 /// A fraction in [0, 1) (the unshot power at which to stop).
 pub fn parse_fraction(s: &str) -> Result<f64, String> {
-    let x: f64 = s.parse().map_err(|e| format!("{e}"))?;
-    if (0.0..1.0).contains(&x) {
-        Ok(x)
-    } else {
-        Err(format!("{x} must be a fraction >= 0 and < 1"))
-    }
+    checked(
+        s,
+        |x| (0.0..1.0).contains(x),
+        "must be a fraction >= 0 and < 1",
+    )
 }
 
 /// A length in scene units: finite and > 0 (whether it fits the scene is checked by the
 /// solver, which knows the scene's area).
 fn parse_length(s: &str) -> Result<f32, String> {
-    let x: f32 = s.parse().map_err(|e| format!("{e}"))?;
-    if x.is_finite() && x > 0.0 {
-        Ok(x)
-    } else {
-        Err(format!("{x} must be a finite length > 0 scene units"))
-    }
+    checked(
+        s,
+        positive_finite,
+        "must be a finite length > 0 scene units",
+    )
 }
 
 /// Bar position of an unshot fraction on a log scale: 0 at 1, `STEPS` at the target.

@@ -10,6 +10,7 @@ use serde::Serialize;
 use twopass_scene::workload;
 
 use super::memory::{fmt_mib, mib, peak_memory, reset_peak_memory};
+use crate::args::checked;
 use crate::context::Context;
 use crate::error::CliError;
 
@@ -411,10 +412,6 @@ pub fn run(args: &RadiosityArgs, ctx: &Context) -> Result<(), CliError> {
 const MAX_DENSE_VERTICES: usize = 20_000;
 
 fn parse_dense_max(s: &str) -> Result<usize, String> {
-    let n: usize = s.parse().map_err(|e| format!("{e}"))?;
-    if n <= MAX_DENSE_VERTICES {
-        Ok(n)
-    } else {
-        Err(format!("{n} must be at most {MAX_DENSE_VERTICES}"))
-    }
+    let needs = format!("must be at most {MAX_DENSE_VERTICES}");
+    checked(s, |n| *n <= MAX_DENSE_VERTICES, &needs)
 }

@@ -11,6 +11,7 @@ use twopass_scene::workload::{self, QueryKind};
 use twopass_scene::{Accel, Ray, Scene, SurfacePoint};
 
 use super::memory::{fmt_mib, mib, peak_memory, reset_peak_memory};
+use crate::args::checked;
 use crate::context::Context;
 use crate::error::CliError;
 
@@ -114,12 +115,8 @@ impl Batch {
 
 /// A measuring time: more than 0 and at most a day, seconds.
 fn parse_seconds(s: &str) -> Result<f64, String> {
-    let x: f64 = s.parse().map_err(|e| format!("{e}"))?;
-    if x > 0.0 && x <= 86_400.0 {
-        Ok(x)
-    } else {
-        Err(format!("{x} must be more than 0 and at most 86400 seconds"))
-    }
+    let in_range = |x: &f64| *x > 0.0 && *x <= 86_400.0;
+    checked(s, in_range, "must be more than 0 and at most 86400 seconds")
 }
 
 /// Measures the BVH build and the ray queries.
