@@ -9,19 +9,18 @@
 //! others. Formats and units: `twopass_bake`.
 
 use std::collections::BTreeSet;
-use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use clap::{Args, ValueEnum};
 use twopass_bake::{self as bake, ColorMapping, ColorRecord, FileRecord, Manifest};
-use twopass_radiosity::{
-    Adaptive, Finish, Hierarchical, Method, Options, Solver, Stop, VisibilityRays,
-};
+use twopass_radiosity::{Options, Solver, Stop};
 
+use crate::args::{checked, positive_finite};
 use crate::context::Context;
 use crate::error::CliError;
-use crate::preset::RadiosityKnobs;
+use crate::preset::PRESET_SETS;
+use crate::solve::SolveArgs;
 
 /// An output format of `twopass bake`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, ValueEnum)]
@@ -62,7 +61,7 @@ pub struct BakeArgs {
     pub solve: SolveArgs,
     /// The solver settings of a measured preset (draft, preview, final) of `twopass bench
     /// tradeoff`; the preset must use radiosity.
-    #[arg(long, value_name = "NAME", conflicts_with_all = &crate::render::PRESET_SETS[4..])]
+    #[arg(long, value_name = "NAME", conflicts_with_all = &PRESET_SETS[4..])]
     pub preset: Option<String>,
     /// The presets file (default: `<stem>.presets.toml` beside the scene).
     #[arg(long, value_name = "FILE", requires = "preset")]
@@ -76,241 +75,16 @@ pub struct BakeArgs {
     pub residual_samples: usize,
 }
 
-/// A radiosity solver, as the command line names it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum SolverChoice {
-    /// Progressive refinement: exact vertex form factors, cost grows as shooters x receivers.
-    Progressive,
-    /// Hierarchical radiosity with clustering: cost grows about linearly with the scene.
-    Hierarchical,
-    /// Hierarchical above a few thousand participating triangles, progressive below.
-    Auto,
-}
-
-impl SolverChoice {
-    /// The library's method.
-    pub fn method(self) -> Method {
-        match self {
-            Self::Progressive => Method::Progressive,
-            Self::Hierarchical => Method::Hierarchical,
-            Self::Auto => Method::Auto,
-        }
-    }
-}
-
-/// The radiosity solver's settings, shared by every command that solves.
-#[derive(Debug, Clone, Args)]
-pub struct SolveArgs {
-    /// The radiosity solver [default: auto, by the scene's size; `twopass info` says which].
-    #[arg(long, value_enum, default_value = "auto")]
-    pub solver: SolverChoice,
-    /// Stop when the residual (unshot) power falls below this fraction of the emitted power:
-    /// the convergence measure of both solvers.
-    #[arg(long, default_value_t = 1e-3, value_name = "FRACTION", value_parser = parse_fraction)]
-    pub unshot: f64,
-    /// Hierarchical solver: refine a link while its estimated transport error exceeds this
-    /// fraction of the emitted power.
-    #[arg(long, default_value_t = Hierarchical::default().link_tolerance, value_name = "FRACTION")]
-    pub link_tolerance: f64,
-    /// Stop after this many shots (progressive) or gather iterations (hierarchical).
-    #[arg(long, value_name = "N")]
-    pub max_shots: Option<u64>,
-    /// Stop after this much wall-clock time, seconds: for `bake`, the whole process (loading,
-    /// the solve, the residual report and the files); the result is usable but not
-    /// deterministic then.
-    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
-    pub time_budget: Option<Duration>,
-    /// Longest patch (shooter) edge, scene units [default: scene diagonal / 8].
-    #[arg(long, value_name = "LENGTH", value_parser = parse_length)]
-    pub patch_size: Option<f32>,
-    /// Longest element (receiver) edge before adaptive subdivision, scene units
-    /// [default: scene diagonal / 24].
-    #[arg(long, value_name = "LENGTH", value_parser = parse_length)]
-    pub element_size: Option<f32>,
-    /// Keep the element mesh fixed: no adaptive subdivision where the light changes fast.
-    #[arg(long)]
-    pub no_adaptive: bool,
-    /// Shadow rays per visibility estimate: a first estimate of MIN, up to MAX where the
-    /// visibility is partial or the receiver is close.
-    #[arg(long, value_name = "MIN,MAX", value_parser = parse_rays, default_value = "4,16")]
-    pub visibility_rays: VisibilityRays,
-}
-
-impl SolveArgs {
-    /// The settings of a measured preset's solve; the others (patch size, shot and time
-    /// limits) at their defaults.
-    pub fn from_knobs(k: &RadiosityKnobs) -> Self {
-        Self {
-            solver: SolverChoice::Auto,
-            link_tolerance: Hierarchical::default().link_tolerance,
-            unshot: k.unshot,
-            max_shots: None,
-            time_budget: None,
-            patch_size: None,
-            element_size: Some(k.element_size),
-            no_adaptive: !k.adaptive,
-            visibility_rays: VisibilityRays {
-                min: k.visibility_min,
-                max: k.visibility_max,
-            },
-        }
-    }
-
-    /// The solver options these arguments ask for.
-    pub fn options(&self, seed: u64) -> Options {
-        Options {
-            patch_size: self.patch_size,
-            element_size: self.element_size,
-            adaptive: (!self.no_adaptive).then(Adaptive::default),
-            visibility: self.visibility_rays,
-            stop: Stop {
-                unshot_fraction: self.unshot,
-                max_shots: self.max_shots,
-                time_budget: self.time_budget,
-            },
-            seed,
-            method: self.solver.method(),
-            hierarchical: Hierarchical {
-                link_tolerance: self.link_tolerance,
-                ..Hierarchical::default()
-            },
-            memory_limit: crate::context::memory_limit(),
-            ..Options::default()
-        }
-    }
-
-    /// Runs `solver` to its stop criteria with a progress bar over the unshot fraction.
-    pub fn run(&self, solver: &mut Solver<'_>, ctx: &Context) -> Finish {
-        let bar = ctx.progress(STEPS, "radiosity");
-        let finish = solver.run(|p| {
-            bar.set_position(bar_position(p.unshot_fraction, self.unshot));
-            bar.set_message(format!("residual {:.1e}", p.unshot_fraction));
-            ControlFlow::Continue(())
-        });
-        bar.finish_and_clear();
-        finish
-    }
-}
-
-fn parse_seconds(s: &str) -> Result<Duration, String> {
-    let secs: f64 = s.parse().map_err(|e| format!("{e}"))?;
-    if !(secs.is_finite() && secs > 0.0) {
-        return Err(format!("{secs} must be a finite number of seconds > 0"));
-    }
-    Duration::try_from_secs_f64(secs).map_err(|e| e.to_string())
-}
-
-fn parse_rays(s: &str) -> Result<VisibilityRays, String> {
-    let (min, max) = s
-        .split_once(',')
-        .ok_or_else(|| format!("`{s}`: expected MIN,MAX such as 4,16"))?;
-    let parse = |x: &str| x.trim().parse::<u32>().map_err(|e| format!("`{x}`: {e}"));
-    let (min, max) = (parse(min)?, parse(max)?);
-    if min == 0 || max < min || max > MAX_VISIBILITY_RAYS {
-        return Err(format!(
-            "{min},{max}: needs 1 <= MIN <= MAX <= {MAX_VISIBILITY_RAYS}"
-        ));
-    }
-    Ok(VisibilityRays { min, max })
-}
-
-/// Most shadow rays per visibility estimate (a 32 x 32 grid; 16 is the default).
-pub const MAX_VISIBILITY_RAYS: u32 = 1024;
-
 /// Most vertices and patch pairs the residual report samples.
 const MAX_RESIDUAL_SAMPLES: usize = 100_000;
 
 fn parse_residual_samples(s: &str) -> Result<usize, String> {
-    let n: usize = s.parse().map_err(|e| format!("{e}"))?;
-    if (1..=MAX_RESIDUAL_SAMPLES).contains(&n) {
-        Ok(n)
-    } else {
-        Err(format!("{n} must be 1 to {MAX_RESIDUAL_SAMPLES}"))
-    }
-}
-
-/// A fraction in [0, 1) (the unshot power at which to stop).
-pub fn parse_fraction(s: &str) -> Result<f64, String> {
-    let x: f64 = s.parse().map_err(|e| format!("{e}"))?;
-    if (0.0..1.0).contains(&x) {
-        Ok(x)
-    } else {
-        Err(format!("{x} must be a fraction >= 0 and < 1"))
-    }
-}
-
-/// A length in scene units: finite and > 0 (whether it fits the scene is checked by the
-/// solver, which knows the scene's area).
-fn parse_length(s: &str) -> Result<f32, String> {
-    let x: f32 = s.parse().map_err(|e| format!("{e}"))?;
-    if x.is_finite() && x > 0.0 {
-        Ok(x)
-    } else {
-        Err(format!("{x} must be a finite length > 0 scene units"))
-    }
+    let needs = format!("must be 1 to {MAX_RESIDUAL_SAMPLES}");
+    checked(s, |n| (1..=MAX_RESIDUAL_SAMPLES).contains(n), &needs)
 }
 
 fn parse_exposure(s: &str) -> Result<f32, String> {
-    let x: f32 = s.parse().map_err(|e| format!("{e}"))?;
-    if x.is_finite() && x > 0.0 {
-        Ok(x)
-    } else {
-        Err(format!("{x} must be finite and > 0"))
-    }
-}
-
-/// Checks a bake file against the manifest of its set, when one lies beside it
-/// (`<stem>.manifest.json`): a file whose size or CRC-32 differs from the manifest's record is
-/// from another bake (one interrupted between its files), and the set is refused.
-pub fn check_in_set(file: &Path) -> Result<(), CliError> {
-    let (Some(dir), Some(stem), Some(name)) = (file.parent(), file.file_stem(), file.file_name())
-    else {
-        return Ok(());
-    };
-    let manifest_path = dir.join(format!("{}.manifest.json", stem.to_string_lossy()));
-    let text = match crate::output::read_small(&manifest_path) {
-        Ok(text) => text,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
-        Err(e) => return Err(CliError::io(&manifest_path, e)),
-    };
-    let manifest: Manifest = serde_json::from_slice(&text).map_err(|e| {
-        CliError::Input(format!(
-            "{}: not a bake manifest ({e}); remove it or bake again",
-            manifest_path.display()
-        ))
-    })?;
-    let Some(record) = manifest
-        .files
-        .iter()
-        .find(|f| f.path.file_name() == Some(name))
-    else {
-        return Ok(());
-    };
-    let bytes = twopass_scene::read_bounded(file, bake::MAX_BAKE_BYTES)
-        .map_err(|e| CliError::io(file, e))?;
-    let size_ok = record.bytes == bytes.len() as u64;
-    let crc_ok = record.crc32.is_none_or(|c| c == crc32fast::hash(&bytes));
-    if size_ok && crc_ok {
-        return Ok(());
-    }
-    Err(CliError::Input(format!(
-        "{}: does not match its manifest {} ({} bytes, recorded {}{}): the bake set is mixed, \
-         probably from a bake stopped between its files; bake again",
-        file.display(),
-        manifest_path.display(),
-        bytes.len(),
-        record.bytes,
-        if crc_ok { "" } else { ", CRC-32 differs" }
-    )))
-}
-
-/// Bar position of an unshot fraction on a log scale: 0 at 1, `STEPS` at the target.
-const STEPS: u64 = 1000;
-
-fn bar_position(unshot: f64, target: f64) -> u64 {
-    let target = target.clamp(1e-15, 0.5);
-    let x = unshot.max(1e-300).ln() / target.ln();
-    (x.clamp(0.0, 1.0) * STEPS as f64).round() as u64
+    checked(s, positive_finite, "must be finite and > 0")
 }
 
 /// Solves the scene and writes the selected outputs and the manifest.
@@ -333,7 +107,7 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
                     preset.method.name()
                 ))
             })?;
-            Some(SolveArgs::from_knobs(&knobs))
+            Some(knobs.solve_args())
         }
         None => None,
     };

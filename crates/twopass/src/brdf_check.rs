@@ -128,13 +128,13 @@ fn cases() -> Result<Vec<Case>, ParamError> {
     Ok(v)
 }
 
-struct Row {
+struct ModelRow {
     name: &'static str,
     params: String,
     result: Plausibility,
 }
 
-impl Row {
+impl ModelRow {
     fn plausible(&self) -> bool {
         self.result.non_finite == 0
             && self.result.min_value >= 0.0
@@ -172,12 +172,12 @@ pub fn run(args: &BrdfCheckArgs, ctx: &Context) -> Result<(), CliError> {
         grid: 12,
     };
     let bar = ctx.progress(cases.len() as u64, "brdf-check");
-    let rows: Vec<Row> = cases
+    let rows: Vec<ModelRow> = cases
         .par_iter()
         .map(|c| {
             let result = check::plausibility(&c.model, &options);
             bar.inc(1);
-            Row {
+            ModelRow {
                 name: c.model.name(),
                 params: c.params.clone(),
                 result,
@@ -242,7 +242,7 @@ pub fn run(args: &BrdfCheckArgs, ctx: &Context) -> Result<(), CliError> {
     Ok(())
 }
 
-fn print_table(rows: &[Row]) -> Result<(), CliError> {
+fn print_table(rows: &[ModelRow]) -> Result<(), CliError> {
     outln!(
         "{:<23} {:<22} {:>9} {:>9} {:>7} {:>7} {:>7} {:>7} {:>7}  verdict",
         "model",
@@ -255,7 +255,7 @@ fn print_table(rows: &[Row]) -> Result<(), CliError> {
         "a(89.9)",
         "max a"
     );
-    let at = |r: &Row, deg: f32| {
+    let at = |r: &ModelRow, deg: f32| {
         r.result
             .albedo
             .iter()

@@ -5,21 +5,24 @@
 //! against the reference), `<stem>-<method>.exr` per method (every layer), and
 //! `<stem>-compare.json` / `.csv` (method, settings, time per phase, rays, error metrics).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use clap::Args;
 use serde::Serialize;
 use twopass_composite::image::Image;
+use twopass_composite::metric::Metrics;
 use twopass_composite::sheet::{ComparisonOptions, Entry, comparison};
-use twopass_composite::write::{write_atomic, write_exr_layers, write_png};
-use twopass_radiosity::{Options, Solver, Stop};
-use twopass_trace::{RenderSettings, WhittedSettings};
+use twopass_composite::write::{write_exr_layers, write_png};
+use twopass_radiosity::{Options, Solution, Solver, Stop};
+use twopass_scene::{Camera, Scene};
+use twopass_trace::{RenderStats, WhittedSettings};
 
 use crate::context::Context;
 use crate::error::CliError;
-use crate::plan::plan;
-use crate::render::{Method, integrator, load_lit, render_with_bar, to_layers};
+use crate::pipeline::{
+    Method, integrator, load_lit, methods, render_settings, render_with_bar, to_layers,
+};
 
 /// Arguments of `twopass compare`.
 #[derive(Debug, Args)]
@@ -41,7 +44,7 @@ pub struct CompareArgs {
 
 /// What one method cost and how far it is from the reference.
 #[derive(Debug, Serialize)]
-struct Row {
+struct MethodRow {
     method: &'static str,
     width: u32,
     height: u32,
@@ -63,7 +66,7 @@ struct Row {
 }
 
 #[derive(Debug, Serialize)]
-struct Report {
+struct CompareReport {
     scene: PathBuf,
     quick: bool,
     seed: u64,
@@ -73,7 +76,7 @@ struct Report {
     skipped: Vec<String>,
     tone_map: String,
     sheet: PathBuf,
-    rows: Vec<Row>,
+    rows: Vec<MethodRow>,
 }
 
 #[derive(Debug, Serialize)]
@@ -87,29 +90,14 @@ struct RadiosityInfo {
     seconds: f64,
 }
 
-/// The methods a scene calls for, and what was skipped and why.
-pub(crate) fn methods(scene: &twopass_scene::Scene) -> (Vec<Method>, Vec<String>) {
-    let p = plan(scene);
-    let mut methods = vec![Method::Reference, Method::Whitted];
-    let mut skipped = Vec::new();
-    if p.diffuse.required {
-        methods.push(Method::Radiosity);
-        if p.specular.required {
-            methods.push(Method::Hybrid);
-        } else {
-            skipped.push(format!(
-                "hybrid: identical to radiosity alone, the specular pass is skipped ({})",
-                p.specular.reason
-            ));
-        }
-        methods.push(Method::HybridDirect);
-    } else {
-        skipped.push(format!(
-            "radiosity, hybrid, hybrid-direct: {}",
-            p.diffuse.reason
-        ));
-    }
-    (methods, skipped)
+/// One method's render: its image, costs and EXR.
+struct Rendered {
+    method: Method,
+    image: Image,
+    /// The shared radiosity solve, seconds (0 for the methods without radiosity).
+    radiosity_seconds: f64,
+    stats: RenderStats,
+    exr: PathBuf,
 }
 
 /// Renders, compares and writes everything.
@@ -137,86 +125,30 @@ pub fn run(args: &CompareArgs, ctx: &Context) -> Result<(), CliError> {
 
     // One radiosity solve serves every radiosity-based method.
     let needs_radiosity = methods.iter().any(|m| m.needs_radiosity());
-    let started = Instant::now();
     let solved = if needs_radiosity {
-        let diag = scene.bounds.diagonal();
-        let options = Options {
-            element_size: args.quick.then_some(diag / 16.0),
-            stop: Stop {
-                unshot_fraction: if args.quick { 1e-2 } else { 1e-4 },
-                ..Stop::default()
-            },
-            seed: ctx.seed,
-            memory_limit: crate::context::memory_limit(),
-            ..Options::default()
-        };
-        let mut solver = Solver::new(&scene, options).map_err(|source| CliError::Solve {
-            path: args.scene.clone(),
-            source,
-        })?;
-        let bar = ctx.progress(1, "radiosity");
-        solver.run(|_| std::ops::ControlFlow::Continue(()));
-        bar.finish_and_clear();
-        let p = solver.progress();
-        let info = RadiosityInfo {
-            solver: p.method.name(),
-            elements: p.elements,
-            patches: p.patches,
-            shots: p.shots,
-            rays: p.rays,
-            unshot_fraction: p.unshot_fraction,
-            seconds: started.elapsed().as_secs_f64(),
-        };
-        Some((solver.solution(), info))
+        Some(solve_shared(&scene, args, ctx)?)
     } else {
         None
     };
 
-    let mut images: Vec<(Method, Image, f64, twopass_trace::RenderStats, PathBuf)> = Vec::new();
-    for &method in &methods {
-        let integ = integrator(
-            method,
-            &scene,
-            solved.as_ref().map(|s| &s.0),
-            WhittedSettings::default(),
-        );
-        let settings = RenderSettings {
-            samples_per_pixel: if method == Method::Reference {
-                reference_spp
-            } else {
-                spp
-            },
-            seed: ctx.seed,
-            ..RenderSettings::default()
-        };
-        let out = render_with_bar(
-            &scene,
-            &camera,
-            integ.as_ref(),
-            &settings,
-            method.name(),
-            ctx,
-        )?;
-        let layers = to_layers(&out.layers)?;
-        let exr = dir.join(format!("{stem}-{}.exr", method.name()));
-        write_exr_layers(&exr, &layers)?;
-        let image = layers.require("image")?.clone();
-        let radiosity_seconds = if method.needs_radiosity() {
-            solved.as_ref().map_or(0.0, |s| s.1.seconds)
-        } else {
-            0.0
-        };
-        images.push((method, image, radiosity_seconds, out.stats, exr));
-    }
+    let images = render_methods(
+        &scene,
+        &camera,
+        &methods,
+        solved.as_ref().map(|s| (&s.0, s.1.seconds)),
+        (spp, reference_spp),
+        (&dir, &stem),
+        ctx,
+    )?;
 
     let (reference, others) = images
         .split_first()
         .expect("the reference is always rendered");
-    fn entry(r: &(Method, Image, f64, twopass_trace::RenderStats, PathBuf)) -> Entry<'_> {
+    fn entry(r: &Rendered) -> Entry<'_> {
         Entry {
-            method: r.0.name(),
-            image: &r.1,
-            seconds: Some(r.2 + r.3.elapsed.as_secs_f64()),
+            method: r.method.name(),
+            image: &r.image,
+            seconds: Some(r.radiosity_seconds + r.stats.elapsed.as_secs_f64()),
         }
     }
     let options = ComparisonOptions {
@@ -238,32 +170,8 @@ pub fn run(args: &CompareArgs, ctx: &Context) -> Result<(), CliError> {
     let sheet_path = dir.join(format!("{stem}-compare.png"));
     write_png(&sheet_path, &sheet.image, Some(&sheet.describe))?;
 
-    let rows: Vec<Row> = images
-        .iter()
-        .enumerate()
-        .map(|(i, (m, img, solve, stats, exr))| {
-            let metrics = i.checked_sub(1).map(|k| sheet.metrics[k]);
-            Row {
-                method: m.name(),
-                width: img.width(),
-                height: img.height(),
-                spp: stats.samples_per_pixel,
-                radiosity_seconds: *solve,
-                render_seconds: stats.elapsed.as_secs_f64(),
-                total_seconds: solve + stats.elapsed.as_secs_f64(),
-                rays: stats.rays,
-                shadow_rays: stats.shadow_rays,
-                non_finite_samples: stats.non_finite,
-                mae: metrics.map(|x| x.mae),
-                rmse: metrics.map(|x| x.rmse),
-                rel_mse: metrics.map(|x| x.rel_mse),
-                rel_rmse: metrics.map(|x| x.rel_rmse),
-                ssim: metrics.map(|x| x.ssim),
-                exr: exr.clone(),
-            }
-        })
-        .collect();
-    let report = Report {
+    let rows = method_rows(&images, &sheet.metrics);
+    let report = CompareReport {
         scene: args.scene.clone(),
         quick: args.quick,
         seed: ctx.seed,
@@ -274,53 +182,168 @@ pub fn run(args: &CompareArgs, ctx: &Context) -> Result<(), CliError> {
         sheet: sheet_path,
         rows,
     };
-    let json = serde_json::to_string_pretty(&report).expect("report serializes");
-    write_atomic(&dir.join(format!("{stem}-compare.json")), json.as_bytes())?;
     crate::output::write_csv(&dir.join(format!("{stem}-compare.csv")), &report.rows)?;
+    let json = dir.join(format!("{stem}-compare.json"));
+    crate::output::finish_report(&json, &report, ctx, print_report)
+}
 
-    if ctx.json {
-        outln!("{json}");
-    } else if !ctx.quiet {
-        for s in &report.skipped {
-            outln!("skipped {s}");
-        }
-        if let Some(r) = &report.radiosity {
-            outln!(
-                "radiosity: {} elements, {} patches, {} shots, unshot {:.1e}, {:.2} s",
-                r.elements,
-                r.patches,
-                r.shots,
-                r.unshot_fraction,
-                r.seconds
-            );
-        }
-        outln!(
-            "{:<14} {:>9} {:>9} {:>10} {:>9} {:>7}",
-            "method",
-            "spp",
-            "seconds",
-            "rel RMSE",
-            "RMSE",
-            "SSIM"
+/// The one radiosity solve every radiosity-based method shares: a coarse mesh to 1e-2 with
+/// `--quick`, the default mesh to 1e-4 without.
+fn solve_shared(
+    scene: &Scene,
+    args: &CompareArgs,
+    ctx: &Context,
+) -> Result<(Solution, RadiosityInfo), CliError> {
+    let started = Instant::now();
+    let diag = scene.bounds.diagonal();
+    let options = Options {
+        element_size: args.quick.then_some(diag / 16.0),
+        stop: Stop {
+            unshot_fraction: if args.quick { 1e-2 } else { 1e-4 },
+            ..Stop::default()
+        },
+        seed: ctx.seed,
+        memory_limit: crate::context::memory_limit(),
+        ..Options::default()
+    };
+    let mut solver = Solver::new(scene, options).map_err(|source| CliError::Solve {
+        path: args.scene.clone(),
+        source,
+    })?;
+    let bar = ctx.progress(1, "radiosity");
+    solver.run(|_| std::ops::ControlFlow::Continue(()));
+    bar.finish_and_clear();
+    let p = solver.progress();
+    let info = RadiosityInfo {
+        solver: p.method.name(),
+        elements: p.elements,
+        patches: p.patches,
+        shots: p.shots,
+        rays: p.rays,
+        unshot_fraction: p.unshot_fraction,
+        seconds: started.elapsed().as_secs_f64(),
+    };
+    Ok((solver.solution(), info))
+}
+
+/// Renders every method at one resolution (the reference with its own sample count), writing
+/// each method's layers as `<stem>-<method>.exr` in `dir`.
+fn render_methods(
+    scene: &Scene,
+    camera: &Camera,
+    methods: &[Method],
+    solved: Option<(&Solution, f64)>,
+    (spp, reference_spp): (u32, u32),
+    (dir, stem): (&Path, &str),
+    ctx: &Context,
+) -> Result<Vec<Rendered>, CliError> {
+    let mut images = Vec::with_capacity(methods.len());
+    for &method in methods {
+        let integ = integrator(
+            method,
+            scene,
+            solved.map(|s| s.0),
+            WhittedSettings::default(),
         );
-        for r in &report.rows {
-            let pct =
-                |x: Option<f64>| x.map_or_else(|| "-".to_owned(), |v| format!("{:.2}%", 100.0 * v));
-            let num = |x: Option<f64>| x.map_or_else(|| "-".to_owned(), |v| format!("{v:.4}"));
-            outln!(
-                "{:<14} {:>9} {:>9.2} {:>10} {:>9} {:>7}",
-                r.method,
-                r.spp,
-                r.total_seconds,
-                pct(r.rel_rmse),
-                num(r.rmse),
-                num(r.ssim)
-            );
-        }
+        let settings = render_settings(
+            if method == Method::Reference {
+                reference_spp
+            } else {
+                spp
+            },
+            ctx.seed,
+        );
+        let out = render_with_bar(scene, camera, integ.as_ref(), &settings, method.name(), ctx)?;
+        let layers = to_layers(&out.layers)?;
+        let exr = dir.join(format!("{stem}-{}.exr", method.name()));
+        write_exr_layers(&exr, &layers)?;
+        let image = layers.require("image")?.clone();
+        let radiosity_seconds = if method.needs_radiosity() {
+            solved.map_or(0.0, |s| s.1)
+        } else {
+            0.0
+        };
+        images.push(Rendered {
+            method,
+            image,
+            radiosity_seconds,
+            stats: out.stats,
+            exr,
+        });
+    }
+    Ok(images)
+}
+
+/// The report's rows: each method's cost and, after the reference, its error metrics.
+fn method_rows(images: &[Rendered], metrics: &[Metrics]) -> Vec<MethodRow> {
+    images
+        .iter()
+        .enumerate()
+        .map(|(i, r)| {
+            let metrics = i.checked_sub(1).map(|k| metrics[k]);
+            MethodRow {
+                method: r.method.name(),
+                width: r.image.width(),
+                height: r.image.height(),
+                spp: r.stats.samples_per_pixel,
+                radiosity_seconds: r.radiosity_seconds,
+                render_seconds: r.stats.elapsed.as_secs_f64(),
+                total_seconds: r.radiosity_seconds + r.stats.elapsed.as_secs_f64(),
+                rays: r.stats.rays,
+                shadow_rays: r.stats.shadow_rays,
+                non_finite_samples: r.stats.non_finite,
+                mae: metrics.map(|x| x.mae),
+                rmse: metrics.map(|x| x.rmse),
+                rel_mse: metrics.map(|x| x.rel_mse),
+                rel_rmse: metrics.map(|x| x.rel_rmse),
+                ssim: metrics.map(|x| x.ssim),
+                exr: r.exr.clone(),
+            }
+        })
+        .collect()
+}
+
+/// The report as a table on stdout.
+fn print_report(report: &CompareReport) -> Result<(), CliError> {
+    for s in &report.skipped {
+        outln!("skipped {s}");
+    }
+    if let Some(r) = &report.radiosity {
         outln!(
-            "wrote {} and the EXRs, JSON and CSV beside it",
-            report.sheet.display()
+            "radiosity: {} elements, {} patches, {} shots, unshot {:.1e}, {:.2} s",
+            r.elements,
+            r.patches,
+            r.shots,
+            r.unshot_fraction,
+            r.seconds
         );
     }
+    outln!(
+        "{:<14} {:>9} {:>9} {:>10} {:>9} {:>7}",
+        "method",
+        "spp",
+        "seconds",
+        "rel RMSE",
+        "RMSE",
+        "SSIM"
+    );
+    for r in &report.rows {
+        let pct =
+            |x: Option<f64>| x.map_or_else(|| "-".to_owned(), |v| format!("{:.2}%", 100.0 * v));
+        let num = |x: Option<f64>| x.map_or_else(|| "-".to_owned(), |v| format!("{v:.4}"));
+        outln!(
+            "{:<14} {:>9} {:>9.2} {:>10} {:>9} {:>7}",
+            r.method,
+            r.spp,
+            r.total_seconds,
+            pct(r.rel_rmse),
+            num(r.rmse),
+            num(r.ssim)
+        );
+    }
+    outln!(
+        "wrote {} and the EXRs, JSON and CSV beside it",
+        report.sheet.display()
+    );
     Ok(())
 }

@@ -13,6 +13,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 #[derive(Debug, Clone, Args)]
 pub struct Context {
     /// Output file, or directory for commands that write several files (created if missing).
+    /// `render`: `x.exr` or `x.png` is that file; a path without an image extension (or ending
+    /// in `/`) is a directory.
     #[arg(long, short, global = true)]
     pub output: Option<PathBuf>,
     /// Image width in pixels, overriding the scene's (alone: keeps the aspect ratio).

@@ -33,6 +33,7 @@ macro_rules! errln {
     }};
 }
 
+mod args;
 mod bake;
 mod bench;
 mod brdf_check;
@@ -42,10 +43,11 @@ mod error;
 mod figure;
 mod info;
 mod output;
+mod pipeline;
 mod plan;
 mod preset;
 mod render;
-mod tradeoff;
+mod solve;
 
 use std::process::ExitCode;
 

@@ -135,3 +135,35 @@ pub fn print_json<T: serde::Serialize>(value: &T) -> Result<(), CliError> {
     outln!("{text}");
     Ok(())
 }
+
+/// The ending of every command with a summary: `value` as pretty JSON on stdout with
+/// `--json`, else the human summary `print` unless `--quiet`.
+pub fn report<T: serde::Serialize>(
+    value: &T,
+    ctx: &crate::context::Context,
+    print: impl FnOnce() -> Result<(), CliError>,
+) -> Result<(), CliError> {
+    if ctx.json {
+        print_json(value)
+    } else if !ctx.quiet {
+        print()
+    } else {
+        Ok(())
+    }
+}
+
+/// The ending of the commands that keep a JSON report beside their other files: writes
+/// `value` as pretty JSON to `path` (atomically), then ends as [`report`] does.
+pub fn finish_report<T: serde::Serialize>(
+    path: &Path,
+    value: &T,
+    ctx: &crate::context::Context,
+    print: impl FnOnce(&T) -> Result<(), CliError>,
+) -> Result<(), CliError> {
+    let json = serde_json::to_string_pretty(value).map_err(|e| CliError::Encode {
+        path: path.to_owned(),
+        message: e.to_string(),
+    })?;
+    write_atomic(path, json.as_bytes())?;
+    report(value, ctx, || print(value))
+}

@@ -11,7 +11,23 @@ use serde::{Deserialize, Serialize};
 use twopass_trace::WhittedSettings;
 
 use crate::error::CliError;
-use crate::render::Method;
+use crate::pipeline::{MAX_DEPTH, Method};
+use crate::solve::{MAX_VISIBILITY_RAYS, SolveArgs, SolverChoice};
+
+/// The arguments a preset sets, which conflict with `--preset`.
+pub const PRESET_SETS: [&str; 11] = [
+    "method",
+    "spp",
+    "depth",
+    "shadow_grid",
+    "unshot",
+    "max_shots",
+    "time_budget",
+    "patch_size",
+    "element_size",
+    "no_adaptive",
+    "visibility_rays",
+];
 
 /// The tracer's knobs of one measured setting.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -50,6 +66,28 @@ pub struct RadiosityKnobs {
     pub visibility_max: u32,
     /// Adaptive subdivision where the light changes fast.
     pub adaptive: bool,
+}
+
+impl RadiosityKnobs {
+    /// The solver settings these knobs ask for; the others (patch size, shot and time limits)
+    /// at their defaults.
+    pub fn solve_args(&self) -> SolveArgs {
+        let k = self;
+        SolveArgs {
+            solver: SolverChoice::Auto,
+            link_tolerance: twopass_radiosity::Hierarchical::default().link_tolerance,
+            unshot: k.unshot,
+            max_shots: None,
+            time_budget: None,
+            patch_size: None,
+            element_size: Some(k.element_size),
+            no_adaptive: !k.adaptive,
+            visibility_rays: twopass_radiosity::VisibilityRays {
+                min: k.visibility_min,
+                max: k.visibility_max,
+            },
+        }
+    }
 }
 
 /// One named preset: the setting and what it measured.
@@ -153,12 +191,8 @@ impl Preset {
         if !(1..=1_000_000).contains(&r.spp) {
             return Err(format!("spp {} must be 1 to 1000000", r.spp));
         }
-        if r.depth > crate::render::MAX_DEPTH {
-            return Err(format!(
-                "depth {} must be at most {}",
-                r.depth,
-                crate::render::MAX_DEPTH
-            ));
+        if r.depth > MAX_DEPTH {
+            return Err(format!("depth {} must be at most {}", r.depth, MAX_DEPTH));
         }
         if !(1..=64).contains(&r.shadow_grid) {
             return Err(format!("shadow_grid {} must be 1 to 64", r.shadow_grid));
@@ -173,7 +207,7 @@ impl Preset {
             if !(0.0..1.0).contains(&k.unshot) {
                 return Err(format!("unshot {} must be >= 0 and < 1", k.unshot));
             }
-            let max = crate::bake::MAX_VISIBILITY_RAYS;
+            let max = MAX_VISIBILITY_RAYS;
             if k.visibility_min == 0
                 || k.visibility_max < k.visibility_min
                 || k.visibility_max > max

@@ -1,66 +1,29 @@
 //! `twopass render SCENE --method M`: one image with one method, written as a multi-layer EXR
 //! (every layer of the tracer plus the final image) and, with `--png`, a tone-mapped PNG.
+//! `--output x.exr` names the EXR, `--output x.png` asks for the PNG alone, and any other path
+//! (no image extension, or a trailing `/`) is a directory for `<stem>-<method>.exr`.
 //!
 //! The radiosity-based methods take their diffuse light from a fresh solve, or from a bake file
 //! of `twopass bake` (`--bake FILE`), which renders any view without solving again.
 
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
-use clap::{Args, ValueEnum};
-use serde::{Deserialize, Serialize};
-use twopass_composite::image::Image;
-use twopass_composite::layer::Layers;
+use clap::Args;
+use serde::Serialize;
 use twopass_composite::tonemap::ToneMap;
 use twopass_composite::write::{write_exr_layers, write_png_tonemapped};
-use twopass_radiosity::{Solution, Solver};
-use twopass_scene::Scene;
-use twopass_trace::hybrid::{hybrid, hybrid_direct, radiosity_only};
-use twopass_trace::whitted::ambient_estimate;
-use twopass_trace::{
-    Integrator, Layer, LayerImages, Progress, Reference, ReferenceSettings, RenderOutput,
-    RenderSettings, RenderStats, Whitted, WhittedSettings,
-};
+use twopass_trace::WhittedSettings;
 
-use crate::bake::SolveArgs;
+use crate::args::checked;
 use crate::context::Context;
 use crate::error::CliError;
+use crate::pipeline::{
+    MAX_DEPTH, Method, integrator, radiosity, render_settings, render_with_bar, to_layers,
+};
 use crate::plan::plan;
-use crate::preset::RenderKnobs;
-
-/// A rendering method.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Method {
-    /// Whitted ray tracing alone, with the Phong ambient term for interreflection.
-    Whitted,
-    /// Radiosity alone: camera rays shaded by the radiosity solution.
-    Radiosity,
-    /// Two-pass: radiosity for the diffuse light, the tracer for the non-diffuse terms.
-    Hybrid,
-    /// As hybrid, with direct diffuse light per pixel and radiosity's indirect part.
-    HybridDirect,
-    /// The reference path tracer.
-    Reference,
-}
-
-impl Method {
-    /// Whether the method reads a radiosity solution.
-    pub fn needs_radiosity(self) -> bool {
-        matches!(self, Self::Radiosity | Self::Hybrid | Self::HybridDirect)
-    }
-
-    /// The name used on the command line and in reports.
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Whitted => "whitted",
-            Self::Radiosity => "radiosity",
-            Self::Hybrid => "hybrid",
-            Self::HybridDirect => "hybrid-direct",
-            Self::Reference => "reference",
-        }
-    }
-}
+use crate::preset::{PRESET_SETS, RadiosityKnobs, RenderKnobs};
+use crate::solve::SolveArgs;
 
 /// Arguments of `twopass render`.
 #[derive(Debug, Args)]
@@ -102,21 +65,6 @@ pub struct RenderArgs {
     pub presets: Option<PathBuf>,
 }
 
-/// The arguments a preset sets, which conflict with `--preset`.
-pub const PRESET_SETS: [&str; 11] = [
-    "method",
-    "spp",
-    "depth",
-    "shadow_grid",
-    "unshot",
-    "max_shots",
-    "time_budget",
-    "patch_size",
-    "element_size",
-    "no_adaptive",
-    "visibility_rays",
-];
-
 #[derive(Debug, Serialize)]
 struct Summary {
     scene: PathBuf,
@@ -134,140 +82,10 @@ struct Summary {
     non_finite_samples: u64,
     /// Mean of the final image over pixels, per channel, W/(m^2 sr).
     mean: [f32; 3],
-    exr: PathBuf,
+    /// The multi-layer EXR; none when `--output` names a PNG file.
+    exr: Option<PathBuf>,
     png: Option<PathBuf>,
     skipped: Vec<String>,
-}
-
-/// Loads a scene to render with several methods: prints its warnings unless quiet, and refuses
-/// a scene where nothing emits (every image would be black).
-pub fn load_lit(path: &Path, ctx: &Context) -> Result<Scene, CliError> {
-    let (scene, warnings) = ctx.load_scene(path)?;
-    if !ctx.quiet {
-        for w in &warnings {
-            errln!("warning: {w}");
-        }
-    }
-    if scene.emitters.is_empty() {
-        return Err(CliError::Input(format!(
-            "{}: nothing emits light, every render would be black",
-            path.display()
-        )));
-    }
-    Ok(scene)
-}
-
-/// The radiosity for the radiosity-based methods: from a bake file, or solved now.
-pub fn radiosity(
-    scene: &Scene,
-    path: &Path,
-    bake: Option<&Path>,
-    solve: &SolveArgs,
-    ctx: &Context,
-) -> Result<(Solution, &'static str), CliError> {
-    match bake {
-        Some(file) => {
-            crate::bake::check_in_set(file)?;
-            Ok((twopass_bake::read_bake(file, scene)?, "bake"))
-        }
-        None => {
-            let mut solver =
-                Solver::new(scene, solve.options(ctx.seed)).map_err(|source| CliError::Solve {
-                    path: path.to_owned(),
-                    source,
-                })?;
-            solve.run(&mut solver, ctx);
-            Ok((solver.solution(), "solve"))
-        }
-    }
-}
-
-/// Renders with a progress bar drawn from the render loop's counters, then checks the
-/// samples it had to drop (see [`check_dropped`]).
-pub fn render_with_bar(
-    scene: &Scene,
-    camera: &twopass_scene::Camera,
-    integrator: &dyn Integrator,
-    settings: &RenderSettings,
-    label: &str,
-    ctx: &Context,
-) -> Result<RenderOutput, CliError> {
-    let progress = Progress::new();
-    let bar = ctx.progress(1000, label);
-    let done = std::sync::atomic::AtomicBool::new(false);
-    let out = std::thread::scope(|s| {
-        s.spawn(|| {
-            while !done.load(std::sync::atomic::Ordering::Relaxed) {
-                bar.set_position((progress.fraction() * 1000.0) as u64);
-                std::thread::sleep(Duration::from_millis(100));
-            }
-        });
-        let out = twopass_trace::render(scene, camera, integrator, settings, &progress);
-        done.store(true, std::sync::atomic::Ordering::Relaxed);
-        out
-    });
-    bar.finish_and_clear();
-    check_dropped(&out.stats, &scene.path, ctx)?;
-    Ok(out)
-}
-
-/// Most of a render's samples that may be non-finite (and dropped) before the render is
-/// refused: beyond this the image says more about the overflow than about the scene.
-pub const MAX_DROPPED_FRACTION: f64 = 0.01;
-
-/// Says loudly when a render dropped non-finite samples, and fails when it dropped more than
-/// [`MAX_DROPPED_FRACTION`] of them: the image would be wrong (black where light overflowed).
-pub fn check_dropped(stats: &RenderStats, scene: &Path, ctx: &Context) -> Result<(), CliError> {
-    if stats.non_finite == 0 {
-        return Ok(());
-    }
-    let fraction = stats.non_finite as f64 / stats.samples.max(1) as f64;
-    let what = format!(
-        "{}: the {} render dropped {} of {} samples ({:.3}%) as non-finite (NaN or infinite radiance)",
-        scene.display(),
-        stats.method,
-        stats.non_finite,
-        stats.samples,
-        100.0 * fraction
-    );
-    if fraction > MAX_DROPPED_FRACTION {
-        return Err(CliError::Input(format!(
-            "{what}; the image would be wrong, so none is written (lower the emission or the scene's scale)"
-        )));
-    }
-    if !ctx.quiet {
-        errln!("warning: {what}; their pixels average the remaining samples");
-    }
-    Ok(())
-}
-
-/// The tracer's layers as named compositor layers, plus the final image as `image`.
-pub fn to_layers(images: &LayerImages) -> Result<Layers, CliError> {
-    let convert =
-        |img: &twopass_trace::Image| Image::from_pixels(img.width, img.height, img.pixels.clone());
-    let mut layers = Vec::with_capacity(Layer::ALL.len() + 1);
-    layers.push(("image".to_owned(), convert(&images.composite())?));
-    for layer in Layer::ALL {
-        layers.push((layer.name().to_owned(), convert(images.layer(layer))?));
-    }
-    Ok(Layers::from_vec(layers)?)
-}
-
-/// The integrator of a method; `solution` must be given for the radiosity-based ones.
-pub fn integrator<'a>(
-    method: Method,
-    scene: &'a Scene,
-    solution: Option<&'a Solution>,
-    whitted: WhittedSettings,
-) -> Box<dyn Integrator + 'a> {
-    let solution = || solution.expect("radiosity-based methods get a solution");
-    match method {
-        Method::Whitted => Box::new(Whitted::new(scene, ambient_estimate(scene), whitted)),
-        Method::Radiosity => Box::new(radiosity_only(scene, solution())),
-        Method::Hybrid => Box::new(hybrid(scene, solution(), whitted)),
-        Method::HybridDirect => Box::new(hybrid_direct(scene, solution(), whitted)),
-        Method::Reference => Box::new(Reference::new(scene, ReferenceSettings::default())),
-    }
 }
 
 /// Renders the scene and writes the EXR (and PNG).
@@ -295,7 +113,7 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
     let preset_solve = preset
         .as_ref()
         .and_then(|p| p.radiosity.as_ref())
-        .map(SolveArgs::from_knobs);
+        .map(RadiosityKnobs::solve_args);
     let solve = preset_solve.as_ref().unwrap_or(&args.solve);
     if args.bake.is_some() && !method.needs_radiosity() {
         return Err(CliError::Input(format!(
@@ -303,6 +121,7 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
             method.name()
         )));
     }
+    let targets = targets(ctx.output.as_deref(), &args.scene, method, args.png)?;
     let camera = ctx.camera(&scene.camera)?;
     let decisions = plan(&scene);
     let mut skipped = Vec::new();
@@ -338,11 +157,7 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
         solution.as_ref().map(|s| &s.0),
         knobs.whitted(),
     );
-    let settings = RenderSettings {
-        samples_per_pixel: knobs.spp,
-        seed: ctx.seed,
-        ..RenderSettings::default()
-    };
+    let settings = render_settings(knobs.spp, ctx.seed);
     let out = render_with_bar(
         &scene,
         &camera,
@@ -352,29 +167,20 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
         ctx,
     )?;
     let layers = to_layers(&out.layers)?;
-    let stem = args
-        .scene
-        .file_stem()
-        .map_or_else(|| "render".to_owned(), |s| s.to_string_lossy().into_owned());
-    let exr = match &ctx.output {
-        Some(p) if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")) => p.clone(),
-        Some(dir) => dir.join(format!("{stem}-{}.exr", method.name())),
-        None => PathBuf::from(format!("{stem}-{}.exr", method.name())),
-    };
-    crate::output::create_dir(exr.parent().unwrap_or(Path::new("")))?;
-    write_exr_layers(&exr, &layers)?;
-    let png = if args.png {
+    if let Some(exr) = &targets.exr {
+        crate::output::create_dir(exr.parent().unwrap_or(Path::new("")))?;
+        write_exr_layers(exr, &layers)?;
+    }
+    if let Some(png) = &targets.png {
         let image = layers.require("image")?;
         let map = match args.exposure {
             Some(stops) => ToneMap::from_stops(stops)?,
             None => ToneMap::auto(image, 0.99, 1.0)?,
         };
-        let path = exr.with_extension("png");
-        write_png_tonemapped(&path, image, &map)?;
-        Some(path)
-    } else {
-        None
-    };
+        crate::output::create_dir(png.parent().unwrap_or(Path::new("")))?;
+        write_png_tonemapped(png, image, &map)?;
+    }
+    let Targets { exr, png } = targets;
     let s = &out.stats;
     let mean = out.layers.composite().mean();
     let summary = Summary {
@@ -396,9 +202,7 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
         png,
         skipped,
     };
-    if ctx.json {
-        crate::output::print_json(&summary)?;
-    } else if !ctx.quiet {
+    crate::output::report(&summary, ctx, || {
         for s in &summary.skipped {
             outln!("{s}");
         }
@@ -418,75 +222,133 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
             summary.mrays_per_s,
             summary.non_finite_samples
         );
-        outln!("wrote {}", summary.exr.display());
+        if let Some(p) = &summary.exr {
+            outln!("wrote {}", p.display());
+        }
         if let Some(p) = &summary.png {
             outln!("wrote {}", p.display());
         }
-    }
-    Ok(())
+        Ok(())
+    })
 }
 
-/// Deepest recursion of mirror and refraction paths (`--depth`, presets).
-pub const MAX_DEPTH: u32 = 64;
+/// The files `render` writes: the multi-layer EXR and the tone-mapped PNG, each when asked for.
+#[derive(Debug, PartialEq, Eq)]
+struct Targets {
+    exr: Option<PathBuf>,
+    png: Option<PathBuf>,
+}
+
+/// Extensions that name an image file rather than a directory for `--output`.
+const IMAGE_EXTENSIONS: [&str; 10] = [
+    "exr", "png", "jpg", "jpeg", "tif", "tiff", "bmp", "hdr", "tga", "webp",
+];
+
+/// Where `render` writes, from `--output`: `x.exr` is the EXR (with `--png`, `x.png` beside
+/// it), `x.png` is the PNG alone, and a path without an image extension (or ending in `/`) is
+/// a directory for `<stem>-<method>.exr` (and `.png`); without `--output`, the current one. An
+/// image format `render` cannot write is a usage error.
+fn targets(
+    output: Option<&Path>,
+    scene: &Path,
+    method: Method,
+    png: bool,
+) -> Result<Targets, CliError> {
+    let stem = scene
+        .file_stem()
+        .map_or_else(|| "render".to_owned(), |s| s.to_string_lossy().into_owned());
+    let in_dir = |dir: &Path| {
+        let exr = dir.join(format!("{stem}-{}.exr", method.name()));
+        let png = png.then(|| exr.with_extension("png"));
+        Targets {
+            exr: Some(exr),
+            png,
+        }
+    };
+    let Some(path) = output else {
+        return Ok(in_dir(Path::new("")));
+    };
+    let names_dir = path
+        .as_os_str()
+        .to_string_lossy()
+        .ends_with(['/', std::path::MAIN_SEPARATOR]);
+    let extension = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .filter(|e| !names_dir && IMAGE_EXTENSIONS.contains(&e.as_str()));
+    match extension.as_deref() {
+        None => Ok(in_dir(path)),
+        Some("exr") => Ok(Targets {
+            exr: Some(path.to_owned()),
+            png: png.then(|| path.with_extension("png")),
+        }),
+        Some("png") => Ok(Targets {
+            exr: None,
+            png: Some(path.to_owned()),
+        }),
+        Some(other) => Err(CliError::Usage(format!(
+            "--output {}: render writes .exr or .png, not .{other} (or name a directory)",
+            path.display()
+        ))),
+    }
+}
 
 /// Most stops of exposure either way: 2^64 spans far more than any radiance a scene can emit.
 const MAX_STOPS: f32 = 64.0;
 
 /// An exposure in stops: finite and within +-[`MAX_STOPS`].
 fn parse_stops(s: &str) -> Result<f32, String> {
-    let x: f32 = s.parse().map_err(|e| format!("{e}"))?;
-    if x.abs() <= MAX_STOPS {
-        Ok(x)
-    } else {
-        Err(format!(
-            "{x} must be a finite number of stops from -{MAX_STOPS} to {MAX_STOPS}"
-        ))
-    }
+    let needs = format!("must be a finite number of stops from -{MAX_STOPS} to {MAX_STOPS}");
+    checked(s, |x: &f32| x.abs() <= MAX_STOPS, &needs)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    fn stats(samples: u64, non_finite: u64) -> RenderStats {
-        RenderStats {
-            method: "reference",
-            width: 10,
-            height: 10,
-            samples_per_pixel: 1,
-            samples,
-            non_finite,
-            rays: 0,
-            shadow_rays: 0,
-            elapsed: Duration::ZERO,
-        }
-    }
-
-    fn quiet() -> Context {
-        Context {
-            output: None,
-            width: None,
-            height: None,
-            seed: 0,
-            threads: None,
-            quiet: true,
-            json: false,
-            confine: false,
-        }
+    fn t(output: Option<&str>, png: bool) -> Result<Targets, CliError> {
+        targets(
+            output.map(Path::new),
+            Path::new("scenes/box.toml"),
+            Method::Hybrid,
+            png,
+        )
     }
 
     #[test]
-    fn dropped_samples_warn_then_fail() {
-        let scene = Path::new("s.toml");
-        assert!(check_dropped(&stats(1000, 0), scene, &quiet()).is_ok());
-        // 1 % dropped is still an image worth having (with a warning).
-        assert!(check_dropped(&stats(1000, 10), scene, &quiet()).is_ok());
-        match check_dropped(&stats(1000, 11), scene, &quiet()) {
-            Err(CliError::Input(m)) => {
-                assert!(m.contains("s.toml") && m.contains("11 of 1000"), "{m}");
-            }
-            other => panic!("more than 1 % dropped must fail: {other:?}"),
+    fn output_names_a_file_by_its_image_extension_and_a_directory_otherwise() {
+        // (--output, --png, the EXR and the PNG written)
+        let cases = [
+            (None, false, Some("box-hybrid.exr"), None),
+            (None, true, Some("box-hybrid.exr"), Some("box-hybrid.png")),
+            (Some("a/out.exr"), false, Some("a/out.exr"), None),
+            (Some("out.EXR"), true, Some("out.EXR"), Some("out.png")),
+            (Some("out.png"), false, None, Some("out.png")),
+            (Some("out.png"), true, None, Some("out.png")),
+            (Some("renders"), false, Some("renders/box-hybrid.exr"), None),
+            (
+                Some("run.v2"),
+                true,
+                Some("run.v2/box-hybrid.exr"),
+                Some("run.v2/box-hybrid.png"),
+            ),
+            (
+                Some("out.png/"),
+                false,
+                Some("out.png/box-hybrid.exr"),
+                None,
+            ),
+        ];
+        for (output, png, exr_file, png_file) in cases {
+            let want = Targets {
+                exr: exr_file.map(PathBuf::from),
+                png: png_file.map(PathBuf::from),
+            };
+            assert_eq!(t(output, png).unwrap(), want, "--output {output:?}");
         }
-        assert!(check_dropped(&stats(100, 100), scene, &quiet()).is_err());
+        match t(Some("out.jpg"), false) {
+            Err(CliError::Usage(m)) => assert!(m.contains(".jpg"), "{m}"),
+            other => panic!("a .jpg output must be a usage error: {other:?}"),
+        }
     }
 }

@@ -41,12 +41,7 @@ fn cornell_bake_writes_every_file_and_a_truthful_manifest() {
     ];
     args.extend(COARSE);
     let out = twopass(&args);
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_ok(&out);
     assert_eq!(
         file_names(&dir),
         [
@@ -161,12 +156,7 @@ fn format_selects_the_outputs_and_exposure_is_recorded() {
         "0.5",
         "--quiet",
     ]);
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_ok(&out);
     assert!(out.stdout.is_empty() && out.stderr.is_empty(), "--quiet");
     assert_eq!(
         file_names(out_dir.path()),

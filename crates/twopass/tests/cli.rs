@@ -8,13 +8,7 @@ use common::{repo, twopass};
 fn info_json_describes_the_cornell_box() {
     let scene = repo("scenes/cornell-box.toml");
     let out = twopass(&["info", scene.to_str().unwrap(), "--json", "--width", "256"]);
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let v = common::ok_json(&out);
     assert_eq!(v["triangles"], 32);
     assert_eq!(
         v["resolution"],
@@ -80,13 +74,7 @@ fn bench_rays_reports_every_query_kind() {
         "--width",
         "32",
     ]);
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let v = common::ok_json(&out);
     let rows = v["rows"].as_array().unwrap();
     let queries: Vec<&str> = rows.iter().map(|r| r["query"].as_str().unwrap()).collect();
     assert_eq!(queries, ["camera (coherent)", "incoherent", "occlusion"]);
@@ -128,13 +116,7 @@ fn bench_radiosity_reports_each_mesh_with_the_dense_check() {
         "--unshot",
         "1e-2",
     ]);
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let rows: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let rows = common::ok_json(&out);
     let rows = rows.as_array().unwrap();
     assert_eq!(rows.len(), 2);
     let elements: Vec<u64> = rows
@@ -171,13 +153,7 @@ fn bench_render_times_every_method_and_the_bake_frame_rate() {
         "--frames",
         "2",
     ]);
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let v = common::ok_json(&out);
     let methods: Vec<&str> = v["rows"]
         .as_array()
         .unwrap()

@@ -2,44 +2,37 @@
 
 mod common;
 
-use common::repo;
+use common::{repo, twopass};
 
 use std::path::Path;
-use std::process::Command;
+use std::process::Output;
 
 use twopass_composite::metric::compare;
 use twopass_composite::sheet::ComparisonOptions;
 use twopass_composite::tonemap::ToneMap;
 use twopass_composite::write::read_exr_layers;
 
+/// Runs `compare --quick --json` on `scene` into `dir` with [width, spp, reference spp].
+fn quick_compare(scene: &Path, dir: &Path, [width, spp, reference_spp]: [&str; 3]) -> Output {
+    let scene = scene.to_str().unwrap();
+    let small = [
+        "--width",
+        width,
+        "--spp",
+        spp,
+        "--reference-spp",
+        reference_spp,
+    ];
+    let output = ["--output", dir.to_str().unwrap(), "--quick", "--json"];
+    twopass(&[&["compare", scene][..], &small, &output].concat())
+}
+
 #[test]
 fn report_matches_the_images_it_wrote() {
     let dir = tempfile::tempdir().unwrap();
     let scene = repo("scenes/cornell-spheres.toml");
-    let out = Command::new(env!("CARGO_BIN_EXE_twopass"))
-        .args([
-            "compare",
-            scene.to_str().unwrap(),
-            "--quick",
-            "--width",
-            "24",
-            "--spp",
-            "2",
-            "--reference-spp",
-            "16",
-            "--json",
-        ])
-        .args(["--output", dir.path().to_str().unwrap()])
-        .env("CI", "1")
-        .output()
-        .unwrap();
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let out = quick_compare(&scene, dir.path(), ["24", "2", "16"]);
+    let report = common::ok_json(&out);
     let rows = report["rows"].as_array().unwrap();
     let methods: Vec<&str> = rows.iter().map(|r| r["method"].as_str().unwrap()).collect();
     // The spheres call for every method; the reference comes first.
@@ -99,30 +92,8 @@ fn report_matches_the_images_it_wrote() {
 fn a_diffuse_scene_skips_the_hybrid_and_says_why() {
     let dir = tempfile::tempdir().unwrap();
     let scene = repo("scenes/cornell-box.toml");
-    let out = Command::new(env!("CARGO_BIN_EXE_twopass"))
-        .args([
-            "compare",
-            scene.to_str().unwrap(),
-            "--quick",
-            "--width",
-            "16",
-            "--spp",
-            "1",
-            "--reference-spp",
-            "4",
-            "--json",
-        ])
-        .args(["--output", dir.path().to_str().unwrap()])
-        .env("CI", "1")
-        .output()
-        .unwrap();
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let out = quick_compare(&scene, dir.path(), ["16", "1", "4"]);
+    let report = common::ok_json(&out);
     let methods: Vec<&str> = report["rows"]
         .as_array()
         .unwrap()

@@ -36,12 +36,7 @@ fn the_manifest_seals_the_bake_set() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("set");
     let out = bake(&dir, &[]);
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_ok(&out);
     let manifest_path = dir.join("cornell-box.manifest.json");
     let manifest: Manifest =
         serde_json::from_slice(&std::fs::read(&manifest_path).unwrap()).unwrap();
@@ -132,12 +127,7 @@ fn stale_temporaries_of_a_killed_run_are_removed() {
         "-o",
         dir.join("x.exr").to_str().unwrap(),
     ]);
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_ok(&out);
     assert!(!stale.exists(), "a leftover of a killed run is removed");
     assert!(fresh.exists(), "a temporary file that may be live is kept");
     assert!(foreign.exists(), "other programs' files are not touched");

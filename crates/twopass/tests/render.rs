@@ -119,12 +119,7 @@ fn a_bake_renders_the_same_as_a_fresh_solve_with_the_same_settings() {
         args.extend(extra);
         args.extend(["--output", out]);
         let o = twopass(&args);
-        assert_eq!(
-            o.status.code(),
-            Some(0),
-            "{}",
-            String::from_utf8_lossy(&o.stderr)
-        );
+        common::assert_ok(&o);
         read_exr_layers(Path::new(out)).unwrap()
     };
     let baked_file = dir.path().join("cornell-box.bake");
@@ -166,4 +161,60 @@ fn render_refuses_what_makes_no_sense() {
     ]);
     assert_eq!(missing.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&missing.stderr).contains("/nonexistent/x.bake"));
+}
+
+/// Runs a small Whitted render of the Cornell box with `--output out` and `extra` arguments.
+fn render_to(out: &Path, extra: &[&str]) -> std::process::Output {
+    let scene = repo("scenes/cornell-box.toml");
+    let (scene, out) = (scene.to_str().unwrap(), out.to_str().unwrap());
+    let small = ["--method", "whitted", "--width", "16", "--spp", "1"];
+    twopass(&[&["render", scene, "--output", out], &small[..], extra].concat())
+}
+
+#[test]
+fn output_with_an_image_extension_is_that_file() {
+    let dir = tempfile::tempdir().unwrap();
+    // `-o out.png`: the PNG file alone, not a directory named out.png.
+    let png = dir.path().join("out.png");
+    let v = common::ok_json(&render_to(&png, &["--json"]));
+    assert!(png.is_file(), "{} is not a file", png.display());
+    let bytes = std::fs::read(&png).unwrap();
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "not a PNG");
+    assert_eq!(v["png"].as_str(), png.to_str());
+    assert!(v["exr"].is_null(), "no EXR asked for: {v}");
+    assert!(!dir.path().join("out.exr").exists());
+
+    // `-o out.exr`: the EXR file, and with --png the PNG beside it.
+    let exr = dir.path().join("sub").join("out.exr");
+    let out = render_to(&exr, &["--png"]);
+    common::assert_ok(&out);
+    assert!(exr.is_file(), "{} is not a file", exr.display());
+    assert_eq!(
+        &std::fs::read(&exr).unwrap()[..4],
+        &[0x76, 0x2f, 0x31, 0x01],
+        "not an EXR"
+    );
+    assert!(read_exr_layers(&exr).unwrap().require("image").is_ok());
+    assert!(exr.with_extension("png").is_file());
+
+    // An image format render cannot write is a usage error, and nothing is created.
+    let jpg = dir.path().join("out.jpg");
+    let out = render_to(&jpg, &[]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains(".jpg"));
+    assert!(!jpg.exists());
+}
+
+#[test]
+fn output_without_an_image_extension_is_a_directory() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, sub) in [("renders", "renders"), ("out.png/", "out.png")] {
+        let out_dir = format!("{}/{name}", dir.path().display());
+        let out = render_to(Path::new(&out_dir), &["--png"]);
+        common::assert_ok(&out);
+        let inside = dir.path().join(sub);
+        assert!(inside.is_dir(), "{} is not a directory", inside.display());
+        assert!(inside.join("cornell-box-whitted.exr").is_file());
+        assert!(inside.join("cornell-box-whitted.png").is_file());
+    }
 }

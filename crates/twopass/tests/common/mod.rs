@@ -20,3 +20,21 @@ pub fn twopass(args: &[&str]) -> Output {
         .output()
         .expect("the binary runs")
 }
+
+/// Asserts that `out` is a successful run (exit code 0), showing its stderr when it is not.
+#[track_caller]
+pub fn assert_ok(out: &Output) {
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// Asserts that `out` succeeded and parses its standard output as the JSON summary.
+#[track_caller]
+pub fn ok_json(out: &Output) -> serde_json::Value {
+    assert_ok(out);
+    serde_json::from_slice(&out.stdout).expect("the summary is JSON")
+}

@@ -2,8 +2,8 @@
 //! pairs (element size x samples per pixel for the radiosity-based methods, samples per pixel
 //! x shadow grid for Whitted and the hybrids), and which solve each render reads.
 
+use crate::pipeline::Method;
 use crate::preset::{RadiosityKnobs, RenderKnobs};
-use crate::render::Method;
 
 /// The knobs swept, and the base setting the others vary around.
 pub(super) struct Sweep {

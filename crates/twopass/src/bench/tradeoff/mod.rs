@@ -28,19 +28,16 @@ use std::time::Instant;
 
 use clap::Args;
 use serde::Serialize;
-use twopass_composite::image::Image;
 use twopass_composite::metric::{Metrics, compare};
 use twopass_composite::tonemap::ToneMap;
 use twopass_radiosity::{Solution, Solver};
-use twopass_trace::{RenderSettings, RenderStats};
+use twopass_trace::RenderStats;
 
-use crate::bake::SolveArgs;
-use crate::bench::{mib, peak_memory, reset_peak_memory};
-use crate::compare::methods;
+use crate::bench::memory::{mib, peak_memory, reset_peak_memory};
 use crate::context::Context;
 use crate::error::CliError;
+use crate::pipeline::{Method, integrator, load_lit, methods, render_settings, to_image};
 use crate::preset::{Preset, PresetFile};
-use crate::render::{Method, integrator, load_lit};
 use sweep::{RunSpec, SolveSpec, Sweep, plan_runs};
 
 /// Arguments of `twopass bench tradeoff`.
@@ -96,7 +93,7 @@ struct Solved {
 
 /// One measured run: a CSV row.
 #[derive(Debug, Clone, Serialize)]
-struct Row {
+struct SweepRow {
     method: &'static str,
     /// The knob this run varies from the base setting.
     knob: &'static str,
@@ -157,7 +154,7 @@ struct ReferenceInfo {
 }
 
 #[derive(Debug, Serialize)]
-struct Report {
+struct TradeoffReport {
     scene: PathBuf,
     width: u32,
     height: u32,
@@ -165,7 +162,7 @@ struct Report {
     seed: u64,
     reference: ReferenceInfo,
     skipped: Vec<String>,
-    rows: Vec<Row>,
+    rows: Vec<SweepRow>,
     reach: Vec<Reach>,
     presets: Vec<Preset>,
     csv: PathBuf,
@@ -188,29 +185,7 @@ pub fn run(args: &TradeoffArgs, ctx: &Context) -> Result<(), CliError> {
         (None, None) => crate::context::resized(&scene.camera, Some(sweep.width), None)?,
         (w, h) => crate::context::resized(&scene.camera, w, h)?,
     };
-    let (called_for, skipped) = methods(&scene);
-    let chosen: Vec<Method> = if args.methods.is_empty() {
-        called_for
-    } else {
-        let mut m: Vec<Method> = Vec::new();
-        for &method in &args.methods {
-            if !m.contains(&method) {
-                m.push(method);
-            }
-        }
-        if let Some(bad) = m
-            .iter()
-            .find(|m| m.needs_radiosity() && !called_for.contains(m))
-        {
-            return Err(CliError::Input(format!(
-                "{}: --methods {}: the scene does not call for it ({})",
-                args.scene.display(),
-                bad.name(),
-                skipped.join("; ")
-            )));
-        }
-        m
-    };
+    let (chosen, skipped) = chosen_methods(args, &scene)?;
     let dir = ctx
         .output
         .clone()
@@ -244,65 +219,20 @@ pub fn run(args: &TradeoffArgs, ctx: &Context) -> Result<(), CliError> {
             100.0 * converged.noise_rel_rmse
         );
     }
-    let display = ToneMap::auto_default(&converged.image)?;
 
     let (solves, runs) = plan_runs(&sweep, scene.bounds.diagonal(), &chosen);
     let bar = ctx.progress((solves.len() + runs.len()) as u64, "tradeoff");
-    let mut solved: Vec<Solved> = Vec::with_capacity(solves.len());
-    for spec in &solves {
-        bar.set_message(format!("solve {}", spec.knob));
-        reset_peak_memory();
-        let started = Instant::now();
-        let mut solver = Solver::new(&scene, SolveArgs::from_knobs(&spec.knobs).options(ctx.seed))
-            .map_err(|source| CliError::Solve {
-                path: args.scene.clone(),
-                source,
-            })?;
-        solver.run(|_| std::ops::ControlFlow::Continue(()));
-        let p = solver.progress();
-        solved.push(Solved {
-            solution: solver.solution(),
-            seconds: started.elapsed().as_secs_f64(),
-            elements: p.elements,
-            rays: p.rays,
-            unshot_fraction: p.unshot_fraction,
-            peak_bytes: peak_memory(),
-        });
-        bar.inc(1);
-    }
+    let solved = solve_all(&scene, &solves, args, ctx, &bar)?;
 
-    let mut rows = Vec::with_capacity(runs.len());
-    for run in &runs {
-        let solve = run.solve.map(|i| (&solves[i], &solved[i]));
-        let integ = integrator(
-            run.method,
-            &scene,
-            solve.map(|s| &s.1.solution),
-            run.render.whitted(),
-        );
-        let settings = RenderSettings {
-            samples_per_pixel: run.render.spp,
-            seed: ctx.seed,
-            ..RenderSettings::default()
-        };
-        reset_peak_memory();
-        bar.set_message(run.method.name());
-        // One bar for the whole sweep: a second bar per render would fight it for the line.
-        let out = twopass_trace::render(
-            &scene,
-            &camera,
-            integ.as_ref(),
-            &settings,
-            &twopass_trace::Progress::new(),
-        );
-        let render_peak = peak_memory();
-        let img = out.layers.composite();
-        let image = Image::from_pixels(img.width, img.height, img.pixels)?;
-        image.check_finite(run.method.name())?;
-        let metrics = compare(&image, &converged.image, &display)?;
-        rows.push(row(run, solve, &out.stats, &metrics, render_peak));
-        bar.inc(1);
-    }
+    let mut rows = measure_runs(
+        &scene,
+        &camera,
+        &runs,
+        (&solves, &solved),
+        &converged,
+        ctx,
+        &bar,
+    )?;
     bar.finish_and_clear();
 
     mark_fronts(&mut rows);
@@ -326,7 +256,7 @@ pub fn run(args: &TradeoffArgs, ctx: &Context) -> Result<(), CliError> {
         threads: rayon::current_num_threads(),
         presets: presets.clone(),
     };
-    let report = Report {
+    let report = TradeoffReport {
         scene: args.scene.clone(),
         width: camera.width,
         height: camera.height,
@@ -366,14 +296,119 @@ pub fn run(args: &TradeoffArgs, ctx: &Context) -> Result<(), CliError> {
     if args.install_presets {
         crate::output::write_atomic(&PresetFile::beside(&args.scene), toml.as_bytes())?;
     }
-    let json = serde_json::to_string_pretty(&report).expect("report serializes");
-    crate::output::write_atomic(&dir.join(format!("{stem}-tradeoff.json")), json.as_bytes())?;
-    if ctx.json {
-        outln!("{json}");
-    } else if !ctx.quiet {
-        print_report(&report)?;
+    let json = dir.join(format!("{stem}-tradeoff.json"));
+    crate::output::finish_report(&json, &report, ctx, print_report)
+}
+
+/// The methods to sweep: those of `--methods` (in order, once each), or every method the scene
+/// calls for; and what the scene skips and why. A radiosity-based method the scene does not
+/// call for is refused.
+fn chosen_methods(
+    args: &TradeoffArgs,
+    scene: &twopass_scene::Scene,
+) -> Result<(Vec<Method>, Vec<String>), CliError> {
+    let (called_for, skipped) = methods(scene);
+    let chosen: Vec<Method> = if args.methods.is_empty() {
+        called_for
+    } else {
+        let mut m: Vec<Method> = Vec::new();
+        for &method in &args.methods {
+            if !m.contains(&method) {
+                m.push(method);
+            }
+        }
+        if let Some(bad) = m
+            .iter()
+            .find(|m| m.needs_radiosity() && !called_for.contains(m))
+        {
+            return Err(CliError::Input(format!(
+                "{}: --methods {}: the scene does not call for it ({})",
+                args.scene.display(),
+                bad.name(),
+                skipped.join("; ")
+            )));
+        }
+        m
+    };
+    Ok((chosen, skipped))
+}
+
+/// Runs every radiosity solve of the sweep once (each serves several runs), measuring its time
+/// and peak memory.
+fn solve_all(
+    scene: &twopass_scene::Scene,
+    solves: &[SolveSpec],
+    args: &TradeoffArgs,
+    ctx: &Context,
+    bar: &indicatif::ProgressBar,
+) -> Result<Vec<Solved>, CliError> {
+    let mut solved: Vec<Solved> = Vec::with_capacity(solves.len());
+    for spec in solves {
+        bar.set_message(format!("solve {}", spec.knob));
+        reset_peak_memory();
+        let started = Instant::now();
+        let mut solver =
+            Solver::new(scene, spec.knobs.solve_args().options(ctx.seed)).map_err(|source| {
+                CliError::Solve {
+                    path: args.scene.clone(),
+                    source,
+                }
+            })?;
+        solver.run(|_| std::ops::ControlFlow::Continue(()));
+        let p = solver.progress();
+        solved.push(Solved {
+            solution: solver.solution(),
+            seconds: started.elapsed().as_secs_f64(),
+            elements: p.elements,
+            rays: p.rays,
+            unshot_fraction: p.unshot_fraction,
+            peak_bytes: peak_memory(),
+        });
+        bar.inc(1);
     }
-    Ok(())
+    Ok(solved)
+}
+
+/// Renders every run of the sweep and measures its time, rays, peak memory and error against
+/// the converged reference (compared through the reference's display tone map).
+fn measure_runs(
+    scene: &twopass_scene::Scene,
+    camera: &twopass_scene::Camera,
+    runs: &[RunSpec],
+    (solves, solved): (&[SolveSpec], &[Solved]),
+    converged: &reference::Converged,
+    ctx: &Context,
+    bar: &indicatif::ProgressBar,
+) -> Result<Vec<SweepRow>, CliError> {
+    let display = ToneMap::auto_default(&converged.image)?;
+    let mut rows = Vec::with_capacity(runs.len());
+    for run in runs {
+        let solve = run.solve.map(|i| (&solves[i], &solved[i]));
+        let integ = integrator(
+            run.method,
+            scene,
+            solve.map(|s| &s.1.solution),
+            run.render.whitted(),
+        );
+        let settings = render_settings(run.render.spp, ctx.seed);
+        reset_peak_memory();
+        bar.set_message(run.method.name());
+        // One bar for the whole sweep: a second bar per render would fight it for the line.
+        let out = twopass_trace::render(
+            scene,
+            camera,
+            integ.as_ref(),
+            &settings,
+            &twopass_trace::Progress::new(),
+        );
+        let render_peak = peak_memory();
+        let image = to_image(out.layers.composite())?;
+        image.check_finite(run.method.name())?;
+        let metrics = compare(&image, &converged.image, &display)?;
+        rows.push(row(run, solve, &out.stats, &metrics, render_peak));
+        bar.inc(1);
+    }
+    Ok(rows)
 }
 
 fn row(
@@ -382,7 +417,7 @@ fn row(
     stats: &RenderStats,
     m: &Metrics,
     render_peak: Option<u64>,
-) -> Row {
+) -> SweepRow {
     let k = solve.map(|s| s.0.knobs);
     let s = solve.map(|s| s.1);
     let radiosity_seconds = s.map_or(0.0, |s| s.seconds);
@@ -391,7 +426,7 @@ fn row(
         (Some(a), Some(b)) => Some(a.max(b)),
         (a, b) => a.or(b),
     };
-    Row {
+    SweepRow {
         method: run.method.name(),
         knob: run.knob,
         spp: run.render.spp,
@@ -420,12 +455,12 @@ fn row(
     }
 }
 
-fn points(rows: &[Row]) -> Vec<(f64, f64)> {
+fn points(rows: &[SweepRow]) -> Vec<(f64, f64)> {
     rows.iter().map(|r| (r.total_seconds, r.rel_rmse)).collect()
 }
 
 /// Marks the global front and each method's own front.
-fn mark_fronts(rows: &mut [Row]) {
+fn mark_fronts(rows: &mut [SweepRow]) {
     for i in front::pareto_front(&points(rows)) {
         rows[i].pareto = true;
     }
@@ -448,7 +483,7 @@ fn mark_fronts(rows: &mut [Row]) {
 
 /// The presets: for each target, the cheapest run reaching it.
 fn derive_presets(
-    rows: &[Row],
+    rows: &[SweepRow],
     runs: &[RunSpec],
     solves: &[SolveSpec],
     targets: &[f64],
@@ -474,7 +509,7 @@ fn derive_presets(
 }
 
 /// Time to reach each target, per method, with the ratio to the path tracer's.
-fn reach_table(rows: &[Row], methods: &[Method], targets: &[f64]) -> Vec<Reach> {
+fn reach_table(rows: &[SweepRow], methods: &[Method], targets: &[f64]) -> Vec<Reach> {
     let curve = |name: &str| -> Vec<(f64, f64)> {
         rows.iter()
             .filter(|r| r.method == name)
@@ -501,7 +536,7 @@ fn reach_table(rows: &[Row], methods: &[Method], targets: &[f64]) -> Vec<Reach> 
     out
 }
 
-fn print_report(r: &Report) -> Result<(), CliError> {
+fn print_report(r: &TradeoffReport) -> Result<(), CliError> {
     for s in &r.skipped {
         outln!("skipped {s}");
     }

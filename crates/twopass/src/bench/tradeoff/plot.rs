@@ -7,7 +7,7 @@ use std::path::Path;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use super::Row;
+use super::SweepRow;
 use crate::error::CliError;
 use crate::figure::{self, FONT, draw_error};
 use crate::preset::Preset;
@@ -30,7 +30,7 @@ fn colour(method: &str) -> RGBColor {
 pub fn plot(
     path: &Path,
     title: &str,
-    rows: &[Row],
+    rows: &[SweepRow],
     presets: &[Preset],
     noise_floor: f64,
 ) -> Result<(), CliError> {

@@ -1,0 +1,221 @@
+//! `twopass bench rays`: ray queries per second (camera, incoherent, occlusion) on one and on
+//! all threads, and the BVH build time.
+
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use clap::Args;
+use rayon::prelude::*;
+use serde::Serialize;
+use twopass_scene::workload::{self, QueryKind};
+use twopass_scene::{Accel, Ray, Scene, SurfacePoint};
+
+use super::memory::{fmt_mib, mib, peak_memory, reset_peak_memory};
+use crate::args::checked;
+use crate::context::Context;
+use crate::error::CliError;
+
+/// Arguments of `twopass bench rays`.
+#[derive(Debug, Args)]
+pub struct RaysArgs {
+    /// Scene file (.toml or .obj); omit it with `--generate`.
+    #[arg(required_unless_present = "generate")]
+    pub scene: Option<PathBuf>,
+    /// Instead of a file, generate a scene of about this many triangles (the Cornell room
+    /// filled with icospheres).
+    #[arg(long, conflicts_with = "scene", value_parser = clap::value_parser!(u64).range(1..=50_000_000))]
+    pub generate: Option<u64>,
+    /// Incoherent and occlusion rays per batch.
+    #[arg(long, default_value_t = 1 << 18, value_parser = clap::value_parser!(u64).range(1..=100_000_000))]
+    pub rays: u64,
+    /// Minimum measuring time per query and thread count, seconds.
+    #[arg(long, default_value_t = 1.0, value_parser = parse_seconds)]
+    pub seconds: f64,
+}
+
+/// One measured ray query: rates on one and on all threads.
+#[derive(Debug, Serialize)]
+struct RayRow {
+    query: &'static str,
+    rays: usize,
+    /// Millions of rays per second on one thread.
+    mrays_1: f64,
+    /// Millions of rays per second on all threads.
+    mrays_n: f64,
+    /// mrays_n / mrays_1.
+    speedup: f64,
+    /// Fraction of rays that hit (closest hit) or are blocked (occlusion).
+    hit_fraction: f64,
+    /// Largest resident memory while measuring this query (scene, BVH and ray batch), MiB.
+    peak_memory_mib: Option<f64>,
+}
+
+/// The `bench rays` report.
+#[derive(Debug, Serialize)]
+struct RayReport {
+    scene: String,
+    triangles: usize,
+    threads: usize,
+    /// Median of 5 builds, milliseconds.
+    bvh_build_ms: f64,
+    bvh_nodes: usize,
+    rows: Vec<RayRow>,
+}
+
+enum Batch {
+    Closest(Vec<Ray>),
+    Occlusion(Vec<(SurfacePoint, SurfacePoint)>),
+}
+
+impl Batch {
+    fn len(&self) -> usize {
+        match self {
+            Self::Closest(r) => r.len(),
+            Self::Occlusion(p) => p.len(),
+        }
+    }
+
+    /// Casts the whole batch once; returns how many rays hit.
+    fn cast(&self, scene: &Scene, parallel: bool) -> usize {
+        const CHUNK: usize = 1024;
+        match (self, parallel) {
+            (Self::Closest(r), false) => r.iter().filter(|r| scene.intersect(r).is_some()).count(),
+            (Self::Closest(r), true) => r
+                .par_chunks(CHUNK)
+                .map(|c| c.iter().filter(|r| scene.intersect(r).is_some()).count())
+                .sum(),
+            (Self::Occlusion(p), false) => p
+                .iter()
+                .filter(|(a, b)| scene.occluded_between(a, b))
+                .count(),
+            (Self::Occlusion(p), true) => p
+                .par_chunks(CHUNK)
+                .map(|c| {
+                    c.iter()
+                        .filter(|(a, b)| scene.occluded_between(a, b))
+                        .count()
+                })
+                .sum(),
+        }
+    }
+
+    /// Rays per second (casting repeatedly for at least `min`) and the hit fraction.
+    fn measure(&self, scene: &Scene, parallel: bool, min: Duration) -> (f64, f64) {
+        let hits = self.cast(scene, parallel); // warm-up, also the hit count
+        let start = Instant::now();
+        let mut passes = 0usize;
+        while passes == 0 || start.elapsed() < min {
+            std::hint::black_box(self.cast(scene, parallel));
+            passes += 1;
+        }
+        let rate = (passes * self.len()) as f64 / start.elapsed().as_secs_f64();
+        (rate, hits as f64 / self.len().max(1) as f64)
+    }
+}
+
+/// A measuring time: more than 0 and at most a day, seconds.
+fn parse_seconds(s: &str) -> Result<f64, String> {
+    let in_range = |x: &f64| *x > 0.0 && *x <= 86_400.0;
+    checked(s, in_range, "must be more than 0 and at most 86400 seconds")
+}
+
+/// Measures the BVH build and the ray queries.
+pub fn run(args: &RaysArgs, ctx: &Context) -> Result<(), CliError> {
+    let (scene, name) = match (&args.scene, args.generate) {
+        (_, Some(n)) => (
+            workload::synthetic_scene(n as usize, ctx.seed)?.0,
+            format!("generated ({n} triangles requested)"),
+        ),
+        (Some(path), None) => (ctx.load_scene(path)?.0, path.display().to_string()),
+        (None, None) => unreachable!("clap requires a scene or --generate"),
+    };
+    let mut scene = scene;
+    scene.camera = ctx.camera(&scene.camera)?;
+    let n = args.rays as usize;
+    let batches = [
+        (
+            QueryKind::Camera,
+            "camera (coherent)",
+            Batch::Closest(workload::camera_rays(&scene)),
+        ),
+        (
+            QueryKind::Incoherent,
+            "incoherent",
+            Batch::Closest(workload::incoherent_rays(&scene, n, ctx.seed)),
+        ),
+        (
+            QueryKind::Occlusion,
+            "occlusion",
+            Batch::Occlusion(workload::occlusion_pairs(&scene, n, ctx.seed ^ 0x5eed)),
+        ),
+    ];
+    let progress = ctx.progress(7, "bench rays");
+    let mut builds: Vec<f64> = (0..5)
+        .map(|_| {
+            let a = Accel::build(&scene.mesh.positions, &scene.mesh.triangles);
+            a.build_time().as_secs_f64() * 1e3
+        })
+        .collect();
+    builds.sort_by(f64::total_cmp);
+    progress.inc(1);
+    let min = Duration::from_secs_f64(args.seconds);
+    let mut rows = Vec::new();
+    for (_, label, batch) in &batches {
+        reset_peak_memory();
+        let (r1, hit) = batch.measure(&scene, false, min);
+        progress.inc(1);
+        let (rn, _) = batch.measure(&scene, true, min);
+        progress.inc(1);
+        rows.push(RayRow {
+            query: label,
+            rays: batch.len(),
+            mrays_1: r1 / 1e6,
+            mrays_n: rn / 1e6,
+            speedup: rn / r1,
+            hit_fraction: hit,
+            peak_memory_mib: mib(peak_memory()),
+        });
+    }
+    progress.finish_and_clear();
+    let report = RayReport {
+        scene: name,
+        triangles: scene.mesh.triangles.len(),
+        threads: rayon::current_num_threads(),
+        bvh_build_ms: builds[2],
+        bvh_nodes: scene.accel().node_count(),
+        rows,
+    };
+    crate::output::report(&report, ctx, || {
+        outln!(
+            "scene {}: {} triangles, BVH {} nodes built in {:.2} ms (median of 5), {} threads",
+            report.scene,
+            report.triangles,
+            report.bvh_nodes,
+            report.bvh_build_ms,
+            report.threads
+        );
+        outln!(
+            "{:<18} {:>9} {:>14} {:>14} {:>9} {:>7} {:>9}",
+            "query",
+            "rays",
+            "1 thr Mrays/s",
+            format!("{} thr Mrays/s", report.threads),
+            "speed-up",
+            "hit %",
+            "peak MiB"
+        );
+        for r in &report.rows {
+            outln!(
+                "{:<18} {:>9} {:>14.2} {:>14.2} {:>8.2}x {:>6.1}% {:>9}",
+                r.query,
+                r.rays,
+                r.mrays_1,
+                r.mrays_n,
+                r.speedup,
+                100.0 * r.hit_fraction,
+                fmt_mib(r.peak_memory_mib)
+            );
+        }
+        Ok(())
+    })
+}

@@ -1,0 +1,328 @@
+//! The pipeline every rendering command shares (`render`, `compare`, `bench render`, `bench
+//! tradeoff`): the methods and which a scene calls for, loading a lit scene, the radiosity from
+//! a bake file or a fresh solve, the integrator of a method, rendering with a progress bar, and
+//! the tracer's layers as the compositor's.
+
+use std::path::Path;
+use std::time::Duration;
+
+use clap::ValueEnum;
+use serde::{Deserialize, Serialize};
+use twopass_bake::Manifest;
+use twopass_composite::image::Image;
+use twopass_composite::layer::Layers;
+use twopass_radiosity::{Solution, Solver};
+use twopass_scene::Scene;
+use twopass_trace::hybrid::{hybrid, hybrid_direct, radiosity_only};
+use twopass_trace::whitted::ambient_estimate;
+use twopass_trace::{
+    Image as FilmImage, Integrator, Layer, LayerImages, Progress, Reference, ReferenceSettings,
+    RenderOutput, RenderSettings, RenderStats, Whitted, WhittedSettings,
+};
+
+use crate::context::Context;
+use crate::error::CliError;
+use crate::plan::plan;
+use crate::solve::SolveArgs;
+
+/// A rendering method.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Method {
+    /// Whitted ray tracing alone, with the Phong ambient term for interreflection.
+    Whitted,
+    /// Radiosity alone: camera rays shaded by the radiosity solution.
+    Radiosity,
+    /// Two-pass: radiosity for the diffuse light, the tracer for the non-diffuse terms.
+    Hybrid,
+    /// As hybrid, with direct diffuse light per pixel and radiosity's indirect part.
+    HybridDirect,
+    /// The reference path tracer.
+    Reference,
+}
+
+impl Method {
+    /// Whether the method reads a radiosity solution.
+    pub fn needs_radiosity(self) -> bool {
+        matches!(self, Self::Radiosity | Self::Hybrid | Self::HybridDirect)
+    }
+
+    /// The name used on the command line and in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Whitted => "whitted",
+            Self::Radiosity => "radiosity",
+            Self::Hybrid => "hybrid",
+            Self::HybridDirect => "hybrid-direct",
+            Self::Reference => "reference",
+        }
+    }
+}
+
+/// Deepest recursion of mirror and refraction paths (`--depth`, presets).
+pub const MAX_DEPTH: u32 = 64;
+
+/// The methods a scene calls for, and what was skipped and why.
+pub fn methods(scene: &Scene) -> (Vec<Method>, Vec<String>) {
+    let p = plan(scene);
+    let mut methods = vec![Method::Reference, Method::Whitted];
+    let mut skipped = Vec::new();
+    if p.diffuse.required {
+        methods.push(Method::Radiosity);
+        if p.specular.required {
+            methods.push(Method::Hybrid);
+        } else {
+            skipped.push(format!(
+                "hybrid: identical to radiosity alone, the specular pass is skipped ({})",
+                p.specular.reason
+            ));
+        }
+        methods.push(Method::HybridDirect);
+    } else {
+        skipped.push(format!(
+            "radiosity, hybrid, hybrid-direct: {}",
+            p.diffuse.reason
+        ));
+    }
+    (methods, skipped)
+}
+
+/// Loads a scene to render with several methods: prints its warnings unless quiet, and refuses
+/// a scene where nothing emits (every image would be black).
+pub fn load_lit(path: &Path, ctx: &Context) -> Result<Scene, CliError> {
+    let (scene, warnings) = ctx.load_scene(path)?;
+    if !ctx.quiet {
+        for w in &warnings {
+            errln!("warning: {w}");
+        }
+    }
+    if scene.emitters.is_empty() {
+        return Err(CliError::Input(format!(
+            "{}: nothing emits light, every render would be black",
+            path.display()
+        )));
+    }
+    Ok(scene)
+}
+
+/// The radiosity for the radiosity-based methods: from a bake file, or solved now.
+pub fn radiosity(
+    scene: &Scene,
+    path: &Path,
+    bake: Option<&Path>,
+    solve: &SolveArgs,
+    ctx: &Context,
+) -> Result<(Solution, &'static str), CliError> {
+    match bake {
+        Some(file) => {
+            check_in_set(file)?;
+            Ok((twopass_bake::read_bake(file, scene)?, "bake"))
+        }
+        None => {
+            let mut solver =
+                Solver::new(scene, solve.options(ctx.seed)).map_err(|source| CliError::Solve {
+                    path: path.to_owned(),
+                    source,
+                })?;
+            solve.run(&mut solver, ctx);
+            Ok((solver.solution(), "solve"))
+        }
+    }
+}
+
+/// The render settings every command uses: `spp` stratified samples per pixel, the run's seed,
+/// the rest at the tracer's defaults.
+pub fn render_settings(spp: u32, seed: u64) -> RenderSettings {
+    RenderSettings {
+        samples_per_pixel: spp,
+        seed,
+        ..RenderSettings::default()
+    }
+}
+
+/// Renders with a progress bar drawn from the render loop's counters, then checks the
+/// samples it had to drop (see [`check_dropped`]).
+pub fn render_with_bar(
+    scene: &Scene,
+    camera: &twopass_scene::Camera,
+    integrator: &dyn Integrator,
+    settings: &RenderSettings,
+    label: &str,
+    ctx: &Context,
+) -> Result<RenderOutput, CliError> {
+    let progress = Progress::new();
+    let bar = ctx.progress(1000, label);
+    let done = std::sync::atomic::AtomicBool::new(false);
+    let out = std::thread::scope(|s| {
+        s.spawn(|| {
+            while !done.load(std::sync::atomic::Ordering::Relaxed) {
+                bar.set_position((progress.fraction() * 1000.0) as u64);
+                std::thread::sleep(Duration::from_millis(100));
+            }
+        });
+        let out = twopass_trace::render(scene, camera, integrator, settings, &progress);
+        done.store(true, std::sync::atomic::Ordering::Relaxed);
+        out
+    });
+    bar.finish_and_clear();
+    check_dropped(&out.stats, &scene.path, ctx)?;
+    Ok(out)
+}
+
+/// Most of a render's samples that may be non-finite (and dropped) before the render is
+/// refused: beyond this the image says more about the overflow than about the scene.
+pub const MAX_DROPPED_FRACTION: f64 = 0.01;
+
+/// Says loudly when a render dropped non-finite samples, and fails when it dropped more than
+/// [`MAX_DROPPED_FRACTION`] of them: the image would be wrong (black where light overflowed).
+pub fn check_dropped(stats: &RenderStats, scene: &Path, ctx: &Context) -> Result<(), CliError> {
+    if stats.non_finite == 0 {
+        return Ok(());
+    }
+    let fraction = stats.non_finite as f64 / stats.samples.max(1) as f64;
+    let what = format!(
+        "{}: the {} render dropped {} of {} samples ({:.3}%) as non-finite (NaN or infinite radiance)",
+        scene.display(),
+        stats.method,
+        stats.non_finite,
+        stats.samples,
+        100.0 * fraction
+    );
+    if fraction > MAX_DROPPED_FRACTION {
+        return Err(CliError::Input(format!(
+            "{what}; the image would be wrong, so none is written (lower the emission or the scene's scale)"
+        )));
+    }
+    if !ctx.quiet {
+        errln!("warning: {what}; their pixels average the remaining samples");
+    }
+    Ok(())
+}
+
+/// The tracer's film image as the compositor's image (the pixels move, not copied): the one
+/// place the CLI crosses from the tracer's film to the compositor.
+pub fn to_image(film: FilmImage) -> Result<Image, CliError> {
+    Ok(Image::from_pixels(film.width, film.height, film.pixels)?)
+}
+
+/// The tracer's layers as named compositor layers, plus the final image as `image`.
+pub fn to_layers(images: &LayerImages) -> Result<Layers, CliError> {
+    let mut layers = Vec::with_capacity(Layer::ALL.len() + 1);
+    layers.push(("image".to_owned(), to_image(images.composite())?));
+    for layer in Layer::ALL {
+        layers.push((
+            layer.name().to_owned(),
+            to_image(images.layer(layer).clone())?,
+        ));
+    }
+    Ok(Layers::from_vec(layers)?)
+}
+
+/// The integrator of a method; `solution` must be given for the radiosity-based ones.
+pub fn integrator<'a>(
+    method: Method,
+    scene: &'a Scene,
+    solution: Option<&'a Solution>,
+    whitted: WhittedSettings,
+) -> Box<dyn Integrator + 'a> {
+    let solution = || solution.expect("radiosity-based methods get a solution");
+    match method {
+        Method::Whitted => Box::new(Whitted::new(scene, ambient_estimate(scene), whitted)),
+        Method::Radiosity => Box::new(radiosity_only(scene, solution())),
+        Method::Hybrid => Box::new(hybrid(scene, solution(), whitted)),
+        Method::HybridDirect => Box::new(hybrid_direct(scene, solution(), whitted)),
+        Method::Reference => Box::new(Reference::new(scene, ReferenceSettings::default())),
+    }
+}
+
+/// Checks a bake file against the manifest of its set, when one lies beside it
+/// (`<stem>.manifest.json`): a file whose size or CRC-32 differs from the manifest's record is
+/// from another bake (one interrupted between its files), and the set is refused.
+pub fn check_in_set(file: &Path) -> Result<(), CliError> {
+    let (Some(dir), Some(stem), Some(name)) = (file.parent(), file.file_stem(), file.file_name())
+    else {
+        return Ok(());
+    };
+    let manifest_path = dir.join(format!("{}.manifest.json", stem.to_string_lossy()));
+    let text = match crate::output::read_small(&manifest_path) {
+        Ok(text) => text,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
+        Err(e) => return Err(CliError::io(&manifest_path, e)),
+    };
+    let manifest: Manifest = serde_json::from_slice(&text).map_err(|e| {
+        CliError::Input(format!(
+            "{}: not a bake manifest ({e}); remove it or bake again",
+            manifest_path.display()
+        ))
+    })?;
+    let Some(record) = manifest
+        .files
+        .iter()
+        .find(|f| f.path.file_name() == Some(name))
+    else {
+        return Ok(());
+    };
+    let bytes = twopass_scene::read_bounded(file, twopass_bake::MAX_BAKE_BYTES)
+        .map_err(|e| CliError::io(file, e))?;
+    let size_ok = record.bytes == bytes.len() as u64;
+    let crc_ok = record.crc32.is_none_or(|c| c == crc32fast::hash(&bytes));
+    if size_ok && crc_ok {
+        return Ok(());
+    }
+    Err(CliError::Input(format!(
+        "{}: does not match its manifest {} ({} bytes, recorded {}{}): the bake set is mixed, \
+         probably from a bake stopped between its files; bake again",
+        file.display(),
+        manifest_path.display(),
+        bytes.len(),
+        record.bytes,
+        if crc_ok { "" } else { ", CRC-32 differs" }
+    )))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn stats(samples: u64, non_finite: u64) -> RenderStats {
+        RenderStats {
+            method: "reference",
+            width: 10,
+            height: 10,
+            samples_per_pixel: 1,
+            samples,
+            non_finite,
+            rays: 0,
+            shadow_rays: 0,
+            elapsed: Duration::ZERO,
+        }
+    }
+
+    fn quiet() -> Context {
+        Context {
+            output: None,
+            width: None,
+            height: None,
+            seed: 0,
+            threads: None,
+            quiet: true,
+            json: false,
+            confine: false,
+        }
+    }
+
+    #[test]
+    fn dropped_samples_warn_then_fail() {
+        let scene = Path::new("s.toml");
+        assert!(check_dropped(&stats(1000, 0), scene, &quiet()).is_ok());
+        // 1 % dropped is still an image worth having (with a warning).
+        assert!(check_dropped(&stats(1000, 10), scene, &quiet()).is_ok());
+        match check_dropped(&stats(1000, 11), scene, &quiet()) {
+            Err(CliError::Input(m)) => {
+                assert!(m.contains("s.toml") && m.contains("11 of 1000"), "{m}");
+            }
+            other => panic!("more than 1 % dropped must fail: {other:?}"),
+        }
+        assert!(check_dropped(&stats(100, 100), scene, &quiet()).is_err());
+    }
+}

@@ -1,0 +1,161 @@
+//! The radiosity solver's settings on the command line (`--solver`, `--unshot`,
+//! `--element-size`, ...), shared by every command that solves (`render`, `bake`, `bench
+//! tradeoff`), and the progress bar of a solve.
+
+use std::ops::ControlFlow;
+use std::time::Duration;
+
+use clap::{Args, ValueEnum};
+use twopass_radiosity::{
+    Adaptive, Finish, Hierarchical, Method, Options, Solver, Stop, VisibilityRays,
+};
+
+use crate::args::{checked, positive_finite};
+use crate::context::Context;
+
+/// A radiosity solver, as the command line names it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum SolverChoice {
+    /// Progressive refinement: exact vertex form factors, cost grows as shooters x receivers.
+    Progressive,
+    /// Hierarchical radiosity with clustering: cost grows about linearly with the scene.
+    Hierarchical,
+    /// Hierarchical above a few thousand participating triangles, progressive below.
+    Auto,
+}
+
+impl SolverChoice {
+    /// The library's method.
+    pub fn method(self) -> Method {
+        match self {
+            Self::Progressive => Method::Progressive,
+            Self::Hierarchical => Method::Hierarchical,
+            Self::Auto => Method::Auto,
+        }
+    }
+}
+
+/// The radiosity solver's settings, shared by every command that solves.
+#[derive(Debug, Clone, Args)]
+pub struct SolveArgs {
+    /// The radiosity solver [default: auto, by the scene's size; `twopass info` says which].
+    #[arg(long, value_enum, default_value = "auto")]
+    pub solver: SolverChoice,
+    /// Stop when the residual (unshot) power falls below this fraction of the emitted power:
+    /// the convergence measure of both solvers.
+    #[arg(long, default_value_t = 1e-3, value_name = "FRACTION", value_parser = parse_fraction)]
+    pub unshot: f64,
+    /// Hierarchical solver: refine a link while its estimated transport error exceeds this
+    /// fraction of the emitted power.
+    #[arg(long, default_value_t = Hierarchical::default().link_tolerance, value_name = "FRACTION")]
+    pub link_tolerance: f64,
+    /// Stop after this many shots (progressive) or gather iterations (hierarchical).
+    #[arg(long, value_name = "N")]
+    pub max_shots: Option<u64>,
+    /// Stop after this much wall-clock time, seconds: for `bake`, the whole process (loading,
+    /// the solve, the residual report and the files); the result is usable but not
+    /// deterministic then.
+    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
+    pub time_budget: Option<Duration>,
+    /// Longest patch (shooter) edge, scene units [default: scene diagonal / 8].
+    #[arg(long, value_name = "LENGTH", value_parser = parse_length)]
+    pub patch_size: Option<f32>,
+    /// Longest element (receiver) edge before adaptive subdivision, scene units
+    /// [default: scene diagonal / 24].
+    #[arg(long, value_name = "LENGTH", value_parser = parse_length)]
+    pub element_size: Option<f32>,
+    /// Keep the element mesh fixed: no adaptive subdivision where the light changes fast.
+    #[arg(long)]
+    pub no_adaptive: bool,
+    /// Shadow rays per visibility estimate: a first estimate of MIN, up to MAX where the
+    /// visibility is partial or the receiver is close.
+    #[arg(long, value_name = "MIN,MAX", value_parser = parse_rays, default_value = "4,16")]
+    pub visibility_rays: VisibilityRays,
+}
+
+impl SolveArgs {
+    /// The solver options these arguments ask for.
+    pub fn options(&self, seed: u64) -> Options {
+        Options {
+            patch_size: self.patch_size,
+            element_size: self.element_size,
+            adaptive: (!self.no_adaptive).then(Adaptive::default),
+            visibility: self.visibility_rays,
+            stop: Stop {
+                unshot_fraction: self.unshot,
+                max_shots: self.max_shots,
+                time_budget: self.time_budget,
+            },
+            seed,
+            method: self.solver.method(),
+            hierarchical: Hierarchical {
+                link_tolerance: self.link_tolerance,
+                ..Hierarchical::default()
+            },
+            memory_limit: crate::context::memory_limit(),
+            ..Options::default()
+        }
+    }
+
+    /// Runs `solver` to its stop criteria with a progress bar over the unshot fraction.
+    pub fn run(&self, solver: &mut Solver<'_>, ctx: &Context) -> Finish {
+        let bar = ctx.progress(STEPS, "radiosity");
+        let finish = solver.run(|p| {
+            bar.set_position(bar_position(p.unshot_fraction, self.unshot));
+            bar.set_message(format!("residual {:.1e}", p.unshot_fraction));
+            ControlFlow::Continue(())
+        });
+        bar.finish_and_clear();
+        finish
+    }
+}
+
+fn parse_seconds(s: &str) -> Result<Duration, String> {
+    let secs: f64 = checked(s, positive_finite, "must be a finite number of seconds > 0")?;
+    Duration::try_from_secs_f64(secs).map_err(|e| e.to_string())
+}
+
+fn parse_rays(s: &str) -> Result<VisibilityRays, String> {
+    let (min, max) = s
+        .split_once(',')
+        .ok_or_else(|| format!("`{s}`: expected MIN,MAX such as 4,16"))?;
+    let parse = |x: &str| x.trim().parse::<u32>().map_err(|e| format!("`{x}`: {e}"));
+    let (min, max) = (parse(min)?, parse(max)?);
+    if min == 0 || max < min || max > MAX_VISIBILITY_RAYS {
+        return Err(format!(
+            "{min},{max}: needs 1 <= MIN <= MAX <= {MAX_VISIBILITY_RAYS}"
+        ));
+    }
+    Ok(VisibilityRays { min, max })
+}
+
+/// Most shadow rays per visibility estimate (a 32 x 32 grid; 16 is the default).
+pub const MAX_VISIBILITY_RAYS: u32 = 1024;
+
+/// A fraction in [0, 1) (the unshot power at which to stop).
+pub fn parse_fraction(s: &str) -> Result<f64, String> {
+    checked(
+        s,
+        |x| (0.0..1.0).contains(x),
+        "must be a fraction >= 0 and < 1",
+    )
+}
+
+/// A length in scene units: finite and > 0 (whether it fits the scene is checked by the
+/// solver, which knows the scene's area).
+fn parse_length(s: &str) -> Result<f32, String> {
+    checked(
+        s,
+        positive_finite,
+        "must be a finite length > 0 scene units",
+    )
+}
+
+/// Bar position of an unshot fraction on a log scale: 0 at 1, `STEPS` at the target.
+const STEPS: u64 = 1000;
+
+fn bar_position(unshot: f64, target: f64) -> u64 {
+    let target = target.clamp(1e-15, 0.5);
+    let x = unshot.max(1e-300).ln() / target.ln();
+    (x.clamp(0.0, 1.0) * STEPS as f64).round() as u64
+}
