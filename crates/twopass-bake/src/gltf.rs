@@ -91,12 +91,15 @@ struct GlbExtrasBody<'a> {
     exposure: f32,
     radiance_unit: &'static str,
     position_unit: &'static str,
+    scene_unit: &'static str,
+    metres_per_scene_unit: f64,
     clamped_vertices: usize,
     scene: &'a str,
 }
 
 /// Encodes the solution's displayed radiance (ambient included) as a glTF 2.0 binary: one
-/// mesh and node per scene object (named after it) with `POSITION` (scene units), unit
+/// mesh and node per scene object (named after it) with `POSITION` (metres, converted from the
+/// scene's [`Unit`](twopass_scene::Unit)), unit
 /// `NORMAL`, `COLOR_0` from `mapping` and `u32` indices, all sharing one unlit material
 /// (`KHR_materials_unlit`, white base colour) so engines show `COLOR_0` without relighting.
 /// The mapping is recorded in the asset's `extras.twopass`. Meshes come in object order
@@ -117,6 +120,10 @@ pub fn encode_glb(
         .map(|b| *b * std::f32::consts::FRAC_1_PI)
         .collect();
     let parts = object_parts(mesh, scene);
+    // glTF positions are metres (glTF 2.0, "Coordinate System and Units"): converted here
+    // rather than through a root-node scale, so every reader (engines that ignore a root
+    // transform, the accessor bounds, measurements in a DCC tool) sees metres.
+    let to_metres = scene.unit.metres();
     let mut root = json::Root::default();
     let mut bin: Vec<u8> = Vec::new();
     let mut clamped_vertices = 0;
@@ -144,9 +151,10 @@ pub fn encode_glb(
         let mut attrs: [Vec<u8>; 3] = Default::default();
         for &v in &part.vertices {
             let vert = &mesh.vertices[v as usize];
-            min = min.min(vert.position);
-            max = max.max(vert.position);
-            f32_bytes(&mut attrs[0], vert.position.to_array());
+            let position = (vert.position.as_dvec3() * to_metres).as_vec3();
+            min = min.min(position);
+            max = max.max(position);
+            f32_bytes(&mut attrs[0], position.to_array());
             let normal = vert.normal.try_normalize().unwrap_or(Vec3::Z);
             f32_bytes(&mut attrs[1], normal.to_array());
             let (c, clipped) = mapping.color(radiance[v as usize]);
@@ -267,7 +275,9 @@ pub fn encode_glb(
             color_0: ColorMapping::FORMULA,
             exposure: mapping.exposure,
             radiance_unit: "W/(m^2 sr)",
-            position_unit: "scene units",
+            position_unit: "m",
+            scene_unit: scene.unit.symbol(),
+            metres_per_scene_unit: to_metres,
             clamped_vertices,
             scene: &scene_name,
         },

@@ -4,13 +4,14 @@
 //!
 //! | output | what it holds | colour |
 //! | --- | --- | --- |
-//! | glTF 2.0 binary (`.glb`, [`encode_glb`]) | one mesh and node per scene object: `POSITION`, `NORMAL`, `COLOR_0`, `u32` indices; one unlit material (`KHR_materials_unlit`) so an engine displays `COLOR_0` as it is | `COLOR_0 = min(1, exposure * L)` per linear RGB channel (see [`ColorMapping`]) |
+//! | glTF 2.0 binary (`.glb`, [`encode_glb`]) | one mesh and node per scene object: `POSITION` (metres), `NORMAL`, `COLOR_0`, `u32` indices; one unlit material (`KHR_materials_unlit`) so an engine displays `COLOR_0` as it is | `COLOR_0 = min(1, exposure * L)` per linear RGB channel (see [`ColorMapping`]) |
 //! | PLY, binary little endian ([`encode_ply`]) | every element vertex (`x y z nx ny nz red green blue`, `float`) and every element (`vertex_indices`, `uint`) | raw radiance `L`, W/(m^2 sr) |
 //! | bake file ([`encode_bake`], [`decode_bake`], [`read_bake`]) | the element mesh and the per-vertex radiosity parts, bit for bit, with fingerprints of the scene it belongs to | radiosity `B`, W/m^2 |
 //! | manifest (JSON, [`Manifest`]) | settings, timings per phase, rays, counts, unshot fraction, energy, residuals, files | |
 //!
-//! Units: positions in scene units (not rescaled to metres; the Cornell box is in
-//! millimetres), radiance `L = B / pi` in W/(m^2 sr), radiosity `B` in W/m^2 per channel.
+//! Units: the `.glb` is in metres (glTF's unit: positions converted from the scene's
+//! [`Unit`](twopass_scene::Unit)); the PLY, the bake file and the manifest keep scene units
+//! (the Cornell box is in millimetres; the PLY header says `comment unit mm`), radiance `L = B / pi` in W/(m^2 sr), radiosity `B` in W/m^2 per channel.
 //! Every file is written atomically ([`write_atomic`], the workspace's one atomic write from
 //! twopass-composite): a temporary file in the target's folder, synced, then renamed over the
 //! target, so a failed write never leaves a partial file.

@@ -59,7 +59,8 @@ impl PropertyAccess for PlyItem {
 }
 
 /// Encodes the element mesh as a binary little-endian PLY: element `vertex` with `float`
-/// properties `x y z` (scene units), `nx ny nz` (unit normal) and `red green blue` (the raw
+/// properties `x y z` (scene units, kept as they are: the header says which in a `comment unit
+/// mm` line and an `obj_info unit mm` line, mm standing for the scene's [`Unit`](twopass_scene::Unit)), `nx ny nz` (unit normal) and `red green blue` (the raw
 /// displayed radiance L = B / pi, W/(m^2 sr), linear RGB, ambient included; not clamped or
 /// exposed), one per mesh vertex in mesh order; element `face` with `list uchar uint
 /// vertex_indices`, one counter-clockwise triangle per element in node order. The header's
@@ -71,11 +72,21 @@ pub fn encode_ply(solution: &Solution, scene: &Scene) -> Result<Vec<u8>, BakeErr
     for c in [
         format!("twopass {} radiosity bake", env!("CARGO_PKG_VERSION")),
         format!("scene {}", scene.path.display()),
-        "x y z: position, scene units".into(),
+        format!("unit {}", scene.unit.symbol()),
+        format!(
+            "x y z: position in scene units ({}, {} m each), not converted",
+            scene.unit.symbol(),
+            scene.unit.metres()
+        ),
         "red green blue: radiance L = B/pi leaving the surface, W/(m^2 sr), linear RGB".into(),
     ] {
         ply.header.comments.push(c);
     }
+    // `obj_info` is the PLY header's place for facts about the object; readers that list
+    // comments and obj_info both see the unit.
+    ply.header
+        .obj_infos
+        .push(format!("unit {}", scene.unit.symbol()));
     let mut vertex = ElementDef::new("vertex".into());
     for p in ["x", "y", "z", "nx", "ny", "nz", "red", "green", "blue"] {
         vertex.properties.add(PropertyDef::new(

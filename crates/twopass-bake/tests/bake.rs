@@ -342,7 +342,14 @@ fn glb_parses_with_one_colour_per_vertex_on_the_element_mesh() {
         assert_eq!(colors.len(), positions.len(), "one COLOR_0 per vertex");
         assert_eq!(normals.len(), positions.len());
         for (k, &v) in expect.iter().enumerate() {
-            assert_eq!(positions[k], mesh.vertices[v as usize].position.to_array());
+            // The Cornell box is in millimetres; glTF positions are metres.
+            let mm = mesh.vertices[v as usize].position;
+            for (m, mm) in positions[k].iter().zip(mm.to_array()) {
+                assert!(
+                    (m * 1000.0 - mm).abs() <= 1e-4 * mm.abs().max(1.0),
+                    "{m} m, {mm} mm"
+                );
+            }
             let (c, clipped) = mapping.color(radiance[v as usize]);
             assert_eq!(colors[k], c.to_array());
             assert!(colors[k].iter().all(|&x| (0.0..=1.0).contains(&x)));
@@ -419,6 +426,31 @@ fn ply_parses_back_with_the_same_values() {
         }
     }
     assert!(ply.header.comments.iter().any(|c| c.contains("W/(m^2 sr)")));
+    // Positions stay in scene units, and the header says which.
+    assert!(ply.header.comments.iter().any(|c| c == "unit mm"));
+    assert!(ply.header.obj_infos.iter().any(|c| c == "unit mm"));
+}
+
+#[test]
+fn glb_floor_is_the_measured_width_in_metres() {
+    let (scene, solution, _) = solved();
+    let glb = bake::encode_glb(solution, scene, ColorMapping::auto(solution)).unwrap();
+    let gltf = gltf::Gltf::from_slice(&glb.bytes).unwrap();
+    let floor = gltf.meshes().find(|m| m.name() == Some("floor")).unwrap();
+    let bounds = floor.primitives().next().unwrap().bounding_box();
+    // The Cornell data: the floor spans x from 0 to 552.8 mm and z from 0 to 559.2 mm.
+    assert!(
+        (bounds.max[0] - bounds.min[0] - 0.5528).abs() < 1e-6,
+        "{bounds:?}"
+    );
+    assert!(
+        (bounds.max[2] - bounds.min[2] - 0.5592).abs() < 1e-6,
+        "{bounds:?}"
+    );
+    let extras: serde_json::Value =
+        serde_json::from_str(gltf.document.as_json().asset.extras.as_ref().unwrap().get()).unwrap();
+    assert_eq!(extras["twopass"]["position_unit"], "m");
+    assert_eq!(extras["twopass"]["scene_unit"], "mm");
 }
 
 #[test]

@@ -152,7 +152,7 @@ pub fn load_toml_with(
         }
     }
     let camera = ld.camera(&file.camera)?;
-    ld.finish(parts, camera)
+    ld.finish(parts, camera, file.unit)
 }
 
 fn load_bare_obj(path: &Path, policy: &ReadPolicy) -> Result<(Scene, Vec<Warning>), SceneError> {
@@ -232,7 +232,8 @@ fn load_bare_obj(path: &Path, policy: &ReadPolicy) -> Result<(Scene, Vec<Warning
         line: None,
         problem,
     })?;
-    ld.finish(parts, camera)
+    // A bare OBJ states no unit: metres, as the OBJ format's readers assume by default.
+    ld.finish(parts, camera, crate::Unit::Metre)
 }
 
 /// What an object becomes before meshing: spheres wait for the scene's size.
@@ -772,6 +773,7 @@ impl Loader {
         mut self,
         parts: Vec<PlacedPart>,
         camera: Camera,
+        unit: crate::Unit,
     ) -> Result<(Scene, Vec<Warning>), SceneError> {
         let mut bounds = Bounds::EMPTY;
         for p in &parts {
@@ -882,7 +884,7 @@ impl Loader {
             });
         }
         Ok((
-            Scene::assemble(self.path, mesh, self.materials, objects, camera),
+            Scene::assemble(self.path, unit, mesh, self.materials, objects, camera),
             self.warnings,
         ))
     }

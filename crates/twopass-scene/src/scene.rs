@@ -197,6 +197,8 @@ pub struct Hit {
 pub struct Scene {
     /// The file it was loaded from.
     pub path: PathBuf,
+    /// The length unit of every position (the scene file's `unit`; metres for a bare OBJ).
+    pub unit: crate::Unit,
     /// All geometry.
     pub mesh: Mesh,
     /// The material table.
@@ -216,6 +218,7 @@ impl Scene {
     /// Assembles a scene from validated parts and builds its BVH.
     pub(crate) fn assemble(
         path: PathBuf,
+        unit: crate::Unit,
         mesh: Mesh,
         materials: Vec<SceneMaterial>,
         objects: Vec<Object>,
@@ -249,6 +252,7 @@ impl Scene {
         let accel = Accel::build(&mesh.positions, &mesh.triangles);
         Self {
             path,
+            unit,
             mesh,
             materials,
             objects,
