@@ -4,8 +4,8 @@
 //!
 //! | output | what it holds | colour |
 //! | --- | --- | --- |
-//! | glTF 2.0 binary (`.glb`, [`encode_glb`]) | one mesh and node per scene object: `POSITION` (metres), `NORMAL`, `COLOR_0`, `u32` indices; one unlit material (`KHR_materials_unlit`) so an engine displays `COLOR_0` as it is | `COLOR_0 = min(1, exposure * L)` per linear RGB channel (see [`ColorMapping`]) |
-//! | PLY, binary little endian ([`encode_ply`]) | every element vertex (`x y z nx ny nz red green blue`, `float`) and every element (`vertex_indices`, `uint`) | raw radiance `L`, W/(m^2 sr) |
+//! | glTF 2.0 binary (`.glb`, [`encode_glb`]) | one mesh and node per scene object: `POSITION` (metres), `NORMAL`, `COLOR_0`, the HDR radiance `_RADIANCE` with its parts `_DIRECT` and `_INDIRECT` (custom float `VEC3` attributes, [`HDR_ATTRIBUTES`]), `u32` indices; one unlit material (`KHR_materials_unlit`) so an engine displays `COLOR_0` as it is | `COLOR_0 = min(1, exposure * L)` per linear RGB channel, float, for display (see [`ColorMapping`]); `_RADIANCE` etc. raw `L`, W/(m^2 sr) |
+//! | PLY, binary little endian ([`encode_ply`]) | every element vertex (`x y z nx ny nz` and `radiance_r/g/b`, `direct_r/g/b`, `indirect_r/g/b` as `float`; `red green blue` as `uchar`) and every element (`vertex_indices`, `uint`) | `radiance_*` etc. raw radiance `L`, W/(m^2 sr); `red green blue` an 8-bit sRGB display colour ([`display_colour`]) |
 //! | bake file ([`encode_bake`], [`decode_bake`], [`read_bake`]) | the element mesh and the per-vertex radiosity parts, bit for bit, with fingerprints of the scene it belongs to | radiosity `B`, W/m^2 |
 //! | manifest (JSON, [`Manifest`]) | settings, timings per phase, rays, counts, unshot fraction, energy, residuals, files | |
 //!
@@ -65,16 +65,16 @@ pub mod gltf;
 pub mod manifest;
 pub mod ply;
 
-pub use colour::{AUTO_EXPOSURE_PERCENTILE, ColorMapping};
+pub use colour::{AUTO_EXPOSURE_PERCENTILE, ColorMapping, RadianceParts};
 pub use error::{BakeError, BakeProblem};
 pub use fingerprint::{Fingerprint, geometry_fingerprint, lighting_fingerprint, scene_fingerprint};
 pub use format::{BAKE_FORMAT_VERSION, MAX_BAKE_BYTES, decode_bake, encode_bake, read_bake};
-pub use gltf::{Glb, encode_glb};
+pub use gltf::{Glb, HDR_ATTRIBUTES, encode_glb};
 pub use manifest::{
     AdaptiveRecord, ColorRecord, CountsRecord, EnergyRecord, FileRecord, MANIFEST_VERSION,
     Manifest, ResidualsRecord, SettingsRecord, TimingsRecord,
 };
-pub use ply::encode_ply;
+pub use ply::{display_colour, encode_ply};
 pub use twopass_radiosity::{InvalidMesh, MeshPart};
 
 /// Writes `bytes` to `path` atomically (the workspace's one atomic write,

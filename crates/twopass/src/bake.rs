@@ -26,9 +26,11 @@ use crate::preset::RadiosityKnobs;
 /// An output format of `twopass bake`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, ValueEnum)]
 pub enum Format {
-    /// glTF 2.0 binary: per-vertex linear colour COLOR_0 = min(1, exposure * radiance).
+    /// glTF 2.0 binary in metres: per-vertex linear COLOR_0 = min(1, exposure * radiance),
+    /// and the HDR radiance with its direct and indirect parts as _RADIANCE, _DIRECT, _INDIRECT.
     Glb,
-    /// Binary PLY: per-vertex float radiance, W/(m^2 sr).
+    /// Binary PLY in scene units: per-vertex float radiance_*, direct_*, indirect_*
+    /// (W/(m^2 sr)) and an 8-bit display colour red green blue.
     Ply,
     /// The bake file `twopass render` loads (the element mesh and radiosity, bit for bit).
     Bake,
@@ -67,7 +69,8 @@ pub struct BakeArgs {
     /// The presets file (default: `<stem>.presets.toml` beside the scene).
     #[arg(long, value_name = "FILE", requires = "preset")]
     pub presets: Option<PathBuf>,
-    /// Multiplier from radiance (W/(m^2 sr)) to the .glb's COLOR_0, which is clipped at 1
+    /// Multiplier from radiance (W/(m^2 sr)) to the display colours (.glb COLOR_0, .ply red
+    /// green blue), which are clipped at 1
     /// [default: auto, the 99th-percentile vertex luminance maps to 1].
     #[arg(long, value_name = "SR_M2_PER_W", value_parser = parse_exposure)]
     pub exposure: Option<f32>,
@@ -403,14 +406,15 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
         Err(e) => return Err(CliError::io(&manifest_path, e)),
     }
     let formats: BTreeSet<Format> = args.format.iter().copied().collect();
+    // One display mapping for every output's clipped colour (.glb COLOR_0, .ply red green blue).
+    let (mapping, mode) = match args.exposure {
+        Some(exposure) => (ColorMapping { exposure }, "fixed"),
+        None => (ColorMapping::auto(&solution), "auto"),
+    };
     for format in formats {
         let path = dir.join(format!("{stem}.{}", format.extension()));
         let bytes = match format {
             Format::Glb => {
-                let (mapping, mode) = match args.exposure {
-                    Some(exposure) => (ColorMapping { exposure }, "fixed"),
-                    None => (ColorMapping::auto(&solution), "auto"),
-                };
                 let glb = bake::encode_glb(&solution, &scene, mapping)?;
                 manifest.color = Some(ColorRecord {
                     mapping: ColorMapping::FORMULA.into(),
@@ -420,7 +424,7 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
                 });
                 glb.bytes
             }
-            Format::Ply => bake::encode_ply(&solution, &scene)?,
+            Format::Ply => bake::encode_ply(&solution, &scene, mapping)?,
             Format::Bake => bake::encode_bake(&solution, &scene)?,
         };
         bake::write_atomic(&path, &bytes)?;
