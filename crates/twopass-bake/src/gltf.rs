@@ -100,6 +100,8 @@ pub(crate) struct GlbBuilder {
 pub(crate) enum Attribute<'a> {
     /// `VEC3` floats (positions get min/max bounds).
     Vec3(json::mesh::Semantic, &'a [Vec3]),
+    /// `VEC2` floats (texture coordinates).
+    Vec2(json::mesh::Semantic, &'a [glam::Vec2]),
 }
 
 impl GlbBuilder {
@@ -119,7 +121,7 @@ impl GlbBuilder {
     ) -> json::Index<json::buffer::View> {
         let offset = self.bin.len();
         self.bin.extend_from_slice(data);
-        while self.bin.len() % 4 != 0 {
+        while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
         self.root.push(json::buffer::View {
@@ -164,6 +166,37 @@ impl GlbBuilder {
         })
     }
 
+    /// Embeds a PNG in the binary chunk as an image with a texture (bilinear, clamped to the
+    /// edge: a lightmap's charts must not wrap).
+    pub(crate) fn png_texture(&mut self, name: &str, png: &[u8]) -> json::Index<json::Texture> {
+        let view = self.view(png, None);
+        let image = self.root.push(json::Image {
+            buffer_view: Some(view),
+            mime_type: Some(json::image::MimeType("image/png".into())),
+            name: Some(name.to_owned()),
+            uri: None,
+            extensions: None,
+            extras: None,
+        });
+        use json::texture::{MagFilter, MinFilter, WrappingMode};
+        let sampler = self.root.push(json::texture::Sampler {
+            mag_filter: Some(Valid(MagFilter::Linear)),
+            min_filter: Some(Valid(MinFilter::Linear)),
+            wrap_s: Valid(WrappingMode::ClampToEdge),
+            wrap_t: Valid(WrappingMode::ClampToEdge),
+            name: None,
+            extensions: None,
+            extras: None,
+        });
+        self.root.push(json::Texture {
+            name: Some(name.to_owned()),
+            sampler: Some(sampler),
+            source: image,
+            extensions: None,
+            extras: None,
+        })
+    }
+
     /// Adds a mesh of one indexed triangle primitive and a node showing it.
     pub(crate) fn mesh(
         &mut self,
@@ -190,6 +223,12 @@ impl GlbBuilder {
                     });
                     let acc =
                         self.accessor(&data, values.len(), T::Vec3, C::F32, ArrayBuffer, bounds);
+                    (semantic.clone(), acc)
+                }
+                Attribute::Vec2(semantic, values) => {
+                    f32_bytes(&mut data, values.iter().flat_map(|v| v.to_array()));
+                    let acc =
+                        self.accessor(&data, values.len(), T::Vec2, C::F32, ArrayBuffer, None);
                     (semantic.clone(), acc)
                 }
             };
@@ -268,7 +307,7 @@ impl GlbBuilder {
             ..Default::default()
         };
         let mut json_bytes = self.root.to_vec().map_err(|e| encode_err(e.to_string()))?;
-        while json_bytes.len() % 4 != 0 {
+        while !json_bytes.len().is_multiple_of(4) {
             json_bytes.push(b' ');
         }
         let total = 12 + 8 + json_bytes.len() + if bin.is_empty() { 0 } else { 8 + bin.len() };

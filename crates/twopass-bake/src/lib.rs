@@ -7,6 +7,7 @@
 //! | glTF 2.0 binary (`.glb`, [`encode_glb`]) | one mesh and node per scene object: `POSITION` (metres), `NORMAL`, `COLOR_0`, the HDR radiance `_RADIANCE` with its parts `_DIRECT` and `_INDIRECT` (custom float `VEC3` attributes, [`HDR_ATTRIBUTES`]), `u32` indices; one unlit material (`KHR_materials_unlit`) so an engine displays `COLOR_0` as it is | `COLOR_0 = min(1, exposure * L)` per linear RGB channel, float, for display (see [`ColorMapping`]); `_RADIANCE` etc. raw `L`, W/(m^2 sr) |
 //! | PLY, binary little endian ([`encode_ply`]) | every element vertex (`x y z nx ny nz` and `radiance_r/g/b`, `direct_r/g/b`, `indirect_r/g/b` as `float`; `red green blue` as `uchar`) and every element (`vertex_indices`, `uint`) | `radiance_*` etc. raw radiance `L`, W/(m^2 sr); `red green blue` an 8-bit sRGB display colour ([`display_colour`]) |
 //! | bake file ([`encode_bake`], [`decode_bake`], [`read_bake`]) | the element mesh and the per-vertex radiosity parts, bit for bit, with fingerprints of the scene it belongs to | radiosity `B`, W/m^2 |
+//! | lightmap ([`bake_lightmap`]) | the scene's own triangles (not the element mesh) as `.glb` with a generated UV atlas on `TEXCOORD_1` and the lightmap PNG as `emissiveTexture` (`texCoord` 1); the lightmap as EXR and PNG | EXR: raw `L`, W/(m^2 sr); PNG: sRGB of `min(1, exposure * L)` |
 //! | manifest (JSON, [`Manifest`]) | settings, timings per phase, rays, counts, unshot fraction, energy, residuals, files | |
 //!
 //! Units: the `.glb` is in metres (glTF's unit: positions converted from the scene's
@@ -38,8 +39,8 @@
 //! This crate is the I/O edge of the radiosity solver (ARCHITECTURE.md, "Architecture
 //! invariants"): twopass-radiosity computes and never touches a file or a file format; this
 //! crate encodes, decodes, reads and writes. Modules, one job each: [`error`], [`fingerprint`],
-//! [`format`](mod@format) (the bake file), [`colour`] (radiance to `COLOR_0`), [`gltf`], [`ply`],
-//! [`manifest`].
+//! [`format`](mod@format) (the bake file), [`colour`] (radiance to `COLOR_0`), [`gltf`],
+//! [`lightmap`], [`ply`], [`manifest`].
 //!
 //! ```no_run
 //! use twopass_radiosity::{Options, Solver};
@@ -62,6 +63,7 @@ pub mod error;
 pub mod fingerprint;
 pub mod format;
 pub mod gltf;
+pub mod lightmap;
 pub mod manifest;
 pub mod ply;
 
@@ -70,9 +72,10 @@ pub use error::{BakeError, BakeProblem};
 pub use fingerprint::{Fingerprint, geometry_fingerprint, lighting_fingerprint, scene_fingerprint};
 pub use format::{BAKE_FORMAT_VERSION, MAX_BAKE_BYTES, decode_bake, encode_bake, read_bake};
 pub use gltf::{Glb, HDR_ATTRIBUTES, encode_glb};
+pub use lightmap::{Lightmap, LightmapSettings, bake_lightmap};
 pub use manifest::{
-    AdaptiveRecord, ColorRecord, CountsRecord, EnergyRecord, FileRecord, MANIFEST_VERSION,
-    Manifest, ResidualsRecord, SettingsRecord, TimingsRecord,
+    AdaptiveRecord, ColorRecord, CountsRecord, EnergyRecord, FileRecord, LightmapRecord,
+    MANIFEST_VERSION, Manifest, ResidualsRecord, SettingsRecord, TimingsRecord,
 };
 pub use ply::{display_colour, encode_ply};
 pub use twopass_radiosity::{InvalidMesh, MeshPart};

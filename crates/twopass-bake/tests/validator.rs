@@ -86,7 +86,10 @@ fn assert_clean(name: &str, report: &serde_json::Value) {
         serde_json::to_string_pretty(report).unwrap()
     );
     // The validator did read the file: it counted the meshes' vertices.
-    assert!(report["info"]["totalVertexCount"].as_u64().unwrap() > 0, "{report}");
+    assert!(
+        report["info"]["totalVertexCount"].as_u64().unwrap() > 0,
+        "{report}"
+    );
 }
 
 #[test]
@@ -95,6 +98,21 @@ fn element_mesh_glb_passes_the_khronos_validator() {
     let glb = bake::encode_glb(solution, scene, ColorMapping::auto(solution)).unwrap();
     if let Some(report) = validate("cornell-box.glb", &glb.bytes) {
         assert_clean("cornell-box.glb", &report);
+    }
+}
+
+#[test]
+fn lightmap_glb_passes_the_khronos_validator() {
+    let (scene, solution) = solved();
+    let settings = twopass_bake::LightmapSettings {
+        texel_size: 10.0,
+        padding: 2,
+    };
+    let lm = bake::bake_lightmap(solution, scene, &settings, ColorMapping::auto(solution)).unwrap();
+    if let Some(report) = validate("cornell-box.lightmap.glb", &lm.glb) {
+        assert_clean("cornell-box.lightmap.glb", &report);
+        assert_eq!(report["info"]["hasTextures"], true, "{report}");
+        assert_eq!(report["info"]["maxUVs"], 2, "{report}");
     }
 }
 

@@ -148,9 +148,15 @@ fn encode_exr(
     Ok(buf.into_inner())
 }
 
+/// Encodes one linear image as EXR bytes with channels `R`, `G`, `B` (32-bit float); `path`
+/// only names the file in errors.
+pub fn encode_exr_image(path: &Path, image: &Image) -> Result<Vec<u8>> {
+    encode_exr(path, &[("", image)], None)
+}
+
 /// Writes one linear image as an EXR with channels `R`, `G`, `B` (32-bit float), atomically.
 pub fn write_exr(path: &Path, image: &Image) -> Result<()> {
-    let bytes = encode_exr(path, &[("", image)], None)?;
+    let bytes = encode_exr_image(path, image)?;
     Ok(write_atomic(path, &bytes)?)
 }
 

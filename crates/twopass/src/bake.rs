@@ -74,6 +74,15 @@ pub struct BakeArgs {
     /// [default: auto, the 99th-percentile vertex luminance maps to 1].
     #[arg(long, value_name = "SR_M2_PER_W", value_parser = parse_exposure)]
     pub exposure: Option<f32>,
+    /// Also bake a lightmap: `<stem>.lightmap.glb` (the scene's own triangles with a generated
+    /// UV atlas on TEXCOORD_1 and the lightmap as an embedded PNG emissive texture),
+    /// `<stem>.lightmap.exr` (HDR radiance, W/(m^2 sr)) and `<stem>.lightmap.png` (the LDR
+    /// texture, exposure-scaled sRGB).
+    #[arg(long)]
+    pub lightmap: bool,
+    /// Lightmap texel edge on the surface, scene units [default: scene diagonal / 200].
+    #[arg(long, value_name = "LENGTH", value_parser = parse_length, requires = "lightmap")]
+    pub texel_size: Option<f32>,
     /// Vertices and patch pairs sampled for the residual report.
     #[arg(long, default_value_t = 200, value_name = "N", value_parser = parse_residual_samples)]
     pub residual_samples: usize,
@@ -435,6 +444,34 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
             crc32: Some(crc32fast::hash(&bytes)),
         });
     }
+    if args.lightmap {
+        let started = Instant::now();
+        let settings = bake::LightmapSettings {
+            texel_size: args.texel_size.unwrap_or(scene.bounds.diagonal() / 200.0),
+            ..bake::LightmapSettings::default()
+        };
+        let lm = bake::bake_lightmap(&solution, &scene, &settings, mapping)?;
+        for (ext, bytes) in [("glb", &lm.glb), ("exr", &lm.exr), ("png", &lm.png)] {
+            let path = dir.join(format!("{stem}.lightmap.{ext}"));
+            bake::write_atomic(&path, bytes)?;
+            manifest.files.push(FileRecord {
+                format: format!("lightmap-{ext}"),
+                path,
+                bytes: bytes.len() as u64,
+                crc32: Some(crc32fast::hash(bytes)),
+            });
+        }
+        manifest.lightmap = Some(bake::LightmapRecord {
+            texel_size: settings.texel_size,
+            padding: settings.padding,
+            width: lm.width,
+            height: lm.height,
+            charts: lm.charts,
+            covered_texels: lm.covered_texels,
+            png: bake::lightmap::PNG_FORMULA.into(),
+            seconds: started.elapsed().as_secs_f64(),
+        });
+    }
     manifest.timings.writing_s = writing_started.elapsed().as_secs_f64();
     manifest.timings.total_s = started.elapsed().as_secs_f64();
     let json = manifest.to_json()?;
@@ -500,6 +537,16 @@ fn print_summary(m: &Manifest, manifest_path: &Path) -> Result<(), CliError> {
             color.exposure,
             color.exposure_mode,
             color.clamped_vertices
+        );
+    }
+    if let Some(lm) = &m.lightmap {
+        outln!(
+            "  lightmap {} x {} texels of {} scene units, {} charts, {:.2} s",
+            lm.width,
+            lm.height,
+            lm.texel_size,
+            lm.charts,
+            lm.seconds
         );
     }
     for f in &m.files {
