@@ -8,6 +8,7 @@
 //! | PLY, binary little endian ([`encode_ply`]) | every element vertex (`x y z nx ny nz` and `radiance_r/g/b`, `direct_r/g/b`, `indirect_r/g/b` as `float`; `red green blue` as `uchar`) and every element (`vertex_indices`, `uint`) | `radiance_*` etc. raw radiance `L`, W/(m^2 sr); `red green blue` an 8-bit sRGB display colour ([`display_colour`]) |
 //! | bake file ([`encode_bake`], [`decode_bake`], [`read_bake`]) | the element mesh and the per-vertex radiosity parts, bit for bit, with fingerprints of the scene it belongs to | radiosity `B`, W/m^2 |
 //! | lightmap ([`bake_lightmap`]) | the scene's own triangles (not the element mesh) as `.glb` with a generated UV atlas on `TEXCOORD_1` and the lightmap PNG as `emissiveTexture` (`texCoord` 1); the lightmap as EXR and PNG | EXR: raw `L`, W/(m^2 sr); PNG: sRGB of `min(1, exposure * L)` |
+//! | per-vertex `.glb` on the scene's own mesh ([`encode_vertex_glb`]) | the scene's own triangles and vertices with the solution sampled there: `POSITION` (metres), `NORMAL`, `COLOR_0`, `_RADIANCE`, `_DIRECT`, `_INDIRECT` | as the element-mesh `.glb` |
 //! | manifest (JSON, [`Manifest`]) | settings, timings per phase, rays, counts, unshot fraction, energy, residuals, files | |
 //!
 //! Units: the `.glb` is in metres (glTF's unit: positions converted from the scene's
@@ -40,7 +41,8 @@
 //! invariants"): twopass-radiosity computes and never touches a file or a file format; this
 //! crate encodes, decodes, reads and writes. Modules, one job each: [`error`], [`fingerprint`],
 //! [`format`](mod@format) (the bake file), [`colour`] (radiance to `COLOR_0`), [`gltf`],
-//! [`lightmap`], [`ply`], [`manifest`].
+//! [`lightmap`], [`vertex`] (the per-vertex bake on the scene's own mesh), [`ply`],
+//! [`manifest`].
 //!
 //! ```no_run
 //! use twopass_radiosity::{Options, Solver};
@@ -66,6 +68,7 @@ pub mod gltf;
 pub mod lightmap;
 pub mod manifest;
 pub mod ply;
+pub mod vertex;
 
 pub use colour::{AUTO_EXPOSURE_PERCENTILE, ColorMapping, RadianceParts};
 pub use error::{BakeError, BakeProblem};
@@ -79,6 +82,7 @@ pub use manifest::{
 };
 pub use ply::{display_colour, encode_ply};
 pub use twopass_radiosity::{InvalidMesh, MeshPart};
+pub use vertex::encode_vertex_glb;
 
 /// Writes `bytes` to `path` atomically (the workspace's one atomic write,
 /// [`twopass_composite::write::write_atomic`]), as a [`BakeError`] on failure.

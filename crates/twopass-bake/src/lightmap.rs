@@ -358,8 +358,9 @@ pub const PNG_FORMULA: &str = "sRGB-encoded 8-bit of min(1, exposure * L), L the
 /// metallic 0, roughness 1, and the PNG as `emissiveTexture` with `texCoord` 1 (emissive
 /// factor 1). Any glTF viewer then shows the baked light as the surface's emission without
 /// relighting it; engines with a lightmap slot take the same texture on UV set 1 (README,
-/// "Bakes for engines"). A vertex is written once per (position, normal, chart), so chart seams
-/// split vertices and nothing else does.
+/// "Bakes for engines"). A vertex is written once per position, shading normal (normals within
+/// [`COPLANAR_COS`] count as one) and chart, so chart seams and creases split vertices and
+/// nothing else does.
 pub fn bake_lightmap(
     radiance: &dyn DiffuseRadiance,
     scene: &Scene,
@@ -464,7 +465,7 @@ fn encode_lightmap_glb(
         }
     }
     for (o, object) in scene.objects.iter().enumerate() {
-        let mut key_index: HashMap<(u32, u32, u32), u32> = HashMap::new();
+        let mut shared = crate::vertex::SharedVertices::default();
         let (mut positions, mut normals, mut uvs, mut indices) =
             (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for t in object.triangles.clone() {
@@ -473,15 +474,15 @@ fn encode_lightmap_glb(
             let tri = m.triangles[t as usize];
             let nrm = m.normal_indices[t as usize];
             for k in 0..3 {
-                let key = (tri[k], nrm[k], chart_of[t as usize]);
-                let next = positions.len() as u32;
-                let v = *key_index.entry(key).or_insert_with(|| {
+                let normal = m.normals[nrm[k] as usize];
+                let group = chart_of[t as usize];
+                let (v, new) = shared.get(group, tri[k], normal, positions.len() as u32);
+                if new {
                     let p = m.positions[tri[k] as usize];
                     positions.push((p.as_dvec3() * to_metres).as_vec3());
-                    normals.push(m.normals[nrm[k] as usize]);
+                    normals.push(normal);
                     uvs.push(chart.atlas(p, s.texel_size, s.padding) / size);
-                    next
-                });
+                }
                 indices.push(v);
             }
         }

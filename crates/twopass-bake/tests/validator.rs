@@ -117,6 +117,15 @@ fn lightmap_glb_passes_the_khronos_validator() {
 }
 
 #[test]
+fn per_vertex_glb_passes_the_khronos_validator() {
+    let (scene, solution) = solved();
+    let glb = bake::encode_vertex_glb(solution, scene, ColorMapping::auto(solution)).unwrap();
+    if let Some(report) = validate("cornell-box.vertex.glb", &glb.bytes) {
+        assert_clean("cornell-box.vertex.glb", &report);
+    }
+}
+
+#[test]
 fn validator_reports_a_broken_glb() {
     // The check can fail: an index past the vertex count is an error the validator reports.
     let (scene, solution) = solved();

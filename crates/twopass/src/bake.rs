@@ -34,6 +34,10 @@ pub enum Format {
     Ply,
     /// The bake file `twopass render` loads (the element mesh and radiosity, bit for bit).
     Bake,
+    /// glTF 2.0 binary of the scene's own triangles and vertices (not the element mesh), in
+    /// metres, with the solution sampled at those vertices: COLOR_0, _RADIANCE, _DIRECT,
+    /// _INDIRECT (`<stem>.vertex.glb`).
+    VertexGlb,
 }
 
 impl Format {
@@ -42,6 +46,7 @@ impl Format {
             Self::Glb => "glb",
             Self::Ply => "ply",
             Self::Bake => "bake",
+            Self::VertexGlb => "vertex.glb",
         }
     }
 }
@@ -435,6 +440,18 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
             }
             Format::Ply => bake::encode_ply(&solution, &scene, mapping)?,
             Format::Bake => bake::encode_bake(&solution, &scene)?,
+            Format::VertexGlb => {
+                let glb = bake::encode_vertex_glb(&solution, &scene, mapping)?;
+                if manifest.color.is_none() {
+                    manifest.color = Some(ColorRecord {
+                        mapping: ColorMapping::FORMULA.into(),
+                        exposure: mapping.exposure,
+                        exposure_mode: mode.into(),
+                        clamped_vertices: glb.clamped_vertices,
+                    });
+                }
+                glb.bytes
+            }
         };
         bake::write_atomic(&path, &bytes)?;
         manifest.files.push(FileRecord {

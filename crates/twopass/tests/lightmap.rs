@@ -1,4 +1,4 @@
-//! `twopass bake --lightmap`: the lightmap files, each listed in the manifest with its size and
+//! `twopass bake --lightmap` and `--format vertex-glb`: the files, each listed in the manifest with its size and
 //! CRC-32, and `--texel-size` only with `--lightmap`.
 
 mod common;
@@ -16,7 +16,7 @@ fn lightmap_bake_writes_its_files_into_the_manifest() {
         "--output",
         dir.to_str().unwrap(),
         "--format",
-        "glb",
+        "glb,vertex-glb",
         "--lightmap",
         "--texel-size",
         "10",
@@ -41,7 +41,13 @@ fn lightmap_bake_writes_its_files_into_the_manifest() {
     names.sort_unstable();
     assert_eq!(
         names,
-        ["glb", "lightmap-exr", "lightmap-glb", "lightmap-png"]
+        [
+            "glb",
+            "lightmap-exr",
+            "lightmap-glb",
+            "lightmap-png",
+            "vertex.glb"
+        ]
     );
     for f in files {
         let bytes = std::fs::read(f["path"].as_str().unwrap()).unwrap();
