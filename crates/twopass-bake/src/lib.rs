@@ -75,7 +75,7 @@ pub use error::{BakeError, BakeProblem};
 pub use fingerprint::{Fingerprint, geometry_fingerprint, lighting_fingerprint, scene_fingerprint};
 pub use format::{BAKE_FORMAT_VERSION, MAX_BAKE_BYTES, decode_bake, encode_bake, read_bake};
 pub use gltf::{Glb, HDR_ATTRIBUTES, encode_glb};
-pub use lightmap::{Lightmap, LightmapSettings, bake_lightmap};
+pub use lightmap::{AtlasSource, Lightmap, LightmapSettings, bake_lightmap};
 pub use manifest::{
     AdaptiveRecord, ColorRecord, CountsRecord, EnergyRecord, FileRecord, LightmapRecord,
     MANIFEST_VERSION, Manifest, ResidualsRecord, SettingsRecord, TimingsRecord,

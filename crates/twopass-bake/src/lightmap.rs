@@ -11,8 +11,9 @@
 //! 0.49, last released years ago, undocumented) was not taken: it would bring a C++ build and
 //! an unmaintained wrapper for a gain only on curved meshes. The charts are packed with
 //! [`etagere`] (the shelf packer WebRender uses for its texture atlases; maintained, pure Rust).
-//! An OBJ's own `vt` coordinates are not read (the scene keeps no UVs), so the atlas is always
-//! generated.
+//! An OBJ's own `vt` coordinates are used instead when every triangle of the scene has them,
+//! they lie in [0, 1] and no two triangles overlap in them ([`AtlasSource`]); OBJ has no second
+//! UV set, so that one set is the lightmap's.
 //!
 //! **Texels.** Every texel whose centre lies on a triangle of its chart takes the solution's
 //! radiance there ([`DiffuseRadiance::radiance`]: the element mesh's per-vertex radiosity
@@ -81,10 +82,12 @@ pub struct Lightmap {
     /// Linear radiance per texel, W/(m^2 sr) per RGB channel, row-major, top row first (UV
     /// (0, 0) is the top-left corner, as glTF has it).
     pub radiance: Image,
-    /// Charts in the atlas.
+    /// Charts in the atlas (1 when the scene's own texture coordinates are used).
     pub charts: usize,
     /// Texels whose centre lies on a triangle (the rest are padding, dilated or empty).
     pub covered_texels: usize,
+    /// Where the texture coordinates come from.
+    pub atlas: AtlasSource,
     /// The scene's triangles with `TEXCOORD_1` into the atlas, as a `.glb` embedding the PNG.
     pub glb: Vec<u8>,
     /// The HDR lightmap as EXR bytes.
@@ -95,7 +98,6 @@ pub struct Lightmap {
 
 /// One chart: coplanar connected triangles of one object, projected onto their plane.
 struct Chart {
-    object: u32,
     triangles: Vec<u32>,
     origin: Vec3,
     axes: [Vec3; 2],
@@ -158,7 +160,6 @@ fn charts(scene: &Scene, texel: f32, pad: u32) -> Vec<Chart> {
             let normal = m.geometric_normals[root as usize];
             let (u, v) = normal.any_orthonormal_pair();
             out.push(Chart {
-                object: m.triangle_object[root as usize],
                 triangles: Vec::new(),
                 origin: m.corners(root)[0],
                 axes: [u, v],
@@ -239,21 +240,189 @@ fn pack(charts: &mut [Chart], texel: f32) -> Result<(u32, u32), BakeError> {
     }
 }
 
-/// One chart's texels (its rectangle, row-major) and which of them hold a value.
-fn fill_chart(
-    chart: &Chart,
-    scene: &Scene,
+/// Where a lightmap's texture coordinates come from.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum AtlasSource {
+    /// The scene's own texture coordinates (an OBJ's `vt`): every triangle has them, they lie
+    /// in [0, 1] and no two triangles overlap.
+    Scene,
+    /// Generated charts, because the scene's coordinates could not serve (the reason).
+    Generated(String),
+}
+
+impl AtlasSource {
+    /// In words, as the manifest records it.
+    pub fn describe(&self) -> String {
+        match self {
+            Self::Scene => "the scene's texture coordinates (OBJ vt)".to_owned(),
+            Self::Generated(why) => format!("generated charts ({why})"),
+        }
+    }
+}
+
+/// A lightmap's layout: the atlas size, each triangle's corners in the atlas (texels, y
+/// down), the rectangles filled and dilated separately, and per corner the group that keeps
+/// vertices apart in the `.glb` (a chart, or a texture-coordinate index).
+struct Layout {
+    width: u32,
+    height: u32,
+    corners: Vec<[Vec2; 3]>,
+    regions: Vec<Region>,
+    groups: Vec<[u32; 3]>,
+    source: AtlasSource,
+}
+
+/// A rectangle of the atlas with the triangles inside it.
+struct Region {
+    at: [u32; 2],
+    size: [u32; 2],
+    triangles: Vec<u32>,
+}
+
+/// The generated layout: charts packed into an atlas.
+fn generated_layout(scene: &Scene, s: &LightmapSettings, why: String) -> Result<Layout, BakeError> {
+    let mut charts = charts(scene, s.texel_size, s.padding);
+    let (width, height) = pack(&mut charts, s.texel_size)?;
+    let m = &scene.mesh;
+    let mut corners = vec![[Vec2::ZERO; 3]; m.triangles.len()];
+    let mut groups = vec![[0; 3]; m.triangles.len()];
+    for (i, c) in charts.iter().enumerate() {
+        for &t in &c.triangles {
+            corners[t as usize] = m.corners(t).map(|p| c.atlas(p, s.texel_size, s.padding));
+            groups[t as usize] = [i as u32; 3];
+        }
+    }
+    let regions = charts
+        .into_iter()
+        .map(|c| Region {
+            at: c.at,
+            size: c.size,
+            triangles: c.triangles,
+        })
+        .collect();
+    Ok(Layout {
+        width,
+        height,
+        corners,
+        regions,
+        groups,
+        source: AtlasSource::Generated(why),
+    })
+}
+
+/// The layout of the scene's own texture coordinates, or why they cannot serve. The atlas is
+/// square, with as many texels as the surface area holds at `texel_size` spread over the
+/// coordinates' own area; OBJ's v points up, the atlas's y down.
+fn scene_layout(scene: &Scene, s: &LightmapSettings) -> Result<Layout, String> {
+    let m = &scene.mesh;
+    let mut uv = Vec::with_capacity(m.triangles.len());
+    for (t, idx) in m.texcoord_indices.iter().enumerate() {
+        let Some(idx) = idx else {
+            return Err(format!(
+                "object `{}` has no texture coordinates",
+                scene.objects[m.triangle_object[t] as usize].name
+            ));
+        };
+        let q = idx.map(|k| m.texcoords[k as usize]);
+        if q.iter()
+            .any(|p| !(0.0..=1.0).contains(&p.x) || !(0.0..=1.0).contains(&p.y))
+        {
+            return Err(format!(
+                "object `{}` has texture coordinates outside [0, 1]",
+                scene.objects[m.triangle_object[t] as usize].name
+            ));
+        }
+        uv.push(q);
+    }
+    if uv.is_empty() {
+        return Err("the scene has no triangles".to_owned());
+    }
+    let uv_area: f64 = uv
+        .iter()
+        .map(|q| f64::from((q[1] - q[0]).perp_dot(q[2] - q[0]).abs()) / 2.0)
+        .sum();
+    if uv_area <= 0.0 {
+        return Err("the texture coordinates cover no area".to_owned());
+    }
+    let texels = scene.total_area() / f64::from(s.texel_size).powi(2) / uv_area;
+    let side = (texels.sqrt().ceil() as u32).max(4).next_multiple_of(4);
+    if side > MAX_LIGHTMAP_SIDE {
+        return Err(format!(
+            "they would need {side} x {side} texels at this texel size"
+        ));
+    }
+    let size = Vec2::splat(side as f32);
+    let corners: Vec<[Vec2; 3]> = uv
+        .iter()
+        .map(|q| q.map(|p| Vec2::new(p.x, 1.0 - p.y) * size))
+        .collect();
+    // Overlap: no texel centre strictly inside two triangles (a shared edge is no overlap).
+    let mut owner = vec![u32::MAX; (side * side) as usize];
+    for (t, c) in corners.iter().enumerate() {
+        let [a, b, d] = *c;
+        let det = (b - a).perp_dot(d - a);
+        if det.abs() <= f32::MIN_POSITIVE {
+            return Err(format!(
+                "object `{}` has a triangle of zero area in texture space",
+                scene.objects[m.triangle_object[t] as usize].name
+            ));
+        }
+        let lo = a.min(b).min(d).floor().max(Vec2::ZERO);
+        let hi = a.max(b).max(d).ceil().min(size);
+        for y in lo.y as u32..hi.y as u32 {
+            for x in lo.x as u32..hi.x as u32 {
+                let p = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+                let w1 = (p - a).perp_dot(d - a) / det;
+                let w2 = (b - a).perp_dot(p - a) / det;
+                if w1 > 1e-4 && w2 > 1e-4 && 1.0 - w1 - w2 > 1e-4 {
+                    let i = (y * side + x) as usize;
+                    if owner[i] != u32::MAX {
+                        let name = |t: usize| &scene.objects[m.triangle_object[t] as usize].name;
+                        return Err(format!(
+                            "texture coordinates overlap (objects `{}` and `{}`)",
+                            name(owner[i] as usize),
+                            name(t)
+                        ));
+                    }
+                    owner[i] = t as u32;
+                }
+            }
+        }
+    }
+    let groups = m
+        .texcoord_indices
+        .iter()
+        .map(|i| i.unwrap_or([0; 3]))
+        .collect();
+    Ok(Layout {
+        width: side,
+        height: side,
+        corners,
+        regions: vec![Region {
+            at: [0, 0],
+            size: [side, side],
+            triangles: (0..m.triangles.len() as u32).collect(),
+        }],
+        groups,
+        source: AtlasSource::Scene,
+    })
+}
+
+/// One region's texels (its rectangle, row-major), which of them hold a value, and how many
+/// texel centres lie on a triangle.
+fn fill_region(
+    region: &Region,
+    layout: &Layout,
     radiance: &dyn DiffuseRadiance,
-    s: &LightmapSettings,
+    padding: u32,
 ) -> (Vec<Rgb>, Vec<bool>, usize) {
-    let [w, h] = chart.size;
+    let [w, h] = region.size;
     let mut value = vec![Rgb::ZERO; (w * h) as usize];
     let mut filled = vec![false; (w * h) as usize];
-    let origin = Vec2::new(chart.at[0] as f32, chart.at[1] as f32);
-    let local = |p: Vec3| chart.atlas(p, s.texel_size, s.padding) - origin;
+    let origin = Vec2::new(region.at[0] as f32, region.at[1] as f32);
     let mut covered = 0;
-    for &t in &chart.triangles {
-        let [a, b, c] = scene.mesh.corners(t).map(local);
+    for &t in &region.triangles {
+        let [a, b, c] = layout.corners[t as usize].map(|p| p - origin);
         let det = (b - a).perp_dot(c - a);
         if det.abs() <= f32::MIN_POSITIVE {
             continue;
@@ -277,7 +446,7 @@ fn fill_chart(
             }
         }
         // A sliver may cover no texel centre: its centroid's texel still gets its light.
-        let centroid = (a + b + c) / 3.0;
+        let centroid = ((a + b + c) / 3.0).max(Vec2::ZERO);
         let (x, y) = (
             (centroid.x as u32).min(w - 1),
             (centroid.y as u32).min(h - 1),
@@ -290,7 +459,7 @@ fn fill_chart(
         }
     }
     // Dilation: each pass gives every empty texel the mean of its filled 8-neighbours.
-    for _ in 0..s.padding {
+    for _ in 0..padding {
         let (before_v, before_f) = (value.clone(), filled.clone());
         for y in 0..h {
             for x in 0..w {
@@ -332,6 +501,7 @@ struct LightmapExtras<'a> {
 struct LightmapExtrasBody<'a> {
     lightmap: &'static str,
     texcoord: u32,
+    atlas: &'a str,
     exposure: f32,
     radiance_unit: &'static str,
     texel_size: f32,
@@ -348,19 +518,24 @@ pub const PNG_FORMULA: &str = "sRGB-encoded 8-bit of min(1, exposure * L), L the
      leaving the surface in W/(m^2 sr); the HDR values are in the .exr beside the .glb";
 
 /// Bakes `solution` (anything that gives diffuse radiance on the scene's triangles) into a
-/// lightmap over generated charts of the scene's own triangles, and encodes it: the HDR EXR,
-/// the LDR PNG (with `mapping`) and a `.glb` of the scene's triangles (not the element mesh)
-/// whose `TEXCOORD_1` addresses the lightmap.
+/// lightmap over the scene's own triangles, and encodes it: the HDR EXR, the LDR PNG (with
+/// `mapping`) and a `.glb` of the scene's triangles (not the element mesh) whose `TEXCOORD_1`
+/// addresses the lightmap.
+///
+/// The atlas is the scene's own texture coordinates (an OBJ's `vt`) when every triangle has
+/// them, they lie in [0, 1] and no two triangles overlap (then the atlas is square, sized so
+/// that a texel covers `texel_size` x `texel_size` scene units on average); otherwise
+/// generated charts ([`AtlasSource`] says which, and why).
 ///
 /// The `.glb` has one mesh and node per object (named after it), `POSITION` in metres,
 /// `NORMAL` (the scene's shading normals), `TEXCOORD_1` (and `TEXCOORD_0`, the same atlas:
-/// glTF wants sets numbered from 0 and the scene has no UVs of its own), and one material: black base colour,
-/// metallic 0, roughness 1, and the PNG as `emissiveTexture` with `texCoord` 1 (emissive
-/// factor 1). Any glTF viewer then shows the baked light as the surface's emission without
-/// relighting it; engines with a lightmap slot take the same texture on UV set 1 (README,
-/// "Bakes for engines"). A vertex is written once per position, shading normal (normals within
-/// [`COPLANAR_COS`] count as one) and chart, so chart seams and creases split vertices and
-/// nothing else does.
+/// glTF wants sets numbered from 0), and one material: black base colour, metallic 0,
+/// roughness 1, and the PNG as `emissiveTexture` with `texCoord` 1 (emissive factor 1). Any
+/// glTF viewer then shows the baked light as the surface's emission without relighting it;
+/// engines with a lightmap slot take the same texture on UV set 1 (README, "Bakes for
+/// engines"). A vertex is written once per position, shading normal (normals within
+/// [`COPLANAR_COS`] count as one) and chart or texture coordinate, so UV seams and creases
+/// split vertices and nothing else does.
 pub fn bake_lightmap(
     radiance: &dyn DiffuseRadiance,
     scene: &Scene,
@@ -377,22 +552,26 @@ pub fn bake_lightmap(
             message: format!("texel size {} must be finite and > 0", s.texel_size),
         });
     }
-    let mut charts = charts(scene, s.texel_size, s.padding);
-    let (width, height) = pack(&mut charts, s.texel_size)?;
-    let filled: Vec<(Vec<Rgb>, Vec<bool>, usize)> = charts
+    let layout = match scene_layout(scene, &s) {
+        Ok(layout) => layout,
+        Err(why) => generated_layout(scene, &s, why)?,
+    };
+    let (width, height) = (layout.width, layout.height);
+    let filled: Vec<(Vec<Rgb>, Vec<bool>, usize)> = layout
+        .regions
         .par_iter()
-        .map(|c| fill_chart(c, scene, radiance, &s))
+        .map(|r| fill_region(r, &layout, radiance, s.padding))
         .collect();
     let mut image = Image::new(width, height);
     let mut covered_texels = 0;
-    for (c, (value, mask, covered)) in charts.iter().zip(&filled) {
+    for (r, (value, mask, covered)) in layout.regions.iter().zip(&filled) {
         covered_texels += covered;
-        let [w, h] = c.size;
+        let [w, h] = r.size;
         for y in 0..h {
             for x in 0..w {
                 let i = (y * w + x) as usize;
                 if mask[i] {
-                    let j = ((c.at[1] + y) * width + c.at[0] + x) as usize;
+                    let j = ((r.at[1] + y) * width + r.at[0] + x) as usize;
                     image.pixels_mut()[j] = value[i];
                 }
             }
@@ -415,13 +594,14 @@ pub fn bake_lightmap(
     let png =
         twopass_composite::write::encode_png(Path::new("lightmap.png"), &ldr, Some(&description))
             .map_err(encode_err)?;
-    let glb = encode_lightmap_glb(scene, &charts, &s, (width, height), &png, mapping)?;
+    let glb = encode_lightmap_glb(scene, &layout, &s, &png, mapping)?;
     Ok(Lightmap {
         width,
         height,
         radiance: image,
-        charts: charts.len(),
+        charts: layout.regions.len(),
         covered_texels,
+        atlas: layout.source,
         glb,
         exr,
         png,
@@ -430,9 +610,8 @@ pub fn bake_lightmap(
 
 fn encode_lightmap_glb(
     scene: &Scene,
-    charts: &[Chart],
+    layout: &Layout,
     s: &LightmapSettings,
-    (width, height): (u32, u32),
     png: &[u8],
     mapping: ColorMapping,
 ) -> Result<Vec<u8>, BakeError> {
@@ -457,31 +636,23 @@ fn encode_lightmap_glb(
         emissive_factor: json::material::EmissiveFactor([1.0; 3]),
         ..Default::default()
     });
-    let size = Vec2::new(width as f32, height as f32);
-    let mut chart_of = vec![0u32; m.triangles.len()];
-    for (i, c) in charts.iter().enumerate() {
-        for &t in &c.triangles {
-            chart_of[t as usize] = i as u32;
-        }
-    }
-    for (o, object) in scene.objects.iter().enumerate() {
+    let size = Vec2::new(layout.width as f32, layout.height as f32);
+    for object in &scene.objects {
         let mut shared = crate::vertex::SharedVertices::default();
         let (mut positions, mut normals, mut uvs, mut indices) =
             (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for t in object.triangles.clone() {
-            let chart = &charts[chart_of[t as usize] as usize];
-            debug_assert_eq!(chart.object, o as u32);
             let tri = m.triangles[t as usize];
             let nrm = m.normal_indices[t as usize];
             for k in 0..3 {
                 let normal = m.normals[nrm[k] as usize];
-                let group = chart_of[t as usize];
+                let group = layout.groups[t as usize][k];
                 let (v, new) = shared.get(group, tri[k], normal, positions.len() as u32);
                 if new {
                     let p = m.positions[tri[k] as usize];
                     positions.push((p.as_dvec3() * to_metres).as_vec3());
                     normals.push(normal);
-                    uvs.push(chart.atlas(p, s.texel_size, s.padding) / size);
+                    uvs.push(layout.corners[t as usize][k] / size);
                 }
                 indices.push(v);
             }
@@ -495,8 +666,7 @@ fn encode_lightmap_glb(
             &[
                 Attribute::Vec3(S::Positions, &positions),
                 Attribute::Vec3(S::Normals, &normals),
-                // glTF requires TEXCOORD_n to be continuous from 0; the scene keeps no UVs of
-                // its own, so set 0 is the same atlas (unique, usable for texture painting).
+                // glTF requires TEXCOORD_n to be continuous from 0; set 0 is the same atlas.
                 Attribute::Vec2(S::TexCoords(0), &uvs),
                 Attribute::Vec2(S::TexCoords(1), &uvs),
             ],
@@ -505,10 +675,12 @@ fn encode_lightmap_glb(
         );
     }
     let scene_name = scene.path.display().to_string();
+    let atlas = layout.source.describe();
     let extras = LightmapExtras {
         twopass: LightmapExtrasBody {
             lightmap: PNG_FORMULA,
             texcoord: 1,
+            atlas: &atlas,
             exposure: mapping.exposure,
             radiance_unit: "W/(m^2 sr)",
             texel_size: s.texel_size,

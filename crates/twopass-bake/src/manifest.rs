@@ -242,8 +242,11 @@ pub struct LightmapRecord {
     pub width: u32,
     /// Atlas height, texels.
     pub height: u32,
-    /// Charts (coplanar connected triangles) in the atlas.
+    /// Charts (coplanar connected triangles) in the atlas; 1 for the scene's own coordinates.
     pub charts: usize,
+    /// Where the texture coordinates come from (the scene's, or generated and why).
+    #[serde(default)]
+    pub atlas: String,
     /// Texels whose centre lies on a triangle.
     pub covered_texels: usize,
     /// How the PNG encodes radiance.

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
 use glam::{DVec2, Vec2, Vec3};
-use twopass_bake::lightmap::{Lightmap, LightmapSettings, bake_lightmap};
+use twopass_bake::lightmap::{AtlasSource, Lightmap, LightmapSettings, bake_lightmap};
 use twopass_bake::{self as bake, ColorMapping};
 use twopass_radiosity::{Options, Solution, Solver, Stop};
 use twopass_scene::Scene;
@@ -224,4 +224,106 @@ fn exr_and_png_read_back() {
         &blob[view.offset()..view.offset() + view.length()],
         lm.png.as_slice()
     );
+}
+
+/// A floor under a light, each an OBJ with its own `vt` (light's in `light_vt`), in metres.
+fn obj_scene(light_vt: [[f32; 2]; 4]) -> (tempfile::TempDir, Scene) {
+    let dir = tempfile::tempdir().unwrap();
+    let quad = |name: &str, v: [[f32; 3]; 4], vt: [[f32; 2]; 4]| {
+        let mut text = String::new();
+        for p in v {
+            text += &format!("v {} {} {}\n", p[0], p[1], p[2]);
+        }
+        for t in vt {
+            text += &format!("vt {} {}\n", t[0], t[1]);
+        }
+        text += "f 1/1 2/2 3/3 4/4\n";
+        std::fs::write(dir.path().join(name), text).unwrap();
+    };
+    quad(
+        "floor.obj",
+        [
+            [0.0, 0.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [1.0, 0.0, 1.0],
+            [1.0, 0.0, 0.0],
+        ],
+        [[0.0, 0.0], [0.0, 0.5], [0.5, 0.5], [0.5, 0.0]],
+    );
+    quad(
+        "light.obj",
+        [
+            [0.3, 0.9, 0.3],
+            [0.7, 0.9, 0.3],
+            [0.7, 0.9, 0.7],
+            [0.3, 0.9, 0.7],
+        ],
+        light_vt,
+    );
+    let toml = "version = 1\n[camera]\nposition = [0.5, 0.5, -2]\nlook_at = [0.5, 0.5, 0]\n\
+                fov_y = 40\n[[material]]\nname = \"white\"\ntype = \"lambert\"\ndiffuse = 0.5\n\
+                [[object]]\nname = \"floor\"\nmaterial = \"white\"\n\
+                shape = { type = \"obj\", file = \"floor.obj\" }\n\
+                [[object]]\nname = \"light\"\nmaterial = \"white\"\nemission = [10, 10, 10]\n\
+                shape = { type = \"obj\", file = \"light.obj\" }\n";
+    let path = dir.path().join("scene.toml");
+    std::fs::write(&path, toml).unwrap();
+    let (scene, _) = twopass_scene::load(&path).unwrap();
+    (dir, scene)
+}
+
+fn bake_obj(scene: &Scene) -> Lightmap {
+    let mut solver = Solver::new(scene, Options::default()).unwrap();
+    solver.run(|_| std::ops::ControlFlow::Continue(()));
+    let solution = solver.solution();
+    let settings = LightmapSettings {
+        texel_size: 0.01,
+        padding: 2,
+    };
+    bake_lightmap(&solution, scene, &settings, ColorMapping::auto(&solution)).unwrap()
+}
+
+#[test]
+fn obj_texture_coordinates_become_the_lightmap_atlas_when_they_fit() {
+    let (_dir, scene) = obj_scene([[0.6, 0.6], [0.9, 0.6], [0.9, 0.9], [0.6, 0.9]]);
+    let lm = bake_obj(&scene);
+    assert_eq!(lm.atlas, AtlasSource::Scene);
+    let gltf = gltf::Gltf::from_slice(&lm.glb).unwrap();
+    let blob = gltf.blob.as_deref().unwrap();
+    let floor = gltf.meshes().find(|m| m.name() == Some("floor")).unwrap();
+    let prim = floor.primitives().next().unwrap();
+    let reader = prim.reader(|_| Some(blob));
+    let mut uv: Vec<[f32; 2]> = reader.read_tex_coords(1).unwrap().into_f32().collect();
+    uv.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    // The OBJ's vt with v flipped (OBJ's v points up, glTF's down).
+    assert_eq!(uv, [[0.0, 0.5], [0.0, 1.0], [0.5, 0.5], [0.5, 1.0]]);
+    // The floor under the light is lit where its coordinates put it, and the light is bright
+    // where its coordinates put it.
+    let at = |u: f32, v: f32| {
+        let (x, y) = (
+            (u * lm.width as f32) as u32,
+            ((1.0 - v) * lm.height as f32) as u32,
+        );
+        lm.radiance.pixels()[(y * lm.width + x) as usize]
+    };
+    assert!(at(0.25, 0.25).min_element() > 0.0);
+    assert!(at(0.75, 0.75).min_element() >= 10.0, "{}", at(0.75, 0.75));
+    // Outside every island, nothing (beyond the dilated padding).
+    assert_eq!(at(0.75, 0.25), Vec3::ZERO);
+}
+
+#[test]
+fn overlapping_obj_texture_coordinates_fall_back_to_generated_charts() {
+    let (_dir, scene) = obj_scene([[0.1, 0.1], [0.4, 0.1], [0.4, 0.4], [0.1, 0.4]]);
+    let lm = bake_obj(&scene);
+    match &lm.atlas {
+        AtlasSource::Generated(why) => assert!(why.contains("overlap"), "{why}"),
+        other => panic!("{other:?}"),
+    }
+    // The Cornell box's built-in shapes have no coordinates at all.
+    let (_, _, cornell) = baked();
+    match &cornell.atlas {
+        AtlasSource::Generated(why) => assert!(why.contains("no texture coordinates"), "{why}"),
+        other => panic!("{other:?}"),
+    }
 }

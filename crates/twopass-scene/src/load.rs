@@ -938,6 +938,11 @@ impl Loader {
         mesh.normals
             .extend(local.normals.iter().map(|n| transform.normal(*n)));
         let object = objects.len() as u32;
+        let uv_base = mesh.texcoords.len() as u32;
+        let has_uv = local.texcoord_indices.len() == local.triangles.len();
+        if has_uv {
+            mesh.texcoords.extend_from_slice(&local.texcoords);
+        }
         let (mut dropped, mut first) = (0, 0);
         for (i, tri) in local.triangles.iter().enumerate() {
             let mut t = tri.map(|v| v + base);
@@ -946,9 +951,13 @@ impl Loader {
             } else {
                 [0; 3]
             };
+            let mut uv = has_uv.then(|| local.texcoord_indices[i].map(|k| k + uv_base));
             if transform.flips {
                 t.swap(1, 2);
                 nt.swap(1, 2);
+                if let Some(uv) = &mut uv {
+                    uv.swap(1, 2);
+                }
             }
             let Some((twice_area, n)) = triangle_normal(t.map(|v| mesh.positions[v as usize]))
             else {
@@ -965,6 +974,7 @@ impl Loader {
             }
             mesh.triangles.push(t);
             mesh.normal_indices.push(nt);
+            mesh.texcoord_indices.push(uv);
             mesh.geometric_normals.push(n);
             mesh.areas.push((0.5 * twice_area) as f32);
             mesh.triangle_object.push(object);

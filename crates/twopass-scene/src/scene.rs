@@ -68,6 +68,11 @@ pub struct Mesh {
     pub areas: Vec<f32>,
     /// Object of each triangle (index into [`Scene::objects`]).
     pub triangle_object: Vec<u32>,
+    /// Texture coordinates from the meshes that have them (an OBJ's `vt`, v up, as written).
+    pub texcoords: Vec<Vec2>,
+    /// Texture-coordinate indices of each triangle's corners (into [`Mesh::texcoords`]), or
+    /// `None` for a triangle without them (built-in shapes, OBJ groups lacking `vt`).
+    pub texcoord_indices: Vec<Option<[u32; 3]>>,
 }
 
 impl Mesh {

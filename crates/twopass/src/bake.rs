@@ -79,8 +79,8 @@ pub struct BakeArgs {
     /// [default: auto, the 99th-percentile vertex luminance maps to 1].
     #[arg(long, value_name = "SR_M2_PER_W", value_parser = parse_exposure)]
     pub exposure: Option<f32>,
-    /// Also bake a lightmap: `<stem>.lightmap.glb` (the scene's own triangles with a generated
-    /// UV atlas on TEXCOORD_1 and the lightmap as an embedded PNG emissive texture),
+    /// Also bake a lightmap: `<stem>.lightmap.glb` (the scene's own triangles with a UV atlas
+    /// on TEXCOORD_1, the OBJ's own texture coordinates when they fit, else generated, and the lightmap as an embedded PNG emissive texture),
     /// `<stem>.lightmap.exr` (HDR radiance, W/(m^2 sr)) and `<stem>.lightmap.png` (the LDR
     /// texture, exposure-scaled sRGB).
     #[arg(long)]
@@ -484,6 +484,7 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
             width: lm.width,
             height: lm.height,
             charts: lm.charts,
+            atlas: lm.atlas.describe(),
             covered_texels: lm.covered_texels,
             png: bake::lightmap::PNG_FORMULA.into(),
             seconds: started.elapsed().as_secs_f64(),
