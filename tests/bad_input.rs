@@ -50,6 +50,26 @@ fn unknown_key_is_refused_with_its_line() {
 }
 
 #[test]
+fn unknown_unit_is_refused_with_its_line_and_the_known_units() {
+    match err("unknown-unit.toml") {
+        SceneError::Toml {
+            path,
+            line,
+            message,
+            ..
+        } => {
+            assert!(path.ends_with("unknown-unit.toml"));
+            assert_eq!(line, 3, "the line of `unit`");
+            assert!(message.contains("furlong"), "{message}");
+            for known in ["mm", "cm", "m", "in", "ft"] {
+                assert!(message.contains(&format!("`{known}`")), "{message}");
+            }
+        }
+        e => panic!("wrong error: {e:?}"),
+    }
+}
+
+#[test]
 fn unknown_material_names_object_and_line() {
     match err("unknown-material.toml") {
         SceneError::UnknownMaterial {

@@ -162,8 +162,24 @@ fn every_scene_in_the_repository_loads() {
                 "{} has no light",
                 path.display()
             );
+            // Every scene here is a Cornell room, about 0.55 m wide: stated in millimetres.
+            assert_eq!(
+                scene.unit,
+                twopass_scene::Unit::Millimetre,
+                "{}",
+                path.display()
+            );
+            let width_m = (scene.bounds.max.x - scene.bounds.min.x) as f64 * scene.unit.metres();
+            assert!(
+                (0.5..0.6).contains(&width_m),
+                "{}: {width_m} m",
+                path.display()
+            );
         }
     }
+    // A bare OBJ states no unit: metres.
+    let (bare, _) = load(scene_path("meshes/cornell-box.obj")).unwrap();
+    assert_eq!(bare.unit, twopass_scene::Unit::Metre);
 }
 
 #[test]

@@ -47,3 +47,40 @@ impl ColorMapping {
     pub const FORMULA: &'static str = "COLOR_0 = min(1, exposure * L) per linear RGB channel, \
          L = B / pi the radiance leaving the surface in W/(m^2 sr)";
 }
+
+/// The radiance a solution displays at each element-mesh vertex, W/(m^2 sr) per linear RGB
+/// channel, HDR, with its parts: `radiance = (B + ambient) / pi` (what [`ColorMapping`] maps),
+/// `direct` the light reflected once from the emitters, `indirect` the light reflected two or
+/// more times plus the ambient estimate of a partial solve (as
+/// [`DiffuseRadiance::indirect_radiance`](twopass_scene::DiffuseRadiance::indirect_radiance)).
+/// `radiance - direct - indirect` is the emitted radiance (zero off the emitters).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RadianceParts {
+    /// Total displayed radiance per vertex.
+    pub radiance: Vec<Rgb>,
+    /// Once-reflected part per vertex.
+    pub direct: Vec<Rgb>,
+    /// Part reflected two or more times (ambient included) per vertex.
+    pub indirect: Vec<Rgb>,
+}
+
+impl RadianceParts {
+    /// The parts of `solution`, from its per-vertex radiosity split (W/m^2) divided by pi.
+    pub fn of(solution: &Solution) -> Self {
+        let to_l = std::f32::consts::FRAC_1_PI;
+        Self {
+            radiance: solution
+                .vertex_radiosity()
+                .iter()
+                .map(|b| *b * to_l)
+                .collect(),
+            direct: solution.direct().iter().map(|b| *b * to_l).collect(),
+            indirect: solution
+                .indirect()
+                .iter()
+                .zip(solution.ambient())
+                .map(|(i, a)| (*i + *a) * to_l)
+                .collect(),
+        }
+    }
+}

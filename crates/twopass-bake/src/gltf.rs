@@ -1,16 +1,20 @@
-//! The glTF 2.0 binary (`.glb`): the displayed radiance as `COLOR_0` on one mesh per object.
+//! The glTF 2.0 binary (`.glb`): the element mesh with its radiance per vertex, one mesh per
+//! object, in metres; and the small builder the other `.glb` outputs (lightmap, per-vertex bake
+//! on the user's mesh) share.
 
 use std::path::PathBuf;
 
 use glam::Vec3;
 use gltf_json as json;
+use json::validation::Checked::Valid;
+use json::validation::USize64;
 use serde::Serialize;
 use twopass_brdf::Rgb;
 use twopass_radiosity::Solution;
 use twopass_radiosity::element::ElementMesh;
 use twopass_scene::Scene;
 
-use crate::colour::ColorMapping;
+use crate::colour::{ColorMapping, RadianceParts};
 use crate::error::BakeError;
 
 /// An encoded `.glb` and what the colour mapping did.
@@ -25,6 +29,11 @@ pub struct Glb {
     /// Triangles (elements) written.
     pub triangles: usize,
 }
+
+/// The custom vertex attributes every baked `.glb` carries beside `COLOR_0` (glTF 2.0 allows
+/// application-specific attributes whose names start with an underscore): float `VEC3`,
+/// linear RGB radiance in W/(m^2 sr), HDR (not exposed, not clipped).
+pub const HDR_ATTRIBUTES: [&str; 3] = ["_RADIANCE", "_DIRECT", "_INDIRECT"];
 
 /// One object's part of the glb: local vertex list (mesh vertex ids) and local indices.
 struct ObjectPart {
@@ -79,51 +88,253 @@ fn f32_bytes(out: &mut Vec<u8>, values: impl IntoIterator<Item = f32>) {
     }
 }
 
-/// The glTF asset extras: how to read `COLOR_0` back as radiance.
-#[derive(Serialize)]
-struct GlbExtras<'a> {
-    twopass: GlbExtrasBody<'a>,
+/// A glTF document under construction with its binary chunk: buffer views, accessors,
+/// meshes and nodes in one buffer, 4-byte aligned throughout.
+pub(crate) struct GlbBuilder {
+    pub(crate) root: json::Root,
+    bin: Vec<u8>,
+    nodes: Vec<json::Index<json::Node>>,
 }
 
-#[derive(Serialize)]
-struct GlbExtrasBody<'a> {
-    color_0: &'static str,
-    exposure: f32,
-    radiance_unit: &'static str,
-    position_unit: &'static str,
-    clamped_vertices: usize,
-    scene: &'a str,
+/// One vertex stream of a primitive.
+pub(crate) enum Attribute<'a> {
+    /// `VEC3` floats (positions get min/max bounds).
+    Vec3(json::mesh::Semantic, &'a [Vec3]),
+    /// `VEC2` floats (texture coordinates).
+    Vec2(json::mesh::Semantic, &'a [glam::Vec2]),
 }
 
-/// Encodes the solution's displayed radiance (ambient included) as a glTF 2.0 binary: one
-/// mesh and node per scene object (named after it) with `POSITION` (scene units), unit
-/// `NORMAL`, `COLOR_0` from `mapping` and `u32` indices, all sharing one unlit material
-/// (`KHR_materials_unlit`, white base colour) so engines show `COLOR_0` without relighting.
-/// The mapping is recorded in the asset's `extras.twopass`. Meshes come in object order
-/// (objects without elements are left out); each lists the mesh vertices its elements use in
-/// ascending vertex order and its elements in node order.
-pub fn encode_glb(
-    solution: &Solution,
-    scene: &Scene,
-    mapping: ColorMapping,
-) -> Result<Glb, BakeError> {
-    use json::validation::Checked::Valid;
-    use json::validation::USize64;
+impl GlbBuilder {
+    pub(crate) fn new() -> Self {
+        Self {
+            root: json::Root::default(),
+            bin: Vec::new(),
+            nodes: Vec::new(),
+        }
+    }
 
-    let mesh = solution.mesh();
-    let radiance: Vec<Rgb> = solution
-        .vertex_radiosity()
-        .iter()
-        .map(|b| *b * std::f32::consts::FRAC_1_PI)
-        .collect();
-    let parts = object_parts(mesh, scene);
-    let mut root = json::Root::default();
-    let mut bin: Vec<u8> = Vec::new();
-    let mut clamped_vertices = 0;
-    let (mut n_vertices, mut n_triangles) = (0, 0);
+    /// Appends `data` (padded to 4 bytes) as a buffer view.
+    pub(crate) fn view(
+        &mut self,
+        data: &[u8],
+        target: Option<json::buffer::Target>,
+    ) -> json::Index<json::buffer::View> {
+        let offset = self.bin.len();
+        self.bin.extend_from_slice(data);
+        while !self.bin.len().is_multiple_of(4) {
+            self.bin.push(0);
+        }
+        self.root.push(json::buffer::View {
+            buffer: json::Index::new(0),
+            byte_length: USize64::from(data.len()),
+            byte_offset: Some(USize64::from(offset)),
+            byte_stride: None,
+            extensions: None,
+            extras: None,
+            name: None,
+            target: target.map(Valid),
+        })
+    }
+
+    fn accessor(
+        &mut self,
+        data: &[u8],
+        count: usize,
+        ty: json::accessor::Type,
+        component: json::accessor::ComponentType,
+        target: json::buffer::Target,
+        bounds: Option<(json::Value, json::Value)>,
+    ) -> json::Index<json::Accessor> {
+        let view = self.view(data, Some(target));
+        let (min, max) = match bounds {
+            Some((a, b)) => (Some(a), Some(b)),
+            None => (None, None),
+        };
+        self.root.push(json::Accessor {
+            buffer_view: Some(view),
+            byte_offset: Some(USize64(0)),
+            count: USize64::from(count),
+            component_type: Valid(json::accessor::GenericComponentType(component)),
+            extensions: None,
+            extras: None,
+            type_: Valid(ty),
+            min,
+            max,
+            name: None,
+            normalized: false,
+            sparse: None,
+        })
+    }
+
+    /// Embeds a PNG in the binary chunk as an image with a texture (bilinear, clamped to the
+    /// edge: a lightmap's charts must not wrap).
+    pub(crate) fn png_texture(&mut self, name: &str, png: &[u8]) -> json::Index<json::Texture> {
+        let view = self.view(png, None);
+        let image = self.root.push(json::Image {
+            buffer_view: Some(view),
+            mime_type: Some(json::image::MimeType("image/png".into())),
+            name: Some(name.to_owned()),
+            uri: None,
+            extensions: None,
+            extras: None,
+        });
+        use json::texture::{MagFilter, MinFilter, WrappingMode};
+        let sampler = self.root.push(json::texture::Sampler {
+            mag_filter: Some(Valid(MagFilter::Linear)),
+            min_filter: Some(Valid(MinFilter::Linear)),
+            wrap_s: Valid(WrappingMode::ClampToEdge),
+            wrap_t: Valid(WrappingMode::ClampToEdge),
+            name: None,
+            extensions: None,
+            extras: None,
+        });
+        self.root.push(json::Texture {
+            name: Some(name.to_owned()),
+            sampler: Some(sampler),
+            source: image,
+            extensions: None,
+            extras: None,
+        })
+    }
+
+    /// Adds a mesh of one indexed triangle primitive and a node showing it.
+    pub(crate) fn mesh(
+        &mut self,
+        name: &str,
+        attributes: &[Attribute<'_>],
+        indices: &[u32],
+        material: json::Index<json::Material>,
+    ) {
+        use json::accessor::{ComponentType as C, Type as T};
+        use json::buffer::Target::ArrayBuffer;
+        let mut map = std::collections::BTreeMap::new();
+        for a in attributes {
+            let mut data = Vec::new();
+            let (semantic, accessor) = match a {
+                Attribute::Vec3(semantic, values) => {
+                    f32_bytes(&mut data, values.iter().flat_map(|v| v.to_array()));
+                    let bounds = (*semantic == json::mesh::Semantic::Positions).then(|| {
+                        let min = values.iter().fold(Vec3::INFINITY, |m, v| m.min(*v));
+                        let max = values.iter().fold(Vec3::NEG_INFINITY, |m, v| m.max(*v));
+                        (
+                            json::Value::from(min.to_array().to_vec()),
+                            json::Value::from(max.to_array().to_vec()),
+                        )
+                    });
+                    let acc =
+                        self.accessor(&data, values.len(), T::Vec3, C::F32, ArrayBuffer, bounds);
+                    (semantic.clone(), acc)
+                }
+                Attribute::Vec2(semantic, values) => {
+                    f32_bytes(&mut data, values.iter().flat_map(|v| v.to_array()));
+                    let acc =
+                        self.accessor(&data, values.len(), T::Vec2, C::F32, ArrayBuffer, None);
+                    (semantic.clone(), acc)
+                }
+            };
+            map.insert(Valid(semantic), accessor);
+        }
+        let mut data = Vec::with_capacity(indices.len() * 4);
+        for i in indices {
+            data.extend_from_slice(&i.to_le_bytes());
+        }
+        let indices = self.accessor(
+            &data,
+            indices.len(),
+            T::Scalar,
+            C::U32,
+            json::buffer::Target::ElementArrayBuffer,
+            None,
+        );
+        let primitive = json::mesh::Primitive {
+            attributes: map,
+            extensions: None,
+            extras: None,
+            indices: Some(indices),
+            material: Some(material),
+            mode: Valid(json::mesh::Mode::Triangles),
+            targets: None,
+        };
+        let mesh = self.root.push(json::Mesh {
+            extensions: None,
+            extras: None,
+            name: Some(name.to_owned()),
+            primitives: vec![primitive],
+            weights: None,
+        });
+        let node = self.root.push(json::Node {
+            mesh: Some(mesh),
+            name: Some(name.to_owned()),
+            ..Default::default()
+        });
+        self.nodes.push(node);
+    }
+
+    /// The document as `.glb` bytes: one scene of every node, `asset.extras` = `extras`.
+    pub(crate) fn finish(
+        mut self,
+        scene_name: &str,
+        extras: &impl Serialize,
+    ) -> Result<Vec<u8>, BakeError> {
+        let encode_err = |message: String| BakeError::Encode {
+            path: PathBuf::from("glb"),
+            message,
+        };
+        let nodes = std::mem::take(&mut self.nodes);
+        let scene_index = self.root.push(json::Scene {
+            extensions: None,
+            extras: None,
+            name: Some(scene_name.to_owned()),
+            nodes,
+        });
+        self.root.scene = Some(scene_index);
+        let bin = self.bin;
+        if !bin.is_empty() {
+            self.root.buffers.push(json::Buffer {
+                byte_length: USize64::from(bin.len()),
+                extensions: None,
+                extras: None,
+                name: None,
+                uri: None,
+            });
+        }
+        self.root.asset = json::Asset {
+            generator: Some(format!("twopass {}", env!("CARGO_PKG_VERSION"))),
+            version: "2.0".into(),
+            extras: Some(
+                serde_json::value::to_raw_value(extras).map_err(|e| encode_err(e.to_string()))?,
+            ),
+            ..Default::default()
+        };
+        let mut json_bytes = self.root.to_vec().map_err(|e| encode_err(e.to_string()))?;
+        while !json_bytes.len().is_multiple_of(4) {
+            json_bytes.push(b' ');
+        }
+        let total = 12 + 8 + json_bytes.len() + if bin.is_empty() { 0 } else { 8 + bin.len() };
+        let total32 = u32::try_from(total)
+            .map_err(|_| encode_err(format!("{total} bytes exceed the 4 GiB limit of .glb")))?;
+        let mut bytes = Vec::with_capacity(total);
+        bytes.extend_from_slice(b"glTF");
+        bytes.extend_from_slice(&2u32.to_le_bytes());
+        bytes.extend_from_slice(&total32.to_le_bytes());
+        bytes.extend_from_slice(&(json_bytes.len() as u32).to_le_bytes());
+        bytes.extend_from_slice(b"JSON");
+        bytes.extend_from_slice(&json_bytes);
+        if !bin.is_empty() {
+            bytes.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+            bytes.extend_from_slice(b"BIN\0");
+            bytes.extend_from_slice(&bin);
+        }
+        Ok(bytes)
+    }
+}
+
+/// The unlit material of the per-vertex bakes: white base colour times `COLOR_0`, shown as it
+/// is (`KHR_materials_unlit`).
+pub(crate) fn unlit_vertex_colour_material(b: &mut GlbBuilder) -> json::Index<json::Material> {
     // The extension struct's fields depend on which gltf-json features the build enables.
     #[allow(clippy::needless_update)]
-    let material = root.push(json::Material {
+    let material = b.root.push(json::Material {
         name: Some("twopass baked radiance (unlit, COLOR_0)".into()),
         pbr_metallic_roughness: json::material::PbrMetallicRoughness {
             base_color_factor: json::material::PbrBaseColorFactor([1.0; 4]),
@@ -137,172 +348,138 @@ pub fn encode_glb(
         }),
         ..Default::default()
     });
-    let mut scene_nodes = Vec::new();
-    for part in &parts {
-        let n = part.vertices.len();
-        let (mut min, mut max) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-        let mut attrs: [Vec<u8>; 3] = Default::default();
-        for &v in &part.vertices {
-            let vert = &mesh.vertices[v as usize];
-            min = min.min(vert.position);
-            max = max.max(vert.position);
-            f32_bytes(&mut attrs[0], vert.position.to_array());
-            let normal = vert.normal.try_normalize().unwrap_or(Vec3::Z);
-            f32_bytes(&mut attrs[1], normal.to_array());
-            let (c, clipped) = mapping.color(radiance[v as usize]);
-            clamped_vertices += usize::from(clipped);
-            f32_bytes(&mut attrs[2], c.to_array());
-        }
-        let mut indices = Vec::with_capacity(part.indices.len() * 4);
-        for &i in &part.indices {
-            indices.extend_from_slice(&i.to_le_bytes());
-        }
-        n_vertices += n;
-        n_triangles += part.indices.len() / 3;
-        // Every view is a multiple of 4 bytes long, so all offsets stay 4-byte aligned.
-        let mut view = |root: &mut json::Root, data: &[u8], target| {
-            let offset = bin.len();
-            bin.extend_from_slice(data);
-            root.push(json::buffer::View {
-                buffer: json::Index::new(0),
-                byte_length: USize64::from(data.len()),
-                byte_offset: Some(USize64::from(offset)),
-                byte_stride: None,
-                extensions: None,
-                extras: None,
-                name: None,
-                target: Some(Valid(target)),
-            })
+    if !b
+        .root
+        .extensions_used
+        .iter()
+        .any(|e| e == "KHR_materials_unlit")
+    {
+        b.root.extensions_used.push("KHR_materials_unlit".into());
+    }
+    material
+}
+
+/// A radiance attribute semantic (`_RADIANCE`, ...).
+pub(crate) fn custom(name: &str) -> json::mesh::Semantic {
+    json::mesh::Semantic::Extras(name.trim_start_matches('_').to_owned())
+}
+
+/// The glTF asset extras of a per-vertex bake: how to read its colours back as radiance.
+#[derive(Serialize)]
+pub(crate) struct GlbExtras<'a> {
+    pub(crate) twopass: GlbExtrasBody<'a>,
+}
+
+#[derive(Serialize)]
+pub(crate) struct GlbExtrasBody<'a> {
+    pub(crate) color_0: &'static str,
+    pub(crate) exposure: f32,
+    pub(crate) radiance_attributes: &'static str,
+    pub(crate) radiance_unit: &'static str,
+    pub(crate) position_unit: &'static str,
+    pub(crate) scene_unit: &'static str,
+    pub(crate) metres_per_scene_unit: f64,
+    pub(crate) clamped_vertices: usize,
+    pub(crate) scene: &'a str,
+}
+
+/// What `_RADIANCE`, `_DIRECT` and `_INDIRECT` hold, as recorded in the asset extras.
+pub(crate) const RADIANCE_ATTRIBUTES: &str = "_RADIANCE: HDR radiance L = B / pi leaving the \
+     surface (float VEC3, linear RGB, not clipped); _DIRECT: its part reflected once from the \
+     emitters; _INDIRECT: two or more bounces (ambient term included); _RADIANCE - _DIRECT - \
+     _INDIRECT = emission";
+
+/// Encodes the solution's displayed radiance (ambient included) as a glTF 2.0 binary: one
+/// mesh and node per scene object (named after it) with `POSITION` (metres, converted from the
+/// scene's [`Unit`](twopass_scene::Unit)), unit `NORMAL`, `COLOR_0` from `mapping` (linear,
+/// float, exposure-scaled and clipped at 1 for display), the HDR radiance and its parts as
+/// the custom attributes [`HDR_ATTRIBUTES`] (W/(m^2 sr), see [`RadianceParts`]), and `u32`
+/// indices, all sharing one unlit material (`KHR_materials_unlit`, white base colour) so
+/// engines show `COLOR_0` without relighting. The mapping and units are recorded in the
+/// asset's `extras.twopass`. Meshes come in object order (objects without elements are left
+/// out); each lists the mesh vertices its elements use in ascending vertex order and its
+/// elements in node order.
+pub fn encode_glb(
+    solution: &Solution,
+    scene: &Scene,
+    mapping: ColorMapping,
+) -> Result<Glb, BakeError> {
+    let mesh = solution.mesh();
+    let parts = RadianceParts::of(solution);
+    let objects = object_parts(mesh, scene);
+    // glTF positions are metres (glTF 2.0, "Coordinate System and Units"): converted here
+    // rather than through a root-node scale, so every reader (engines that ignore a root
+    // transform, the accessor bounds, measurements in a DCC tool) sees metres.
+    let to_metres = scene.unit.metres();
+    let mut b = GlbBuilder::new();
+    let material = unlit_vertex_colour_material(&mut b);
+    let mut clamped_vertices = 0;
+    let (mut n_vertices, mut n_triangles) = (0, 0);
+    for part in &objects {
+        let pick = |values: &[Rgb]| -> Vec<Vec3> {
+            part.vertices.iter().map(|&v| values[v as usize]).collect()
         };
-        let views = [
-            view(&mut root, &attrs[0], json::buffer::Target::ArrayBuffer),
-            view(&mut root, &attrs[1], json::buffer::Target::ArrayBuffer),
-            view(&mut root, &attrs[2], json::buffer::Target::ArrayBuffer),
-            view(
-                &mut root,
-                &indices,
-                json::buffer::Target::ElementArrayBuffer,
-            ),
-        ];
-        let accessor = |root: &mut json::Root, view, count, ty, component, bounds: Option<_>| {
-            let (min, max) = match bounds {
-                Some((a, b)) => (Some(a), Some(b)),
-                None => (None, None),
-            };
-            root.push(json::Accessor {
-                buffer_view: Some(view),
-                byte_offset: Some(USize64(0)),
-                count: USize64::from(count),
-                component_type: Valid(json::accessor::GenericComponentType(component)),
-                extensions: None,
-                extras: None,
-                type_: Valid(ty),
-                min,
-                max,
-                name: None,
-                normalized: false,
-                sparse: None,
+        let positions: Vec<Vec3> = part
+            .vertices
+            .iter()
+            .map(|&v| (mesh.vertices[v as usize].position.as_dvec3() * to_metres).as_vec3())
+            .collect();
+        let normals: Vec<Vec3> = part
+            .vertices
+            .iter()
+            .map(|&v| {
+                mesh.vertices[v as usize]
+                    .normal
+                    .try_normalize()
+                    .unwrap_or(Vec3::Z)
             })
-        };
-        use json::accessor::{ComponentType as C, Type as T};
-        let bounds = (
-            json::Value::from(min.to_array().to_vec()),
-            json::Value::from(max.to_array().to_vec()),
-        );
-        let positions = accessor(&mut root, views[0], n, T::Vec3, C::F32, Some(bounds));
-        let normals = accessor(&mut root, views[1], n, T::Vec3, C::F32, None);
-        let colors = accessor(&mut root, views[2], n, T::Vec3, C::F32, None);
-        let index_count = part.indices.len();
-        let indices = accessor(&mut root, views[3], index_count, T::Scalar, C::U32, None);
+            .collect();
+        let radiance = pick(&parts.radiance);
+        let colours: Vec<Vec3> = radiance
+            .iter()
+            .map(|l| {
+                let (c, clipped) = mapping.color(*l);
+                clamped_vertices += usize::from(clipped);
+                c
+            })
+            .collect();
+        let (direct, indirect) = (pick(&parts.direct), pick(&parts.indirect));
+        use json::mesh::Semantic as S;
         let name = scene
             .objects
             .get(part.object as usize)
             .map_or_else(|| format!("object {}", part.object), |o| o.name.clone());
-        let primitive = json::mesh::Primitive {
-            attributes: [
-                (Valid(json::mesh::Semantic::Positions), positions),
-                (Valid(json::mesh::Semantic::Normals), normals),
-                (Valid(json::mesh::Semantic::Colors(0)), colors),
-            ]
-            .into_iter()
-            .collect(),
-            extensions: None,
-            extras: None,
-            indices: Some(indices),
-            material: Some(material),
-            mode: Valid(json::mesh::Mode::Triangles),
-            targets: None,
-        };
-        let mesh_index = root.push(json::Mesh {
-            extensions: None,
-            extras: None,
-            name: Some(name.clone()),
-            primitives: vec![primitive],
-            weights: None,
-        });
-        scene_nodes.push(root.push(json::Node {
-            mesh: Some(mesh_index),
-            name: Some(name),
-            ..Default::default()
-        }));
+        b.mesh(
+            &name,
+            &[
+                Attribute::Vec3(S::Positions, &positions),
+                Attribute::Vec3(S::Normals, &normals),
+                Attribute::Vec3(S::Colors(0), &colours),
+                Attribute::Vec3(custom(HDR_ATTRIBUTES[0]), &radiance),
+                Attribute::Vec3(custom(HDR_ATTRIBUTES[1]), &direct),
+                Attribute::Vec3(custom(HDR_ATTRIBUTES[2]), &indirect),
+            ],
+            &part.indices,
+            material,
+        );
+        n_vertices += part.vertices.len();
+        n_triangles += part.indices.len() / 3;
     }
-    let scene_index = root.push(json::Scene {
-        extensions: None,
-        extras: None,
-        name: Some(scene.path.display().to_string()),
-        nodes: scene_nodes,
-    });
-    root.scene = Some(scene_index);
-    root.buffers.push(json::Buffer {
-        byte_length: USize64::from(bin.len()),
-        extensions: None,
-        extras: None,
-        name: None,
-        uri: None,
-    });
-    root.extensions_used = vec!["KHR_materials_unlit".into()];
     let scene_name = scene.path.display().to_string();
     let extras = GlbExtras {
         twopass: GlbExtrasBody {
             color_0: ColorMapping::FORMULA,
             exposure: mapping.exposure,
+            radiance_attributes: RADIANCE_ATTRIBUTES,
             radiance_unit: "W/(m^2 sr)",
-            position_unit: "scene units",
+            position_unit: "m",
+            scene_unit: scene.unit.symbol(),
+            metres_per_scene_unit: to_metres,
             clamped_vertices,
             scene: &scene_name,
         },
     };
-    let encode_err = |message: String| BakeError::Encode {
-        path: PathBuf::from("glb"),
-        message,
-    };
-    root.asset = json::Asset {
-        generator: Some(format!("twopass {}", env!("CARGO_PKG_VERSION"))),
-        version: "2.0".into(),
-        extras: Some(
-            serde_json::value::to_raw_value(&extras).map_err(|e| encode_err(e.to_string()))?,
-        ),
-        ..Default::default()
-    };
-    let mut json_bytes = root.to_vec().map_err(|e| encode_err(e.to_string()))?;
-    while json_bytes.len() % 4 != 0 {
-        json_bytes.push(b' ');
-    }
-    let total = 12 + 8 + json_bytes.len() + if bin.is_empty() { 0 } else { 8 + bin.len() };
-    let total32 = u32::try_from(total)
-        .map_err(|_| encode_err(format!("{total} bytes exceed the 4 GiB limit of .glb")))?;
-    let mut bytes = Vec::with_capacity(total);
-    bytes.extend_from_slice(b"glTF");
-    bytes.extend_from_slice(&2u32.to_le_bytes());
-    bytes.extend_from_slice(&total32.to_le_bytes());
-    bytes.extend_from_slice(&(json_bytes.len() as u32).to_le_bytes());
-    bytes.extend_from_slice(b"JSON");
-    bytes.extend_from_slice(&json_bytes);
-    if !bin.is_empty() {
-        bytes.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-        bytes.extend_from_slice(b"BIN\0");
-        bytes.extend_from_slice(&bin);
-    }
+    let bytes = b.finish(&scene_name, &extras)?;
     Ok(Glb {
         bytes,
         clamped_vertices,

@@ -4,13 +4,16 @@
 //!
 //! | output | what it holds | colour |
 //! | --- | --- | --- |
-//! | glTF 2.0 binary (`.glb`, [`encode_glb`]) | one mesh and node per scene object: `POSITION`, `NORMAL`, `COLOR_0`, `u32` indices; one unlit material (`KHR_materials_unlit`) so an engine displays `COLOR_0` as it is | `COLOR_0 = min(1, exposure * L)` per linear RGB channel (see [`ColorMapping`]) |
-//! | PLY, binary little endian ([`encode_ply`]) | every element vertex (`x y z nx ny nz red green blue`, `float`) and every element (`vertex_indices`, `uint`) | raw radiance `L`, W/(m^2 sr) |
+//! | glTF 2.0 binary (`.glb`, [`encode_glb`]) | one mesh and node per scene object: `POSITION` (metres), `NORMAL`, `COLOR_0`, the HDR radiance `_RADIANCE` with its parts `_DIRECT` and `_INDIRECT` (custom float `VEC3` attributes, [`HDR_ATTRIBUTES`]), `u32` indices; one unlit material (`KHR_materials_unlit`) so an engine displays `COLOR_0` as it is | `COLOR_0 = min(1, exposure * L)` per linear RGB channel, float, for display (see [`ColorMapping`]); `_RADIANCE` etc. raw `L`, W/(m^2 sr) |
+//! | PLY, binary little endian ([`encode_ply`]) | every element vertex (`x y z nx ny nz` and `radiance_r/g/b`, `direct_r/g/b`, `indirect_r/g/b` as `float`; `red green blue` as `uchar`) and every element (`vertex_indices`, `uint`) | `radiance_*` etc. raw radiance `L`, W/(m^2 sr); `red green blue` an 8-bit sRGB display colour ([`display_colour`]) |
 //! | bake file ([`encode_bake`], [`decode_bake`], [`read_bake`]) | the element mesh and the per-vertex radiosity parts, bit for bit, with fingerprints of the scene it belongs to | radiosity `B`, W/m^2 |
+//! | lightmap ([`bake_lightmap`]) | the scene's own triangles (not the element mesh) as `.glb` with a generated UV atlas on `TEXCOORD_1` and the lightmap PNG as `emissiveTexture` (`texCoord` 1); the lightmap as EXR and PNG | EXR: raw `L`, W/(m^2 sr); PNG: sRGB of `min(1, exposure * L)` |
+//! | per-vertex `.glb` on the scene's own mesh ([`encode_vertex_glb`]) | the scene's own triangles and vertices with the solution sampled there: `POSITION` (metres), `NORMAL`, `COLOR_0`, `_RADIANCE`, `_DIRECT`, `_INDIRECT` | as the element-mesh `.glb` |
 //! | manifest (JSON, [`Manifest`]) | settings, timings per phase, rays, counts, unshot fraction, energy, residuals, files | |
 //!
-//! Units: positions in scene units (not rescaled to metres; the Cornell box is in
-//! millimetres), radiance `L = B / pi` in W/(m^2 sr), radiosity `B` in W/m^2 per channel.
+//! Units: the `.glb` is in metres (glTF's unit: positions converted from the scene's
+//! [`Unit`](twopass_scene::Unit)); the PLY, the bake file and the manifest keep scene units
+//! (the Cornell box is in millimetres; the PLY header says `comment unit mm`), radiance `L = B / pi` in W/(m^2 sr), radiosity `B` in W/m^2 per channel.
 //! Every file is written atomically ([`write_atomic`], the workspace's one atomic write from
 //! twopass-composite): a temporary file in the target's folder, synced, then renamed over the
 //! target, so a failed write never leaves a partial file.
@@ -37,7 +40,8 @@
 //! This crate is the I/O edge of the radiosity solver (ARCHITECTURE.md, "Architecture
 //! invariants"): twopass-radiosity computes and never touches a file or a file format; this
 //! crate encodes, decodes, reads and writes. Modules, one job each: [`error`], [`fingerprint`],
-//! [`format`](mod@format) (the bake file), [`colour`] (radiance to `COLOR_0`), [`gltf`], [`ply`],
+//! [`format`](mod@format) (the bake file), [`colour`] (radiance to `COLOR_0`), [`gltf`],
+//! [`lightmap`], [`vertex`] (the per-vertex bake on the scene's own mesh), [`ply`],
 //! [`manifest`].
 //!
 //! ```no_run
@@ -61,20 +65,24 @@ pub mod error;
 pub mod fingerprint;
 pub mod format;
 pub mod gltf;
+pub mod lightmap;
 pub mod manifest;
 pub mod ply;
+pub mod vertex;
 
-pub use colour::{AUTO_EXPOSURE_PERCENTILE, ColorMapping};
+pub use colour::{AUTO_EXPOSURE_PERCENTILE, ColorMapping, RadianceParts};
 pub use error::{BakeError, BakeProblem};
 pub use fingerprint::{Fingerprint, geometry_fingerprint, lighting_fingerprint, scene_fingerprint};
 pub use format::{BAKE_FORMAT_VERSION, MAX_BAKE_BYTES, decode_bake, encode_bake, read_bake};
-pub use gltf::{Glb, encode_glb};
+pub use gltf::{Glb, HDR_ATTRIBUTES, encode_glb};
+pub use lightmap::{AtlasSource, Lightmap, LightmapSettings, bake_lightmap};
 pub use manifest::{
-    AdaptiveRecord, ColorRecord, CountsRecord, EnergyRecord, FileRecord, MANIFEST_VERSION,
-    Manifest, ResidualsRecord, SettingsRecord, TimingsRecord,
+    AdaptiveRecord, ColorRecord, CountsRecord, EnergyRecord, FileRecord, LightmapRecord,
+    MANIFEST_VERSION, Manifest, ResidualsRecord, SettingsRecord, TimingsRecord,
 };
-pub use ply::encode_ply;
+pub use ply::{display_colour, encode_ply};
 pub use twopass_radiosity::{InvalidMesh, MeshPart};
+pub use vertex::encode_vertex_glb;
 
 /// Writes `bytes` to `path` atomically (the workspace's one atomic write,
 /// [`twopass_composite::write::write_atomic`]), as a [`BakeError`] on failure.

@@ -224,8 +224,35 @@ pub struct Manifest {
     pub residuals: ResidualsRecord,
     /// The `.glb` colour mapping, when a `.glb` was written.
     pub color: Option<ColorRecord>,
+    /// The lightmap, when one was baked.
+    #[serde(default)]
+    pub lightmap: Option<LightmapRecord>,
     /// The files written (the manifest not included).
     pub files: Vec<FileRecord>,
+}
+
+/// A lightmap bake ([`bake_lightmap`](crate::lightmap::bake_lightmap)).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LightmapRecord {
+    /// Texel edge on the surface, scene units.
+    pub texel_size: f32,
+    /// Border around each chart, texels.
+    pub padding: u32,
+    /// Atlas width, texels.
+    pub width: u32,
+    /// Atlas height, texels.
+    pub height: u32,
+    /// Charts (coplanar connected triangles) in the atlas; 1 for the scene's own coordinates.
+    pub charts: usize,
+    /// Where the texture coordinates come from (the scene's, or generated and why).
+    #[serde(default)]
+    pub atlas: String,
+    /// Texels whose centre lies on a triangle.
+    pub covered_texels: usize,
+    /// How the PNG encodes radiance.
+    pub png: String,
+    /// Time to lay out, fill and encode the lightmap, seconds.
+    pub seconds: f64,
 }
 
 fn seconds(d: Duration) -> f64 {
@@ -332,6 +359,7 @@ impl Manifest {
                 reciprocity_mean: residuals.reciprocity_mean,
             },
             color: None,
+            lightmap: None,
             files: Vec::new(),
         }
     }

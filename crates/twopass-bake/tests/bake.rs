@@ -338,11 +338,34 @@ fn glb_parses_with_one_colour_per_vertex_on_the_element_mesh() {
         let positions: Vec<[f32; 3]> = reader.read_positions().unwrap().collect();
         let colors: Vec<[f32; 3]> = reader.read_colors(0).unwrap().into_rgb_f32().collect();
         let normals: Vec<[f32; 3]> = reader.read_normals().unwrap().collect();
+        // The HDR radiance and its parts as custom float VEC3 attributes.
+        let custom = |name: &str| -> Vec<[f32; 3]> {
+            let (_, acc) = prim
+                .attributes()
+                .find(|(s, _)| *s == gltf::Semantic::Extras(name.into()))
+                .unwrap_or_else(|| panic!("no _{name}"));
+            assert_eq!(acc.data_type(), gltf::accessor::DataType::F32);
+            assert_eq!(acc.dimensions(), gltf::accessor::Dimensions::Vec3);
+            gltf::accessor::Iter::<[f32; 3]>::new(acc, |_| Some(blob))
+                .unwrap()
+                .collect()
+        };
+        let (hdr, direct) = (custom("RADIANCE"), custom("DIRECT"));
         assert_eq!(positions.len(), expect.len());
         assert_eq!(colors.len(), positions.len(), "one COLOR_0 per vertex");
         assert_eq!(normals.len(), positions.len());
         for (k, &v) in expect.iter().enumerate() {
-            assert_eq!(positions[k], mesh.vertices[v as usize].position.to_array());
+            // The Cornell box is in millimetres; glTF positions are metres.
+            let mm = mesh.vertices[v as usize].position;
+            for (m, mm) in positions[k].iter().zip(mm.to_array()) {
+                assert!(
+                    (m * 1000.0 - mm).abs() <= 1e-4 * mm.abs().max(1.0),
+                    "{m} m, {mm} mm"
+                );
+            }
+            assert_eq!(hdr[k], radiance[v as usize].to_array());
+            let d = solution.direct()[v as usize] * std::f32::consts::FRAC_1_PI;
+            assert_eq!(direct[k], d.to_array());
             let (c, clipped) = mapping.color(radiance[v as usize]);
             assert_eq!(colors[k], c.to_array());
             assert!(colors[k].iter().all(|&x| (0.0..=1.0).contains(&x)));
@@ -378,7 +401,8 @@ fn ply_parses_back_with_the_same_values() {
     use ply_rs_bw::parser::Parser;
     use ply_rs_bw::ply::{DefaultElement, Property};
     let (scene, solution, _) = solved();
-    let bytes = bake::encode_ply(solution, scene).unwrap();
+    let mapping = ColorMapping::auto(solution);
+    let bytes = bake::encode_ply(solution, scene, mapping).unwrap();
     let ply = Parser::<DefaultElement>::new()
         .read_ply(&mut bytes.as_slice())
         .unwrap();
@@ -401,11 +425,36 @@ fn ply_parses_back_with_the_same_values() {
             v.normal.to_array()
         );
         let l = radiosity[i] * std::f32::consts::FRAC_1_PI;
-        assert_eq!(
-            [float(e, "red"), float(e, "green"), float(e, "blue")],
-            l.to_array()
+        let hdr = |p: &str| ["r", "g", "b"].map(|c| float(e, &format!("{p}_{c}")));
+        assert_eq!(hdr("radiance"), l.to_array());
+        let direct = solution.direct()[i] * std::f32::consts::FRAC_1_PI;
+        assert_eq!(hdr("direct"), direct.to_array());
+        // Emission + direct + indirect (ambient included) is the radiance.
+        let emission = scene.objects[v.object as usize].emission;
+        let sum = glam::Vec3::from(hdr("direct")) + glam::Vec3::from(hdr("indirect")) + emission;
+        assert!(
+            (sum - l).abs().max_element() <= 1e-4 * l.max_element().max(1.0),
+            "{sum} vs {l}"
         );
+        // The display colour is 8-bit sRGB of the clipped exposed radiance.
+        let uchar = |k: &str| match e[k] {
+            Property::UChar(x) => x,
+            ref other => panic!("{k} is {other:?}"),
+        };
+        let (c, _) = mapping.color(l);
+        let srgb = |x: f32| {
+            let x = x.clamp(0.0, 1.0);
+            if x <= 0.0031308 {
+                12.92 * x
+            } else {
+                1.055 * x.powf(1.0 / 2.4) - 0.055
+            }
+        };
+        let expect = c.to_array().map(|x| (srgb(x) * 255.0).round() as u8);
+        assert_eq!([uchar("red"), uchar("green"), uchar("blue")], expect);
     }
+    // The HDR values reach above what 8-bit colour holds (the light, the lit ceiling).
+    assert!(verts.iter().any(|e| float(e, "radiance_r") > 1.0));
     let faces = &ply.payload["face"];
     let leaves: Vec<[u32; 3]> = mesh
         .leaves()
@@ -419,6 +468,31 @@ fn ply_parses_back_with_the_same_values() {
         }
     }
     assert!(ply.header.comments.iter().any(|c| c.contains("W/(m^2 sr)")));
+    // Positions stay in scene units, and the header says which.
+    assert!(ply.header.comments.iter().any(|c| c == "unit mm"));
+    assert!(ply.header.obj_infos.iter().any(|c| c == "unit mm"));
+}
+
+#[test]
+fn glb_floor_is_the_measured_width_in_metres() {
+    let (scene, solution, _) = solved();
+    let glb = bake::encode_glb(solution, scene, ColorMapping::auto(solution)).unwrap();
+    let gltf = gltf::Gltf::from_slice(&glb.bytes).unwrap();
+    let floor = gltf.meshes().find(|m| m.name() == Some("floor")).unwrap();
+    let bounds = floor.primitives().next().unwrap().bounding_box();
+    // The Cornell data: the floor spans x from 0 to 552.8 mm and z from 0 to 559.2 mm.
+    assert!(
+        (bounds.max[0] - bounds.min[0] - 0.5528).abs() < 1e-6,
+        "{bounds:?}"
+    );
+    assert!(
+        (bounds.max[2] - bounds.min[2] - 0.5592).abs() < 1e-6,
+        "{bounds:?}"
+    );
+    let extras: serde_json::Value =
+        serde_json::from_str(gltf.document.as_json().asset.extras.as_ref().unwrap().get()).unwrap();
+    assert_eq!(extras["twopass"]["position_unit"], "m");
+    assert_eq!(extras["twopass"]["scene_unit"], "mm");
 }
 
 #[test]

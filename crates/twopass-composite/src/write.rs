@@ -7,9 +7,11 @@
 //! the file, the layer and the pixel.
 //!
 //! EXR files are linear, 32-bit float, ZIP-compressed scanlines, one part. A layer set is
-//! written the way OpenEXR names layers in one part: channels `<layer>.R`, `<layer>.G`,
-//! `<layer>.B` (as Blender's multilayer files, tev and OpenEXR's tools read them); a single
-//! image is written as plain `R`, `G`, `B`. PNGs are 8-bit sRGB with an `sRGB` chunk and, when
+//! written the way OpenEXR names layers in one part: the final image as plain `R`, `G`, `B`
+//! (what a viewer or a tool that reads "the" image shows first), and every layer beside it as
+//! channels `<layer>.R`, `<layer>.G`, `<layer>.B` (as Blender's multilayer files, tev and
+//! OpenEXR's tools read them); a single image is written as plain `R`, `G`, `B`. A render's
+//! [`RenderMetadata`] goes into the header as text attributes. PNGs are 8-bit sRGB with an `sRGB` chunk and, when
 //! given, a `Description` text chunk that says how they were tone mapped.
 
 use std::io::{Cursor, Write};
@@ -21,7 +23,8 @@ use glam::Vec3;
 
 use crate::error::{CompositeError, Result, WriteError};
 use crate::image::{Image, Rgb8Image};
-use crate::layer::Layers;
+use crate::layer::{FINAL, Layers};
+use crate::metadata::RenderMetadata;
 use crate::tonemap::ToneMap;
 
 /// Writes `bytes` to `path` atomically: a temporary file in the same folder (which must exist),
@@ -66,8 +69,13 @@ fn refuse_non_finite(path: &Path, layer: &str, image: &Image) -> Result<()> {
 }
 
 /// Encodes one EXR part holding every `(prefix, image)`: channels `prefix.R/G/B`, or `R/G/B`
-/// for an empty prefix. All images have one size (checked by the callers).
-fn encode_exr(path: &Path, parts: &[(&str, &Image)]) -> Result<Vec<u8>> {
+/// for an empty prefix, with `metadata` (if any) as header attributes and the `software`
+/// attribute always. All images have one size (checked by the callers).
+fn encode_exr(
+    path: &Path,
+    parts: &[(&str, &Image)],
+    metadata: Option<&RenderMetadata>,
+) -> Result<Vec<u8>> {
     let Some((_, first)) = parts.first() else {
         return Err(CompositeError::Empty {
             what: format!("layer set for {}", path.display()),
@@ -79,7 +87,10 @@ fn encode_exr(path: &Path, parts: &[(&str, &Image)]) -> Result<Vec<u8>> {
             what: format!("image for {}", path.display()),
         });
     }
-    for (name, image) in parts {
+    // Named layers first: a non-finite pixel is reported in the pass it comes from rather
+    // than in the final image summed from it.
+    let (plain, named): (Vec<_>, Vec<_>) = parts.iter().partition(|(n, _)| n.is_empty());
+    for (name, image) in named.into_iter().chain(plain) {
         refuse_non_finite(path, if name.is_empty() { "image" } else { name }, image)?;
     }
     let mut channels: ex::SmallVec<[ex::AnyChannel<ex::FlatSamples>; 4]> = ex::SmallVec::new();
@@ -98,9 +109,30 @@ fn encode_exr(path: &Path, parts: &[(&str, &Image)]) -> Result<Vec<u8>> {
             channels.push(ex::AnyChannel::new(text, ex::FlatSamples::F32(samples)));
         }
     }
+    let text = |value: &str, what: &str| {
+        ex::Text::new_or_none(value).ok_or_else(|| CompositeError::LayerName {
+            name: what.to_owned(),
+            reason: "not representable as EXR header text",
+        })
+    };
+    let mut attributes = ex::LayerAttributes {
+        software_name: Some(text(
+            &format!("twopass {}", crate::metadata::VERSION),
+            "software",
+        )?),
+        ..ex::LayerAttributes::default()
+    };
+    if let Some(m) = metadata {
+        for (name, value) in m.attributes() {
+            attributes.other.insert(
+                text(name, name)?,
+                exr::meta::attribute::AttributeValue::Text(text(&value, name)?),
+            );
+        }
+    }
     let layer = ex::Layer::new(
         ex::Vec2(w as usize, h as usize),
-        ex::LayerAttributes::default(),
+        attributes,
         ex::Encoding::SMALL_LOSSLESS,
         ex::AnyChannels::sort(channels),
     );
@@ -116,16 +148,59 @@ fn encode_exr(path: &Path, parts: &[(&str, &Image)]) -> Result<Vec<u8>> {
     Ok(buf.into_inner())
 }
 
+/// Encodes one linear image as EXR bytes with channels `R`, `G`, `B` (32-bit float); `path`
+/// only names the file in errors.
+pub fn encode_exr_image(path: &Path, image: &Image) -> Result<Vec<u8>> {
+    encode_exr(path, &[("", image)], None)
+}
+
 /// Writes one linear image as an EXR with channels `R`, `G`, `B` (32-bit float), atomically.
 pub fn write_exr(path: &Path, image: &Image) -> Result<()> {
-    let bytes = encode_exr(path, &[("", image)])?;
+    let bytes = encode_exr_image(path, image)?;
     Ok(write_atomic(path, &bytes)?)
 }
 
-/// Writes every layer into one EXR (channels `<layer>.R/G/B`, 32-bit float), atomically.
+/// The name of the layer a set's final image is in: [`IMAGE`] (the renderers' merged image)
+/// or [`FINAL`], whichever the set has (in that order), or `None`.
+pub fn final_layer(layers: &Layers) -> Option<&'static str> {
+    [IMAGE, FINAL].into_iter().find(|n| layers.get(n).is_some())
+}
+
+/// The layer name under which the twopass renderers put their merged image.
+pub const IMAGE: &str = "image";
+
+/// Encodes a layer set as EXR bytes: the final image as plain `R`, `G`, `B` (the layer
+/// [`final_layer`] names or, when there is none, the sum of every layer, since the passes
+/// split the light without overlap), every layer as `<layer>.R/G/B`, and `metadata` as header
+/// attributes.
+pub fn encode_exr_layers(
+    path: &Path,
+    layers: &Layers,
+    metadata: Option<&RenderMetadata>,
+) -> Result<Vec<u8>> {
+    let sum;
+    let top = match final_layer(layers) {
+        Some(name) => layers.require(name)?,
+        None => {
+            sum = layers.sum_all();
+            &sum
+        }
+    };
+    let mut parts: Vec<(&str, &Image)> = vec![("", top)];
+    parts.extend(layers.iter());
+    encode_exr(path, &parts, metadata)
+}
+
+/// Writes every layer into one EXR, atomically: the final image as plain `R`, `G`, `B` and
+/// each layer as `<layer>.R/G/B` (32-bit float); see [`encode_exr_layers`].
 pub fn write_exr_layers(path: &Path, layers: &Layers) -> Result<()> {
-    let parts: Vec<(&str, &Image)> = layers.iter().collect();
-    let bytes = encode_exr(path, &parts)?;
+    let bytes = encode_exr_layers(path, layers, None)?;
+    Ok(write_atomic(path, &bytes)?)
+}
+
+/// [`write_exr_layers`] with the render's metadata in the header.
+pub fn write_exr_render(path: &Path, layers: &Layers, metadata: &RenderMetadata) -> Result<()> {
+    let bytes = encode_exr_layers(path, layers, Some(metadata))?;
     Ok(write_atomic(path, &bytes)?)
 }
 

@@ -330,3 +330,90 @@ fn comparison_sheet_shares_exposure_and_scale() {
         .unwrap();
     }
 }
+
+#[test]
+fn render_exr_has_the_final_image_as_plain_rgb_and_its_metadata() {
+    use exr::meta::attribute::AttributeValue;
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("render.exr");
+    let mut layers = Layers::new(6, 4)
+        .with("ambient", ramp(6, 4, 0.0))
+        .unwrap()
+        .with("diffuse", ramp(6, 4, 1.0))
+        .unwrap()
+        .with("specular", ramp(6, 4, 0.5))
+        .unwrap();
+    layers
+        .merge_into(write::IMAGE, &["diffuse", "specular"])
+        .unwrap();
+    let meta = twopass_composite::RenderMetadata::new("hybrid", 16, 42, 1.25);
+    write::write_exr_render(&path, &layers, &meta).unwrap();
+
+    // Read back with the exr crate itself: plain R, G, B equal to the `image` layer, the
+    // passes beside it, the metadata in the header.
+    let raw = exr::prelude::read_all_flat_layers_from_file(&path).unwrap();
+    assert_eq!(raw.layer_data.len(), 1);
+    let layer = &raw.layer_data[0];
+    let channel = |name: &str| -> Vec<f32> {
+        layer
+            .channel_data
+            .list
+            .iter()
+            .find(|c| c.name.to_string() == name)
+            .unwrap_or_else(|| panic!("no channel {name}"))
+            .sample_data
+            .values_as_f32()
+            .collect()
+    };
+    let image = layers.get(write::IMAGE).unwrap();
+    for (c, letter) in ["R", "G", "B"].into_iter().enumerate() {
+        let top = channel(letter);
+        let expect: Vec<f32> = image.pixels().iter().map(|p| p[c]).collect();
+        assert_eq!(top, expect, "channel {letter}");
+        for pass in ["ambient", "diffuse", "specular", "image"] {
+            channel(&format!("{pass}.{letter}"));
+        }
+    }
+    let attr = |name: &str| match layer.attributes.other.get(&exr::prelude::Text::from(name)) {
+        Some(AttributeValue::Text(t)) => t.to_string(),
+        other => panic!("{name}: {other:?}"),
+    };
+    assert_eq!(attr("twopass:method"), "hybrid");
+    assert_eq!(attr("twopass:spp"), "16");
+    assert_eq!(attr("twopass:seed"), "42");
+    assert_eq!(attr("twopass:seconds"), "1.25");
+    assert_eq!(attr("twopass:version"), env!("CARGO_PKG_VERSION"));
+    assert_eq!(
+        layer
+            .attributes
+            .software_name
+            .as_ref()
+            .map(|t| t.to_string()),
+        Some(format!("twopass {}", env!("CARGO_PKG_VERSION")))
+    );
+    // The plain image is what read_exr returns, and the layers still read back as layers.
+    assert_eq!(&write::read_exr(&path).unwrap(), image);
+    let back = write::read_exr_layers(&path).unwrap();
+    assert_eq!(
+        back.names().collect::<Vec<_>>(),
+        ["ambient", "diffuse", "image", "specular"]
+    );
+
+    // Without a merged layer, the plain image is the sum of the passes.
+    let passes = Layers::new(6, 4)
+        .with("a", ramp(6, 4, 1.0))
+        .unwrap()
+        .with("b", ramp(6, 4, 0.25))
+        .unwrap();
+    let summed = dir.path().join("passes.exr");
+    write::write_exr_layers(&summed, &passes).unwrap();
+    let top = write::read_exr(&summed).unwrap();
+    for ((p, a), b) in top
+        .pixels()
+        .iter()
+        .zip(passes.get("a").unwrap().pixels())
+        .zip(passes.get("b").unwrap().pixels())
+    {
+        assert_eq!(*p, *a + *b);
+    }
+}

@@ -13,6 +13,10 @@ pub const VERSION: u32 = 1;
 pub struct SceneFile {
     /// Format version, must be [`VERSION`].
     pub version: u32,
+    /// Length unit of every position in the file and its meshes (default metres). An
+    /// unknown unit is a TOML error at its line naming the known ones.
+    #[serde(default)]
+    pub unit: crate::unit::Unit,
     /// The pinhole camera.
     pub camera: Spanned<CameraDesc>,
     /// Named materials, referenced by objects.

@@ -6,7 +6,8 @@
 //! non-zero area, every material parameter is in range and every emission is finite and
 //! non-negative: the passes downstream cannot fail on the scene's data.
 //!
-//! Units: positions in the scene's own units (the Cornell box is in millimetres), emitted
+//! Units: positions in the scene's own units, which the scene file states ([`Unit`], the
+//! Cornell box is in millimetres; exporters to metre-based formats convert with it), emitted
 //! radiance in W/(m^2 sr) per RGB channel with areas in scene units, angles in radians at
 //! run time (degrees in files).
 //!
@@ -33,6 +34,7 @@ mod radiance;
 mod scene;
 pub mod shape;
 mod transform;
+mod unit;
 pub mod workload;
 
 pub use accel::{Accel, Ray, SurfacePoint, TriangleHit};
@@ -48,3 +50,4 @@ pub use load::{
 pub use radiance::DiffuseRadiance;
 pub use scene::{Bounds, Emitter, Hit, Mesh, Object, Scene, SceneMaterial};
 pub use transform::Transform;
+pub use unit::Unit;

@@ -152,7 +152,7 @@ pub fn load_toml_with(
         }
     }
     let camera = ld.camera(&file.camera)?;
-    ld.finish(parts, camera)
+    ld.finish(parts, camera, file.unit)
 }
 
 fn load_bare_obj(path: &Path, policy: &ReadPolicy) -> Result<(Scene, Vec<Warning>), SceneError> {
@@ -232,7 +232,8 @@ fn load_bare_obj(path: &Path, policy: &ReadPolicy) -> Result<(Scene, Vec<Warning
         line: None,
         problem,
     })?;
-    ld.finish(parts, camera)
+    // A bare OBJ states no unit: metres, as the OBJ format's readers assume by default.
+    ld.finish(parts, camera, crate::Unit::Metre)
 }
 
 /// What an object becomes before meshing: spheres wait for the scene's size.
@@ -772,6 +773,7 @@ impl Loader {
         mut self,
         parts: Vec<PlacedPart>,
         camera: Camera,
+        unit: crate::Unit,
     ) -> Result<(Scene, Vec<Warning>), SceneError> {
         let mut bounds = Bounds::EMPTY;
         for p in &parts {
@@ -882,7 +884,7 @@ impl Loader {
             });
         }
         Ok((
-            Scene::assemble(self.path, mesh, self.materials, objects, camera),
+            Scene::assemble(self.path, unit, mesh, self.materials, objects, camera),
             self.warnings,
         ))
     }
@@ -936,6 +938,11 @@ impl Loader {
         mesh.normals
             .extend(local.normals.iter().map(|n| transform.normal(*n)));
         let object = objects.len() as u32;
+        let uv_base = mesh.texcoords.len() as u32;
+        let has_uv = local.texcoord_indices.len() == local.triangles.len();
+        if has_uv {
+            mesh.texcoords.extend_from_slice(&local.texcoords);
+        }
         let (mut dropped, mut first) = (0, 0);
         for (i, tri) in local.triangles.iter().enumerate() {
             let mut t = tri.map(|v| v + base);
@@ -944,9 +951,13 @@ impl Loader {
             } else {
                 [0; 3]
             };
+            let mut uv = has_uv.then(|| local.texcoord_indices[i].map(|k| k + uv_base));
             if transform.flips {
                 t.swap(1, 2);
                 nt.swap(1, 2);
+                if let Some(uv) = &mut uv {
+                    uv.swap(1, 2);
+                }
             }
             let Some((twice_area, n)) = triangle_normal(t.map(|v| mesh.positions[v as usize]))
             else {
@@ -963,6 +974,7 @@ impl Loader {
             }
             mesh.triangles.push(t);
             mesh.normal_indices.push(nt);
+            mesh.texcoord_indices.push(uv);
             mesh.geometric_normals.push(n);
             mesh.areas.push((0.5 * twice_area) as f32);
             mesh.triangle_object.push(object);

@@ -56,6 +56,8 @@ struct ScannedModel {
     triangles: usize,
     /// Whether every corner of every face names a normal.
     all_normals: bool,
+    /// Whether every corner of every face names a texture coordinate.
+    all_texcoords: bool,
     usemtl: Option<(String, usize)>,
 }
 
@@ -199,6 +201,28 @@ pub(crate) fn load(path: &Path, policy: &ReadPolicy) -> Result<ObjFile, SceneErr
         } else {
             (Vec::new(), Vec::new())
         };
+        // Texture coordinates (OBJ `vt`, v up) are kept only when every corner of the group
+        // names one and all are finite: the lightmap bake may take them as its atlas.
+        let texcoords: Vec<glam::Vec2> = mesh
+            .texcoords
+            .chunks_exact(2)
+            .map(glam::Vec2::from_slice)
+            .collect();
+        let keep_uv = scanned.get(k).is_some_and(|s| s.all_texcoords)
+            && !texcoords.is_empty()
+            && mesh.texcoord_indices.len() == mesh.indices.len()
+            && texcoords.iter().all(|t| t.is_finite());
+        let (texcoords, texcoord_indices) = if keep_uv {
+            (
+                texcoords,
+                mesh.texcoord_indices
+                    .chunks_exact(3)
+                    .map(|c| [c[0], c[1], c[2]])
+                    .collect(),
+            )
+        } else {
+            (Vec::new(), Vec::new())
+        };
         out.push(ObjModel {
             name: m.name,
             mesh: ShapeMesh {
@@ -206,6 +230,8 @@ pub(crate) fn load(path: &Path, policy: &ReadPolicy) -> Result<ObjFile, SceneErr
                 triangles,
                 normals,
                 normal_indices,
+                texcoords,
+                texcoord_indices,
             },
             material: mesh.material_id,
             usemtl: scanned.get(k).and_then(|s| s.usemtl.clone()),
@@ -254,6 +280,7 @@ fn scan(
     let mut models = Vec::new();
     let mut current = ScannedModel {
         all_normals: true,
+        all_texcoords: true,
         ..ScannedModel::default()
     };
     let mut faces = 0usize; // faces (any arity) in the current model, as tobj counts them
@@ -302,7 +329,7 @@ fn scan(
                         ),
                     ));
                 }
-                let mut normals = 0;
+                let (mut normals, mut texcoords) = (0, 0);
                 for (c, corner) in corners.iter().enumerate() {
                     let parts: Vec<&str> = corner.split('/').collect();
                     let bad =
@@ -326,6 +353,7 @@ fn scan(
                     index(parts[0], nv, tv, "vertex")?;
                     if let Some(t) = parts.get(1).filter(|t| !t.is_empty()) {
                         index(t, nvt, tvt, "texture coordinate")?;
+                        texcoords += 1;
                     }
                     if let Some(v) = parts.get(2) {
                         if v.is_empty() {
@@ -338,6 +366,7 @@ fn scan(
                 faces += 1;
                 current.triangles += corners.len() - 2;
                 current.all_normals &= normals == corners.len();
+                current.all_texcoords &= texcoords == corners.len();
             }
             "l" | "p" => faces += 1,
             "o" | "g" if faces > 0 => {
@@ -384,6 +413,7 @@ fn push_model(models: &mut Vec<ScannedModel>, current: &mut ScannedModel) {
     let next = ScannedModel {
         triangles: 0,
         all_normals: true,
+        all_texcoords: true,
         usemtl: current.usemtl.clone(),
     };
     let done = std::mem::replace(current, next);

@@ -68,6 +68,11 @@ pub struct Mesh {
     pub areas: Vec<f32>,
     /// Object of each triangle (index into [`Scene::objects`]).
     pub triangle_object: Vec<u32>,
+    /// Texture coordinates from the meshes that have them (an OBJ's `vt`, v up, as written).
+    pub texcoords: Vec<Vec2>,
+    /// Texture-coordinate indices of each triangle's corners (into [`Mesh::texcoords`]), or
+    /// `None` for a triangle without them (built-in shapes, OBJ groups lacking `vt`).
+    pub texcoord_indices: Vec<Option<[u32; 3]>>,
 }
 
 impl Mesh {
@@ -197,6 +202,8 @@ pub struct Hit {
 pub struct Scene {
     /// The file it was loaded from.
     pub path: PathBuf,
+    /// The length unit of every position (the scene file's `unit`; metres for a bare OBJ).
+    pub unit: crate::Unit,
     /// All geometry.
     pub mesh: Mesh,
     /// The material table.
@@ -216,6 +223,7 @@ impl Scene {
     /// Assembles a scene from validated parts and builds its BVH.
     pub(crate) fn assemble(
         path: PathBuf,
+        unit: crate::Unit,
         mesh: Mesh,
         materials: Vec<SceneMaterial>,
         objects: Vec<Object>,
@@ -249,6 +257,7 @@ impl Scene {
         let accel = Accel::build(&mesh.positions, &mesh.triangles);
         Self {
             path,
+            unit,
             mesh,
             materials,
             objects,

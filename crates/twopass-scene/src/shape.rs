@@ -14,6 +14,10 @@ pub struct ShapeMesh {
     pub normals: Vec<Vec3>,
     /// Normal indices per triangle corner; empty for flat shading, else one per triangle.
     pub normal_indices: Vec<[u32; 3]>,
+    /// Texture coordinates (an OBJ's `vt`, v up); empty when the shape has none.
+    pub texcoords: Vec<glam::Vec2>,
+    /// Texture-coordinate indices per triangle corner; empty, or one per triangle.
+    pub texcoord_indices: Vec<[u32; 3]>,
 }
 
 /// A parallelogram: two triangles over four shared vertices, front along `edge_u x edge_v`.
@@ -292,6 +296,7 @@ pub fn sphere(center: Vec3, radius: f32, subdivisions: u32) -> Result<ShapeMesh,
         normals: dirs.iter().map(|d| d.as_vec3()).collect(),
         normal_indices: tris.clone(),
         triangles: tris,
+        ..ShapeMesh::default()
     })
 }
 

@@ -25,12 +25,18 @@ use crate::solve::SolveArgs;
 /// An output format of `twopass bake`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, ValueEnum)]
 pub enum Format {
-    /// glTF 2.0 binary: per-vertex linear colour COLOR_0 = min(1, exposure * radiance).
+    /// glTF 2.0 binary in metres: per-vertex linear COLOR_0 = min(1, exposure * radiance),
+    /// and the HDR radiance with its direct and indirect parts as _RADIANCE, _DIRECT, _INDIRECT.
     Glb,
-    /// Binary PLY: per-vertex float radiance, W/(m^2 sr).
+    /// Binary PLY in scene units: per-vertex float radiance_*, direct_*, indirect_*
+    /// (W/(m^2 sr)) and an 8-bit display colour red green blue.
     Ply,
     /// The bake file `twopass render` loads (the element mesh and radiosity, bit for bit).
     Bake,
+    /// glTF 2.0 binary of the scene's own triangles and vertices (not the element mesh), in
+    /// metres, with the solution sampled at those vertices: COLOR_0, _RADIANCE, _DIRECT,
+    /// _INDIRECT (`<stem>.vertex.glb`).
+    VertexGlb,
 }
 
 impl Format {
@@ -39,6 +45,7 @@ impl Format {
             Self::Glb => "glb",
             Self::Ply => "ply",
             Self::Bake => "bake",
+            Self::VertexGlb => "vertex.glb",
         }
     }
 }
@@ -66,10 +73,20 @@ pub struct BakeArgs {
     /// The presets file (default: `<stem>.presets.toml` beside the scene).
     #[arg(long, value_name = "FILE", requires = "preset")]
     pub presets: Option<PathBuf>,
-    /// Multiplier from radiance (W/(m^2 sr)) to the .glb's COLOR_0, which is clipped at 1
+    /// Multiplier from radiance (W/(m^2 sr)) to the display colours (.glb COLOR_0, .ply red
+    /// green blue), which are clipped at 1
     /// [default: auto, the 99th-percentile vertex luminance maps to 1].
     #[arg(long, value_name = "SR_M2_PER_W", value_parser = parse_exposure)]
     pub exposure: Option<f32>,
+    /// Also bake a lightmap: `<stem>.lightmap.glb` (the scene's own triangles with a UV atlas
+    /// on TEXCOORD_1, the OBJ's own texture coordinates when they fit, else generated, and the lightmap as an embedded PNG emissive texture),
+    /// `<stem>.lightmap.exr` (HDR radiance, W/(m^2 sr)) and `<stem>.lightmap.png` (the LDR
+    /// texture, exposure-scaled sRGB).
+    #[arg(long)]
+    pub lightmap: bool,
+    /// Lightmap texel edge on the surface, scene units [default: scene diagonal / 200].
+    #[arg(long, value_name = "LENGTH", value_parser = parse_length, requires = "lightmap")]
+    pub texel_size: Option<f32>,
     /// Vertices and patch pairs sampled for the residual report.
     #[arg(long, default_value_t = 200, value_name = "N", value_parser = parse_residual_samples)]
     pub residual_samples: usize,
@@ -177,14 +194,15 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
         Err(e) => return Err(CliError::io(&manifest_path, e)),
     }
     let formats: BTreeSet<Format> = args.format.iter().copied().collect();
+    // One display mapping for every output's clipped colour (.glb COLOR_0, .ply red green blue).
+    let (mapping, mode) = match args.exposure {
+        Some(exposure) => (ColorMapping { exposure }, "fixed"),
+        None => (ColorMapping::auto(&solution), "auto"),
+    };
     for format in formats {
         let path = dir.join(format!("{stem}.{}", format.extension()));
         let bytes = match format {
             Format::Glb => {
-                let (mapping, mode) = match args.exposure {
-                    Some(exposure) => (ColorMapping { exposure }, "fixed"),
-                    None => (ColorMapping::auto(&solution), "auto"),
-                };
                 let glb = bake::encode_glb(&solution, &scene, mapping)?;
                 manifest.color = Some(ColorRecord {
                     mapping: ColorMapping::FORMULA.into(),
@@ -194,8 +212,20 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
                 });
                 glb.bytes
             }
-            Format::Ply => bake::encode_ply(&solution, &scene)?,
+            Format::Ply => bake::encode_ply(&solution, &scene, mapping)?,
             Format::Bake => bake::encode_bake(&solution, &scene)?,
+            Format::VertexGlb => {
+                let glb = bake::encode_vertex_glb(&solution, &scene, mapping)?;
+                if manifest.color.is_none() {
+                    manifest.color = Some(ColorRecord {
+                        mapping: ColorMapping::FORMULA.into(),
+                        exposure: mapping.exposure,
+                        exposure_mode: mode.into(),
+                        clamped_vertices: glb.clamped_vertices,
+                    });
+                }
+                glb.bytes
+            }
         };
         bake::write_atomic(&path, &bytes)?;
         manifest.files.push(FileRecord {
@@ -203,6 +233,35 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
             path,
             bytes: bytes.len() as u64,
             crc32: Some(crc32fast::hash(&bytes)),
+        });
+    }
+    if args.lightmap {
+        let started = Instant::now();
+        let settings = bake::LightmapSettings {
+            texel_size: args.texel_size.unwrap_or(scene.bounds.diagonal() / 200.0),
+            ..bake::LightmapSettings::default()
+        };
+        let lm = bake::bake_lightmap(&solution, &scene, &settings, mapping)?;
+        for (ext, bytes) in [("glb", &lm.glb), ("exr", &lm.exr), ("png", &lm.png)] {
+            let path = dir.join(format!("{stem}.lightmap.{ext}"));
+            bake::write_atomic(&path, bytes)?;
+            manifest.files.push(FileRecord {
+                format: format!("lightmap-{ext}"),
+                path,
+                bytes: bytes.len() as u64,
+                crc32: Some(crc32fast::hash(bytes)),
+            });
+        }
+        manifest.lightmap = Some(bake::LightmapRecord {
+            texel_size: settings.texel_size,
+            padding: settings.padding,
+            width: lm.width,
+            height: lm.height,
+            charts: lm.charts,
+            atlas: lm.atlas.describe(),
+            covered_texels: lm.covered_texels,
+            png: bake::lightmap::PNG_FORMULA.into(),
+            seconds: started.elapsed().as_secs_f64(),
         });
     }
     manifest.timings.writing_s = writing_started.elapsed().as_secs_f64();
@@ -270,6 +329,16 @@ fn print_summary(m: &Manifest, manifest_path: &Path) -> Result<(), CliError> {
             color.exposure,
             color.exposure_mode,
             color.clamped_vertices
+        );
+    }
+    if let Some(lm) = &m.lightmap {
+        outln!(
+            "  lightmap {} x {} texels of {} scene units, {} charts, {:.2} s",
+            lm.width,
+            lm.height,
+            lm.texel_size,
+            lm.charts,
+            lm.seconds
         );
     }
     for f in &m.files {

@@ -1,0 +1,185 @@
+//! The per-vertex bake on the scene's own mesh: the solution sampled at the user's vertices
+//! (not the element mesh's), for engines that take vertex colours on the asset they ship.
+
+use std::collections::HashMap;
+
+use glam::Vec3;
+use gltf_json as json;
+use twopass_brdf::Rgb;
+use twopass_radiosity::Solution;
+use twopass_scene::Scene;
+
+use crate::colour::{ColorMapping, RadianceParts};
+use crate::error::BakeError;
+use crate::gltf::{
+    Attribute, Glb, GlbBuilder, GlbExtras, GlbExtrasBody, HDR_ATTRIBUTES, RADIANCE_ATTRIBUTES,
+    custom, unlit_vertex_colour_material,
+};
+
+/// Output vertices of the scene mesh: one per scene position and shading normal, where
+/// normals closer than [`COPLANAR_COS`](crate::lightmap::COPLANAR_COS) count as one (a
+/// polygon's triangles each have their own normal, equal up to rounding or the polygon's
+/// slight non-planarity), within one group (an object, or a chart of one).
+#[derive(Default)]
+pub(crate) struct SharedVertices {
+    by_position: HashMap<(u32, u32), Vec<(Vec3, u32)>>,
+}
+
+impl SharedVertices {
+    /// The output vertex of scene position `position` with normal `normal` in group `group`,
+    /// and whether it is new (then numbered `next`).
+    pub(crate) fn get(
+        &mut self,
+        group: u32,
+        position: u32,
+        normal: Vec3,
+        next: u32,
+    ) -> (u32, bool) {
+        let list = self.by_position.entry((group, position)).or_default();
+        match list
+            .iter()
+            .find(|(n, _)| n.dot(normal) >= crate::lightmap::COPLANAR_COS)
+        {
+            Some(&(_, v)) => (v, false),
+            None => {
+                list.push((normal, next));
+                (next, true)
+            }
+        }
+    }
+}
+
+/// The radiance parts at barycentrics `b` of scene triangle `t`, interpolated on the element
+/// mesh (zero where the triangle takes no part in the solve).
+fn parts_at(solution: &Solution, parts: &RadianceParts, t: u32, b: [f32; 3]) -> [Rgb; 3] {
+    let mesh = solution.mesh();
+    match mesh.locate(t, b[1], b[2]) {
+        None => [Rgb::ZERO; 3],
+        Some((leaf, w)) => {
+            let v = mesh.nodes[leaf as usize].vertices;
+            let w = w.map(|x| x.clamp(0.0, 1.0));
+            let sum = (w[0] + w[1] + w[2]).max(f32::MIN_POSITIVE);
+            let mix = |values: &[Rgb]| {
+                (values[v[0] as usize] * w[0]
+                    + values[v[1] as usize] * w[1]
+                    + values[v[2] as usize] * w[2])
+                    / sum
+            };
+            [
+                mix(&parts.radiance),
+                mix(&parts.direct),
+                mix(&parts.indirect),
+            ]
+        }
+    }
+}
+
+/// Encodes the scene's own triangles (not the element mesh) as a glTF binary with the
+/// solution sampled at their vertices: one mesh and node per object, `POSITION` in metres,
+/// `NORMAL` (the scene's shading normals), `COLOR_0` (`mapping`, clipped for display) and the
+/// HDR radiance with its parts as [`HDR_ATTRIBUTES`] (W/(m^2 sr)), under the unlit material of
+/// [`encode_glb`](crate::encode_glb). A vertex is one scene position with one shading normal
+/// (normals within [`COPLANAR_COS`](crate::lightmap::COPLANAR_COS) count as one); its value is the mean, over the triangles that use it, of the element mesh's
+/// interpolated value at that corner (equal on a smooth surface, different across a crease
+/// only when the corner's triangles lie on different patches). A user vertex carries one
+/// value, so light that changes inside a large triangle (a shadow on a wall of two triangles)
+/// is lost: that is what the lightmap ([`bake_lightmap`](crate::bake_lightmap)) is for.
+pub fn encode_vertex_glb(
+    solution: &Solution,
+    scene: &Scene,
+    mapping: ColorMapping,
+) -> Result<Glb, BakeError> {
+    let m = &scene.mesh;
+    let parts = RadianceParts::of(solution);
+    let to_metres = scene.unit.metres();
+    let mut b = GlbBuilder::new();
+    let material = unlit_vertex_colour_material(&mut b);
+    let (mut clamped_vertices, mut n_vertices, mut n_triangles) = (0, 0, 0);
+    for object in &scene.objects {
+        let mut shared = SharedVertices::default();
+        let (mut positions, mut normals, mut sums, mut counts, mut indices) = (
+            Vec::new(),
+            Vec::new(),
+            Vec::<[Rgb; 3]>::new(),
+            Vec::new(),
+            Vec::new(),
+        );
+        for t in object.triangles.clone() {
+            let (tri, nrm) = (m.triangles[t as usize], m.normal_indices[t as usize]);
+            for k in 0..3 {
+                let normal = m.normals[nrm[k] as usize];
+                let (v, new) = shared.get(0, tri[k], normal, positions.len() as u32);
+                if new {
+                    let p = m.positions[tri[k] as usize];
+                    positions.push((p.as_dvec3() * to_metres).as_vec3());
+                    normals.push(normal);
+                    sums.push([Rgb::ZERO; 3]);
+                    counts.push(0u32);
+                }
+                let mut corner = [0.0; 3];
+                corner[k] = 1.0;
+                let value = parts_at(solution, &parts, t, corner);
+                for (s, x) in sums[v as usize].iter_mut().zip(value) {
+                    *s += x;
+                }
+                counts[v as usize] += 1;
+                indices.push(v);
+            }
+        }
+        if indices.is_empty() {
+            continue;
+        }
+        let mean = |i: usize| -> Vec<Vec3> {
+            sums.iter()
+                .zip(&counts)
+                .map(|(s, &n)| s[i] / n as f32)
+                .collect()
+        };
+        let (radiance, direct, indirect) = (mean(0), mean(1), mean(2));
+        let colours: Vec<Vec3> = radiance
+            .iter()
+            .map(|l| {
+                let (c, clipped) = mapping.color(*l);
+                clamped_vertices += usize::from(clipped);
+                c
+            })
+            .collect();
+        use json::mesh::Semantic as S;
+        b.mesh(
+            &object.name,
+            &[
+                Attribute::Vec3(S::Positions, &positions),
+                Attribute::Vec3(S::Normals, &normals),
+                Attribute::Vec3(S::Colors(0), &colours),
+                Attribute::Vec3(custom(HDR_ATTRIBUTES[0]), &radiance),
+                Attribute::Vec3(custom(HDR_ATTRIBUTES[1]), &direct),
+                Attribute::Vec3(custom(HDR_ATTRIBUTES[2]), &indirect),
+            ],
+            &indices,
+            material,
+        );
+        n_vertices += positions.len();
+        n_triangles += indices.len() / 3;
+    }
+    let scene_name = scene.path.display().to_string();
+    let extras = GlbExtras {
+        twopass: GlbExtrasBody {
+            color_0: ColorMapping::FORMULA,
+            exposure: mapping.exposure,
+            radiance_attributes: RADIANCE_ATTRIBUTES,
+            radiance_unit: "W/(m^2 sr)",
+            position_unit: "m",
+            scene_unit: scene.unit.symbol(),
+            metres_per_scene_unit: to_metres,
+            clamped_vertices,
+            scene: &scene_name,
+        },
+    };
+    let bytes = b.finish(&scene_name, &extras)?;
+    Ok(Glb {
+        bytes,
+        clamped_vertices,
+        vertices: n_vertices,
+        triangles: n_triangles,
+    })
+}

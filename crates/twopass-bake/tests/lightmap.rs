@@ -1,0 +1,329 @@
+//! The lightmap bake: the `.glb` holds the scene's own triangles with `TEXCOORD_1` charts that
+//! preserve area (texel size x texel size scene units per texel) and do not overlap, the
+//! texels near every chart corner are filled (padding), the lightmap carries the solution's
+//! radiant power, and its EXR and PNG read back with the `exr` and `png` readers.
+
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+use glam::{DVec2, Vec2, Vec3};
+use twopass_bake::lightmap::{AtlasSource, Lightmap, LightmapSettings, bake_lightmap};
+use twopass_bake::{self as bake, ColorMapping};
+use twopass_radiosity::{Options, Solution, Solver, Stop};
+use twopass_scene::Scene;
+
+const TEXEL: f32 = 5.0;
+
+fn cornell_path() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell-box.toml")
+}
+
+fn baked() -> &'static (Scene, Solution, Lightmap) {
+    static BAKED: OnceLock<(Scene, Solution, Lightmap)> = OnceLock::new();
+    BAKED.get_or_init(|| {
+        let (scene, _) = twopass_scene::load(cornell_path()).unwrap();
+        let options = Options {
+            element_size: Some(60.0),
+            stop: Stop {
+                unshot_fraction: 1e-2,
+                ..Stop::default()
+            },
+            ..Options::default()
+        };
+        let mut solver = Solver::new(&scene, options).unwrap();
+        solver.run(|_| std::ops::ControlFlow::Continue(()));
+        let solution = solver.solution();
+        let settings = LightmapSettings {
+            texel_size: TEXEL,
+            padding: 2,
+        };
+        let lm =
+            bake_lightmap(&solution, &scene, &settings, ColorMapping::auto(&solution)).unwrap();
+        (scene, solution, lm)
+    })
+}
+
+/// Every triangle of the `.glb`: object name, positions (m) and TEXCOORD_1 (texels).
+fn triangles(lm: &Lightmap) -> Vec<(String, [Vec3; 3], [DVec2; 3])> {
+    let gltf = gltf::Gltf::from_slice(&lm.glb).unwrap();
+    let blob = gltf.blob.as_deref().unwrap();
+    let size = DVec2::new(f64::from(lm.width), f64::from(lm.height));
+    let mut out = Vec::new();
+    for mesh in gltf.meshes() {
+        let prim = mesh.primitives().next().unwrap();
+        let material = prim.material();
+        let info = material.emissive_texture().expect("emissive lightmap");
+        assert_eq!(info.tex_coord(), 1);
+        let reader = prim.reader(|_| Some(blob));
+        let pos: Vec<[f32; 3]> = reader.read_positions().unwrap().collect();
+        let uv: Vec<[f32; 2]> = reader.read_tex_coords(1).unwrap().into_f32().collect();
+        // Set 0 repeats the atlas (glTF numbers sets from 0; the scene has no UVs of its own).
+        let uv0: Vec<[f32; 2]> = reader.read_tex_coords(0).unwrap().into_f32().collect();
+        assert_eq!(uv0, uv);
+        let idx: Vec<u32> = reader.read_indices().unwrap().into_u32().collect();
+        for t in idx.chunks(3) {
+            out.push((
+                mesh.name().unwrap().to_owned(),
+                [0, 1, 2].map(|k| Vec3::from(pos[t[k] as usize])),
+                [0, 1, 2].map(|k| Vec2::from(uv[t[k] as usize]).as_dvec2() * size),
+            ));
+        }
+    }
+    out
+}
+
+#[test]
+fn glb_is_the_scene_mesh_with_area_preserving_charts() {
+    let (scene, _, lm) = baked();
+    let tris = triangles(lm);
+    assert_eq!(
+        tris.len(),
+        scene.mesh.triangles.len(),
+        "the user's triangles, not the elements"
+    );
+    let texel_m = f64::from(TEXEL) * scene.unit.metres();
+    let (mut uv_area, mut area) = (0.0, 0.0);
+    for (name, p, uv) in &tris {
+        let a = f64::from((p[1] - p[0]).cross(p[2] - p[0]).length()) / 2.0;
+        let u = (uv[1] - uv[0]).perp_dot(uv[2] - uv[0]).abs() / 2.0 * texel_m * texel_m;
+        // Each chart is an orthogonal projection onto the triangle's own plane: no stretch.
+        assert!(
+            (u - a).abs() <= 1e-3 * a,
+            "{name}: {u} m^2 in UV, {a} m^2 in space"
+        );
+        for q in uv {
+            assert!(q.x >= 0.0 && q.y >= 0.0, "{name}: {q}");
+            assert!(
+                q.x <= f64::from(lm.width) && q.y <= f64::from(lm.height),
+                "{name}: {q}"
+            );
+        }
+        uv_area += u;
+        area += a;
+    }
+    // The Cornell box's surfaces, from the scene itself, in m^2.
+    let expect = scene.total_area() * scene.unit.metres().powi(2);
+    assert!((area - expect).abs() < 1e-4 * expect, "{area} vs {expect}");
+    assert!((uv_area - expect).abs() < 1e-3 * expect);
+    // The charts use the atlas well (packing and padding cost less than half).
+    let fill = lm.covered_texels as f64 / f64::from(lm.width * lm.height);
+    assert!(
+        fill > 0.5,
+        "{} covered of {} x {}",
+        lm.covered_texels,
+        lm.width,
+        lm.height
+    );
+}
+
+fn inside(uv: &[DVec2; 3], p: DVec2, eps: f64) -> Option<[f64; 3]> {
+    let det = (uv[1] - uv[0]).perp_dot(uv[2] - uv[0]);
+    let w1 = (p - uv[0]).perp_dot(uv[2] - uv[0]) / det;
+    let w2 = (uv[1] - uv[0]).perp_dot(p - uv[0]) / det;
+    let w = [1.0 - w1 - w2, w1, w2];
+    w.iter().all(|&k| k > eps).then_some(w)
+}
+
+#[test]
+fn charts_do_not_overlap_and_carry_the_radiant_power() {
+    let (_, solution, lm) = baked();
+    let tris = triangles(lm);
+    let w = lm.width as usize;
+    let mut owner = vec![u32::MAX; w * lm.height as usize];
+    let pixels = lm.radiance.pixels();
+    let mut power_map = 0.0;
+    for (i, (name, _, uv)) in tris.iter().enumerate() {
+        let lo = uv[0].min(uv[1]).min(uv[2]).floor();
+        let hi = uv[0].max(uv[1]).max(uv[2]).ceil();
+        for y in lo.y as usize..hi.y as usize {
+            for x in lo.x as usize..hi.x as usize {
+                let c = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
+                if inside(uv, c, 1e-6).is_some() {
+                    let j = y * w + x;
+                    // Two triangles of one object and plane may share a texel centre only on
+                    // their common edge, which the strict test leaves out.
+                    assert_eq!(owner[j], u32::MAX, "texel ({x}, {y}) of {name} is taken");
+                    owner[j] = i as u32;
+                    power_map += f64::from(pixels[j].element_sum());
+                }
+            }
+        }
+    }
+    let texel2 = f64::from(TEXEL).powi(2);
+    // The solution's integral of L over every element (the linear interpolant's exact mean).
+    let mesh = solution.mesh();
+    let l = solution.vertex_radiosity();
+    let power_mesh: f64 = mesh
+        .leaves()
+        .map(|n| {
+            let node = &mesh.nodes[n as usize];
+            let mean: f32 = node
+                .vertices
+                .iter()
+                .map(|&v| l[v as usize].element_sum())
+                .sum::<f32>()
+                / 3.0;
+            f64::from(node.area) * f64::from(mean) / std::f64::consts::PI
+        })
+        .sum();
+    let power_map = power_map * texel2;
+    // Counting texel centres measures each triangle's area to within about its perimeter
+    // times half a 5 mm texel, with errors of both signs; the radiance per texel is the
+    // solution's own. Over the whole box: 1 %.
+    assert!(
+        (power_map / power_mesh - 1.0).abs() < 0.01,
+        "lightmap {power_map}, element mesh {power_mesh}"
+    );
+}
+
+#[test]
+fn padding_fills_every_texel_bilinear_filtering_reads_at_the_corners() {
+    let (_, _, lm) = baked();
+    let pixels = lm.radiance.pixels();
+    let w = lm.width as i64;
+    for (name, _, uv) in triangles(lm) {
+        for q in uv {
+            // Bilinear filtering at q reads the 2 x 2 texels around q - 0.5.
+            let base = (q - DVec2::splat(0.5)).floor();
+            for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                let (x, y) = (base.x as i64 + dx, base.y as i64 + dy);
+                let v = pixels[(y * w + x) as usize];
+                // Every Cornell surface gets light in every channel.
+                assert!(
+                    v.min_element() > 0.0,
+                    "{name}: texel ({x}, {y}) is empty near {q}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn exr_and_png_read_back() {
+    let (_, _, lm) = baked();
+    let dir = tempfile::tempdir().unwrap();
+    let exr = dir.path().join("lightmap.exr");
+    bake::write_atomic(&exr, &lm.exr).unwrap();
+    let back = twopass_composite::write::read_exr(&exr).unwrap();
+    assert_eq!(&back, &lm.radiance);
+    let decoder = png::Decoder::new(std::io::Cursor::new(&lm.png));
+    let reader = decoder.read_info().unwrap();
+    assert_eq!(
+        (reader.info().width, reader.info().height),
+        (lm.width, lm.height)
+    );
+    // The .glb embeds exactly this PNG.
+    let gltf = gltf::Gltf::from_slice(&lm.glb).unwrap();
+    let image = gltf.images().next().unwrap();
+    let gltf::image::Source::View { view, mime_type } = image.source() else {
+        panic!("image not embedded");
+    };
+    assert_eq!(mime_type, "image/png");
+    let blob = gltf.blob.as_deref().unwrap();
+    assert_eq!(
+        &blob[view.offset()..view.offset() + view.length()],
+        lm.png.as_slice()
+    );
+}
+
+/// A floor under a light, each an OBJ with its own `vt` (light's in `light_vt`), in metres.
+fn obj_scene(light_vt: [[f32; 2]; 4]) -> (tempfile::TempDir, Scene) {
+    let dir = tempfile::tempdir().unwrap();
+    let quad = |name: &str, v: [[f32; 3]; 4], vt: [[f32; 2]; 4]| {
+        let mut text = String::new();
+        for p in v {
+            text += &format!("v {} {} {}\n", p[0], p[1], p[2]);
+        }
+        for t in vt {
+            text += &format!("vt {} {}\n", t[0], t[1]);
+        }
+        text += "f 1/1 2/2 3/3 4/4\n";
+        std::fs::write(dir.path().join(name), text).unwrap();
+    };
+    quad(
+        "floor.obj",
+        [
+            [0.0, 0.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [1.0, 0.0, 1.0],
+            [1.0, 0.0, 0.0],
+        ],
+        [[0.0, 0.0], [0.0, 0.5], [0.5, 0.5], [0.5, 0.0]],
+    );
+    quad(
+        "light.obj",
+        [
+            [0.3, 0.9, 0.3],
+            [0.7, 0.9, 0.3],
+            [0.7, 0.9, 0.7],
+            [0.3, 0.9, 0.7],
+        ],
+        light_vt,
+    );
+    let toml = "version = 1\n[camera]\nposition = [0.5, 0.5, -2]\nlook_at = [0.5, 0.5, 0]\n\
+                fov_y = 40\n[[material]]\nname = \"white\"\ntype = \"lambert\"\ndiffuse = 0.5\n\
+                [[object]]\nname = \"floor\"\nmaterial = \"white\"\n\
+                shape = { type = \"obj\", file = \"floor.obj\" }\n\
+                [[object]]\nname = \"light\"\nmaterial = \"white\"\nemission = [10, 10, 10]\n\
+                shape = { type = \"obj\", file = \"light.obj\" }\n";
+    let path = dir.path().join("scene.toml");
+    std::fs::write(&path, toml).unwrap();
+    let (scene, _) = twopass_scene::load(&path).unwrap();
+    (dir, scene)
+}
+
+fn bake_obj(scene: &Scene) -> Lightmap {
+    let mut solver = Solver::new(scene, Options::default()).unwrap();
+    solver.run(|_| std::ops::ControlFlow::Continue(()));
+    let solution = solver.solution();
+    let settings = LightmapSettings {
+        texel_size: 0.01,
+        padding: 2,
+    };
+    bake_lightmap(&solution, scene, &settings, ColorMapping::auto(&solution)).unwrap()
+}
+
+#[test]
+fn obj_texture_coordinates_become_the_lightmap_atlas_when_they_fit() {
+    let (_dir, scene) = obj_scene([[0.6, 0.6], [0.9, 0.6], [0.9, 0.9], [0.6, 0.9]]);
+    let lm = bake_obj(&scene);
+    assert_eq!(lm.atlas, AtlasSource::Scene);
+    let gltf = gltf::Gltf::from_slice(&lm.glb).unwrap();
+    let blob = gltf.blob.as_deref().unwrap();
+    let floor = gltf.meshes().find(|m| m.name() == Some("floor")).unwrap();
+    let prim = floor.primitives().next().unwrap();
+    let reader = prim.reader(|_| Some(blob));
+    let mut uv: Vec<[f32; 2]> = reader.read_tex_coords(1).unwrap().into_f32().collect();
+    uv.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    // The OBJ's vt with v flipped (OBJ's v points up, glTF's down).
+    assert_eq!(uv, [[0.0, 0.5], [0.0, 1.0], [0.5, 0.5], [0.5, 1.0]]);
+    // The floor under the light is lit where its coordinates put it, and the light is bright
+    // where its coordinates put it.
+    let at = |u: f32, v: f32| {
+        let (x, y) = (
+            (u * lm.width as f32) as u32,
+            ((1.0 - v) * lm.height as f32) as u32,
+        );
+        lm.radiance.pixels()[(y * lm.width + x) as usize]
+    };
+    assert!(at(0.25, 0.25).min_element() > 0.0);
+    assert!(at(0.75, 0.75).min_element() >= 10.0, "{}", at(0.75, 0.75));
+    // Outside every island, nothing (beyond the dilated padding).
+    assert_eq!(at(0.75, 0.25), Vec3::ZERO);
+}
+
+#[test]
+fn overlapping_obj_texture_coordinates_fall_back_to_generated_charts() {
+    let (_dir, scene) = obj_scene([[0.1, 0.1], [0.4, 0.1], [0.4, 0.4], [0.1, 0.4]]);
+    let lm = bake_obj(&scene);
+    match &lm.atlas {
+        AtlasSource::Generated(why) => assert!(why.contains("overlap"), "{why}"),
+        other => panic!("{other:?}"),
+    }
+    // The Cornell box's built-in shapes have no coordinates at all.
+    let (_, _, cornell) = baked();
+    match &cornell.atlas {
+        AtlasSource::Generated(why) => assert!(why.contains("no texture coordinates"), "{why}"),
+        other => panic!("{other:?}"),
+    }
+}

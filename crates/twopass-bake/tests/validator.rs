@@ -1,0 +1,147 @@
+//! Every `.glb` the bake writes passes the Khronos glTF-Validator (the npm package
+//! `gltf-validator`, installed by `npm ci --prefix tests/node`) with 0 errors and 0 warnings.
+//!
+//! With `CI` set, a missing `node` or validator package fails the test; elsewhere the test
+//! prints a note and passes without validating, so `cargo test` works on a machine without
+//! Node.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::OnceLock;
+
+use twopass_bake::{self as bake, ColorMapping};
+use twopass_radiosity::{Options, Solution, Solver, Stop};
+use twopass_scene::Scene;
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// The Cornell box, solved coarsely (the validator checks structure, not accuracy).
+fn solved() -> &'static (Scene, Solution) {
+    static SOLVED: OnceLock<(Scene, Solution)> = OnceLock::new();
+    SOLVED.get_or_init(|| {
+        let (scene, _) = twopass_scene::load(repo().join("scenes/cornell-box.toml")).unwrap();
+        let options = Options {
+            element_size: Some(100.0),
+            stop: Stop {
+                unshot_fraction: 1e-2,
+                ..Stop::default()
+            },
+            ..Options::default()
+        };
+        let mut solver = Solver::new(&scene, options).unwrap();
+        solver.run(|_| std::ops::ControlFlow::Continue(()));
+        let solution = solver.solution();
+        (scene, solution)
+    })
+}
+
+/// The validator's report of `bytes`, or `None` (after a note) when the validator is not
+/// installed and `CI` is not set.
+fn validate(name: &str, bytes: &[u8]) -> Option<serde_json::Value> {
+    let script = repo().join("tests/node/validate.mjs");
+    let package = repo().join("tests/node/node_modules/gltf-validator/package.json");
+    let node = Command::new("node").arg("--version").output();
+    let missing = match (&node, package.exists()) {
+        (Ok(out), true) if out.status.success() => None,
+        (Ok(out), _) if out.status.success() => Some(format!(
+            "the gltf-validator package is not installed ({} missing; run `npm ci --prefix \
+             tests/node`)",
+            package.display()
+        )),
+        _ => Some("`node` is not on PATH".to_owned()),
+    };
+    if let Some(why) = missing {
+        if std::env::var_os("CI").is_some() {
+            panic!("glTF-Validator cannot run in CI: {why}");
+        }
+        eprintln!("note: {name} not validated: {why}");
+        return None;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join(name);
+    std::fs::write(&path, bytes).unwrap();
+    let out = Command::new("node")
+        .arg(&script)
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "validator failed on {name}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    Some(serde_json::from_slice(&out.stdout).unwrap())
+}
+
+/// Asserts a report has no error and no warning, printing the report otherwise.
+fn assert_clean(name: &str, report: &serde_json::Value) {
+    let issues = &report["issues"];
+    let errors = issues["numErrors"].as_u64().unwrap();
+    let warnings = issues["numWarnings"].as_u64().unwrap();
+    assert!(
+        errors == 0 && warnings == 0,
+        "{name}: {errors} errors, {warnings} warnings:\n{}",
+        serde_json::to_string_pretty(report).unwrap()
+    );
+    // The validator did read the file: it counted the meshes' vertices.
+    assert!(
+        report["info"]["totalVertexCount"].as_u64().unwrap() > 0,
+        "{report}"
+    );
+}
+
+#[test]
+fn element_mesh_glb_passes_the_khronos_validator() {
+    let (scene, solution) = solved();
+    let glb = bake::encode_glb(solution, scene, ColorMapping::auto(solution)).unwrap();
+    if let Some(report) = validate("cornell-box.glb", &glb.bytes) {
+        assert_clean("cornell-box.glb", &report);
+    }
+}
+
+#[test]
+fn lightmap_glb_passes_the_khronos_validator() {
+    let (scene, solution) = solved();
+    let settings = twopass_bake::LightmapSettings {
+        texel_size: 10.0,
+        padding: 2,
+    };
+    let lm = bake::bake_lightmap(solution, scene, &settings, ColorMapping::auto(solution)).unwrap();
+    if let Some(report) = validate("cornell-box.lightmap.glb", &lm.glb) {
+        assert_clean("cornell-box.lightmap.glb", &report);
+        assert_eq!(report["info"]["hasTextures"], true, "{report}");
+        assert_eq!(report["info"]["maxUVs"], 2, "{report}");
+    }
+}
+
+#[test]
+fn per_vertex_glb_passes_the_khronos_validator() {
+    let (scene, solution) = solved();
+    let glb = bake::encode_vertex_glb(solution, scene, ColorMapping::auto(solution)).unwrap();
+    if let Some(report) = validate("cornell-box.vertex.glb", &glb.bytes) {
+        assert_clean("cornell-box.vertex.glb", &report);
+    }
+}
+
+#[test]
+fn validator_reports_a_broken_glb() {
+    // The check can fail: an index past the vertex count is an error the validator reports.
+    let (scene, solution) = solved();
+    let glb = bake::encode_glb(solution, scene, ColorMapping::auto(solution)).unwrap();
+    let mut bytes = glb.bytes.clone();
+    let json_len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let bin = 20 + json_len + 8;
+    // The last four bytes of the binary chunk are the last mesh's last index (u32).
+    let end = bytes.len();
+    assert!(end > bin + 4);
+    bytes[end - 4..].copy_from_slice(&u32::MAX.to_le_bytes());
+    if let Some(report) = validate("broken.glb", &bytes) {
+        assert!(
+            report["issues"]["numErrors"].as_u64().unwrap() > 0,
+            "{}",
+            serde_json::to_string_pretty(&report).unwrap()
+        );
+    }
+}

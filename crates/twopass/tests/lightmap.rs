@@ -1,0 +1,96 @@
+//! `twopass bake --lightmap` and `--format vertex-glb`: the files, each listed in the manifest with its size and
+//! CRC-32, and `--texel-size` only with `--lightmap`.
+
+mod common;
+
+use common::{repo, twopass};
+
+#[test]
+fn lightmap_bake_writes_its_files_into_the_manifest() {
+    let out_dir = tempfile::tempdir().unwrap();
+    let dir = out_dir.path();
+    let scene = repo("scenes/cornell-box.toml");
+    let out = twopass(&[
+        "bake",
+        scene.to_str().unwrap(),
+        "--output",
+        dir.to_str().unwrap(),
+        "--format",
+        "glb,vertex-glb",
+        "--lightmap",
+        "--texel-size",
+        "10",
+        "--element-size",
+        "100",
+        "--unshot",
+        "1e-2",
+        "--json",
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let manifest: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let files = manifest["files"].as_array().unwrap();
+    let mut names: Vec<&str> = files
+        .iter()
+        .map(|f| f["format"].as_str().unwrap())
+        .collect();
+    names.sort_unstable();
+    assert_eq!(
+        names,
+        [
+            "glb",
+            "lightmap-exr",
+            "lightmap-glb",
+            "lightmap-png",
+            "vertex.glb"
+        ]
+    );
+    for f in files {
+        let bytes = std::fs::read(f["path"].as_str().unwrap()).unwrap();
+        assert_eq!(f["bytes"].as_u64().unwrap(), bytes.len() as u64);
+        assert_eq!(
+            f["crc32"].as_u64().unwrap(),
+            u64::from(crc32fast::hash(&bytes))
+        );
+    }
+    let lm = &manifest["lightmap"];
+    assert_eq!(lm["texel_size"], 10.0);
+    // The box is about 556 x 549 x 559 mm: its six sides alone need about 5 x 55 x 55 texels
+    // of 10 mm, so the atlas holds at least that.
+    let texels = lm["width"].as_u64().unwrap() * lm["height"].as_u64().unwrap();
+    assert!(texels >= 5 * 55 * 55, "{lm}");
+    assert!(
+        lm["covered_texels"].as_u64().unwrap() >= 5 * 54 * 54,
+        "{lm}"
+    );
+    assert!(dir.join("cornell-box.lightmap.png").exists());
+}
+
+#[test]
+fn texel_size_needs_lightmap() {
+    let scene = repo("scenes/cornell-box.toml");
+    let out = twopass(&["bake", scene.to_str().unwrap(), "--texel-size", "5"]);
+    assert_eq!(
+        out.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let out = twopass(&[
+        "bake",
+        scene.to_str().unwrap(),
+        "--lightmap",
+        "--texel-size",
+        "-1",
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
