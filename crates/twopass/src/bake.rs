@@ -20,7 +20,7 @@ use crate::args::{checked, positive_finite};
 use crate::context::Context;
 use crate::error::CliError;
 use crate::preset::PRESET_SETS;
-use crate::solve::SolveArgs;
+use crate::solve::{SolveArgs, parse_length};
 
 /// An output format of `twopass bake`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, ValueEnum)]

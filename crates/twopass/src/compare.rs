@@ -10,10 +10,11 @@ use std::time::Instant;
 
 use clap::Args;
 use serde::Serialize;
+use twopass_composite::RenderMetadata;
 use twopass_composite::image::Image;
 use twopass_composite::metric::Metrics;
 use twopass_composite::sheet::{ComparisonOptions, Entry, comparison};
-use twopass_composite::write::{write_exr_layers, write_png};
+use twopass_composite::write::{write_exr_render, write_png};
 use twopass_radiosity::{Options, Solution, Solver, Stop};
 use twopass_scene::{Camera, Scene};
 use twopass_trace::{RenderStats, WhittedSettings};
@@ -256,13 +257,19 @@ fn render_methods(
         let out = render_with_bar(scene, camera, integ.as_ref(), &settings, method.name(), ctx)?;
         let layers = to_layers(&out.layers)?;
         let exr = dir.join(format!("{stem}-{}.exr", method.name()));
-        write_exr_layers(&exr, &layers)?;
         let image = layers.require("image")?.clone();
         let radiosity_seconds = if method.needs_radiosity() {
             solved.map_or(0.0, |s| s.1)
         } else {
             0.0
         };
+        let metadata = RenderMetadata::new(
+            method.name(),
+            settings.samples_per_pixel,
+            ctx.seed,
+            radiosity_seconds + out.stats.elapsed.as_secs_f64(),
+        );
+        write_exr_render(&exr, &layers, &metadata)?;
         images.push(Rendered {
             method,
             image,

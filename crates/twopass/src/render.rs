@@ -11,8 +11,9 @@ use std::time::Instant;
 
 use clap::Args;
 use serde::Serialize;
+use twopass_composite::RenderMetadata;
 use twopass_composite::tonemap::ToneMap;
-use twopass_composite::write::{write_exr_layers, write_png_tonemapped};
+use twopass_composite::write::{write_exr_render, write_png_tonemapped};
 use twopass_trace::WhittedSettings;
 
 use crate::args::checked;
@@ -169,7 +170,11 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
     let layers = to_layers(&out.layers)?;
     if let Some(exr) = &targets.exr {
         crate::output::create_dir(exr.parent().unwrap_or(Path::new("")))?;
-        write_exr_layers(exr, &layers)?;
+        // The header says how it was made: method, samples, seed, and the seconds of the
+        // whole run (solve and render).
+        let seconds = radiosity_seconds + out.stats.elapsed.as_secs_f64();
+        let metadata = RenderMetadata::new(method.name(), knobs.spp, ctx.seed, seconds);
+        write_exr_render(exr, &layers, &metadata)?;
     }
     if let Some(png) = &targets.png {
         let image = layers.require("image")?;

@@ -143,7 +143,7 @@ pub fn parse_fraction(s: &str) -> Result<f64, String> {
 
 /// A length in scene units: finite and > 0 (whether it fits the scene is checked by the
 /// solver, which knows the scene's area).
-fn parse_length(s: &str) -> Result<f32, String> {
+pub(crate) fn parse_length(s: &str) -> Result<f32, String> {
     checked(
         s,
         positive_finite,

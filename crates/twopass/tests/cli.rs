@@ -183,3 +183,53 @@ fn bench_render_times_every_method_and_the_bake_frame_rate() {
             .all(|r| r["non_finite"] == 0)
     );
 }
+
+#[test]
+fn render_exr_says_how_it_was_made() {
+    // The EXR of `render` carries the final image as plain R, G, B and the render's method,
+    // samples, seed and version in its header, read back here by the exr crate itself.
+    use exr::meta::attribute::AttributeValue;
+    let dir = tempfile::tempdir().unwrap();
+    let exr_path = dir.path().join("box.exr");
+    let scene = repo("scenes/cornell-box.toml");
+    let out = twopass(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--method",
+        "whitted",
+        "--width",
+        "16",
+        "--spp",
+        "2",
+        "--seed",
+        "7",
+        "-o",
+        exr_path.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let raw = exr::prelude::read_all_flat_layers_from_file(&exr_path).unwrap();
+    let layer = &raw.layer_data[0];
+    let names: Vec<String> = layer
+        .channel_data
+        .list
+        .iter()
+        .map(|c| c.name.to_string())
+        .collect();
+    for c in ["R", "G", "B", "image.R"] {
+        assert!(names.iter().any(|n| n == c), "no channel {c} in {names:?}");
+    }
+    let attr = |name: &str| match layer.attributes.other.get(&exr::prelude::Text::from(name)) {
+        Some(AttributeValue::Text(t)) => t.to_string(),
+        other => panic!("{name}: {other:?}"),
+    };
+    assert_eq!(attr("twopass:method"), "whitted");
+    assert_eq!(attr("twopass:spp"), "2");
+    assert_eq!(attr("twopass:seed"), "7");
+    assert!(attr("twopass:seconds").parse::<f64>().unwrap() > 0.0);
+    assert_eq!(attr("twopass:version"), env!("CARGO_PKG_VERSION"));
+}
