@@ -271,6 +271,64 @@ impl GlbBuilder {
     }
 
     /// The document as `.glb` bytes: one scene of every node, `asset.extras` = `extras`.
+    /// A mesh of vertex radiance: positions (m), normals and the display colour `COLOR_0`,
+    /// then the HDR radiance, direct and indirect parts under [`HDR_ATTRIBUTES`].
+    pub(crate) fn vertex_radiance_mesh(
+        &mut self,
+        name: &str,
+        [positions, normals, colours]: [&[Vec3]; 3],
+        [radiance, direct, indirect]: [&[Vec3]; 3],
+        indices: &[u32],
+        material: json::Index<json::Material>,
+    ) {
+        use json::mesh::Semantic as S;
+        self.mesh(
+            name,
+            &[
+                Attribute::Vec3(S::Positions, positions),
+                Attribute::Vec3(S::Normals, normals),
+                Attribute::Vec3(S::Colors(0), colours),
+                Attribute::Vec3(custom(HDR_ATTRIBUTES[0]), radiance),
+                Attribute::Vec3(custom(HDR_ATTRIBUTES[1]), direct),
+                Attribute::Vec3(custom(HDR_ATTRIBUTES[2]), indirect),
+            ],
+            indices,
+            material,
+        );
+    }
+
+    /// Closes a file of vertex-radiance meshes: the `extras` that say how to read them (the
+    /// colour mapping, units, clipped vertices) and the counts.
+    pub(crate) fn finish_vertex_radiance(
+        self,
+        scene: &Scene,
+        mapping: &ColorMapping,
+        clamped_vertices: usize,
+        (vertices, triangles): (usize, usize),
+    ) -> Result<Glb, BakeError> {
+        let scene_name = scene.path.display().to_string();
+        let extras = GlbExtras {
+            twopass: GlbExtrasBody {
+                color_0: ColorMapping::FORMULA,
+                exposure: mapping.exposure,
+                radiance_attributes: RADIANCE_ATTRIBUTES,
+                radiance_unit: "W/(m^2 sr)",
+                position_unit: "m",
+                scene_unit: scene.unit.symbol(),
+                metres_per_scene_unit: scene.unit.metres(),
+                clamped_vertices,
+                scene: &scene_name,
+            },
+        };
+        let bytes = self.finish(&scene_name, &extras)?;
+        Ok(Glb {
+            bytes,
+            clamped_vertices,
+            vertices,
+            triangles,
+        })
+    }
+
     pub(crate) fn finish(
         mut self,
         scene_name: &str,
@@ -444,46 +502,19 @@ pub fn encode_glb(
             })
             .collect();
         let (direct, indirect) = (pick(&parts.direct), pick(&parts.indirect));
-        use json::mesh::Semantic as S;
         let name = scene
             .objects
             .get(part.object as usize)
             .map_or_else(|| format!("object {}", part.object), |o| o.name.clone());
-        b.mesh(
+        b.vertex_radiance_mesh(
             &name,
-            &[
-                Attribute::Vec3(S::Positions, &positions),
-                Attribute::Vec3(S::Normals, &normals),
-                Attribute::Vec3(S::Colors(0), &colours),
-                Attribute::Vec3(custom(HDR_ATTRIBUTES[0]), &radiance),
-                Attribute::Vec3(custom(HDR_ATTRIBUTES[1]), &direct),
-                Attribute::Vec3(custom(HDR_ATTRIBUTES[2]), &indirect),
-            ],
+            [&positions, &normals, &colours],
+            [&radiance, &direct, &indirect],
             &part.indices,
             material,
         );
         n_vertices += part.vertices.len();
         n_triangles += part.indices.len() / 3;
     }
-    let scene_name = scene.path.display().to_string();
-    let extras = GlbExtras {
-        twopass: GlbExtrasBody {
-            color_0: ColorMapping::FORMULA,
-            exposure: mapping.exposure,
-            radiance_attributes: RADIANCE_ATTRIBUTES,
-            radiance_unit: "W/(m^2 sr)",
-            position_unit: "m",
-            scene_unit: scene.unit.symbol(),
-            metres_per_scene_unit: to_metres,
-            clamped_vertices,
-            scene: &scene_name,
-        },
-    };
-    let bytes = b.finish(&scene_name, &extras)?;
-    Ok(Glb {
-        bytes,
-        clamped_vertices,
-        vertices: n_vertices,
-        triangles: n_triangles,
-    })
+    b.finish_vertex_radiance(scene, &mapping, clamped_vertices, (n_vertices, n_triangles))
 }

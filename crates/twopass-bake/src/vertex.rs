@@ -4,17 +4,13 @@
 use std::collections::HashMap;
 
 use glam::Vec3;
-use gltf_json as json;
 use twopass_brdf::Rgb;
 use twopass_radiosity::Solution;
 use twopass_scene::Scene;
 
 use crate::colour::{ColorMapping, RadianceParts};
 use crate::error::BakeError;
-use crate::gltf::{
-    Attribute, Glb, GlbBuilder, GlbExtras, GlbExtrasBody, HDR_ATTRIBUTES, RADIANCE_ATTRIBUTES,
-    custom, unlit_vertex_colour_material,
-};
+use crate::gltf::{Glb, GlbBuilder, unlit_vertex_colour_material};
 
 /// Output vertices of the scene mesh: one per scene position and shading normal, where
 /// normals closer than [`COPLANAR_COS`](crate::lightmap::COPLANAR_COS) count as one (a
@@ -144,42 +140,15 @@ pub fn encode_vertex_glb(
                 c
             })
             .collect();
-        use json::mesh::Semantic as S;
-        b.mesh(
+        b.vertex_radiance_mesh(
             &object.name,
-            &[
-                Attribute::Vec3(S::Positions, &positions),
-                Attribute::Vec3(S::Normals, &normals),
-                Attribute::Vec3(S::Colors(0), &colours),
-                Attribute::Vec3(custom(HDR_ATTRIBUTES[0]), &radiance),
-                Attribute::Vec3(custom(HDR_ATTRIBUTES[1]), &direct),
-                Attribute::Vec3(custom(HDR_ATTRIBUTES[2]), &indirect),
-            ],
+            [&positions, &normals, &colours],
+            [&radiance, &direct, &indirect],
             &indices,
             material,
         );
         n_vertices += positions.len();
         n_triangles += indices.len() / 3;
     }
-    let scene_name = scene.path.display().to_string();
-    let extras = GlbExtras {
-        twopass: GlbExtrasBody {
-            color_0: ColorMapping::FORMULA,
-            exposure: mapping.exposure,
-            radiance_attributes: RADIANCE_ATTRIBUTES,
-            radiance_unit: "W/(m^2 sr)",
-            position_unit: "m",
-            scene_unit: scene.unit.symbol(),
-            metres_per_scene_unit: to_metres,
-            clamped_vertices,
-            scene: &scene_name,
-        },
-    };
-    let bytes = b.finish(&scene_name, &extras)?;
-    Ok(Glb {
-        bytes,
-        clamped_vertices,
-        vertices: n_vertices,
-        triangles: n_triangles,
-    })
+    b.finish_vertex_radiance(scene, &mapping, clamped_vertices, (n_vertices, n_triangles))
 }

@@ -6,15 +6,13 @@
 //! With `CI` set, a missing `blender` fails the test (`.ci/run` installs it); elsewhere the
 //! test prints a note and passes without checking.
 
-use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use twopass_bake::{ColorMapping, LightmapSettings, bake_lightmap};
-use twopass_radiosity::{Options, Solver, Stop};
 
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
+mod common;
+
+use common::{cornell, repo};
 
 #[test]
 fn blender_imports_the_lightmap_glb_at_real_size_with_its_lightmap() {
@@ -29,18 +27,7 @@ fn blender_imports_the_lightmap_glb_at_real_size_with_its_lightmap() {
         eprintln!("note: Blender import not checked: `blender` is not on PATH");
         return;
     }
-    let (scene, _) = twopass_scene::load(repo().join("scenes/cornell-box.toml")).unwrap();
-    let options = Options {
-        element_size: Some(100.0),
-        stop: Stop {
-            unshot_fraction: 1e-2,
-            ..Stop::default()
-        },
-        ..Options::default()
-    };
-    let mut solver = Solver::new(&scene, options).unwrap();
-    solver.run(|_| std::ops::ControlFlow::Continue(()));
-    let solution = solver.solution();
+    let (scene, solution) = cornell(100.0);
     let settings = LightmapSettings {
         texel_size: 5.0,
         padding: 2,

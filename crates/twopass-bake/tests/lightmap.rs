@@ -3,36 +3,24 @@
 //! texels near every chart corner are filled (padding), the lightmap carries the solution's
 //! radiant power, and its EXR and PNG read back with the `exr` and `png` readers.
 
-use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
 use glam::{DVec2, Vec2, Vec3};
 use twopass_bake::lightmap::{AtlasSource, Lightmap, LightmapSettings, bake_lightmap};
 use twopass_bake::{self as bake, ColorMapping};
-use twopass_radiosity::{Options, Solution, Solver, Stop};
+use twopass_radiosity::{Options, Solution, Solver};
+
+mod common;
+
+use common::cornell;
 use twopass_scene::Scene;
 
 const TEXEL: f32 = 5.0;
 
-fn cornell_path() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell-box.toml")
-}
-
 fn baked() -> &'static (Scene, Solution, Lightmap) {
     static BAKED: OnceLock<(Scene, Solution, Lightmap)> = OnceLock::new();
     BAKED.get_or_init(|| {
-        let (scene, _) = twopass_scene::load(cornell_path()).unwrap();
-        let options = Options {
-            element_size: Some(60.0),
-            stop: Stop {
-                unshot_fraction: 1e-2,
-                ..Stop::default()
-            },
-            ..Options::default()
-        };
-        let mut solver = Solver::new(&scene, options).unwrap();
-        solver.run(|_| std::ops::ControlFlow::Continue(()));
-        let solution = solver.solution();
+        let (scene, solution) = cornell(60.0);
         let settings = LightmapSettings {
             texel_size: TEXEL,
             padding: 2,

@@ -5,36 +5,21 @@
 //! prints a note and passes without validating, so `cargo test` works on a machine without
 //! Node.
 
-use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::OnceLock;
 
 use twopass_bake::{self as bake, ColorMapping};
-use twopass_radiosity::{Options, Solution, Solver, Stop};
+use twopass_radiosity::Solution;
 use twopass_scene::Scene;
 
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
+mod common;
+
+use common::{cornell, repo};
 
 /// The Cornell box, solved coarsely (the validator checks structure, not accuracy).
 fn solved() -> &'static (Scene, Solution) {
     static SOLVED: OnceLock<(Scene, Solution)> = OnceLock::new();
-    SOLVED.get_or_init(|| {
-        let (scene, _) = twopass_scene::load(repo().join("scenes/cornell-box.toml")).unwrap();
-        let options = Options {
-            element_size: Some(100.0),
-            stop: Stop {
-                unshot_fraction: 1e-2,
-                ..Stop::default()
-            },
-            ..Options::default()
-        };
-        let mut solver = Solver::new(&scene, options).unwrap();
-        solver.run(|_| std::ops::ControlFlow::Continue(()));
-        let solution = solver.solution();
-        (scene, solution)
-    })
+    SOLVED.get_or_init(|| cornell(100.0))
 }
 
 /// The validator's report of `bytes`, or `None` (after a note) when the validator is not

@@ -2,27 +2,16 @@
 //! vertices (in metres), and each vertex the radiance of the element-mesh vertex at the same
 //! place (every Cornell polygon is flat and one object, so exactly one).
 
-use std::path::Path;
 
 use glam::Vec3;
 use twopass_bake::{self as bake, ColorMapping, RadianceParts};
-use twopass_radiosity::{Options, Solver, Stop};
+mod common;
+
+use common::cornell;
 
 #[test]
 fn vertex_glb_holds_the_element_values_at_the_users_vertices() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell-box.toml");
-    let (scene, _) = twopass_scene::load(path).unwrap();
-    let options = Options {
-        element_size: Some(80.0),
-        stop: Stop {
-            unshot_fraction: 1e-2,
-            ..Stop::default()
-        },
-        ..Options::default()
-    };
-    let mut solver = Solver::new(&scene, options).unwrap();
-    solver.run(|_| std::ops::ControlFlow::Continue(()));
-    let solution = solver.solution();
+    let (scene, solution) = cornell(80.0);
     let mapping = ColorMapping::auto(&solution);
     let glb = bake::encode_vertex_glb(&solution, &scene, mapping).unwrap();
     let parts = RadianceParts::of(&solution);

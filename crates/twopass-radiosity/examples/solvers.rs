@@ -9,7 +9,8 @@
 //! diagnosis, environment variables set: `TOL` (link tolerance), `MIN` (smallest element
 //! edge), `ELEM` (progressive element size), `OCCLUSION=0` (no shadow rays), `PER_OBJECT`
 //! (reflected power per object, direct and indirect), `PER_VERTEX` (the same from vertex
-//! values), `HIERARCHICAL_ONLY` (skip progressive refinement, for large scenes).
+//! values), `HIERARCHICAL_ONLY` (skip progressive refinement, for large scenes), `VIS_MIN` and
+//! `VIS_MAX` (shadow rays per visibility estimate, first and most).
 
 use std::time::Instant;
 
@@ -86,72 +87,6 @@ fn object_power(scene: &twopass_scene::Scene, s: &Solution) -> Vec<(f64, f64)> {
     out
 }
 
-/// Direct reflected power per object (luminance-free: summed channels, W) by plain Monte Carlo
-/// with `n` point pairs per object and shadow rays: an estimate independent of both solvers.
-fn direct_monte_carlo(scene: &twopass_scene::Scene, n: u64) -> Vec<f64> {
-    use twopass_brdf::random::hash;
-    let unit = |h: u64| (h >> 11) as f64 / (1u64 << 53) as f64;
-    let pick = |tris: &std::ops::Range<u32>, u: f64| -> (u32, f64) {
-        let area: f64 = tris
-            .clone()
-            .map(|t| f64::from(scene.mesh.areas[t as usize]))
-            .sum();
-        let mut x = u * area;
-        for t in tris.clone() {
-            x -= f64::from(scene.mesh.areas[t as usize]);
-            if x <= 0.0 {
-                return (t, area);
-            }
-        }
-        (tris.end - 1, area)
-    };
-    scene
-        .objects
-        .iter()
-        .enumerate()
-        .map(|(o, obj)| {
-            let rho = scene.materials[obj.material as usize]
-                .material
-                .diffuse_albedo();
-            let mut sum = 0.0f64;
-            let mut area_o = 0.0;
-            for e in &scene.emitters {
-                let light = &scene.objects[e.object as usize];
-                if e.object as usize == o {
-                    continue;
-                }
-                let mut acc = 0.0f64;
-                let mut area_l = 0.0;
-                for i in 0..n {
-                    let h = hash(i ^ (o as u64) << 40);
-                    let (t, ao) = pick(&obj.triangles, unit(h));
-                    let (tl, al) = pick(&light.triangles, unit(hash(h ^ 1)));
-                    area_o = ao;
-                    area_l = al;
-                    let x = scene.mesh.sample_triangle(
-                        t,
-                        glam::Vec2::new(unit(hash(h ^ 2)) as f32, unit(hash(h ^ 3)) as f32),
-                    );
-                    let y = scene.mesh.sample_triangle(
-                        tl,
-                        glam::Vec2::new(unit(hash(h ^ 4)) as f32, unit(hash(h ^ 5)) as f32),
-                    );
-                    let d = (y.position - x.position).as_dvec3();
-                    let l2 = d.length_squared();
-                    let cx = x.normal.as_dvec3().dot(d) / l2.sqrt();
-                    let cy = -y.normal.as_dvec3().dot(d) / l2.sqrt();
-                    if cx <= 0.0 || cy <= 0.0 || scene.occluded_between(&x, &y) {
-                        continue;
-                    }
-                    acc += cx * cy / l2;
-                }
-                sum += f64::from((rho * e.radiance).element_sum()) * acc / n as f64 * area_l;
-            }
-            sum * area_o
-        })
-        .collect()
-}
-
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let path = args
@@ -164,16 +99,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let hier = solve(&scene, Method::Hierarchical, unshot)?;
     if std::env::var_os("HIERARCHICAL_ONLY").is_some() {
-        if let Ok(n) = std::env::var("DIRECT_MC") {
-            let mc = direct_monte_carlo(&scene, n.parse()?);
-            for (o, h) in object_power(&scene, &hier).iter().enumerate() {
-                println!(
-                    "  {:>20}: direct / Monte Carlo {:.4}",
-                    scene.objects[o].name,
-                    h.0 / mc[o]
-                );
-            }
-        }
         return Ok(());
     }
     let prog = solve(&scene, Method::Progressive, unshot)?;
@@ -205,20 +130,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         th.1 / tp.1
     );
     if std::env::var_os("PER_OBJECT").is_some() {
-        let mc: Option<Vec<f64>> = std::env::var("DIRECT_MC")
-            .ok()
-            .map(|n| n.parse().map(|n| direct_monte_carlo(&scene, n)))
-            .transpose()?;
         for (o, (h, p)) in ph.iter().zip(&pp).enumerate() {
-            let check = mc.as_ref().map_or(String::new(), |mc| {
-                format!(
-                    "; direct / Monte Carlo: hierarchical {:.4}, progressive {:.4}",
-                    h.0 / mc[o],
-                    p.0 / mc[o]
-                )
-            });
             println!(
-                "  {:>20}: power ratio direct {:.4}, indirect {:.4}{check}",
+                "  {:>20}: power ratio direct {:.4}, indirect {:.4}",
                 scene.objects[o].name,
                 h.0 / p.0,
                 h.1 / p.1

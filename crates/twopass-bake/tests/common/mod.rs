@@ -1,0 +1,33 @@
+//! What the bake crate's test binaries share: the repository root and the Cornell box solved
+//! coarsely by progressive refinement (the bake tests check formats and sampling, not the
+//! solver's accuracy).
+
+#![allow(dead_code)] // each test binary uses its own part
+
+use std::path::{Path, PathBuf};
+
+use twopass_radiosity::{Options, Solution, Solver, Stop};
+use twopass_scene::Scene;
+
+/// The repository root.
+pub fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// `scenes/cornell-box.toml` solved with elements of about `element_size` mm to an unshot
+/// fraction of 1e-2.
+pub fn cornell(element_size: f32) -> (Scene, Solution) {
+    let (scene, _) = twopass_scene::load(repo().join("scenes/cornell-box.toml")).unwrap();
+    let options = Options {
+        element_size: Some(element_size),
+        stop: Stop {
+            unshot_fraction: 1e-2,
+            ..Stop::default()
+        },
+        ..Options::default()
+    };
+    let mut solver = Solver::new(&scene, options).unwrap();
+    solver.run(|_| std::ops::ControlFlow::Continue(()));
+    let solution = solver.solution();
+    (scene, solution)
+}
