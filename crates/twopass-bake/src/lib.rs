@@ -76,7 +76,7 @@ pub use error::{BakeError, BakeProblem};
 pub use fingerprint::{Fingerprint, geometry_fingerprint, lighting_fingerprint, scene_fingerprint};
 pub use format::{BAKE_FORMAT_VERSION, MAX_BAKE_BYTES, decode_bake, encode_bake, read_bake};
 pub use gltf::{Glb, HDR_ATTRIBUTES, encode_glb};
-pub use lightmap::{AtlasSource, Lightmap, LightmapSettings, bake_lightmap};
+pub use lightmap::{AtlasSource, CameraRecord, Lightmap, LightmapSettings, bake_lightmap};
 pub use lightmap_read::{LightmapRadiance, lightmap_exr_path, read_lightmap_glb};
 pub use manifest::{
     AdaptiveRecord, ColorRecord, CountsRecord, EnergyRecord, FileRecord, LightmapRecord,
