@@ -108,8 +108,8 @@ pub fn load_lit(path: &Path, ctx: &Context) -> Result<Scene, CliError> {
 /// The diffuse light of the radiosity-based methods: a radiosity solution (solved now or read
 /// from a `.bake` file), or a lightmap bake read back (`.lightmap.glb` and its HDR EXR).
 pub enum Radiosity {
-    /// A radiosity solution.
-    Solution(Solution),
+    /// A radiosity solution (boxed: it is much larger than the lightmap's handle).
+    Solution(Box<Solution>),
     /// A lightmap bake: the lightmap sampled at each hit's `TEXCOORD_1`.
     Lightmap(twopass_bake::LightmapRadiance),
 }
@@ -118,7 +118,7 @@ impl Radiosity {
     /// The diffuse light as the tracer takes it.
     pub fn as_dyn(&self) -> &dyn DiffuseRadiance {
         match self {
-            Self::Solution(s) => s,
+            Self::Solution(s) => s.as_ref(),
             Self::Lightmap(l) => l,
         }
     }
@@ -149,7 +149,7 @@ pub fn radiosity(
         Some(file) => {
             check_in_set(file)?;
             Ok((
-                Radiosity::Solution(twopass_bake::read_bake(file, scene)?),
+                Radiosity::Solution(Box::new(twopass_bake::read_bake(file, scene)?)),
                 "bake",
             ))
         }
@@ -160,7 +160,7 @@ pub fn radiosity(
                     source,
                 })?;
             solve.run(&mut solver, ctx);
-            Ok((Radiosity::Solution(solver.solution()), "solve"))
+            Ok((Radiosity::Solution(Box::new(solver.solution())), "solve"))
         }
     }
 }
