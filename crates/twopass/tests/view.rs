@@ -12,6 +12,8 @@ use std::io::{BufRead, BufReader, Write};
 use std::net::TcpListener;
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use std::sync::{Arc, Condvar, Mutex};
+use std::time::Duration;
 
 use common::{assert_ok, repo, twopass};
 
@@ -24,14 +26,24 @@ fn missing(what: &str) -> bool {
     true
 }
 
+/// Longest wait of the page's `./hold` request for its `./ready`, real time.
+const HOLD_LIMIT: Duration = Duration::from_secs(120);
+
 /// Serves the files under `root` over HTTP/1.0 on a free local port, one thread per
-/// connection, for as long as the test runs; returns the page's URL.
+/// connection, for as long as the test runs; returns the page's URL (with `?hold`).
+///
+/// `/hold` answers only once a `/ready` request arrives after it (or after [`HOLD_LIMIT`]):
+/// the page opened with `?hold` requests `./hold` as it starts and `./ready` once it has drawn,
+/// and headless Chromium's virtual time stands still while a request is pending, so the DOM
+/// dump and the screenshot come after the page's first frame however slow the machine is.
 fn serve(root: PathBuf) -> String {
     let listener = TcpListener::bind("127.0.0.1:0").unwrap();
-    let url = format!("http://{}/", listener.local_addr().unwrap());
+    let url = format!("http://{}/?hold", listener.local_addr().unwrap());
+    let readies = Arc::new((Mutex::new(0u64), Condvar::new()));
     std::thread::spawn(move || {
         for stream in listener.incoming().flatten() {
             let root = root.clone();
+            let readies = Arc::clone(&readies);
             std::thread::spawn(move || {
                 let mut reader = BufReader::new(&stream);
                 let mut line = String::new();
@@ -52,6 +64,19 @@ fn serve(root: PathBuf) -> String {
                 };
                 let file = root.join(rel);
                 let mut stream = &stream;
+                let (count, changed) = &*readies;
+                if rel == "hold" || rel == "ready" {
+                    let mut n = count.lock().unwrap();
+                    if rel == "ready" {
+                        *n += 1;
+                        changed.notify_all();
+                    } else {
+                        let seen = *n;
+                        let _ = changed.wait_timeout_while(n, HOLD_LIMIT, |n| *n == seen);
+                    }
+                    let _ = stream.write_all(b"HTTP/1.0 204 No Content\r\n\r\n");
+                    return;
+                }
                 let body = if rel.contains("..") {
                     None
                 } else {
@@ -97,8 +122,8 @@ fn chromium(url: &str, (width, height): (u32, u32), profile: &Path, extra: &str)
             "--enable-unsafe-swiftshader",
             "--force-device-scale-factor=1",
             "--hide-scrollbars",
-            // The page's load (three.js, the .glb, the first frame) fits in this much virtual
-            // time; the DOM or the screenshot is taken after it.
+            // Virtual time for the page after its load; it stands still while the page's
+            // `./hold` request is pending (see `serve`), so the first frame comes first.
             "--virtual-time-budget=20000",
             &format!("--user-data-dir={}", profile.display()),
             &format!("--window-size={width},{height}"),

@@ -11,10 +11,19 @@ import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 
+// For automated screenshots (crates/twopass/tests/view.rs): with `?hold` in the URL the page
+// keeps a request to ./hold open until it has drawn (or failed), then requests ./ready. A
+// headless browser's virtual-time budget does not run out while a request is pending, so its
+// screenshot is taken after the frame even when a busy machine slows the load.
+const hold = new URLSearchParams(window.location.search).has('hold');
+if (hold) fetch('./hold').catch(() => {});
+const settled = () => { if (hold) fetch('./ready').catch(() => {}); };
+
 const status = document.getElementById('status');
 const fail = (message) => {
   status.textContent = `twopass view: ${message}`;
   document.title = `twopass view: error: ${message}`;
+  settled();
 };
 status.textContent = 'Loading the bake...';
 
@@ -68,4 +77,5 @@ new GLTFLoader().load(file, (gltf) => {
   draw();
   status.remove();
   document.title = 'twopass view: ready';
+  settled();
 }, undefined, (e) => fail(`cannot load ${file}: ${e?.message ?? e}`));
