@@ -67,6 +67,9 @@ pub enum BakeProblem {
         /// What is wrong.
         problem: &'static str,
     },
+    /// A lightmap bake (`.lightmap.glb` and its EXR) that cannot serve the scene: what is
+    /// wrong with it.
+    Lightmap(String),
 }
 
 impl fmt::Display for BakeProblem {
@@ -106,6 +109,7 @@ impl fmt::Display for BakeProblem {
                 index,
                 problem,
             } => write!(f, "bake {what} [{index}]: {problem}"),
+            Self::Lightmap(message) => write!(f, "lightmap bake: {message}"),
         }
     }
 }

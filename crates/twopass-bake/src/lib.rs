@@ -41,7 +41,7 @@
 //! invariants"): twopass-radiosity computes and never touches a file or a file format; this
 //! crate encodes, decodes, reads and writes. Modules, one job each: [`error`], [`fingerprint`],
 //! [`format`](mod@format) (the bake file), [`colour`] (radiance to `COLOR_0`), [`gltf`],
-//! [`lightmap`], [`vertex`] (the per-vertex bake on the scene's own mesh), [`ply`],
+//! [`lightmap`], [`lightmap_read`] (a lightmap bake read back as diffuse light), [`vertex`] (the per-vertex bake on the scene's own mesh), [`ply`],
 //! [`manifest`].
 //!
 //! ```no_run
@@ -66,6 +66,7 @@ pub mod fingerprint;
 pub mod format;
 pub mod gltf;
 pub mod lightmap;
+pub mod lightmap_read;
 pub mod manifest;
 pub mod ply;
 pub mod vertex;
@@ -75,7 +76,8 @@ pub use error::{BakeError, BakeProblem};
 pub use fingerprint::{Fingerprint, geometry_fingerprint, lighting_fingerprint, scene_fingerprint};
 pub use format::{BAKE_FORMAT_VERSION, MAX_BAKE_BYTES, decode_bake, encode_bake, read_bake};
 pub use gltf::{Glb, HDR_ATTRIBUTES, encode_glb};
-pub use lightmap::{AtlasSource, Lightmap, LightmapSettings, bake_lightmap};
+pub use lightmap::{AtlasSource, CameraRecord, Lightmap, LightmapSettings, bake_lightmap};
+pub use lightmap_read::{LightmapRadiance, lightmap_exr_path, read_lightmap_glb};
 pub use manifest::{
     AdaptiveRecord, ColorRecord, CountsRecord, EnergyRecord, FileRecord, LightmapRecord,
     MANIFEST_VERSION, Manifest, ResidualsRecord, SettingsRecord, TimingsRecord,

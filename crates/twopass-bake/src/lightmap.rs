@@ -511,6 +511,46 @@ struct LightmapExtrasBody<'a> {
     scene_unit: &'static str,
     metres_per_scene_unit: f64,
     scene: &'a str,
+    camera: CameraRecord,
+}
+
+/// The scene's camera as the lightmap `.glb` records it (`asset.extras.twopass.camera`), so
+/// a viewer (the page of `twopass view`) can show the bake from the view twopass renders.
+/// Positions in metres, in the `.glb`'s frame.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct CameraRecord {
+    /// Eye position, metres.
+    pub position: [f32; 3],
+    /// The point looked at, metres: on the viewing axis, as far along it as the centre of
+    /// the scene's bounding box (the point a viewer orbits around).
+    pub target: [f32; 3],
+    /// Unit image-up direction.
+    pub up: [f32; 3],
+    /// Vertical field of view, degrees.
+    pub vertical_fov_degrees: f32,
+    /// The scene's image width, pixels.
+    pub width: u32,
+    /// The scene's image height, pixels.
+    pub height: u32,
+}
+
+impl CameraRecord {
+    /// The record of `scene`'s camera.
+    pub fn of(scene: &Scene) -> Self {
+        let c = &scene.camera;
+        let m = scene.unit.metres();
+        let centre = (scene.bounds.min + scene.bounds.max) * 0.5;
+        let along = c.forward.dot(centre - c.position).max(f32::EPSILON);
+        let metres = |p: Vec3| (p.as_dvec3() * m).as_vec3().to_array();
+        Self {
+            position: metres(c.position),
+            target: metres(c.position + c.forward * along),
+            up: c.up.to_array(),
+            vertical_fov_degrees: c.fov_y.to_degrees(),
+            width: c.width,
+            height: c.height,
+        }
+    }
 }
 
 /// How the lightmap PNG encodes radiance, as recorded in the `.glb`.
@@ -530,7 +570,9 @@ pub const PNG_FORMULA: &str = "sRGB-encoded 8-bit of min(1, exposure * L), L the
 /// The `.glb` has one mesh and node per object (named after it), `POSITION` in metres,
 /// `NORMAL` (the scene's shading normals), `TEXCOORD_1` (and `TEXCOORD_0`, the same atlas:
 /// glTF wants sets numbered from 0), and one material: black base colour, metallic 0,
-/// roughness 1, and the PNG as `emissiveTexture` with `texCoord` 1 (emissive factor 1). Any
+/// roughness 1, and the PNG as `emissiveTexture` with `texCoord` 1 (emissive factor 1); its
+/// `asset.extras.twopass` say how the PNG encodes radiance (`exposure`) and where the scene's
+/// camera is ([`CameraRecord`]). Any
 /// glTF viewer then shows the baked light as the surface's emission without relighting it;
 /// engines with a lightmap slot take the same texture on UV set 1 (README, "Bakes for
 /// engines"). A vertex is written once per position, shading normal (normals within
@@ -690,6 +732,7 @@ fn encode_lightmap_glb(
             scene_unit: scene.unit.symbol(),
             metres_per_scene_unit: to_metres,
             scene: &scene_name,
+            camera: CameraRecord::of(scene),
         },
     };
     b.finish(&scene_name, &extras)

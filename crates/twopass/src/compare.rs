@@ -243,7 +243,7 @@ fn render_methods(
         let integ = integrator(
             method,
             scene,
-            solved.map(|s| s.0),
+            solved.map(|s| s.0 as &dyn twopass_scene::DiffuseRadiance),
             WhittedSettings::default(),
         );
         let settings = render_settings(

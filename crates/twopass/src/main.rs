@@ -48,6 +48,7 @@ mod plan;
 mod preset;
 mod render;
 mod solve;
+mod view;
 
 use std::process::ExitCode;
 
@@ -83,6 +84,8 @@ enum Command {
     /// Measure the engine: ray queries, radiosity solves, renders, and the speed/accuracy trade.
     #[command(subcommand)]
     Bench(bench::BenchCommand),
+    /// Write a static three.js page that shows a lightmap bake from the scene's camera.
+    View(view::ViewArgs),
 }
 
 fn main() -> ExitCode {
@@ -118,5 +121,6 @@ fn run(cli: Cli) -> Result<(), CliError> {
         Command::Compare(args) => compare::run(args, &cli.ctx),
         Command::Bake(args) => bake::run(args, &cli.ctx),
         Command::Bench(cmd) => bench::run(cmd, &cli.ctx),
+        Command::View(args) => view::run(args, &cli.ctx),
     }
 }

@@ -12,7 +12,7 @@ use twopass_bake::Manifest;
 use twopass_composite::image::Image;
 use twopass_composite::layer::Layers;
 use twopass_radiosity::{Solution, Solver};
-use twopass_scene::Scene;
+use twopass_scene::{DiffuseRadiance, Scene};
 use twopass_trace::hybrid::{hybrid, hybrid_direct, radiosity_only};
 use twopass_trace::whitted::ambient_estimate;
 use twopass_trace::{
@@ -105,18 +105,53 @@ pub fn load_lit(path: &Path, ctx: &Context) -> Result<Scene, CliError> {
     Ok(scene)
 }
 
-/// The radiosity for the radiosity-based methods: from a bake file, or solved now.
+/// The diffuse light of the radiosity-based methods: a radiosity solution (solved now or read
+/// from a `.bake` file), or a lightmap bake read back (`.lightmap.glb` and its HDR EXR).
+pub enum Radiosity {
+    /// A radiosity solution (boxed: it is much larger than the lightmap's handle).
+    Solution(Box<Solution>),
+    /// A lightmap bake: the lightmap sampled at each hit's `TEXCOORD_1`.
+    Lightmap(twopass_bake::LightmapRadiance),
+}
+
+impl Radiosity {
+    /// The diffuse light as the tracer takes it.
+    pub fn as_dyn(&self) -> &dyn DiffuseRadiance {
+        match self {
+            Self::Solution(s) => s.as_ref(),
+            Self::Lightmap(l) => l,
+        }
+    }
+}
+
+/// Whether `--bake FILE` names a lightmap `.glb` rather than a `.bake` file.
+pub fn is_glb(file: &Path) -> bool {
+    file.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("glb"))
+}
+
+/// The radiosity for the radiosity-based methods: from a bake file, a lightmap `.glb` (with
+/// its HDR EXR beside it), or solved now.
 pub fn radiosity(
     scene: &Scene,
     path: &Path,
     bake: Option<&Path>,
     solve: &SolveArgs,
     ctx: &Context,
-) -> Result<(Solution, &'static str), CliError> {
+) -> Result<(Radiosity, &'static str), CliError> {
     match bake {
+        Some(file) if is_glb(file) => {
+            check_in_set(file)?;
+            check_in_set(&twopass_bake::lightmap_exr_path(file))?;
+            let lightmap = twopass_bake::read_lightmap_glb(file, scene)?;
+            Ok((Radiosity::Lightmap(lightmap), "lightmap"))
+        }
         Some(file) => {
             check_in_set(file)?;
-            Ok((twopass_bake::read_bake(file, scene)?, "bake"))
+            Ok((
+                Radiosity::Solution(Box::new(twopass_bake::read_bake(file, scene)?)),
+                "bake",
+            ))
         }
         None => {
             let mut solver =
@@ -125,7 +160,7 @@ pub fn radiosity(
                     source,
                 })?;
             solve.run(&mut solver, ctx);
-            Ok((solver.solution(), "solve"))
+            Ok((Radiosity::Solution(Box::new(solver.solution())), "solve"))
         }
     }
 }
@@ -222,7 +257,7 @@ pub fn to_layers(images: &LayerImages) -> Result<Layers, CliError> {
 pub fn integrator<'a>(
     method: Method,
     scene: &'a Scene,
-    solution: Option<&'a Solution>,
+    solution: Option<&'a dyn DiffuseRadiance>,
     whitted: WhittedSettings,
 ) -> Box<dyn Integrator + 'a> {
     let solution = || solution.expect("radiosity-based methods get a solution");
@@ -236,14 +271,17 @@ pub fn integrator<'a>(
 }
 
 /// Checks a bake file against the manifest of its set, when one lies beside it
-/// (`<stem>.manifest.json`): a file whose size or CRC-32 differs from the manifest's record is
+/// (`<stem>.manifest.json`, for `<stem>.lightmap.glb` and `.exr` too): a file whose size or CRC-32 differs from the manifest's record is
 /// from another bake (one interrupted between its files), and the set is refused.
 pub fn check_in_set(file: &Path) -> Result<(), CliError> {
     let (Some(dir), Some(stem), Some(name)) = (file.parent(), file.file_stem(), file.file_name())
     else {
         return Ok(());
     };
-    let manifest_path = dir.join(format!("{}.manifest.json", stem.to_string_lossy()));
+    // A lightmap's files (`x.lightmap.glb`, `x.lightmap.exr`) belong to `x.manifest.json`.
+    let stem = stem.to_string_lossy();
+    let stem = stem.strip_suffix(".lightmap").unwrap_or(&stem);
+    let manifest_path = dir.join(format!("{stem}.manifest.json"));
     let text = match crate::output::read_small(&manifest_path) {
         Ok(text) => text,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),

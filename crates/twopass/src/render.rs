@@ -4,7 +4,9 @@
 //! (no image extension, or a trailing `/`) is a directory for `<stem>-<method>.exr`.
 //!
 //! The radiosity-based methods take their diffuse light from a fresh solve, or from a bake file
-//! of `twopass bake` (`--bake FILE`), which renders any view without solving again.
+//! of `twopass bake` (`--bake FILE`), which renders any view without solving again, or from a
+//! lightmap bake (`--bake x.lightmap.glb`: the HDR lightmap `x.lightmap.exr` beside it, sampled
+//! at each hit's `TEXCOORD_1`), which shows what an engine given the lightmap would show.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -20,7 +22,7 @@ use crate::args::checked;
 use crate::context::Context;
 use crate::error::CliError;
 use crate::pipeline::{
-    MAX_DEPTH, Method, integrator, radiosity, render_settings, render_with_bar, to_layers,
+    MAX_DEPTH, Method, integrator, is_glb, radiosity, render_settings, render_with_bar, to_layers,
 };
 use crate::plan::plan;
 use crate::preset::{PRESET_SETS, RadiosityKnobs, RenderKnobs};
@@ -34,7 +36,10 @@ pub struct RenderArgs {
     /// The method.
     #[arg(long, value_enum, default_value = "hybrid")]
     pub method: Method,
-    /// Bake file from `twopass bake` for the radiosity-based methods (default: solve now).
+    /// Bake file from `twopass bake` for the radiosity-based methods (default: solve now): a
+    /// `.bake` file, or a lightmap `<stem>.lightmap.glb` (its HDR `<stem>.lightmap.exr` beside
+    /// it gives the light, sampled bilinearly at each hit's `TEXCOORD_1`; radiosity and hybrid
+    /// only).
     #[arg(long, value_name = "FILE")]
     pub bake: Option<PathBuf>,
     /// Samples per pixel (stratified).
@@ -122,6 +127,13 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
             method.name()
         )));
     }
+    if args.bake.as_deref().is_some_and(is_glb) && method == Method::HybridDirect {
+        return Err(CliError::Input(format!(
+            "--bake {}: a lightmap holds the total diffuse light, not the indirect part \
+             hybrid-direct adds to its direct light; use radiosity or hybrid, or a .bake file",
+            args.bake.as_deref().unwrap_or(Path::new("")).display()
+        )));
+    }
     let targets = targets(ctx.output.as_deref(), &args.scene, method, args.png)?;
     let camera = ctx.camera(&scene.camera)?;
     let decisions = plan(&scene);
@@ -155,7 +167,7 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
     let integrator = integrator(
         method,
         &scene,
-        solution.as_ref().map(|s| &s.0),
+        solution.as_ref().map(|s| s.0.as_dyn()),
         knobs.whitted(),
     );
     let settings = render_settings(knobs.spp, ctx.seed);

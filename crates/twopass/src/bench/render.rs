@@ -102,7 +102,14 @@ pub fn run(args: &RenderBenchArgs, ctx: &Context) -> Result<(), CliError> {
         Method::Reference,
     ]
     .into_iter()
-    .map(|m| integrator(m, &scene, Some(&solution), w))
+    .map(|m| {
+        integrator(
+            m,
+            &scene,
+            Some(&solution as &dyn twopass_scene::DiffuseRadiance),
+            w,
+        )
+    })
     .collect();
     let bar = ctx.progress(methods.len() as u64 + 1, "bench render");
     let mut rows = Vec::new();

@@ -387,7 +387,7 @@ fn measure_runs(
         let integ = integrator(
             run.method,
             scene,
-            solve.map(|s| &s.1.solution),
+            solve.map(|s| &s.1.solution as &dyn twopass_scene::DiffuseRadiance),
             run.render.whitted(),
         );
         let settings = render_settings(run.render.spp, ctx.seed);
