@@ -2,7 +2,6 @@
 //! vertices (in metres), and each vertex the radiance of the element-mesh vertex at the same
 //! place (every Cornell polygon is flat and one object, so exactly one).
 
-
 use glam::Vec3;
 use twopass_bake::{self as bake, ColorMapping, RadianceParts};
 mod common;

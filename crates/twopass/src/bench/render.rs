@@ -78,10 +78,7 @@ pub fn run(args: &RenderBenchArgs, ctx: &Context) -> Result<(), CliError> {
         None => {
             let mut solver = twopass_radiosity::Solver::new(
                 &scene,
-                twopass_radiosity::Options {
-                    seed: ctx.seed,
-                    ..Default::default()
-                },
+                crate::solve::SolveArgs::default().options(ctx.seed),
             )
             .map_err(|source| CliError::Solve {
                 path: args.scene.clone(),
