@@ -23,3 +23,9 @@ mod tests {
         assert_eq!(luminance(Vec3::new(0.0, 2.0, 0.0)), 2.0 * 0.7152);
     }
 }
+
+/// The mean of the three channels (a lobe's weight when choosing which part to sample).
+#[inline]
+pub(crate) fn mean(c: Vec3) -> f32 {
+    (c.x + c.y + c.z) / 3.0
+}
