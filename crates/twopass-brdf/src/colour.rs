@@ -13,6 +13,12 @@ pub fn luminance(rgb: Vec3) -> f32 {
     rgb.dot(LUMINANCE)
 }
 
+/// The mean of the three channels (a lobe's weight when choosing which part to sample).
+#[inline]
+pub(crate) fn mean(c: Vec3) -> f32 {
+    (c.x + c.y + c.z) / 3.0
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -22,10 +28,4 @@ mod tests {
         assert!((luminance(Vec3::ONE) - 1.0).abs() < 1e-6);
         assert_eq!(luminance(Vec3::new(0.0, 2.0, 0.0)), 2.0 * 0.7152);
     }
-}
-
-/// The mean of the three channels (a lobe's weight when choosing which part to sample).
-#[inline]
-pub(crate) fn mean(c: Vec3) -> f32 {
-    (c.x + c.y + c.z) / 3.0
 }
