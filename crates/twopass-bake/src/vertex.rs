@@ -73,7 +73,7 @@ fn parts_at(solution: &Solution, parts: &RadianceParts, t: u32, b: [f32; 3]) -> 
 /// Encodes the scene's own triangles (not the element mesh) as a glTF binary with the
 /// solution sampled at their vertices: one mesh and node per object, `POSITION` in metres,
 /// `NORMAL` (the scene's shading normals), `COLOR_0` (`mapping`, clipped for display) and the
-/// HDR radiance with its parts as [`HDR_ATTRIBUTES`] (W/(m^2 sr)), under the unlit material of
+/// HDR radiance with its parts as [`HDR_ATTRIBUTES`](crate::HDR_ATTRIBUTES) (W/(m^2 sr)), under the unlit material of
 /// [`encode_glb`](crate::encode_glb). A vertex is one scene position with one shading normal
 /// (normals within [`COPLANAR_COS`](crate::lightmap::COPLANAR_COS) count as one); its value is the mean, over the triangles that use it, of the element mesh's
 /// interpolated value at that corner (equal on a smooth surface, different across a crease
