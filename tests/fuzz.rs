@@ -20,7 +20,7 @@ use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed, TestRunner};
 use twopass_radiosity::{Options, Solver, Stop};
 use twopass_scene::{Scene, SceneError, Warning};
-use twopass_trace::{Progress, RenderSettings, Whitted, WhittedSettings, render};
+use twopass_trace::{RenderProgress, RenderSettings, Whitted, WhittedSettings, render};
 
 use crate::{data, scene_path};
 
@@ -204,7 +204,7 @@ fn exercise(result: Result<(Scene, Vec<Warning>), SceneError>) {
         samples_per_pixel: 1,
         ..RenderSettings::default()
     };
-    let out = render(&scene, &camera, &whitted, &settings, &Progress::new());
+    let out = render(&scene, &camera, &whitted, &settings, &RenderProgress::new());
     let image = out.layers.composite();
     assert!(
         image.pixels.iter().all(|p| p.is_finite()),

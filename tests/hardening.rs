@@ -237,13 +237,13 @@ fn a_scene_near_the_range_limit_renders_as_at_unit_scale() {
             &camera,
             &whitted,
             &settings,
-            &twopass_trace::Progress::new(),
+            &twopass_trace::RenderProgress::new(),
         );
         assert_eq!(out.stats.non_finite, 0, "scale {s}");
         out.layers.composite()
     };
     let (unit, big) = (render(1.0), render(1e9));
-    let mean = |img: &twopass_trace::Image| {
+    let mean = |img: &twopass_trace::FilmImage| {
         img.pixels
             .iter()
             .fold(Vec3::ZERO, |a, p| a + Vec3::from_array(p.to_array()))

@@ -5,7 +5,8 @@
 use glam::Vec2;
 use twopass_scene::Ray;
 use twopass_trace::{
-    Layer, Progress, Reference, ReferenceSettings, RenderSettings, Whitted, WhittedSettings, render,
+    Layer, Reference, ReferenceSettings, RenderProgress, RenderSettings, Whitted, WhittedSettings,
+    render,
 };
 
 use super::common::{mean_and_error, scene};
@@ -89,7 +90,13 @@ fn whitted_matches_the_closed_form_within_one_percent() {
             ..Default::default()
         },
     );
-    let out = render(&scene, &scene.camera, &w, &settings(1), &Progress::new());
+    let out = render(
+        &scene,
+        &scene.camera,
+        &w,
+        &settings(1),
+        &RenderProgress::new(),
+    );
     let img = out.layers.layer(Layer::Diffuse);
     let mut worst = 0.0_f64;
     let mut n = 0;
@@ -110,7 +117,13 @@ fn reference_matches_the_closed_form_within_its_noise_and_one_percent() {
     let scene = plane_scene();
     let exact = expected(&scene);
     let r = Reference::new(&scene, ReferenceSettings::default());
-    let out = render(&scene, &scene.camera, &r, &settings(64), &Progress::new());
+    let out = render(
+        &scene,
+        &scene.camera,
+        &r,
+        &settings(64),
+        &RenderProgress::new(),
+    );
     let img = out.layers.composite();
     // Per pixel relative differences are independent estimates of zero.
     let diffs: Vec<f64> = exact

@@ -2,7 +2,7 @@
 
 use twopass_scene::{Ray, Scene};
 use twopass_trace::{
-    Integrator, Layer, Progress, Radiance, Reference, ReferenceSettings, RenderOutput,
+    Integrator, Layer, Radiance, Reference, ReferenceSettings, RenderOutput, RenderProgress,
     RenderSettings, Sampler, Tally, Whitted, WhittedSettings, render,
 };
 
@@ -34,10 +34,22 @@ fn same_seed_gives_bit_identical_images_at_one_and_two_threads() {
     );
     for integrator in [&reference as &dyn Integrator, &whitted] {
         let one = on_threads(1, || {
-            render(&scene, &camera, integrator, &settings, &Progress::new())
+            render(
+                &scene,
+                &camera,
+                integrator,
+                &settings,
+                &RenderProgress::new(),
+            )
         });
         let two = on_threads(2, || {
-            render(&scene, &camera, integrator, &settings, &Progress::new())
+            render(
+                &scene,
+                &camera,
+                integrator,
+                &settings,
+                &RenderProgress::new(),
+            )
         });
         assert_eq!(one.layers, two.layers, "{} differs", integrator.name());
         assert_eq!(
@@ -53,7 +65,7 @@ fn same_seed_gives_bit_identical_images_at_one_and_two_threads() {
                 seed: 43,
                 ..settings
             },
-            &Progress::new(),
+            &RenderProgress::new(),
         );
         assert_ne!(one.layers, other.layers);
     }
@@ -87,7 +99,7 @@ fn non_finite_samples_are_counted_and_never_written() {
         samples_per_pixel: 4,
         ..Default::default()
     };
-    let progress = Progress::new();
+    let progress = RenderProgress::new();
     let out = render(&scene, &camera, &Faulty, &settings, &progress);
     assert_eq!(progress.done(), 256);
     assert_eq!(progress.fraction(), 1.0);
@@ -120,7 +132,7 @@ fn layers_sum_to_the_image_and_split_by_first_event() {
         &camera,
         &w,
         &RenderSettings::default(),
-        &Progress::new(),
+        &RenderProgress::new(),
     );
     let l = &out.layers;
     // The spheres reflect and refract; the walls are diffuse with ambient; the light emits.

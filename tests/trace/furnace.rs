@@ -3,7 +3,7 @@
 //! inward-facing quads (built-in spheres face outward and emitters are one-sided, so a sphere
 //! seen from inside would neither emit nor reflect).
 
-use twopass_trace::{Progress, Reference, ReferenceSettings, RenderSettings, render};
+use twopass_trace::{Reference, ReferenceSettings, RenderProgress, RenderSettings, render};
 
 use super::common::{mean_and_error, scene};
 
@@ -32,7 +32,7 @@ fn path_tracer_furnace_has_radiance_one() {
         seed: 3,
         ..Default::default()
     };
-    let out = render(&scene, &scene.camera, &r, &settings, &Progress::new());
+    let out = render(&scene, &scene.camera, &r, &settings, &RenderProgress::new());
     assert_eq!(out.stats.non_finite, 0);
     let img = out.layers.composite();
     for c in 0..3 {

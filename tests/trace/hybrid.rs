@@ -9,7 +9,7 @@ use twopass_brdf::Rgb;
 use twopass_scene::DiffuseRadiance;
 use twopass_trace::hybrid::{hybrid, hybrid_direct, radiosity_only};
 use twopass_trace::{
-    Layer, Progress, Reference, ReferenceSettings, RenderSettings, WhittedSettings, render,
+    Layer, Reference, ReferenceSettings, RenderProgress, RenderSettings, WhittedSettings, render,
 };
 
 use super::common::repo_scene;
@@ -54,14 +54,14 @@ fn hybrid_equals_radiosity_alone_on_lambertian_scenes() {
         &camera,
         &radiosity_only(&scene, &double),
         &settings(),
-        &Progress::new(),
+        &RenderProgress::new(),
     );
     let b = render(
         &scene,
         &camera,
         &hybrid(&scene, &double, WhittedSettings::default()),
         &settings(),
-        &Progress::new(),
+        &RenderProgress::new(),
     );
     assert_eq!(a.layers, b.layers, "hybrid differs from radiosity alone");
     assert_eq!(
@@ -80,7 +80,7 @@ fn hybrid_with_a_real_solution_matches_radiosity_alone_and_the_reference() {
     let finish = solver.run(|_| ControlFlow::Continue(()));
     assert_eq!(finish, twopass_radiosity::Finish::Converged);
     let solution = solver.solution();
-    let p = Progress::new();
+    let p = RenderProgress::new();
     let alone = render(
         &scene,
         &camera,
@@ -112,7 +112,7 @@ fn hybrid_with_a_real_solution_matches_radiosity_alone_and_the_reference() {
 }
 
 /// Relative RMS error of issue 7: sqrt(mean((x - r)^2 / (r^2 + 0.01))) over pixels and channels.
-fn relative_rmse(x: &twopass_trace::Image, r: &twopass_trace::Image) -> f64 {
+fn relative_rmse(x: &twopass_trace::FilmImage, r: &twopass_trace::FilmImage) -> f64 {
     let mut sum = 0.0;
     for (a, b) in x.pixels.iter().zip(&r.pixels) {
         for c in 0..3 {
@@ -127,7 +127,7 @@ fn relative_rmse(x: &twopass_trace::Image, r: &twopass_trace::Image) -> f64 {
 fn hybrid_error_against_the_reference_shrinks_as_the_mesh_is_refined() {
     let scene = repo_scene("cornell-box.toml");
     let camera = scene.camera.with_resolution(Some(16), Some(16));
-    let p = Progress::new();
+    let p = RenderProgress::new();
     // Two independent references: their difference measures the reference's own noise.
     let reference = Reference::new(&scene, ReferenceSettings::default());
     let spp = |samples_per_pixel, seed| RenderSettings {

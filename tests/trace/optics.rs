@@ -4,7 +4,7 @@
 //! rays leaving a surface never hit it again is `accel::spawned_rays_never_rehit_their_own_surface`.
 
 use glam::{Vec2, Vec3};
-use twopass_trace::{Layer, Progress, RenderSettings, Whitted, WhittedSettings, render};
+use twopass_trace::{Layer, RenderProgress, RenderSettings, Whitted, WhittedSettings, render};
 
 use super::common::scene;
 
@@ -45,9 +45,15 @@ fn mirror_shows_the_mirrored_scene_pixel_for_pixel() {
         &with_mirror.camera,
         &w,
         &centres(),
-        &Progress::new(),
+        &RenderProgress::new(),
     );
-    let b = render(&direct, &direct.camera, &w, &centres(), &Progress::new());
+    let b = render(
+        &direct,
+        &direct.camera,
+        &w,
+        &centres(),
+        &RenderProgress::new(),
+    );
     let (ra, eb) = (
         a.layers.layer(Layer::Reflection),
         b.layers.layer(Layer::Emission),
@@ -89,7 +95,7 @@ fn glass_slab_transmits_per_exact_fresnel() {
             shadow_grid: 1,
         },
     );
-    let out = render(&s, &s.camera, &w, &centres(), &Progress::new());
+    let out = render(&s, &s.camera, &w, &centres(), &RenderProgress::new());
     let t = out.layers.layer(Layer::Refraction);
     for y in 0..16 {
         for x in 0..16 {

@@ -43,6 +43,19 @@ impl ColorMapping {
         (c.min(Vec3::ONE), c.max_element() > 1.0)
     }
 
+    /// `COLOR_0` of each radiance in `radiance`, counting the vertices with a clipped channel
+    /// in `clamped`.
+    pub fn colors(&self, radiance: &[Rgb], clamped: &mut usize) -> Vec<Rgb> {
+        radiance
+            .iter()
+            .map(|l| {
+                let (c, clipped) = self.color(*l);
+                *clamped += usize::from(clipped);
+                c
+            })
+            .collect()
+    }
+
     /// The mapping as a formula, as recorded in the manifest and the glTF asset extras.
     pub const FORMULA: &'static str = "COLOR_0 = min(1, exposure * L) per linear RGB channel, \
          L = B / pi the radiance leaving the surface in W/(m^2 sr)";

@@ -493,14 +493,7 @@ pub fn encode_glb(
             })
             .collect();
         let radiance = pick(&parts.radiance);
-        let colours: Vec<Vec3> = radiance
-            .iter()
-            .map(|l| {
-                let (c, clipped) = mapping.color(*l);
-                clamped_vertices += usize::from(clipped);
-                c
-            })
-            .collect();
+        let colours = mapping.colors(&radiance, &mut clamped_vertices);
         let (direct, indirect) = (pick(&parts.direct), pick(&parts.indirect));
         let name = scene
             .objects

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use serde::{Deserialize, Serialize};
-use twopass_radiosity::{Finish, Options, Progress, Residuals};
+use twopass_radiosity::{Finish, Options, Residuals, SolveProgress};
 use twopass_scene::Scene;
 
 use crate::error::BakeError;
@@ -268,7 +268,7 @@ impl Manifest {
         scene: &Scene,
         options: &Options,
         finish: Finish,
-        progress: &Progress,
+        progress: &SolveProgress,
         residuals: &Residuals,
         samples: usize,
         residuals_time: Duration,

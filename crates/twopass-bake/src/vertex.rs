@@ -132,14 +132,7 @@ pub fn encode_vertex_glb(
                 .collect()
         };
         let (radiance, direct, indirect) = (mean(0), mean(1), mean(2));
-        let colours: Vec<Vec3> = radiance
-            .iter()
-            .map(|l| {
-                let (c, clipped) = mapping.color(*l);
-                clamped_vertices += usize::from(clipped);
-                c
-            })
-            .collect();
+        let colours = mapping.colors(&radiance, &mut clamped_vertices);
         b.vertex_radiance_mesh(
             &object.name,
             [&positions, &normals, &colours],

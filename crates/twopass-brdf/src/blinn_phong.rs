@@ -21,9 +21,8 @@
 
 use glam::{Vec2, Vec3};
 
-use crate::frame::{
-    COS_FLOOR, half_sin2, half_vector, pow_one_minus, reflect_about, symmetric_dot,
-};
+use crate::colour::mean;
+use crate::frame::{COS_FLOOR, half_sin2, pow_one_minus, reflect_about_half, reflected_pdf};
 use crate::interface::{Glossy, impl_brdf_via_glossy};
 use crate::param::{check_diffuse, check_exponent, check_sum, check_unit};
 use crate::sample::square_to_phong_lobe;
@@ -99,25 +98,17 @@ impl Glossy for BlinnPhong {
         }
     }
     fn sample_glossy(&self, wo: Vec3, u: Vec2) -> Option<Vec3> {
-        let h = square_to_phong_lobe(u, self.n);
-        (wo.dot(h) > 0.0).then(|| reflect_about(wo, h))
+        reflect_about_half(wo, square_to_phong_lobe(u, self.n))
     }
     fn pdf_glossy(&self, wo: Vec3, wi: Vec3) -> f32 {
-        let Some(h) = half_vector(wo, wi) else {
-            return 0.0;
-        };
-        let oh = symmetric_dot(wo, wi, h);
-        if oh <= 0.0 {
-            return 0.0;
-        }
-        let Some(s2) = half_sin2(wo, wi) else {
-            return 0.0;
-        };
-        let pdf_h = (self.n + 1.0) / std::f32::consts::TAU * pow_one_minus(s2, 0.5 * self.n);
-        pdf_h / (4.0 * oh.max(COS_FLOOR))
+        reflected_pdf(wo, wi, |_| {
+            half_sin2(wo, wi).map_or(0.0, |s2| {
+                (self.n + 1.0) / std::f32::consts::TAU * pow_one_minus(s2, 0.5 * self.n)
+            })
+        })
     }
     fn glossy_weight(&self, _wo: Vec3) -> f32 {
-        (self.ks.x + self.ks.y + self.ks.z) / 3.0
+        mean(self.ks)
     }
 }
 

@@ -13,6 +13,12 @@ pub fn luminance(rgb: Vec3) -> f32 {
     rgb.dot(LUMINANCE)
 }
 
+/// The mean of the three channels (a lobe's weight when choosing which part to sample).
+#[inline]
+pub(crate) fn mean(c: Vec3) -> f32 {
+    (c.x + c.y + c.z) / 3.0
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -16,7 +16,8 @@
 use glam::{Vec2, Vec3};
 
 use crate::beckmann::Beckmann;
-use crate::frame::{COS_FLOOR, half_vector, reflect_about, symmetric_dot};
+use crate::colour::mean;
+use crate::frame::{COS_FLOOR, half_vector, reflect_about_half, reflected_pdf, symmetric_dot};
 use crate::interface::{Glossy, impl_brdf_via_glossy};
 use crate::param::{check_diffuse, check_sum, check_unit};
 use crate::{ComplexIor, FresnelModel, ParamError, Rgb, fresnel, v_cavity};
@@ -103,22 +104,13 @@ impl Glossy for CookTorrance {
         self.s * self.fresnel(vh) * scale
     }
     fn sample_glossy(&self, wo: Vec3, u: Vec2) -> Option<Vec3> {
-        let h = self.d.sample(u);
-        (wo.dot(h) > 0.0).then(|| reflect_about(wo, h))
+        reflect_about_half(wo, self.d.sample(u))
     }
     fn pdf_glossy(&self, wo: Vec3, wi: Vec3) -> f32 {
-        let Some(h) = half_vector(wo, wi) else {
-            return 0.0;
-        };
-        let oh = symmetric_dot(wo, wi, h);
-        if oh <= 0.0 {
-            return 0.0;
-        }
-        self.d.pdf(h) / (4.0 * oh.max(COS_FLOOR))
+        reflected_pdf(wo, wi, |h| self.d.pdf(h))
     }
     fn glossy_weight(&self, wo: Vec3) -> f32 {
-        let w = self.s * self.fresnel(wo.z);
-        (w.x + w.y + w.z) / 3.0
+        mean(self.s * self.fresnel(wo.z))
     }
 }
 

@@ -118,6 +118,28 @@ pub(crate) fn half_vector(wo: Vec3, wi: Vec3) -> Option<Vec3> {
     (wo + wi).try_normalize()
 }
 
+/// `wo` reflected about a sampled half vector `h`, or `None` when `h` faces away from `wo`:
+/// how a half-vector (microfacet) lobe turns its sample into a direction.
+#[inline]
+pub(crate) fn reflect_about_half(wo: Vec3, h: Vec3) -> Option<Vec3> {
+    (wo.dot(h) > 0.0).then(|| reflect_about(wo, h))
+}
+
+/// Density of `wi` for a lobe that draws the half vector `h` with density `pdf_h(h)` and
+/// reflects `wo` about it: `pdf_h(h) / (4 wo.h)` (the reflection's Jacobian), 0 where the
+/// half vector is undefined or faces away.
+#[inline]
+pub(crate) fn reflected_pdf(wo: Vec3, wi: Vec3, pdf_h: impl FnOnce(Vec3) -> f32) -> f32 {
+    let Some(h) = half_vector(wo, wi) else {
+        return 0.0;
+    };
+    let oh = symmetric_dot(wo, wi, h);
+    if oh <= 0.0 {
+        return 0.0;
+    }
+    pdf_h(h) / (4.0 * oh.max(COS_FLOOR))
+}
+
 /// `cos^n` given `d = 1 - cos` (d in [0, 2]): zero for d >= 1 (cos <= 0), else
 /// exp(n ln(1 - d)). Working from `1 - cos`, computed without cancellation by the callers,
 /// keeps exponents up to 1e6 accurate where cos itself rounds to 1 in f32.

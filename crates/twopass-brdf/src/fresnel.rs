@@ -92,10 +92,15 @@ pub fn complex(cos_i: f32, n: f32, k: f32) -> f32 {
 
 /// [`complex`] per RGB channel of `ior`.
 pub fn complex_rgb(cos_i: f32, ior: &ComplexIor) -> Rgb {
+    per_channel(ior, |n, k| complex(cos_i, n, k))
+}
+
+/// `f(n, k)` for each RGB channel of `ior`.
+fn per_channel(ior: &ComplexIor, f: impl Fn(f32, f32) -> f32) -> Rgb {
     Rgb::new(
-        complex(cos_i, ior.n.x, ior.k.x),
-        complex(cos_i, ior.n.y, ior.k.y),
-        complex(cos_i, ior.n.z, ior.k.z),
+        f(ior.n.x, ior.k.x),
+        f(ior.n.y, ior.k.y),
+        f(ior.n.z, ior.k.z),
     )
 }
 
@@ -131,11 +136,7 @@ pub fn schlick_ior(cos_i: f32, n: f32, k: f32) -> f32 {
 
 /// [`schlick_ior`] per RGB channel of `ior`.
 pub fn schlick_rgb(cos_i: f32, ior: &ComplexIor) -> Rgb {
-    Rgb::new(
-        schlick_ior(cos_i, ior.n.x, ior.k.x),
-        schlick_ior(cos_i, ior.n.y, ior.k.y),
-        schlick_ior(cos_i, ior.n.z, ior.k.z),
-    )
+    per_channel(ior, |n, k| schlick_ior(cos_i, n, k))
 }
 
 /// Unpolarized reflectance of a smooth dielectric interface of real relative index `eta`

@@ -16,6 +16,7 @@ use glam::{Vec2, Vec3};
 
 use crate::Rgb;
 use crate::check::{self, Quadrature};
+use crate::colour::mean;
 use crate::sample::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
 
 /// Which lobe produced a sample.
@@ -92,10 +93,6 @@ pub(crate) trait Glossy {
     fn pdf_glossy(&self, wo: Vec3, wi: Vec3) -> f32;
     /// Relative weight of the lobe when choosing which part to sample (>= 0).
     fn glossy_weight(&self, wo: Vec3) -> f32;
-}
-
-fn mean(c: Rgb) -> f32 {
-    (c.x + c.y + c.z) / 3.0
 }
 
 /// Probability of sampling the diffuse part.

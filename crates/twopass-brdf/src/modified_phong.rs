@@ -15,6 +15,7 @@ use std::f32::consts::TAU;
 
 use glam::{Vec2, Vec3};
 
+use crate::colour::mean;
 use crate::interface::{Glossy, impl_brdf_via_glossy};
 use crate::param::{check_diffuse, check_exponent, check_sum, check_unit};
 use crate::phong::{lobe, lobe_around_mirror_pdf, sample_lobe_around_mirror};
@@ -58,7 +59,7 @@ impl Glossy for ModifiedPhong {
         lobe_around_mirror_pdf(wo, wi, self.n)
     }
     fn glossy_weight(&self, _wo: Vec3) -> f32 {
-        (self.ks.x + self.ks.y + self.ks.z) / 3.0
+        mean(self.ks)
     }
 }
 

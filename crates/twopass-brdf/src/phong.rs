@@ -17,6 +17,7 @@
 
 use glam::{Vec2, Vec3};
 
+use crate::colour::mean;
 use crate::frame::{COS_FLOOR, Frame, both_above, pow_one_minus, reflect};
 use crate::interface::{Glossy, impl_brdf_via_glossy};
 use crate::param::{check_diffuse, check_exponent, check_unit};
@@ -93,7 +94,7 @@ impl Glossy for Phong {
         lobe_around_mirror_pdf(wo, wi, self.n)
     }
     fn glossy_weight(&self, _wo: Vec3) -> f32 {
-        (self.ks.x + self.ks.y + self.ks.z) / 3.0
+        mean(self.ks)
     }
 }
 

@@ -45,6 +45,6 @@ pub use mesh_error::{InvalidMesh, MeshPart};
 pub use progressive::{MAX_ELEMENTS, Progressive};
 pub use solution::Solution;
 pub use solver::{
-    Adaptive, Energy, Finish, Hierarchical, MAX_VISIBILITY_RAYS, Method, Options, Progress,
-    Residuals, SolveError, Solver, Stop,
+    Adaptive, Energy, Finish, Hierarchical, MAX_VISIBILITY_RAYS, Method, Options, Residuals,
+    SolveError, SolveProgress, Solver, Stop,
 };

@@ -13,8 +13,8 @@ use crate::element::ElementMesh;
 use crate::form_factor::{self, RECEIVER_INSET, hash};
 use crate::solution::Solution;
 use crate::solver::{
-    Adaptive, Energy, Finish, Options, Progress, Residuals, SolveError, check_common, luminance,
-    participating,
+    Adaptive, Energy, Finish, Options, Residuals, SolveError, SolveProgress, check_common,
+    luminance, participating,
 };
 
 /// Most patches or elements a solve meshes before adaptive subdivision (about 2 GB of mesh,
@@ -383,8 +383,8 @@ impl<'s> Progressive<'s> {
     }
 
     /// Where the solve stands.
-    pub fn progress(&self) -> Progress {
-        Progress {
+    pub fn progress(&self) -> SolveProgress {
+        SolveProgress {
             method: crate::solver::Method::Progressive,
             shots: self.shots,
             iterations: 0,

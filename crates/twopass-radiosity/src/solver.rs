@@ -192,9 +192,13 @@ impl Energy {
     }
 }
 
+/// The old name of [`SolveProgress`], inside this crate only, for `hierarchical.rs` (being
+/// changed beside this); remove it when that file uses the new name.
+pub(crate) use SolveProgress as Progress;
+
 /// Where a solve stands.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Progress {
+pub struct SolveProgress {
     /// The solver that runs (never [`Method::Auto`]).
     pub method: Method,
     /// Shots so far (progressive refinement; 0 for the hierarchical solver).
@@ -447,7 +451,7 @@ impl<'s> Solver<'s> {
     /// Runs to the stop criteria; `observer` sees the progress after every shot (progressive)
     /// or gather iteration (hierarchical) and may stop the solve early by returning `Break`.
     /// The solution is usable whenever this returns.
-    pub fn run(&mut self, mut observer: impl FnMut(&Progress) -> ControlFlow<()>) -> Finish {
+    pub fn run(&mut self, mut observer: impl FnMut(&SolveProgress) -> ControlFlow<()>) -> Finish {
         match self {
             Self::Progressive(p) => p.run(|s| observer(&s.progress())),
             Self::Hierarchical(h) => h.run(|s| observer(&s.progress())),
@@ -463,7 +467,7 @@ impl<'s> Solver<'s> {
     }
 
     /// Where the solve stands.
-    pub fn progress(&self) -> Progress {
+    pub fn progress(&self) -> SolveProgress {
         match self {
             Self::Progressive(p) => p.progress(),
             Self::Hierarchical(h) => h.progress(),

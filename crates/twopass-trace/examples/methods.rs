@@ -9,8 +9,8 @@ use std::time::Instant;
 use twopass_trace::hybrid::{hybrid, hybrid_direct, radiosity_only};
 use twopass_trace::whitted::ambient_estimate;
 use twopass_trace::{
-    Integrator, Progress, Reference, ReferenceSettings, RenderSettings, Whitted, WhittedSettings,
-    render,
+    Integrator, Reference, ReferenceSettings, RenderProgress, RenderSettings, Whitted,
+    WhittedSettings, render,
 };
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -52,7 +52,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("| method | time (s) | Mrays/s | non-finite | mean RGB |");
     println!("| --- | --- | --- | --- | --- |");
     for m in &methods {
-        let out = render(&scene, &camera, m.as_ref(), &settings, &Progress::new());
+        let out = render(
+            &scene,
+            &camera,
+            m.as_ref(),
+            &settings,
+            &RenderProgress::new(),
+        );
         let s = out.stats;
         let mean = out.layers.composite().mean();
         println!(

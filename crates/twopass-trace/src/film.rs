@@ -128,7 +128,7 @@ impl Mul<f32> for Radiance {
 
 /// A linear RGB image, row-major from the top-left pixel; values in W/(m^2 sr) per channel.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Image {
+pub struct FilmImage {
     /// Width, pixels.
     pub width: u32,
     /// Height, pixels.
@@ -137,7 +137,7 @@ pub struct Image {
     pub pixels: Vec<Rgb>,
 }
 
-impl Image {
+impl FilmImage {
     /// A black image.
     pub fn new(width: u32, height: u32) -> Self {
         Self {
@@ -162,23 +162,23 @@ impl Image {
     }
 }
 
-/// One [`Image`] per [`Layer`], all the same size.
+/// One [`FilmImage`] per [`Layer`], all the same size.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LayerImages {
     /// Indexed by [`Layer::index`].
-    pub images: [Image; 6],
+    pub images: [FilmImage; 6],
 }
 
 impl LayerImages {
     /// Six black images of the given size.
     pub fn new(width: u32, height: u32) -> Self {
         Self {
-            images: std::array::from_fn(|_| Image::new(width, height)),
+            images: std::array::from_fn(|_| FilmImage::new(width, height)),
         }
     }
 
     /// The image of one layer.
-    pub fn layer(&self, layer: Layer) -> &Image {
+    pub fn layer(&self, layer: Layer) -> &FilmImage {
         &self.images[layer.index()]
     }
 
@@ -193,8 +193,8 @@ impl LayerImages {
     }
 
     /// The sum of the layers, in [`Layer::ALL`] order per pixel: the rendered image.
-    pub fn composite(&self) -> Image {
-        let mut out = Image::new(self.width(), self.height());
+    pub fn composite(&self) -> FilmImage {
+        let mut out = FilmImage::new(self.width(), self.height());
         for img in &self.images {
             for (o, p) in out.pixels.iter_mut().zip(&img.pixels) {
                 *o += *p;

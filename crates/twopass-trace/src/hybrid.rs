@@ -22,13 +22,14 @@ use crate::whitted::{Whitted, WhittedSettings};
 /// vertex); mirrors and glass show as their diffuse part, as in the classic picture. No shadow or
 /// secondary rays.
 pub fn radiosity_only<'a>(scene: &Scene, solution: &'a dyn DiffuseRadiance) -> Whitted<'a> {
-    Whitted {
-        lights: Lights::new(scene),
-        source: DiffuseSource::Radiosity(solution),
-        view_dependent: false,
-        settings: WhittedSettings::default(),
-        name: "radiosity",
-    }
+    let settings = WhittedSettings::default();
+    radiosity_based(
+        scene,
+        DiffuseSource::Radiosity(solution),
+        false,
+        settings,
+        "radiosity",
+    )
 }
 
 /// The two-pass hybrid: the solution for all diffuse light, plus the glossy lobes against the
@@ -38,13 +39,13 @@ pub fn hybrid<'a>(
     solution: &'a dyn DiffuseRadiance,
     settings: WhittedSettings,
 ) -> Whitted<'a> {
-    Whitted {
-        lights: Lights::new(scene),
-        source: DiffuseSource::Radiosity(solution),
-        view_dependent: true,
+    radiosity_based(
+        scene,
+        DiffuseSource::Radiosity(solution),
+        true,
         settings,
-        name: "hybrid",
-    }
+        "hybrid",
+    )
 }
 
 /// The hybrid with per-pixel direct light (Chen et al. 1991): direct diffuse light with shadow
@@ -55,11 +56,24 @@ pub fn hybrid_direct<'a>(
     solution: &'a dyn DiffuseRadiance,
     settings: WhittedSettings,
 ) -> Whitted<'a> {
+    let source = DiffuseSource::RadiosityIndirect(solution);
+    radiosity_based(scene, source, true, settings, "hybrid-direct")
+}
+
+/// The Whitted core lighting `scene` with diffuse light from `source`, with the view-dependent
+/// terms (glossy lobes, delta paths) or without.
+fn radiosity_based<'a>(
+    scene: &Scene,
+    source: DiffuseSource<'a>,
+    view_dependent: bool,
+    settings: WhittedSettings,
+    name: &'static str,
+) -> Whitted<'a> {
     Whitted {
         lights: Lights::new(scene),
-        source: DiffuseSource::RadiosityIndirect(solution),
-        view_dependent: true,
+        source,
+        view_dependent,
         settings,
-        name: "hybrid-direct",
+        name,
     }
 }

@@ -44,12 +44,12 @@ impl Default for RenderSettings {
 
 /// Progress of a render, readable from any thread while it runs (for a progress bar).
 #[derive(Debug, Default)]
-pub struct Progress {
+pub struct RenderProgress {
     done: AtomicU64,
     total: AtomicU64,
 }
 
-impl Progress {
+impl RenderProgress {
     /// A counter at zero.
     pub fn new() -> Self {
         Self::default()
@@ -132,7 +132,7 @@ pub fn render(
     camera: &Camera,
     integrator: &dyn Integrator,
     settings: &RenderSettings,
-    progress: &Progress,
+    progress: &RenderProgress,
 ) -> RenderOutput {
     let start = Instant::now();
     let (width, height) = (camera.width, camera.height);

@@ -199,17 +199,19 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
         Some(exposure) => (ColorMapping { exposure }, "fixed"),
         None => (ColorMapping::auto(&solution), "auto"),
     };
+    // What the manifest says of the mapping, with the vertices a .glb clipped.
+    let color_record = |clamped_vertices| ColorRecord {
+        mapping: ColorMapping::FORMULA.into(),
+        exposure: mapping.exposure,
+        exposure_mode: mode.into(),
+        clamped_vertices,
+    };
     for format in formats {
         let path = dir.join(format!("{stem}.{}", format.extension()));
         let bytes = match format {
             Format::Glb => {
                 let glb = bake::encode_glb(&solution, &scene, mapping)?;
-                manifest.color = Some(ColorRecord {
-                    mapping: ColorMapping::FORMULA.into(),
-                    exposure: mapping.exposure,
-                    exposure_mode: mode.into(),
-                    clamped_vertices: glb.clamped_vertices,
-                });
+                manifest.color = Some(color_record(glb.clamped_vertices));
                 glb.bytes
             }
             Format::Ply => bake::encode_ply(&solution, &scene, mapping)?,
@@ -217,12 +219,7 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
             Format::VertexGlb => {
                 let glb = bake::encode_vertex_glb(&solution, &scene, mapping)?;
                 if manifest.color.is_none() {
-                    manifest.color = Some(ColorRecord {
-                        mapping: ColorMapping::FORMULA.into(),
-                        exposure: mapping.exposure,
-                        exposure_mode: mode.into(),
-                        clamped_vertices: glb.clamped_vertices,
-                    });
+                    manifest.color = Some(color_record(glb.clamped_vertices));
                 }
                 glb.bytes
             }

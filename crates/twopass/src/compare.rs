@@ -15,7 +15,7 @@ use twopass_composite::image::Image;
 use twopass_composite::metric::Metrics;
 use twopass_composite::sheet::{ComparisonOptions, Entry, comparison};
 use twopass_composite::write::{write_exr_render, write_png};
-use twopass_radiosity::{Options, Solution, Solver, Stop};
+use twopass_radiosity::{Solution, Solver};
 use twopass_scene::{Camera, Scene};
 use twopass_trace::{RenderStats, WhittedSettings};
 
@@ -188,25 +188,16 @@ pub fn run(args: &CompareArgs, ctx: &Context) -> Result<(), CliError> {
     crate::output::finish_report(&json, &report, ctx, print_report)
 }
 
-/// The one radiosity solve every radiosity-based method shares: a coarse mesh to 1e-2 with
-/// `--quick`, the default mesh to 1e-4 without.
+/// The one radiosity solve every radiosity-based method shares ([`SolveArgs::compare`]).
+///
+/// [`SolveArgs::compare`]: crate::solve::SolveArgs::compare
 fn solve_shared(
     scene: &Scene,
     args: &CompareArgs,
     ctx: &Context,
 ) -> Result<(Solution, RadiosityInfo), CliError> {
     let started = Instant::now();
-    let diag = scene.bounds.diagonal();
-    let options = Options {
-        element_size: args.quick.then_some(diag / 16.0),
-        stop: Stop {
-            unshot_fraction: if args.quick { 1e-2 } else { 1e-4 },
-            ..Stop::default()
-        },
-        seed: ctx.seed,
-        memory_limit: crate::context::memory_limit(),
-        ..Options::default()
-    };
+    let options = crate::solve::SolveArgs::compare(scene, args.quick).options(ctx.seed);
     let mut solver = Solver::new(scene, options).map_err(|source| CliError::Solve {
         path: args.scene.clone(),
         source,

@@ -12,7 +12,7 @@ use twopass_trace::WhittedSettings;
 
 use crate::error::CliError;
 use crate::pipeline::{MAX_DEPTH, Method};
-use crate::solve::{MAX_VISIBILITY_RAYS, SolveArgs, SolverChoice};
+use crate::solve::{MAX_VISIBILITY_RAYS, SolveArgs};
 
 /// The arguments a preset sets, which conflict with `--preset`.
 pub const PRESET_SETS: [&str; 11] = [
@@ -74,18 +74,14 @@ impl RadiosityKnobs {
     pub fn solve_args(&self) -> SolveArgs {
         let k = self;
         SolveArgs {
-            solver: SolverChoice::Auto,
-            link_tolerance: twopass_radiosity::Hierarchical::default().link_tolerance,
             unshot: k.unshot,
-            max_shots: None,
-            time_budget: None,
-            patch_size: None,
             element_size: Some(k.element_size),
             no_adaptive: !k.adaptive,
             visibility_rays: twopass_radiosity::VisibilityRays {
                 min: k.visibility_min,
                 max: k.visibility_max,
             },
+            ..SolveArgs::default()
         }
     }
 }

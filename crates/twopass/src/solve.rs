@@ -1,6 +1,8 @@
-//! The radiosity solver's settings on the command line (`--solver`, `--unshot`,
-//! `--element-size`, ...), shared by every command that solves (`render`, `bake`, `bench
-//! tradeoff`), and the progress bar of a solve.
+//! The radiosity solver's settings: on the command line (`--solver`, `--unshot`,
+//! `--element-size`, ...) and the one home of the solver options every command that solves
+//! derives from a scene (`render`, `bake`, `compare`, `bench radiosity`, `bench render`,
+//! `bench tradeoff` and the preset files all go through [`SolveArgs::options`]), and the
+//! progress bar of a solve.
 
 use std::ops::ControlFlow;
 use std::time::Duration;
@@ -9,6 +11,7 @@ use clap::{Args, ValueEnum};
 use twopass_radiosity::{
     Adaptive, Finish, Hierarchical, Method, Options, Solver, Stop, VisibilityRays,
 };
+use twopass_scene::Scene;
 
 use crate::args::{checked, positive_finite};
 use crate::context::Context;
@@ -73,8 +76,52 @@ pub struct SolveArgs {
     pub visibility_rays: VisibilityRays,
 }
 
+impl Default for SolveArgs {
+    /// The command line's defaults (the library's, with the machine's memory limit added by
+    /// [`SolveArgs::options`]).
+    fn default() -> Self {
+        Self {
+            solver: SolverChoice::Auto,
+            unshot: Stop::default().unshot_fraction,
+            link_tolerance: Hierarchical::default().link_tolerance,
+            max_shots: None,
+            time_budget: None,
+            patch_size: None,
+            element_size: None,
+            no_adaptive: false,
+            visibility_rays: VisibilityRays::default(),
+        }
+    }
+}
+
 impl SolveArgs {
-    /// The solver options these arguments ask for.
+    /// `compare`'s shared solve: with `quick`, a coarse mesh (elements of the scene diagonal
+    /// / 16) to an unshot fraction of 1e-2; without, the default mesh to 1e-4.
+    pub fn compare(scene: &Scene, quick: bool) -> Self {
+        Self {
+            element_size: quick.then_some(scene.bounds.diagonal() / 16.0),
+            unshot: if quick { 1e-2 } else { 1e-4 },
+            ..Self::default()
+        }
+    }
+
+    /// `bench radiosity`'s fixed mesh of about `elements` elements over the scene's area, to
+    /// `unshot`: no adaptive subdivision, and patches (default diagonal / 8) no smaller than
+    /// the elements.
+    pub fn element_count(scene: &Scene, elements: u32, unshot: f64) -> Self {
+        // Bisection leaves are right triangles of area about L^2 / 4 for a longest edge L.
+        let element_size = (4.0 * scene.total_area() / f64::from(elements.max(1))).sqrt() as f32;
+        Self {
+            element_size: Some(element_size),
+            patch_size: Some((scene.bounds.diagonal() / 8.0).max(element_size)),
+            no_adaptive: true,
+            unshot,
+            ..Self::default()
+        }
+    }
+
+    /// The solver options these arguments ask for, the library's defaults for the rest and
+    /// the machine's memory limit ([`crate::context::memory_limit`]).
     pub fn options(&self, seed: u64) -> Options {
         Options {
             patch_size: self.patch_size,
@@ -158,4 +205,31 @@ fn bar_position(unshot: f64, target: f64) -> u64 {
     let target = target.clamp(1e-15, 0.5);
     let x = unshot.max(1e-300).ln() / target.ln();
     (x.clamp(0.0, 1.0) * STEPS as f64).round() as u64
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::Parser;
+
+    use super::*;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        solve: SolveArgs,
+    }
+
+    #[test]
+    fn the_default_settings_are_the_command_lines() {
+        let parsed = Cli::parse_from(["twopass"]).solve;
+        assert_eq!(format!("{parsed:?}"), format!("{:?}", SolveArgs::default()));
+        let options = parsed.options(7);
+        assert_eq!(options.memory_limit, crate::context::memory_limit());
+        let library = Options {
+            seed: 7,
+            memory_limit: options.memory_limit,
+            ..Options::default()
+        };
+        assert_eq!(options, library);
+    }
 }

@@ -191,22 +191,8 @@ fn render_exr_says_how_it_was_made() {
     use exr::meta::attribute::AttributeValue;
     let dir = tempfile::tempdir().unwrap();
     let exr_path = dir.path().join("box.exr");
-    let scene = repo("scenes/cornell-box.toml");
-    let out = twopass(&[
-        "render",
-        scene.to_str().unwrap(),
-        "--method",
-        "whitted",
-        "--width",
-        "16",
-        "--spp",
-        "2",
-        "--seed",
-        "7",
-        "-o",
-        exr_path.to_str().unwrap(),
-        "--quiet",
-    ]);
+    let exr = exr_path.to_str().unwrap();
+    let out = common::render_box("whitted", 16, 2, &["--seed", "7", "-o", exr, "--quiet"]);
     assert!(
         out.status.success(),
         "{}",

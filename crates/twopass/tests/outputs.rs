@@ -5,7 +5,7 @@ mod common;
 
 use std::time::{Duration, SystemTime};
 
-use common::{repo, twopass};
+use common::{render_box, repo, twopass};
 use twopass_bake::Manifest;
 
 const COARSE: [&str; 6] = [
@@ -59,21 +59,17 @@ fn the_manifest_seals_the_bake_set() {
     assert_eq!(out.status.code(), Some(0));
     let bake_file = dir.join("cornell-box.bake");
     std::fs::copy(other.join("cornell-box.bake"), &bake_file).unwrap();
-    let scene = repo("scenes/cornell-box.toml");
-    let render = twopass(&[
-        "render",
-        scene.to_str().unwrap(),
-        "--method",
+    let render = render_box(
         "radiosity",
-        "--bake",
-        bake_file.to_str().unwrap(),
-        "--width",
-        "8",
-        "--spp",
-        "1",
-        "-o",
-        tmp.path().join("r.exr").to_str().unwrap(),
-    ]);
+        8,
+        1,
+        &[
+            "--bake",
+            bake_file.to_str().unwrap(),
+            "-o",
+            tmp.path().join("r.exr").to_str().unwrap(),
+        ],
+    );
     let stderr = String::from_utf8_lossy(&render.stderr);
     assert_eq!(render.status.code(), Some(1), "{stderr}");
     assert!(stderr.contains("does not match its manifest"), "{stderr}");
@@ -114,19 +110,12 @@ fn stale_temporaries_of_a_killed_run_are_removed() {
             .set_modified(hour_ago)
             .unwrap();
     }
-    let scene = repo("scenes/cornell-box.toml");
-    let out = twopass(&[
-        "render",
-        scene.to_str().unwrap(),
-        "--method",
+    let out = render_box(
         "whitted",
-        "--width",
-        "8",
-        "--spp",
-        "1",
-        "-o",
-        dir.join("x.exr").to_str().unwrap(),
-    ]);
+        8,
+        1,
+        &["-o", dir.join("x.exr").to_str().unwrap()],
+    );
     common::assert_ok(&out);
     assert!(!stale.exists(), "a leftover of a killed run is removed");
     assert!(fresh.exists(), "a temporary file that may be live is kept");

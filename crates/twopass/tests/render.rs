@@ -165,10 +165,12 @@ fn render_refuses_what_makes_no_sense() {
 
 /// Runs a small Whitted render of the Cornell box with `--output out` and `extra` arguments.
 fn render_to(out: &Path, extra: &[&str]) -> std::process::Output {
-    let scene = repo("scenes/cornell-box.toml");
-    let (scene, out) = (scene.to_str().unwrap(), out.to_str().unwrap());
-    let small = ["--method", "whitted", "--width", "16", "--spp", "1"];
-    twopass(&[&["render", scene, "--output", out], &small[..], extra].concat())
+    common::render_box(
+        "whitted",
+        16,
+        1,
+        &[&["--output", out.to_str().unwrap()], extra].concat(),
+    )
 }
 
 #[test]

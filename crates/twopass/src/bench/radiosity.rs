@@ -13,6 +13,7 @@ use super::memory::{fmt_mib, mib, peak_memory, reset_peak_memory};
 use crate::args::checked;
 use crate::context::Context;
 use crate::error::CliError;
+use crate::solve::SolveArgs;
 
 /// Arguments of `twopass bench radiosity`.
 #[derive(Debug, Args)]
@@ -106,7 +107,7 @@ struct ScaleRow {
 
 /// Solves generated scenes of growing size (`--generate`).
 fn radiosity_scale(args: &RadiosityArgs, ctx: &Context) -> Result<(), CliError> {
-    use twopass_radiosity::{Options, Solver, Stop};
+    use twopass_radiosity::Solver;
     let progress = ctx.progress(args.generate.len() as u64, "bench radiosity");
     let mut rows: Vec<ScaleRow> = Vec::new();
     for &n in &args.generate {
@@ -114,16 +115,12 @@ fn radiosity_scale(args: &RadiosityArgs, ctx: &Context) -> Result<(), CliError> 
         let started = Instant::now();
         let (scene, _) = workload::synthetic_scene(n as usize, ctx.seed)?;
         let load_seconds = started.elapsed().as_secs_f64();
-        let options = Options {
-            method: args.solver.method(),
-            stop: Stop {
-                unshot_fraction: args.unshot,
-                ..Stop::default()
-            },
-            seed: ctx.seed,
-            memory_limit: crate::context::memory_limit(),
-            ..Options::default()
-        };
+        let options = SolveArgs {
+            solver: args.solver,
+            unshot: args.unshot,
+            ..SolveArgs::default()
+        }
+        .options(ctx.seed);
         let start = Instant::now();
         let mut solver = Solver::new(&scene, options).map_err(|source| CliError::Solve {
             path: PathBuf::from(format!("generated-{n}")),
@@ -292,28 +289,17 @@ fn plot_scale(path: &std::path::Path, rows: &[ScaleRow]) -> Result<(), CliError>
 
 /// Solves the scene at each element count, or the generated scenes of `--generate`.
 pub fn run(args: &RadiosityArgs, ctx: &Context) -> Result<(), CliError> {
-    use twopass_radiosity::{Options, Progressive, Stop, dense_solve};
+    use twopass_radiosity::{Progressive, dense_solve};
     let Some(path) = &args.scene else {
         return radiosity_scale(args, ctx);
     };
     let (scene, _) = ctx.load_scene(path)?;
-    let area = scene.total_area();
     let progress = ctx.progress(args.elements.len() as u64, "bench radiosity");
     let mut rows = Vec::new();
     for &target in &args.elements {
-        // Bisection leaves are right triangles of area about L^2 / 4 for a longest edge L.
-        let element_size = (4.0 * area / f64::from(target.max(1))).sqrt() as f32;
-        let options = Options {
-            element_size: Some(element_size),
-            patch_size: Some((scene.bounds.diagonal() / 8.0).max(element_size)),
-            adaptive: None,
-            stop: Stop {
-                unshot_fraction: args.unshot,
-                ..Stop::default()
-            },
-            seed: ctx.seed,
-            ..Options::default()
-        };
+        let solve = SolveArgs::element_count(&scene, target, args.unshot);
+        let element_size = solve.element_size.unwrap_or_default();
+        let options = solve.options(ctx.seed);
         reset_peak_memory();
         let start = Instant::now();
         let mut solver = Progressive::new(&scene, options).map_err(|source| CliError::Solve {

@@ -61,7 +61,7 @@ struct RenderReport {
 pub fn run(args: &RenderBenchArgs, ctx: &Context) -> Result<(), CliError> {
     use crate::pipeline::{Method, check_in_set, integrator, render_settings};
     use twopass_trace::hybrid::radiosity_only;
-    use twopass_trace::{Integrator, Progress, WhittedSettings};
+    use twopass_trace::{Integrator, RenderProgress, WhittedSettings};
 
     let (scene, _) = ctx.load_scene(&args.scene)?;
     let camera = crate::context::resized(
@@ -78,10 +78,7 @@ pub fn run(args: &RenderBenchArgs, ctx: &Context) -> Result<(), CliError> {
         None => {
             let mut solver = twopass_radiosity::Solver::new(
                 &scene,
-                twopass_radiosity::Options {
-                    seed: ctx.seed,
-                    ..Default::default()
-                },
+                crate::solve::SolveArgs::default().options(ctx.seed),
             )
             .map_err(|source| CliError::Solve {
                 path: args.scene.clone(),
@@ -115,7 +112,13 @@ pub fn run(args: &RenderBenchArgs, ctx: &Context) -> Result<(), CliError> {
     let mut rows = Vec::new();
     for m in &methods {
         reset_peak_memory();
-        let out = twopass_trace::render(&scene, &camera, m.as_ref(), &settings, &Progress::new());
+        let out = twopass_trace::render(
+            &scene,
+            &camera,
+            m.as_ref(),
+            &settings,
+            &RenderProgress::new(),
+        );
         let mean = out.layers.composite().mean();
         rows.push(RenderRow {
             method: out.stats.method,
@@ -150,7 +153,7 @@ pub fn run(args: &RenderBenchArgs, ctx: &Context) -> Result<(), CliError> {
             &view,
             &interactive,
             &one,
-            &Progress::new(),
+            &RenderProgress::new(),
         ));
     }
     let frames_per_second = f64::from(args.frames) / t.elapsed().as_secs_f64();

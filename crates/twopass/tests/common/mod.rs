@@ -21,6 +21,15 @@ pub fn twopass(args: &[&str]) -> Output {
         .expect("the binary runs")
 }
 
+/// Runs `twopass render` of the Cornell box (`scenes/cornell-box.toml`) with `method`, `width`
+/// pixels across and `spp` samples per pixel, then the `extra` arguments (the output, ...).
+pub fn render_box(method: &str, width: u32, spp: u32, extra: &[&str]) -> Output {
+    let scene = repo("scenes/cornell-box.toml");
+    let (width, spp) = (width.to_string(), spp.to_string());
+    let args = ["render", scene.to_str().unwrap(), "--method", method];
+    twopass(&[&args[..], &["--width", &width, "--spp", &spp], extra].concat())
+}
+
 /// Asserts that `out` is a successful run (exit code 0), showing its stderr when it is not.
 #[track_caller]
 pub fn assert_ok(out: &Output) {

@@ -399,7 +399,7 @@ fn measure_runs(
             camera,
             integ.as_ref(),
             &settings,
-            &twopass_trace::Progress::new(),
+            &twopass_trace::RenderProgress::new(),
         );
         let render_peak = peak_memory();
         let image = to_image(out.layers.composite())?;
