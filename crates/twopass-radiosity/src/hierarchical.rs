@@ -42,7 +42,7 @@ use crate::element::{ElementMesh, barycentric_2d};
 use crate::form_factor::{self, hash};
 use crate::solution::Solution;
 use crate::solver::{
-    Energy, Finish, Method, Options, Progress, Residuals, SolveError, check_common, luminance,
+    Energy, Finish, Method, Options, Residuals, SolveError, SolveProgress, check_common, luminance,
     participating,
 };
 
@@ -1477,8 +1477,8 @@ impl<'s> HierarchicalSolver<'s> {
     }
 
     /// Where the solve stands.
-    pub fn progress(&self) -> Progress {
-        Progress {
+    pub fn progress(&self) -> SolveProgress {
+        SolveProgress {
             method: Method::Hierarchical,
             shots: 0,
             iterations: self.iterations,

@@ -192,10 +192,6 @@ impl Energy {
     }
 }
 
-/// The old name of [`SolveProgress`], inside this crate only, for `hierarchical.rs` (being
-/// changed beside this); remove it when that file uses the new name.
-pub(crate) use SolveProgress as Progress;
-
 /// Where a solve stands.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SolveProgress {

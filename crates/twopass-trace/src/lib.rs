@@ -45,8 +45,3 @@ pub use integrator::{Integrator, Lights, Tally};
 pub use reference::{Reference, ReferenceSettings};
 pub use sampler::Sampler;
 pub use whitted::{Whitted, WhittedSettings};
-/// The names [`FilmImage`] and [`RenderProgress`] had before they were told apart from
-/// `twopass_composite::Image` and `twopass_radiosity::SolveProgress`; kept, hidden, only
-/// until the CLI's `pipeline.rs` (being changed beside this) uses the new names.
-#[doc(hidden)]
-pub use {film::FilmImage as Image, render::RenderProgress as Progress};

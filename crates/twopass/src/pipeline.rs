@@ -16,8 +16,8 @@ use twopass_scene::{DiffuseRadiance, Scene};
 use twopass_trace::hybrid::{hybrid, hybrid_direct, radiosity_only};
 use twopass_trace::whitted::ambient_estimate;
 use twopass_trace::{
-    Image as FilmImage, Integrator, Layer, LayerImages, Progress, Reference, ReferenceSettings,
-    RenderOutput, RenderSettings, RenderStats, Whitted, WhittedSettings,
+    FilmImage, Integrator, Layer, LayerImages, Reference, ReferenceSettings, RenderOutput,
+    RenderProgress, RenderSettings, RenderStats, Whitted, WhittedSettings,
 };
 
 use crate::context::Context;
@@ -185,7 +185,7 @@ pub fn render_with_bar(
     label: &str,
     ctx: &Context,
 ) -> Result<RenderOutput, CliError> {
-    let progress = Progress::new();
+    let progress = RenderProgress::new();
     let bar = ctx.progress(1000, label);
     let done = std::sync::atomic::AtomicBool::new(false);
     let out = std::thread::scope(|s| {
