@@ -7,28 +7,10 @@ mod common;
 
 use std::path::Path;
 
-use common::{assert_ok, repo, twopass};
+use common::{assert_ok, bake_cornell_lightmap, repo, twopass};
 use twopass_composite::metric::compare;
 use twopass_composite::tonemap::ToneMap;
 use twopass_composite::write::read_exr;
-
-/// Bakes the Cornell box with a 5 mm lightmap into `dir` (the `.bake` and the lightmap files
-/// of one solve).
-fn bake(dir: &Path) {
-    let scene = repo("scenes/cornell-box.toml");
-    assert_ok(&twopass(&[
-        "bake",
-        scene.to_str().unwrap(),
-        "--output",
-        dir.to_str().unwrap(),
-        "--format",
-        "bake",
-        "--lightmap",
-        "--texel-size",
-        "5",
-        "--quiet",
-    ]));
-}
 
 fn render(scene: &str, bake: &Path, method: &str, out: &Path) -> std::process::Output {
     twopass(&[
@@ -54,7 +36,7 @@ fn render(scene: &str, bake: &Path, method: &str, out: &Path) -> std::process::O
 fn a_lightmap_glb_renders_as_the_solution_it_was_baked_from() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
-    bake(dir);
+    bake_cornell_lightmap(dir);
     let from_bake = dir.join("from-bake.exr");
     let from_glb = dir.join("from-glb.exr");
     let scene = "scenes/cornell-box.toml";
@@ -86,7 +68,7 @@ fn a_lightmap_glb_renders_as_the_solution_it_was_baked_from() {
 fn a_lightmap_of_another_scene_or_without_its_exr_is_refused() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
-    bake(dir);
+    bake_cornell_lightmap(dir);
     let glb = dir.join("cornell-box.lightmap.glb");
     let out_file = dir.join("x.exr");
     let other = render("scenes/cornell-spheres.toml", &glb, "radiosity", &out_file);

@@ -15,7 +15,7 @@ use std::process::Command;
 use std::sync::{Arc, Condvar, Mutex};
 use std::time::Duration;
 
-use common::{assert_ok, repo, twopass};
+use common::{assert_ok, bake_cornell_lightmap, repo, twopass};
 
 /// Skips (with a note) or, in CI, fails when a tool the test needs is missing.
 fn missing(what: &str) -> bool {
@@ -183,19 +183,8 @@ fn the_page_in_headless_chromium_matches_the_radiosity_render() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
     let bake = dir.join("bake");
+    bake_cornell_lightmap(&bake);
     let scene = repo("scenes/cornell-box.toml");
-    assert_ok(&twopass(&[
-        "bake",
-        scene.to_str().unwrap(),
-        "--output",
-        bake.to_str().unwrap(),
-        "--format",
-        "bake",
-        "--lightmap",
-        "--texel-size",
-        "5",
-        "--quiet",
-    ]));
     let page = dir.join("page");
     assert_ok(&twopass(&[
         "view",

@@ -47,3 +47,21 @@ pub fn ok_json(out: &Output) -> serde_json::Value {
     assert_ok(out);
     serde_json::from_slice(&out.stdout).expect("the summary is JSON")
 }
+
+/// Bakes the Cornell box with a 5 mm lightmap into `dir` (the `.bake` and the lightmap files
+/// of one solve).
+pub fn bake_cornell_lightmap(dir: &std::path::Path) {
+    let scene = repo("scenes/cornell-box.toml");
+    assert_ok(&twopass(&[
+        "bake",
+        scene.to_str().unwrap(),
+        "--output",
+        dir.to_str().unwrap(),
+        "--format",
+        "bake",
+        "--lightmap",
+        "--texel-size",
+        "5",
+        "--quiet",
+    ]));
+}
