@@ -81,6 +81,17 @@ enum Step {
     SplitSource(Link),
 }
 
+/// What refinement has done with the pieces of a link it split.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Piece {
+    /// None decided yet.
+    Untouched,
+    /// At least one decided: the link is gone for good.
+    Decided,
+    /// Out of time before any was decided: the link was kept whole, the pieces are skipped.
+    Restored,
+}
+
 /// A link's evaluation.
 struct Eval {
     k: [f64; 3],
@@ -248,7 +259,7 @@ const BYTES_PER_NODE: u64 = 480;
 /// Approximate bytes per link (the link, sorting and the candidates of a refinement pass).
 const BYTES_PER_LINK: u64 = 96;
 /// Candidates evaluated between two looks at the clock.
-const BATCH: usize = 1 << 16;
+const BATCH: usize = 1 << 14;
 /// A link with a cluster at an end is near, and must be refined, unless the ends' centres
 /// are farther apart than this many times the sum of their bounding radii: the isotropic
 /// far-field estimate holds only well away from a cluster.
@@ -315,6 +326,10 @@ pub struct HierarchicalSolver<'s> {
     rays: u64,
     rounds: u32,
     linked: bool,
+    /// Past the time budget: links still being decided get the first, coarse visibility
+    /// estimate only (no confirmation, no finer count, no visibility per corner), so that the
+    /// candidates left when the budget runs out cost a few rays each, not dozens.
+    hurry: bool,
     /// The partly blocked links have had their visibility estimated again with the
     /// converged radiosities.
     refreshed: bool,
@@ -442,6 +457,7 @@ impl<'s> HierarchicalSolver<'s> {
             rays: 0,
             rounds: 0,
             linked: false,
+            hurry: false,
             refreshed: false,
             max_links: (spare / 2 / BYTES_PER_LINK) as usize,
             max_nodes: (spare / 2 / BYTES_PER_NODE) as usize,
@@ -995,6 +1011,7 @@ impl<'s> HierarchicalSolver<'s> {
         // rule). Such a link is confirmed with the full count before it is trusted. (A
         // cluster link's error is its whole transport already.)
         if let (Kind::Surface(_), Kind::Surface(_)) = (r.kind(), s.kind())
+            && !self.hurry
             && !e.partial
             && e.rays > 0
             && e.rays < u64::from(vis.max)
@@ -1029,7 +1046,7 @@ impl<'s> HierarchicalSolver<'s> {
                 Some(false) if allow_split => return (Step::SplitSource(link(&e)), rays),
                 _ => {
                     // Nothing left to split: a finer visibility estimate is all that helps.
-                    if e.partial && vis.max > vis.min && e.error > 0.0 {
+                    if e.partial && vis.max > vis.min && e.error > 0.0 && !self.hurry {
                         let more = self.evaluate(r, s, vis.max);
                         rays += more.rays;
                         e = more;
@@ -1041,7 +1058,9 @@ impl<'s> HierarchicalSolver<'s> {
         // its own visibility lets through (corners' mean plus shift), and the corners show one
         // visibility each, so that a shadow edge or an occluder standing on the element is
         // not smeared over the corners it spares.
-        if let (true, Kind::Surface(p), Kind::Surface(_)) = (e.partial, r.kind(), s.kind()) {
+        if let (true, false, Kind::Surface(p), Kind::Surface(_)) =
+            (e.partial, self.hurry, r.kind(), s.kind())
+        {
             let (x, _) = self.receiving_points(p);
             let tri = self.mesh.nodes[p as usize].scene_triangle;
             let total = (e.k[0] + e.k[1] + e.k[2]) / 3.0 + e.shift;
@@ -1074,17 +1093,51 @@ impl<'s> HierarchicalSolver<'s> {
     }
 
     /// Refines candidate pairs into links until every link is accurate enough, the nodes
-    /// cannot be split, or a budget (time, memory) says stop. Returns how many links it made.
-    fn refine(&mut self, mut candidates: Vec<(NodeRef, NodeRef)>) -> usize {
+    /// cannot be split, or a budget (time, memory) says stop. Each candidate may come from a
+    /// link that was split (`Some(link)`): once the time budget has run out, such a link is
+    /// kept whole instead of deciding its pieces (which costs shadow rays for each), unless a
+    /// piece was decided already. Returns how many links it made.
+    fn refine(&mut self, candidates: Vec<(NodeRef, NodeRef, Option<Link>)>) -> usize {
         let started = Instant::now();
         let before = self.links.len();
-        while !candidates.is_empty() {
+        // The links split on this level and what became of their pieces.
+        let mut parents: Vec<(Link, Piece)> = Vec::new();
+        let mut level: Vec<(NodeRef, NodeRef, u32)> = candidates
+            .into_iter()
+            .map(|(r, s, parent)| {
+                let p = parent.map_or(u32::MAX, |l| {
+                    parents.push((l, Piece::Untouched));
+                    parents.len() as u32 - 1
+                });
+                (r, s, p)
+            })
+            .collect();
+        while !level.is_empty() {
             let mut next = Vec::new();
-            for batch in candidates.chunks(BATCH) {
-                let allow = !self.deadline_passed()
-                    && self.links.len() + candidates.len() < self.max_links
+            let mut next_parents: Vec<(Link, Piece)> = Vec::new();
+            for batch in level.chunks(BATCH) {
+                self.hurry = self.deadline_passed();
+                let allow = !self.hurry
+                    && self.links.len() + level.len() < self.max_links
                     && self.mesh.nodes.len() < self.max_nodes;
-                let steps: Vec<(Step, u64)> = batch
+                // Past the budget, a split link none of whose pieces was decided comes back
+                // whole (once); its other pieces are skipped.
+                let mut todo = Vec::with_capacity(batch.len());
+                for &(r, s, p) in batch {
+                    match parents.get_mut(p as usize) {
+                        Some((link, state)) if self.hurry && *state == Piece::Untouched => {
+                            self.links.push(*link);
+                            *state = Piece::Restored;
+                        }
+                        Some((_, Piece::Restored)) => {}
+                        Some((_, state)) => {
+                            *state = Piece::Decided;
+                            todo.push((r, s));
+                        }
+                        None => todo.push((r, s)),
+                    }
+                }
+                let steps: Vec<(Step, u64)> = todo
                     .par_iter()
                     .with_min_len(8)
                     .map(|&(r, s)| self.decide(r, s, allow))
@@ -1121,24 +1174,29 @@ impl<'s> HierarchicalSolver<'s> {
                             let ch = self.children(c);
                             for a in ch {
                                 for b in ch {
-                                    next.push((a, b));
+                                    next.push((a, b, u32::MAX));
                                 }
                             }
                         }
                         Step::SplitReceiver(l) => {
+                            next_parents.push((l, Piece::Untouched));
+                            let p = next_parents.len() as u32 - 1;
                             for a in self.children(l.receiver) {
-                                next.push((a, l.source));
+                                next.push((a, l.source, p));
                             }
                         }
                         Step::SplitSource(l) => {
+                            next_parents.push((l, Piece::Untouched));
+                            let p = next_parents.len() as u32 - 1;
                             for b in self.children(l.source) {
-                                next.push((l.receiver, b));
+                                next.push((l.receiver, b, p));
                             }
                         }
                     }
                 }
             }
-            candidates = next;
+            level = next;
+            parents = next_parents;
         }
         self.sort_links();
         // New leaves take their ancestors' irradiance (interpolated) until the next gather.
@@ -1208,7 +1266,11 @@ impl<'s> HierarchicalSolver<'s> {
         let n = redo.len();
         // Each goes through the refinement again from its own ends: it is re-evaluated and
         // split where the oracle says so.
-        self.refine(redo.iter().map(|l| (l.receiver, l.source)).collect());
+        self.refine(
+            redo.iter()
+                .map(|l| (l.receiver, l.source, Some(*l)))
+                .collect(),
+        );
         n
     }
 
@@ -1420,7 +1482,7 @@ impl<'s> HierarchicalSolver<'s> {
         let stop = self.options.stop;
         if !self.linked {
             let root = self.clusters.root;
-            self.refine(vec![(root, root)]);
+            self.refine(vec![(root, root, None)]);
             self.linked = true;
         }
         // First converge coarsely, re-refine with those radiosities, then to the tolerance.
