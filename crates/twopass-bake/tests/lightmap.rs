@@ -12,7 +12,7 @@ use twopass_radiosity::{Options, Solution, Solver};
 
 mod common;
 
-use common::cornell;
+use common::{cornell, solved};
 use twopass_scene::Scene;
 
 const TEXEL: f32 = 5.0;
@@ -314,4 +314,68 @@ fn overlapping_obj_texture_coordinates_fall_back_to_generated_charts() {
         AtlasSource::Generated(why) => assert!(why.contains("no texture coordinates"), "{why}"),
         other => panic!("{other:?}"),
     }
+}
+
+#[test]
+fn curved_surfaces_unwrap_into_few_charts_that_carry_their_power() {
+    // The spheres of cornell-spheres.toml (5,120 triangles each) are flattened by conformal
+    // maps into a few charts, not one per triangle; a texel then covers a triangle's surface
+    // area over its atlas area, and the lightmap's power matches the element mesh's.
+    let (scene, solution) = solved("scenes/cornell-spheres.toml", 60.0);
+    let texel = 2.0;
+    let settings = LightmapSettings {
+        texel_size: texel,
+        padding: 2,
+    };
+    let lm = bake_lightmap(&solution, &scene, &settings, ColorMapping::auto(&solution)).unwrap();
+    assert!(
+        lm.charts * 100 < scene.mesh.triangles.len(),
+        "{} charts for {} triangles",
+        lm.charts,
+        scene.mesh.triangles.len()
+    );
+    let w = lm.width as usize;
+    let pixels = lm.radiance.pixels();
+    let mut owner = vec![false; w * lm.height as usize];
+    let mut power_map = 0.0;
+    for (name, pos, uv) in triangles(&lm) {
+        // Positions are metres in the .glb, the scene is in millimetres.
+        let p = pos.map(|q| q.as_dvec3() * 1000.0);
+        let area = (p[1] - p[0]).cross(p[2] - p[0]).length() / 2.0;
+        let atlas = (uv[1] - uv[0]).perp_dot(uv[2] - uv[0]).abs() / 2.0;
+        let lo = uv[0].min(uv[1]).min(uv[2]).floor();
+        let hi = uv[0].max(uv[1]).max(uv[2]).ceil();
+        for y in lo.y as usize..hi.y as usize {
+            for x in lo.x as usize..hi.x as usize {
+                let c = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
+                if inside(&uv, c, 1e-6).is_some() {
+                    let j = y * w + x;
+                    assert!(!owner[j], "texel ({x}, {y}) of {name} is taken");
+                    owner[j] = true;
+                    power_map += f64::from(pixels[j].element_sum()) * area / atlas;
+                }
+            }
+        }
+    }
+    let mesh = solution.mesh();
+    let l = solution.vertex_radiosity();
+    let power_mesh: f64 = mesh
+        .leaves()
+        .map(|n| {
+            let node = &mesh.nodes[n as usize];
+            let mean: f32 = node
+                .vertices
+                .iter()
+                .map(|&v| l[v as usize].element_sum())
+                .sum::<f32>()
+                / 3.0;
+            f64::from(node.area) * f64::from(mean) / std::f64::consts::PI
+        })
+        .sum();
+    // As for the box: counting texel centres measures each chart's area to within its
+    // perimeter times half a texel, with errors of both signs.
+    assert!(
+        (power_map / power_mesh - 1.0).abs() < 0.01,
+        "lightmap {power_map}, element mesh {power_mesh}"
+    );
 }

@@ -17,7 +17,12 @@ pub fn repo() -> PathBuf {
 /// `scenes/cornell-box.toml` solved with elements of about `element_size` mm to an unshot
 /// fraction of 1e-2.
 pub fn cornell(element_size: f32) -> (Scene, Solution) {
-    let (scene, _) = twopass_scene::load(repo().join("scenes/cornell-box.toml")).unwrap();
+    solved("scenes/cornell-box.toml", element_size)
+}
+
+/// The scene at `path` (from the repository root) solved like [`cornell`].
+pub fn solved(path: &str, element_size: f32) -> (Scene, Solution) {
+    let (scene, _) = twopass_scene::load(repo().join(path)).unwrap();
     let options = Options {
         element_size: Some(element_size),
         stop: Stop {
