@@ -112,15 +112,22 @@ fn inside(uv: &[DVec2; 3], p: DVec2, eps: f64) -> Option<[f64; 3]> {
     w.iter().all(|&k| k > eps).then_some(w)
 }
 
-#[test]
-fn charts_do_not_overlap_and_carry_the_radiant_power() {
-    let (_, solution, lm) = baked();
-    let tris = triangles(lm);
+/// The lightmap's power, summed channels: every texel whose centre lies strictly inside a
+/// triangle, its radiance times the surface area it stands for (`texel_area(positions in m,
+/// atlas corners in texels)`, scene units squared). Panics if two triangles claim a texel
+/// (triangles of one chart may share a centre only on their common edge, which the strict
+/// test leaves out).
+fn lightmap_power(
+    lm: &Lightmap,
+    tris: &[(String, [Vec3; 3], [DVec2; 3])],
+    texel_area: impl Fn(&[Vec3; 3], &[DVec2; 3]) -> f64,
+) -> f64 {
     let w = lm.width as usize;
-    let mut owner = vec![u32::MAX; w * lm.height as usize];
     let pixels = lm.radiance.pixels();
-    let mut power_map = 0.0;
-    for (i, (name, _, uv)) in tris.iter().enumerate() {
+    let mut owner = vec![false; w * lm.height as usize];
+    let mut power = 0.0;
+    for (name, pos, uv) in tris {
+        let weight = texel_area(pos, uv);
         let lo = uv[0].min(uv[1]).min(uv[2]).floor();
         let hi = uv[0].max(uv[1]).max(uv[2]).ceil();
         for y in lo.y as usize..hi.y as usize {
@@ -128,21 +135,22 @@ fn charts_do_not_overlap_and_carry_the_radiant_power() {
                 let c = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
                 if inside(uv, c, 1e-6).is_some() {
                     let j = y * w + x;
-                    // Two triangles of one object and plane may share a texel centre only on
-                    // their common edge, which the strict test leaves out.
-                    assert_eq!(owner[j], u32::MAX, "texel ({x}, {y}) of {name} is taken");
-                    owner[j] = i as u32;
-                    power_map += f64::from(pixels[j].element_sum());
+                    assert!(!owner[j], "texel ({x}, {y}) of {name} is taken");
+                    owner[j] = true;
+                    power += f64::from(pixels[j].element_sum()) * weight;
                 }
             }
         }
     }
-    let texel2 = f64::from(TEXEL).powi(2);
-    // The solution's integral of L over every element (the linear interpolant's exact mean).
+    power
+}
+
+/// The solution's integral of L over every element (the linear interpolant's exact mean),
+/// summed channels.
+fn element_mesh_power(solution: &Solution) -> f64 {
     let mesh = solution.mesh();
     let l = solution.vertex_radiosity();
-    let power_mesh: f64 = mesh
-        .leaves()
+    mesh.leaves()
         .map(|n| {
             let node = &mesh.nodes[n as usize];
             let mean: f32 = node
@@ -153,8 +161,16 @@ fn charts_do_not_overlap_and_carry_the_radiant_power() {
                 / 3.0;
             f64::from(node.area) * f64::from(mean) / std::f64::consts::PI
         })
-        .sum();
-    let power_map = power_map * texel2;
+        .sum()
+}
+
+#[test]
+fn charts_do_not_overlap_and_carry_the_radiant_power() {
+    let (_, solution, lm) = baked();
+    let tris = triangles(lm);
+    let texel2 = f64::from(TEXEL).powi(2);
+    let power_map = lightmap_power(lm, &tris, |_, _| texel2);
+    let power_mesh = element_mesh_power(solution);
     // Counting texel centres measures each triangle's area to within about its perimeter
     // times half a 5 mm texel, with errors of both signs; the radiance per texel is the
     // solution's own. Over the whole box: 1 %.
@@ -334,44 +350,13 @@ fn curved_surfaces_unwrap_into_few_charts_that_carry_their_power() {
         lm.charts,
         scene.mesh.triangles.len()
     );
-    let w = lm.width as usize;
-    let pixels = lm.radiance.pixels();
-    let mut owner = vec![false; w * lm.height as usize];
-    let mut power_map = 0.0;
-    for (name, pos, uv) in triangles(&lm) {
-        // Positions are metres in the .glb, the scene is in millimetres.
+    // Positions are metres in the .glb, the scene is in millimetres.
+    let power_map = lightmap_power(&lm, &triangles(&lm), |pos, uv| {
         let p = pos.map(|q| q.as_dvec3() * 1000.0);
         let area = (p[1] - p[0]).cross(p[2] - p[0]).length() / 2.0;
-        let atlas = (uv[1] - uv[0]).perp_dot(uv[2] - uv[0]).abs() / 2.0;
-        let lo = uv[0].min(uv[1]).min(uv[2]).floor();
-        let hi = uv[0].max(uv[1]).max(uv[2]).ceil();
-        for y in lo.y as usize..hi.y as usize {
-            for x in lo.x as usize..hi.x as usize {
-                let c = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
-                if inside(&uv, c, 1e-6).is_some() {
-                    let j = y * w + x;
-                    assert!(!owner[j], "texel ({x}, {y}) of {name} is taken");
-                    owner[j] = true;
-                    power_map += f64::from(pixels[j].element_sum()) * area / atlas;
-                }
-            }
-        }
-    }
-    let mesh = solution.mesh();
-    let l = solution.vertex_radiosity();
-    let power_mesh: f64 = mesh
-        .leaves()
-        .map(|n| {
-            let node = &mesh.nodes[n as usize];
-            let mean: f32 = node
-                .vertices
-                .iter()
-                .map(|&v| l[v as usize].element_sum())
-                .sum::<f32>()
-                / 3.0;
-            f64::from(node.area) * f64::from(mean) / std::f64::consts::PI
-        })
-        .sum();
+        area / ((uv[1] - uv[0]).perp_dot(uv[2] - uv[0]).abs() / 2.0)
+    });
+    let power_mesh = element_mesh_power(&solution);
     // As for the box: counting texel centres measures each chart's area to within its
     // perimeter times half a texel, with errors of both signs.
     assert!(
