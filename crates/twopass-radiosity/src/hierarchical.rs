@@ -858,6 +858,49 @@ impl<'s> HierarchicalSolver<'s> {
         )
     }
 
+    /// Unoccluded transport from surface node `q` to surface node `p`, per unit exitance of
+    /// `q`: the point form factors at `p`'s seven receiving points (corners first), the shift
+    /// (area average less the corners' mean) and the form-factor error estimate (per unit
+    /// receiver area).
+    fn surface_transport(&self, p: u32, q: u32) -> ([f64; 7], f64, f64) {
+        let (x, n) = self.receiving_points(p);
+        let poly = self.mesh.corners(q);
+        let ns = self.scene.mesh.geometric_normals
+            [self.mesh.nodes[q as usize].scene_triangle as usize]
+            .as_dvec3();
+        let f: [f64; 7] =
+            std::array::from_fn(|i| form_factor::point_to_polygon(x[i], n[i], &poly, Some(ns)));
+        // The corners keep their exact point values; the receiver's area-averaged form factor
+        // sets the light it gets (interpolating a curved F linearly would lose or add light
+        // with a consistent sign), by the seven-point rule exact for cubics (corners 1/20, edge
+        // midpoints 2/15, centroid 9/20). The error estimate: how far that average is from the
+        // corners' and from the quadratic rule's (corners 1/12, centroid 3/4), plus a part of
+        // the spread.
+        let mean = (f[0] + f[1] + f[2]) / 3.0;
+        let average =
+            (f[0] + f[1] + f[2]) / 20.0 + (f[4] + f[5] + f[6]) * (2.0 / 15.0) + f[3] * (9.0 / 20.0);
+        let quadratic = mean / 4.0 + f[3] * 0.75;
+        let (lo, hi) = f
+            .iter()
+            .fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
+        (
+            f,
+            average - mean,
+            (average - mean).abs() + (average - quadratic).abs() + 0.25 * (hi - lo),
+        )
+    }
+
+    /// Unoccluded point form factors from surface node `q` at surface node `p`'s three
+    /// receiving corners.
+    fn corner_form_factors(&self, p: u32, q: u32) -> [f64; 3] {
+        let (x, n) = self.receiving_points(p);
+        let poly = self.mesh.corners(q);
+        let ns = self.scene.mesh.geometric_normals
+            [self.mesh.nodes[q as usize].scene_triangle as usize]
+            .as_dvec3();
+        std::array::from_fn(|i| form_factor::point_to_polygon(x[i], n[i], &poly, Some(ns)))
+    }
+
     /// Transport, error estimate and visibility of the link `s -> r`, with `rays` shadow rays.
     fn evaluate(&self, r: NodeRef, s: NodeRef, rays: u32) -> Eval {
         let (er, es) = (self.ends(r), self.ends(s));
@@ -870,34 +913,9 @@ impl<'s> HierarchicalSolver<'s> {
         let mut shift = 0.0;
         let (k, error) = match (r.kind(), s.kind()) {
             (Kind::Surface(p), Kind::Surface(q)) => {
-                let (x, n) = self.receiving_points(p);
-                let poly = self.mesh.corners(q);
-                let ns = self.scene.mesh.geometric_normals
-                    [self.mesh.nodes[q as usize].scene_triangle as usize]
-                    .as_dvec3();
-                let f: [f64; 7] = std::array::from_fn(|i| {
-                    form_factor::point_to_polygon(x[i], n[i], &poly, Some(ns))
-                });
-                // The corners keep their exact point values; the receiver's area-averaged
-                // form factor sets the light it gets (interpolating a curved F linearly would
-                // lose or add light with a consistent sign), by the seven-point rule exact
-                // for cubics (corners 1/20, edge midpoints 2/15, centroid 9/20). The error
-                // estimate: how far that average is from the corners' and from the
-                // quadratic rule's (corners 1/12, centroid 3/4), plus a part of the spread.
-                let mean = (f[0] + f[1] + f[2]) / 3.0;
-                let average = (f[0] + f[1] + f[2]) / 20.0
-                    + (f[4] + f[5] + f[6]) * (2.0 / 15.0)
-                    + f[3] * (9.0 / 20.0);
-                let quadratic = mean / 4.0 + f[3] * 0.75;
-                shift = average - mean;
-                let (lo, hi) = f
-                    .iter()
-                    .fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
-                (
-                    [f[0], f[1], f[2]],
-                    er.area
-                        * ((average - mean).abs() + (average - quadratic).abs() + 0.25 * (hi - lo)),
-                )
+                let (f, s, error) = self.surface_transport(p, q);
+                shift = s;
+                ([f[0], f[1], f[2]], er.area * error)
             }
             (Kind::Surface(p), Kind::Cluster(_)) => {
                 // Irradiance at each corner per unit of the cluster's radiant table entry
@@ -1579,14 +1597,126 @@ impl<'s> HierarchicalSolver<'s> {
 
     /// The current solution: per-vertex radiosity over the leaves, the area-weighted mean of
     /// the leaves' corner values at each vertex.
+    /// The light each leaf's corners show: [`Self::corners_in`] with every unblocked
+    /// surface-to-surface link above the leaf evaluated again at the leaf's own corners (a
+    /// final gather at the vertices through the link hierarchy).
+    ///
+    /// A link attached above a leaf reaches the leaf's corners by linear interpolation of its
+    /// corner values, and a uniform shift makes up what that interpolant misses of the
+    /// receiver's area average. That is right for the power the receiver gets, and wrong
+    /// pointwise wherever the form factor is curved over the receiver: a piece of the wall
+    /// across a crease that touches the receiver's corner gives that corner close to 1/2
+    /// (the half-plane limit) whatever its size, while a point a little way along the crease
+    /// gets far less from it. Interpolated, that value spreads along the whole edge, and the
+    /// links of every level above a crease vertex added up to 1.1-1.3 times its irradiance
+    /// (a closed cube's crease vertices showed 13 % too much radiosity once refinement
+    /// reached the smallest elements there). The sources linked above a receiver partition
+    /// what it sees, so their exact point values at a vertex sum to its point irradiance.
+    /// Those links show their point values and no shift; the leaf's power, and so the
+    /// transport between leaves, is unchanged: only what the vertices show. Partly blocked
+    /// links keep their per-corner visibility (the shadow edges) and cluster links their
+    /// far-field values.
+    fn display_corners(&self) -> Vec<[[DVec3; 4]; 2]> {
+        let mut out = self.corners_in.clone();
+        if self.links.is_empty() {
+            return out;
+        }
+        // The unblocked surface-to-surface links a surface node receives.
+        let received = |n: u32| {
+            let r = NodeRef::surface(n);
+            let range = match self.receivers.binary_search_by_key(&r, |&(x, _)| x) {
+                Ok(i) => {
+                    self.receivers[i].1 as usize
+                        ..self
+                            .receivers
+                            .get(i + 1)
+                            .map_or(self.links.len(), |&(_, e)| e as usize)
+                }
+                Err(_) => 0..0,
+            };
+            self.links[range]
+                .iter()
+                .filter(|l| matches!(l.source.kind(), Kind::Surface(_)) && !l.partial)
+        };
+        let fixes: Vec<(u32, [[DVec3; 4]; 2])> = self
+            .mesh
+            .roots
+            .par_iter()
+            .flat_map_iter(|&root| {
+                let mut fixes = Vec::new();
+                // (node, the links above it: each with the node it is attached to and its
+                // visible fraction)
+                let mut stack: Vec<(u32, Vec<(Link, u32, f64)>)> = vec![(root, Vec::new())];
+                while let Some((n, mut above)) = stack.pop() {
+                    let node = &self.mesh.nodes[n as usize];
+                    if let Some(children) = node.children {
+                        above.extend(received(n).filter_map(|l| {
+                            let Kind::Surface(q) = l.source.kind() else {
+                                return None;
+                            };
+                            // What the link carries over what its receiver's corners see of
+                            // the source unoccluded (1 unless a later visibility estimate
+                            // found some of it blocked).
+                            let open: f64 = self.corner_form_factors(n, q).iter().sum();
+                            let k: f64 = l.k.iter().map(|&k| f64::from(k)).sum();
+                            (open > 0.0).then(|| (*l, n, (k / open).clamp(0.0, 1.0)))
+                        }));
+                        stack.push((children[0], above.clone()));
+                        stack.push((children[1], above));
+                        continue;
+                    }
+                    let mut fix = [[DVec3::ZERO; 4]; 2];
+                    for (l, a, vis) in &above {
+                        let Kind::Surface(q) = l.source.kind() else {
+                            continue;
+                        };
+                        let f = self.corner_form_factors(n, q);
+                        let at = &self.mesh.nodes[*a as usize];
+                        let sv = self.source_value(l);
+                        for c in 0..3 {
+                            let w = barycentric_2d(at.uv, node.uv[c]);
+                            let interpolated = f64::from(l.k[0]) * f64::from(w[0])
+                                + f64::from(l.k[1]) * f64::from(w[1])
+                                + f64::from(l.k[2]) * f64::from(w[2]);
+                            let d = f[c] * vis - interpolated;
+                            fix[0][c] += sv[0] * d;
+                            fix[1][c] += sv[1] * d;
+                        }
+                        fix[0][3] -= sv[0] * f64::from(l.shift);
+                        fix[1][3] -= sv[1] * f64::from(l.shift);
+                    }
+                    // The leaf's own links are exact at its corners already: no shift.
+                    for l in received(n) {
+                        let sv = self.source_value(l);
+                        fix[0][3] -= sv[0] * f64::from(l.shift);
+                        fix[1][3] -= sv[1] * f64::from(l.shift);
+                    }
+                    fixes.push((n, fix));
+                }
+                fixes
+            })
+            .collect();
+        for (n, fix) in fixes {
+            for (o, f) in fix.iter().enumerate() {
+                for (k, d) in f.iter().enumerate() {
+                    out[n as usize][o][k] += *d;
+                }
+            }
+        }
+        out
+    }
+
+    /// The current solution: per-vertex radiosity over the leaves, the area-weighted mean of
+    /// the leaves' corner values at each vertex (see [`Self::display_corners`]).
     pub fn solution(&self) -> Solution {
+        let corners = self.display_corners();
         let nv = self.mesh.vertices.len();
         let mut sum = vec![[DVec3::ZERO; 2]; nv];
         let mut weight = vec![0.0f64; nv];
         for n in self.mesh.leaves() {
             let node = &self.mesh.nodes[n as usize];
             let a = f64::from(node.area).max(f64::MIN_POSITIVE);
-            let [e, r] = self.corners_in[n as usize];
+            let [e, r] = corners[n as usize];
             for (k, &v) in node.vertices.iter().enumerate() {
                 // Corner values plus the links' shifts, so the displayed light is the light
                 // the leaf gets (see `Link::shift`).
