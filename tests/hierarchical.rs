@@ -318,13 +318,6 @@ fn direct_power_monte_carlo(scene: &Scene, n: u64) -> Vec<f64> {
 }
 
 #[test]
-#[ignore = "known defect, issue 13: \"shadowed\" gets 0.13 of its direct light. Emitter pieces \
-            split during a refinement pass have no exitance until the next push-pull, so their \
-            links are kept or dropped on four rays, never refined around the shadow, and the rays \
-            that decide to keep a link also set its light. Branch issue-13-shadow-links fixes \
-            both (1.02 here) but then refines a closed room's creases to the smallest elements, \
-            where the furnace's mean radiosity at rho 0.9 drifts 0.3 % (the transport of \
-            touching pairs; the furnace test fails)."]
 fn cluster_links_carry_direct_light_and_shadows_as_monte_carlo_does() {
     // A floor, a light above it, and five spheres of 1280 triangles at different heights, one
     // ("shadowed") 84 % hidden from the light by another: the spheres take their light
