@@ -20,6 +20,12 @@ fn info_json_describes_the_cornell_box() {
         v["plan"]["specular"]["required"], false,
         "an all-Lambertian scene needs no specular pass"
     );
+    assert_eq!(v["plan"]["specular_transfer"]["required"], false);
+    let reason = v["plan"]["specular_transfer"]["reason"].as_str().unwrap();
+    assert!(
+        reason.contains("no mirror, conductor or dielectric"),
+        "{reason}"
+    );
     assert_eq!(v["emitters"].as_array().unwrap().len(), 1);
 }
 
@@ -32,6 +38,13 @@ fn specular_pass_is_planned_only_for_non_diffuse_materials() {
     let reason = v["plan"]["specular"]["reason"].as_str().unwrap();
     assert!(
         reason.contains("mirror") && reason.contains("glass"),
+        "{reason}"
+    );
+    // The spheres face the walls: light through them goes to the radiosity elements.
+    assert_eq!(v["plan"]["specular_transfer"]["required"], true);
+    let reason = v["plan"]["specular_transfer"]["reason"].as_str().unwrap();
+    assert!(
+        reason.contains("mirror-sphere, glass-sphere face diffuse surfaces"),
         "{reason}"
     );
 }
