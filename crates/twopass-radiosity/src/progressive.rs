@@ -48,9 +48,9 @@ pub struct Progressive<'s> {
     specular: Option<Specular>,
     /// Per vertex, with the specular transfer: irradiance that arrived through specular
     /// surfaces (every deposit so far, splatted on the current mesh), W/m^2; and the area each
-    /// vertex stands for ([`specular::vertex_areas`]). Empty without it.
+    /// vertex stands for, with its leaves ([`specular::VertexAreas`]). Empty without it.
     received_spec: Vec<DVec3>,
-    vertex_area: Vec<f64>,
+    vertex_areas: specular::VertexAreas,
     /// Per patch: unshot and shot radiosity, split by origin.
     unshot_emit: Vec<DVec3>,
     unshot_refl: Vec<DVec3>,
@@ -178,7 +178,7 @@ impl<'s> Progressive<'s> {
             received_refl: Vec::new(),
             specular,
             received_spec: Vec::new(),
-            vertex_area: Vec::new(),
+            vertex_areas: specular::VertexAreas::default(),
             unshot_emit: Vec::new(),
             unshot_refl: Vec::new(),
             shot_emit: Vec::new(),
@@ -215,14 +215,11 @@ impl<'s> Progressive<'s> {
         let Some(spec) = &self.specular else {
             return;
         };
-        self.vertex_area = specular::vertex_areas(&self.mesh);
+        self.vertex_areas = specular::VertexAreas::new(&self.mesh);
         self.received_spec = vec![DVec3::ZERO; self.mesh.vertices.len()];
-        specular::splat(
-            &self.mesh,
-            &self.vertex_area,
-            &spec.deposits,
-            &mut self.received_spec,
-        );
+        for (v, e) in specular::splat(&self.mesh, &self.vertex_areas, &spec.deposits) {
+            self.received_spec[v as usize] = e;
+        }
     }
 
     /// Irradiance received at vertex `v` from every path, W/m^2.
@@ -276,32 +273,35 @@ impl<'s> Progressive<'s> {
             }
             return DVec3::ZERO;
         }
-        let mut delta = vec![DVec3::ZERO; self.mesh.vertices.len()];
-        specular::splat(&self.mesh, &self.vertex_area, &deposits, &mut delta);
-        for (r, d) in self.received_spec.iter_mut().zip(&delta) {
-            *r += *d;
-        }
-        let mut arrived = DVec3::ZERO;
-        for q in 0..self.mesh.patches.len() {
-            let mut gained = DVec3::ZERO;
-            for &leaf in &self.patch_leaves[q] {
+        // Only the leaves around the vertices that received anything gain power: an element
+        // receives its area times the mean of its vertices' irradiance.
+        let delta = specular::splat(&self.mesh, &self.vertex_areas, &deposits);
+        let mut gains: Vec<(u32, DVec3)> = Vec::new();
+        for &(v, e) in &delta {
+            self.received_spec[v as usize] += e;
+            for &leaf in &self.vertex_areas.leaves[v as usize] {
                 let node = &self.mesh.nodes[leaf as usize];
-                let e: DVec3 = node
-                    .vertices
-                    .iter()
-                    .map(|&v| delta[v as usize])
-                    .sum::<DVec3>()
-                    / 3.0;
-                gained += e * f64::from(node.area);
+                gains.push((node.patch, e * (f64::from(node.area) / 3.0)));
             }
-            if gained != DVec3::ZERO {
-                let rho = self.patch_rho(q);
-                arrived += gained;
-                self.energy.absorbed += gained * (DVec3::ONE - rho);
-                let a = self.patch_area(q);
-                self.unshot_refl[q] += gained * rho / a;
-                self.energy.unshot += gained * rho;
+        }
+        gains.sort_by_key(|g| g.0);
+        gains.dedup_by(|later, first| {
+            if later.0 == first.0 {
+                first.1 += later.1;
+                true
+            } else {
+                false
             }
+        });
+        let mut arrived = DVec3::ZERO;
+        for (q, gained) in gains {
+            let q = q as usize;
+            let rho = self.patch_rho(q);
+            arrived += gained;
+            self.energy.absorbed += gained * (DVec3::ONE - rho);
+            let a = self.patch_area(q);
+            self.unshot_refl[q] += gained * rho / a;
+            self.energy.unshot += gained * rho;
         }
         if let Some(spec) = &mut self.specular {
             spec.rays += rays;

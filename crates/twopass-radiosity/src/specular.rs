@@ -318,50 +318,54 @@ impl Specular {
     /// its solid angle).
     fn direction(&self, x: DVec3, u: Vec2) -> Option<(DVec3, f64)> {
         use std::f64::consts::PI;
-        let cones: Vec<(DVec3, f64)> = self
-            .targets
-            .iter()
-            .map(|t| {
-                let d = t.center - x;
-                let dist = d.length();
-                if dist <= t.radius {
-                    (DVec3::Z, -1.0)
-                } else {
-                    (d / dist, (1.0 - (t.radius / dist).powi(2)).max(0.0).sqrt())
-                }
-            })
-            .collect();
+        // The cone of target `t` seen from `x`: axis and cosine of its half angle (-1, the
+        // whole sphere of directions, from inside the bounding sphere).
+        let cone = |t: &Target| {
+            let d = t.center - x;
+            let dist = d.length();
+            if dist <= t.radius {
+                (DVec3::Z, -1.0)
+            } else {
+                (d / dist, (1.0 - (t.radius / dist).powi(2)).max(0.0).sqrt())
+            }
+        };
         let solid = |cos_max: f64| 2.0 * PI * (1.0 - cos_max);
-        let total: f64 = cones.iter().map(|c| solid(c.1)).sum();
+        let total: f64 = self.targets.iter().map(|t| solid(cone(t).1)).sum();
         if !(total > 0.0) {
             return None;
         }
         // Pick a cone with the first coordinate, reusing its remainder (keeps stratification).
         let target = f64::from(u.x) * total;
         let mut acc = 0.0;
-        let mut pick = cones.len() - 1;
-        let mut ux = 0.5;
-        for (j, c) in cones.iter().enumerate() {
-            let w = solid(c.1);
-            if target < acc + w || j + 1 == cones.len() {
-                pick = j;
-                ux = ((target - acc) / w).clamp(0.0, 1.0 - 1e-12);
+        let mut picked = (DVec3::Z, -1.0, 0.5);
+        for (j, t) in self.targets.iter().enumerate() {
+            let (axis, cos_max) = cone(t);
+            let w = solid(cos_max);
+            if target < acc + w || j + 1 == self.targets.len() {
+                let ux = ((target - acc) / w).clamp(0.0, 1.0 - 1e-12);
+                picked = (axis, cos_max, ux);
                 break;
             }
             acc += w;
         }
-        let (axis, cos_max) = cones[pick];
+        let (axis, cos_max, ux) = picked;
         let cos_t = 1.0 - ux * (1.0 - cos_max);
         let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
         let phi = 2.0 * PI * f64::from(u.y);
-        let local = DVec3::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t);
         let (s, t) = axis.any_orthonormal_pair();
-        let dir = (s * local.x + t * local.y + axis * local.z).normalize();
+        let dir = (s * (sin_t * phi.cos()) + t * (sin_t * phi.sin()) + axis * cos_t).normalize();
         // Mixture density: each cone holding the direction adds its probability over its solid
         // angle, (solid / total) / solid = 1 / total.
-        let holding = cones.iter().filter(|c| dir.dot(c.0) >= c.1).count().max(1);
-        let pdf = holding as f64 / total;
-        (pdf > 0.0).then_some((dir, pdf))
+        let holding = self
+            .targets
+            .iter()
+            .filter(|t| {
+                let (axis, cos_max) = cone(t);
+                dir.dot(axis) >= cos_max
+            })
+            .count()
+            .max(1);
+        Some((dir, holding as f64 / total))
     }
 
     /// Follows a ray leaving `from` in `dir` with `power` through the delta surfaces; returns
@@ -426,28 +430,41 @@ impl Specular {
 
 /// Per vertex: a third of the area of the leaves around it (scene units squared), the area a
 /// vertex's irradiance stands for in the solver's power bookkeeping (an element receives its
-/// area times the mean of its vertices' irradiance).
-pub(crate) fn vertex_areas(mesh: &ElementMesh) -> Vec<f64> {
-    let mut a = vec![0.0; mesh.vertices.len()];
-    for leaf in mesh.leaves() {
-        let node = &mesh.nodes[leaf as usize];
-        for &v in &node.vertices {
-            a[v as usize] += f64::from(node.area) / 3.0;
-        }
-    }
-    a
+/// area times the mean of its vertices' irradiance); and the leaves around it.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct VertexAreas {
+    /// Per vertex: a third of the area of the leaves around it.
+    pub area: Vec<f64>,
+    /// Per vertex: the leaves around it.
+    pub leaves: Vec<Vec<u32>>,
 }
 
-/// Adds the deposits' irradiance to `irradiance` (per vertex, W/m^2): each deposit's power is
-/// shared among the three vertices of the element it lands in by its barycentric weights
-/// there, and divided by each vertex's area ([`vertex_areas`]), so the power the solver's
-/// bookkeeping sees arriving is exactly the power deposited.
+impl VertexAreas {
+    /// The areas and leaves of the current mesh.
+    pub fn new(mesh: &ElementMesh) -> Self {
+        let mut area = vec![0.0; mesh.vertices.len()];
+        let mut leaves = vec![Vec::new(); mesh.vertices.len()];
+        for leaf in mesh.leaves() {
+            let node = &mesh.nodes[leaf as usize];
+            for &v in &node.vertices {
+                area[v as usize] += f64::from(node.area) / 3.0;
+                leaves[v as usize].push(leaf);
+            }
+        }
+        Self { area, leaves }
+    }
+}
+
+/// The deposits' irradiance per vertex (W/m^2), sorted by vertex, each vertex once: each
+/// deposit's power is shared among the three vertices of the element it lands in by its
+/// barycentric weights there, and divided by each vertex's area ([`VertexAreas`]), so the
+/// power the solver's bookkeeping sees arriving is exactly the power deposited.
 pub(crate) fn splat(
     mesh: &ElementMesh,
-    vertex_area: &[f64],
+    areas: &VertexAreas,
     deposits: &[Deposit],
-    irradiance: &mut [DVec3],
-) {
+) -> Vec<(u32, DVec3)> {
+    let mut out: Vec<(u32, DVec3)> = Vec::with_capacity(deposits.len() * 3);
     for d in deposits {
         let Some((leaf, w)) = mesh.locate(d.triangle, d.b.x, d.b.y) else {
             continue;
@@ -461,10 +478,22 @@ pub(crate) fn splat(
         };
         let power = d.power.as_dvec3();
         for (k, &v) in mesh.nodes[leaf as usize].vertices.iter().enumerate() {
-            let a = vertex_area[v as usize];
+            let a = areas.area[v as usize];
             if a > 0.0 {
-                irradiance[v as usize] += power * (w[k] / a);
+                out.push((v, power * (w[k] / a)));
             }
         }
     }
+    // A stable sort keeps the deposits' order within a vertex: the sums do not depend on
+    // anything but the deposits.
+    out.sort_by_key(|e| e.0);
+    out.dedup_by(|later, first| {
+        if later.0 == first.0 {
+            first.1 += later.1;
+            true
+        } else {
+            false
+        }
+    });
+    out
 }
