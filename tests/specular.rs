@@ -145,17 +145,16 @@ fn irradiance_through_a_mirror_is_the_mirrored_emitters_times_the_reflectance() 
                 let w = [i as f64, j as f64, (m - i - j) as f64].map(|x| x / m as f64);
                 let x = p[0] * w[0] + p[1] * w[1] + p[2] * w[2];
                 let e = through_mirror(x);
-                for k in 0..3 {
-                    sum[k] += w[k] * e;
+                for (s, w) in sum.iter_mut().zip(w) {
+                    *s += w * e;
                 }
                 count += 1.0;
             }
         }
         let a = f64::from(node.area);
-        for k in 0..3 {
-            let v = node.vertices[k] as usize;
-            weighted[v] += a * sum[k] / count;
-            area[v] += a / 3.0;
+        for (&v, s) in node.vertices.iter().zip(sum) {
+            weighted[v as usize] += a * s / count;
+            area[v as usize] += a / 3.0;
         }
     }
     let (mut power, mut expected_power, mut vertices) = (DVec3::ZERO, 0.0, 0);

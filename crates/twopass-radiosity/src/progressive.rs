@@ -257,15 +257,13 @@ impl<'s> Progressive<'s> {
         );
         let node = self.mesh.patches[p];
         let key = hash(self.options.seed ^ hash(0x5bec_0000_0000_0000 ^ self.shots) ^ p as u64);
-        let (deposits, rays) = spec.shoot(
-            self.scene,
-            self.mesh.corners(node),
-            self.mesh.nodes[node as usize].scene_triangle,
+        let shooter = specular::Shooter {
+            corners: self.mesh.corners(node),
+            tri: self.mesh.nodes[node as usize].scene_triangle,
             radiosity,
             area,
-            n,
-            key,
-        );
+        };
+        let (deposits, rays) = spec.shoot(self.scene, &shooter, n, key);
         self.rays += rays;
         if deposits.is_empty() {
             if let Some(spec) = &mut self.specular {

@@ -6,12 +6,12 @@
 //! vertex the patch sees directly (with the specular objects as occluders, since they do not
 //! take part). This module carries the rest: it traces rays from the shooter toward the
 //! specular objects, follows them through the delta lobes of `twopass-brdf`
-//! ([`DeltaLobe::sample_flux`]: the power a refraction carries, not its radiance) up to
-//! [`SpecularTransfer::max_depth`] bounces, and hands back where they land on a surface that
-//! takes part in radiosity, with the power they carry. A ray whose first hit is not specular
-//! carries nothing here: that light is the form factors' (nothing is counted twice). The
-//! solver splats the landed power onto the element vertices (see [`splat`]) as irradiance,
-//! so it is then reflected and shot again like any other light. Choice and justification:
+//! ([`twopass_brdf::delta::DeltaLobe::sample_flux`]: the power a refraction carries, not its
+//! radiance) up to [`SpecularTransfer::max_depth`] bounces, and hands back where they land on
+//! a surface that takes part in radiosity, with the power they carry. A ray whose first hit is
+//! not specular carries nothing here: that light is the form factors' (nothing is counted
+//! twice). The solver splats the landed power onto the element vertices as irradiance, so it
+//! is then reflected and shot again like any other light. Choice and justification:
 //! ARCHITECTURE.md, "Specular transfer".
 //!
 //! Sampling: a point on the shooting patch stratified over a k x k grid, paired with a
@@ -181,6 +181,16 @@ pub(crate) struct Deposit {
     pub power: Vec3,
 }
 
+/// A shooting patch: its triangle `corners` on scene triangle `tri` (light leaves its front),
+/// its unshot radiosity (W/m^2 per channel) and its area (scene units squared).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Shooter {
+    pub corners: [DVec3; 3],
+    pub tri: u32,
+    pub radiosity: DVec3,
+    pub area: f64,
+}
+
 /// A bounding sphere of a specular object: the cone it subtends is where rays are aimed.
 #[derive(Debug, Clone, Copy)]
 struct Target {
@@ -251,20 +261,16 @@ impl Specular {
         k * k
     }
 
-    /// Traces the specular paths of one shot: patch triangle `corners` (on scene triangle
-    /// `tri`, leaving from its front) with radiosity `radiosity` (W/m^2 per channel, area
-    /// `area`), `n` rays (a square), random stream keyed by `key`. Returns the deposits in ray
-    /// order and the rays cast. Parallel over rays; the result does not depend on scheduling.
-    pub fn shoot(
-        &self,
-        scene: &Scene,
-        corners: [DVec3; 3],
-        tri: u32,
-        radiosity: DVec3,
-        area: f64,
-        n: u32,
-        key: u64,
-    ) -> (Vec<Deposit>, u64) {
+    /// Traces the specular paths of one shot of `shooter` with `n` rays (a square), random
+    /// stream keyed by `key`. Returns the deposits in ray order and the rays cast. Parallel
+    /// over rays; the result does not depend on scheduling.
+    pub fn shoot(&self, scene: &Scene, shooter: &Shooter, n: u32, key: u64) -> (Vec<Deposit>, u64) {
+        let Shooter {
+            corners,
+            tri,
+            radiosity,
+            area,
+        } = *shooter;
         let k = f64::from(n).sqrt().round() as u32;
         let n = k * k;
         // Direction strata paired with point strata through a shuffle (Fisher-Yates).
@@ -331,7 +337,7 @@ impl Specular {
         };
         let solid = |cos_max: f64| 2.0 * PI * (1.0 - cos_max);
         let total: f64 = self.targets.iter().map(|t| solid(cone(t).1)).sum();
-        if !(total > 0.0) {
+        if total.is_nan() || total <= 0.0 {
             return None;
         }
         // Pick a cone with the first coordinate, reusing its remainder (keeps stratification).
