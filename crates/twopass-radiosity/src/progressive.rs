@@ -51,6 +51,8 @@ pub struct Progressive<'s> {
     /// vertex stands for, with its leaves ([`specular::VertexAreas`]). Empty without it.
     received_spec: Vec<DVec3>,
     vertex_areas: specular::VertexAreas,
+    /// A per-vertex buffer of zeros for the splats.
+    scratch: Vec<DVec3>,
     /// Per patch: unshot and shot radiosity, split by origin.
     unshot_emit: Vec<DVec3>,
     unshot_refl: Vec<DVec3>,
@@ -179,6 +181,7 @@ impl<'s> Progressive<'s> {
             specular,
             received_spec: Vec::new(),
             vertex_areas: specular::VertexAreas::default(),
+            scratch: Vec::new(),
             unshot_emit: Vec::new(),
             unshot_refl: Vec::new(),
             shot_emit: Vec::new(),
@@ -212,12 +215,18 @@ impl<'s> Progressive<'s> {
     /// With the specular transfer: the vertex areas of the current mesh, and every deposit so
     /// far splatted onto it (after a refinement the deposits land on the finer elements).
     fn resplat(&mut self) {
-        let Some(spec) = &self.specular else {
+        let Some(spec) = &mut self.specular else {
             return;
         };
         self.vertex_areas = specular::VertexAreas::new(&self.mesh);
         self.received_spec = vec![DVec3::ZERO; self.mesh.vertices.len()];
-        for (v, e) in specular::splat(&self.mesh, &self.vertex_areas, &spec.deposits) {
+        let all = specular::splat(
+            &self.mesh,
+            &self.vertex_areas,
+            &mut spec.deposits,
+            &mut self.scratch,
+        );
+        for (v, e) in all {
             self.received_spec[v as usize] = e;
         }
     }
@@ -263,7 +272,7 @@ impl<'s> Progressive<'s> {
             radiosity,
             area,
         };
-        let (deposits, rays) = spec.shoot(self.scene, &shooter, n, key);
+        let (mut deposits, rays) = spec.shoot(self.scene, &shooter, n, key);
         self.rays += rays;
         if deposits.is_empty() {
             if let Some(spec) = &mut self.specular {
@@ -273,7 +282,12 @@ impl<'s> Progressive<'s> {
         }
         // Only the leaves around the vertices that received anything gain power: an element
         // receives its area times the mean of its vertices' irradiance.
-        let delta = specular::splat(&self.mesh, &self.vertex_areas, &deposits);
+        let delta = specular::splat(
+            &self.mesh,
+            &self.vertex_areas,
+            &mut deposits,
+            &mut self.scratch,
+        );
         let mut gains: Vec<(u32, DVec3)> = Vec::new();
         for &(v, e) in &delta {
             self.received_spec[v as usize] += e;

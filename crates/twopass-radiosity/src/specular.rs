@@ -177,6 +177,9 @@ pub(crate) struct Deposit {
     pub triangle: u32,
     /// Barycentrics (b1, b2) on it.
     pub b: Vec2,
+    /// The element-mesh node it was last found in (`u32::MAX`: not looked up yet): the search
+    /// after a refinement starts there.
+    pub node: u32,
     /// Power per channel, W (with areas in scene units).
     pub power: Vec3,
 }
@@ -405,6 +408,7 @@ impl Specular {
                     Some(Deposit {
                         triangle: hit.point.triangle,
                         b: Vec2::new(hit.barycentric[1], hit.barycentric[2]),
+                        node: u32::MAX,
                         power: p,
                     }),
                     rays,
@@ -464,17 +468,29 @@ impl VertexAreas {
 /// The deposits' irradiance per vertex (W/m^2), sorted by vertex, each vertex once: each
 /// deposit's power is shared among the three vertices of the element it lands in by its
 /// barycentric weights there, and divided by each vertex's area ([`VertexAreas`]), so the
-/// power the solver's bookkeeping sees arriving is exactly the power deposited.
+/// power the solver's bookkeeping sees arriving is exactly the power deposited. `scratch` is
+/// a per-vertex buffer of zeros (resized here), left zero. Each deposit remembers its element
+/// for the next splat.
 pub(crate) fn splat(
     mesh: &ElementMesh,
     areas: &VertexAreas,
-    deposits: &[Deposit],
+    deposits: &mut [Deposit],
+    scratch: &mut Vec<DVec3>,
 ) -> Vec<(u32, DVec3)> {
-    let mut out: Vec<(u32, DVec3)> = Vec::with_capacity(deposits.len() * 3);
+    if scratch.len() != mesh.vertices.len() {
+        *scratch = vec![DVec3::ZERO; mesh.vertices.len()];
+    }
+    let mut touched: Vec<u32> = Vec::new();
     for d in deposits {
-        let Some((leaf, w)) = mesh.locate(d.triangle, d.b.x, d.b.y) else {
+        let found = if d.node == u32::MAX {
+            mesh.locate(d.triangle, d.b.x, d.b.y)
+        } else {
+            Some(mesh.locate_from(d.node, d.b.x, d.b.y))
+        };
+        let Some((leaf, w)) = found else {
             continue;
         };
+        d.node = leaf;
         let w = w.map(|x| f64::from(x).max(0.0));
         let sum = w[0] + w[1] + w[2];
         let w = if sum > 0.0 {
@@ -485,21 +501,19 @@ pub(crate) fn splat(
         let power = d.power.as_dvec3();
         for (k, &v) in mesh.nodes[leaf as usize].vertices.iter().enumerate() {
             let a = areas.area[v as usize];
-            if a > 0.0 {
-                out.push((v, power * (w[k] / a)));
+            let e = power * (w[k] / a);
+            // Powers are never negative: a vertex's sum, once not zero, stays so.
+            if a > 0.0 && e != DVec3::ZERO {
+                if scratch[v as usize] == DVec3::ZERO {
+                    touched.push(v);
+                }
+                scratch[v as usize] += e;
             }
         }
     }
-    // A stable sort keeps the deposits' order within a vertex: the sums do not depend on
-    // anything but the deposits.
-    out.sort_by_key(|e| e.0);
-    out.dedup_by(|later, first| {
-        if later.0 == first.0 {
-            first.1 += later.1;
-            true
-        } else {
-            false
-        }
-    });
-    out
+    touched.sort_unstable();
+    touched
+        .into_iter()
+        .map(|v| (v, std::mem::take(&mut scratch[v as usize])))
+        .collect()
 }
