@@ -232,3 +232,37 @@ fn render_exr_says_how_it_was_made() {
     assert!(attr("twopass:seconds").parse::<f64>().unwrap() > 0.0);
     assert_eq!(attr("twopass:version"), env!("CARGO_PKG_VERSION"));
 }
+
+#[test]
+fn render_says_when_the_specular_transfer_does_not_run() {
+    let scene = repo("scenes/cornell-spheres.toml");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("h.exr");
+    let args = |extra: &[&str]| {
+        let mut a = vec![
+            "render",
+            scene.to_str().unwrap(),
+            "--method",
+            "hybrid",
+            "--width",
+            "16",
+            "--spp",
+            "1",
+            "--json",
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        a.extend_from_slice(extra);
+        let v = common::ok_json(&twopass(&a));
+        v["skipped"].to_string()
+    };
+    // By default the spheres get the transfer: nothing is skipped.
+    assert_eq!(args(&[]), "[]");
+    let hierarchical = args(&["--solver", "hierarchical"]);
+    assert!(
+        hierarchical.contains("specular transfer skipped: the hierarchical solver"),
+        "{hierarchical}"
+    );
+    let off = args(&["--specular-rays", "0"]);
+    assert!(off.contains("--specular-rays 0"), "{off}");
+}
