@@ -11,6 +11,7 @@ mod hardening;
 mod hierarchical;
 mod radiosity;
 mod scenes;
+mod specular;
 mod trace;
 
 /// A scene under the repository's `scenes/`.

@@ -64,7 +64,8 @@ impl ColorMapping {
 /// The radiance a solution displays at each element-mesh vertex, W/(m^2 sr) per linear RGB
 /// channel, HDR, with its parts: `radiance = (B + ambient) / pi` (what [`ColorMapping`] maps),
 /// `direct` the light reflected once from the emitters, `indirect` the light reflected two or
-/// more times plus the ambient estimate of a partial solve (as
+/// more times or carried through mirrors and glass, plus the ambient estimate of a partial
+/// solve (as
 /// [`DiffuseRadiance::indirect_radiance`](twopass_scene::DiffuseRadiance::indirect_radiance)).
 /// `radiance - direct - indirect` is the emitted radiance (zero off the emitters).
 #[derive(Debug, Clone, PartialEq)]

@@ -43,10 +43,15 @@ pub struct SettingsRecord {
     pub max_shots: Option<u64>,
     /// Stop after this wall-clock time, seconds, if set.
     pub time_budget_s: Option<f64>,
-    /// Seed of the visibility sampling.
+    /// Seed of the visibility sampling and of the specular transfer.
     pub seed: u64,
     /// Worker threads (the result does not depend on it).
     pub threads: usize,
+    /// Specular transfer (light through mirrors and glass, progressive refinement): rays a
+    /// shot of the whole emitted power traces, or `null` when the options turn it off. It
+    /// runs only on scenes that need it (`twopass info` says whether).
+    #[serde(default)]
+    pub specular_rays: Option<u32>,
 }
 
 /// Adaptive subdivision settings (see `Adaptive`).
@@ -212,7 +217,7 @@ pub struct Manifest {
     pub timings: TimingsRecord,
     /// Shots (patches shot, with repeats).
     pub shots: u64,
-    /// Shadow rays cast.
+    /// Rays cast: shadow rays, and the specular transfer's.
     pub rays: u64,
     /// Mesh sizes.
     pub counts: CountsRecord,
@@ -311,6 +316,7 @@ impl Manifest {
                 time_budget_s: options.stop.time_budget.map(seconds),
                 seed: options.seed,
                 threads: rayon::current_num_threads(),
+                specular_rays: options.specular.map(|s| s.rays),
             },
             finish: match finish {
                 Finish::Converged => "converged",

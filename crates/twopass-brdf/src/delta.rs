@@ -81,6 +81,20 @@ impl DeltaLobe {
     /// picks reflection with probability F (`u.x < F`). The sample's `pdf` is the discrete
     /// branch probability and `weight` the ray weight divided by it.
     pub fn sample(&self, wo: Vec3, u: Vec2) -> Option<BrdfSample> {
+        self.sample_as(wo, u, true)
+    }
+
+    /// [`DeltaLobe::sample`] for light carried from the emitters (flux, or importance
+    /// transport): `wo` is the direction the light arrives from and the sample's `wi` the one
+    /// it leaves in. The same branch choice and directions, but a refraction carries the power
+    /// (1 - F) of the light crossing the interface, without the radiance compression
+    /// 1 / eta_rel^2 (Veach 1997, section 5.2: power is conserved across a refraction, radiance
+    /// is not), so the weight of a dielectric sample is 1 either way.
+    pub fn sample_flux(&self, wo: Vec3, u: Vec2) -> Option<BrdfSample> {
+        self.sample_as(wo, u, false)
+    }
+
+    fn sample_as(&self, wo: Vec3, u: Vec2, radiance: bool) -> Option<BrdfSample> {
         match *self {
             DeltaLobe::Dielectric { eta } => {
                 if wo.z == 0.0 {
@@ -98,7 +112,11 @@ impl DeltaLobe {
                     let (wt, eta_rel) = fresnel::refract(wo, eta)?;
                     Some(BrdfSample {
                         wi: wt,
-                        weight: Rgb::splat(1.0 / (eta_rel * eta_rel)),
+                        weight: Rgb::splat(if radiance {
+                            1.0 / (eta_rel * eta_rel)
+                        } else {
+                            1.0
+                        }),
                         pdf: 1.0 - f,
                         kind: SampleKind::SpecularTransmission,
                     })
@@ -111,5 +129,47 @@ impl DeltaLobe {
                 kind: SampleKind::SpecularReflection,
             }),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn flux_samples_conserve_power_across_a_dielectric() {
+        // Light arriving from outside and from inside a glass interface: the branch
+        // probabilities are F and 1 - F and both flux weights are 1, so the expected flux
+        // leaving is exactly the flux arriving; the radiance weight of the refraction is the
+        // flux weight divided by eta_rel^2 = (eta_t / eta_i)^2.
+        let lobe = DeltaLobe::Dielectric { eta: 1.5 };
+        for wo in [
+            Vec3::new(0.3, 0.1, 0.9).normalize(),
+            Vec3::new(-0.2, 0.4, -0.8).normalize(),
+        ] {
+            let f = fresnel::dielectric(wo.z, 1.5);
+            let reflect = lobe.sample_flux(wo, Vec2::new(0.0, 0.5)).unwrap();
+            let refract = lobe.sample_flux(wo, Vec2::new(0.999, 0.5)).unwrap();
+            assert_eq!(reflect.kind, SampleKind::SpecularReflection);
+            assert_eq!(refract.kind, SampleKind::SpecularTransmission);
+            assert!((reflect.pdf - f).abs() < 1e-6 && (refract.pdf - (1.0 - f)).abs() < 1e-6);
+            assert_eq!(reflect.weight, Rgb::ONE);
+            assert_eq!(refract.weight, Rgb::ONE);
+            let (wt, eta_rel) = fresnel::refract(wo, 1.5).unwrap();
+            let radiance = lobe.sample(wo, Vec2::new(0.999, 0.5)).unwrap();
+            assert_eq!(radiance.wi, wt);
+            assert_eq!(refract.wi, wt);
+            let expected = 1.0 / (eta_rel * eta_rel);
+            assert!((radiance.weight.x - expected).abs() < 1e-6);
+        }
+        // Mirrors and conductors weigh flux and radiance alike: their reflectance.
+        let mirror = DeltaLobe::Mirror {
+            reflectance: Rgb::new(0.9, 0.5, 0.2),
+        };
+        let wo = Vec3::new(0.1, 0.2, 0.97).normalize();
+        assert_eq!(
+            mirror.sample_flux(wo, Vec2::ZERO),
+            mirror.sample(wo, Vec2::ZERO)
+        );
     }
 }

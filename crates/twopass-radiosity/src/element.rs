@@ -422,15 +422,21 @@ impl ElementMesh {
     /// The leaf of scene triangle `t`'s tree containing barycentrics (b1, b2), and the point's
     /// barycentric weights in that leaf. `None` when the triangle does not take part.
     pub fn locate(&self, t: u32, b1: f32, b2: f32) -> Option<(u32, [f32; 3])> {
-        let mut n = *self.roots.get(t as usize)?;
+        let n = *self.roots.get(t as usize)?;
         if n == u32::MAX {
             return None;
         }
+        Some(self.locate_from(n, b1, b2))
+    }
+
+    /// [`ElementMesh::locate`] starting at node `n` of the tree (the point must lie in it):
+    /// a leaf found before a refinement is an ancestor of the leaf that holds the point after.
+    pub fn locate_from(&self, mut n: u32, b1: f32, b2: f32) -> (u32, [f32; 3]) {
         let p = Vec2::new(b1, b2);
         loop {
             let node = &self.nodes[n as usize];
             match node.children {
-                None => return Some((n, barycentric_2d(node.uv, p))),
+                None => return (n, barycentric_2d(node.uv, p)),
                 Some([c0, c1]) => {
                     // The halves (a, m, c) and (m, b, c) are split by the segment m-c: the point
                     // belongs to the first when it lies on a's side of that line.

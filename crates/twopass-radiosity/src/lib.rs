@@ -3,6 +3,8 @@
 //!   differential-area-to-polygon form factors and ray-traced visibility at the receiving
 //!   vertices (Wallace, Elmquist & Haines 1989), patch/element substructuring with conforming
 //!   adaptive subdivision (Cohen et al. 1986) and a dense reference solve ([`Progressive`]);
+//!   Each shot also carries the shooter's light through mirrors and glass to the diffuse
+//!   surfaces it lands on ([`specular`]: the paths L S+ D and D S+ D);
 //! - hierarchical radiosity with clustering (Hanrahan, Salzman & Aupperle 1991; Smits, Arvo &
 //!   Greenberg 1994; Sillion 1994) for large scenes ([`HierarchicalSolver`]).
 //!
@@ -37,6 +39,7 @@ mod mesh_error;
 mod progressive;
 mod solution;
 mod solver;
+pub mod specular;
 
 pub use direct::{MAX_DENSE_VERTICES, dense_solve};
 pub use form_factor::VisibilityRays;
@@ -48,3 +51,4 @@ pub use solver::{
     Adaptive, Energy, Finish, Hierarchical, MAX_VISIBILITY_RAYS, Method, Options, Residuals,
     SolveError, SolveProgress, Solver, Stop,
 };
+pub use specular::SpecularTransfer;

@@ -1,5 +1,7 @@
 //! Progressive refinement (Cohen, Chen, Wallace & Greenberg 1988) with ray-traced form factors
-//! at the receiving vertices (Wallace, Elmquist & Haines 1989) and adaptive element subdivision.
+//! at the receiving vertices (Wallace, Elmquist & Haines 1989) and adaptive element subdivision,
+//! plus the specular transfer of [`crate::specular`]: each shot also traces the shooter's light
+//! through mirrors and glass and deposits it where it lands.
 
 use std::ops::ControlFlow;
 use std::time::{Duration, Instant};
@@ -16,6 +18,7 @@ use crate::solver::{
     Adaptive, Energy, Finish, Options, Residuals, SolveError, SolveProgress, check_common,
     luminance, participating,
 };
+use crate::specular::{self, Specular};
 
 /// Most patches or elements a solve meshes before adaptive subdivision (about 2 GB of mesh,
 /// form-factor rows and radiosities); smaller patch or element sizes are refused up front.
@@ -41,6 +44,15 @@ pub struct Progressive<'s> {
     /// Per vertex: irradiance received from emitted and from reflected light, W/m^2.
     received_emit: Vec<DVec3>,
     received_refl: Vec<DVec3>,
+    /// The specular transfer, when the scene needs it ([`specular::decide`]).
+    specular: Option<Specular>,
+    /// Per vertex, with the specular transfer: irradiance that arrived through specular
+    /// surfaces (every deposit so far, splatted on the current mesh), W/m^2; and the area each
+    /// vertex stands for, with its leaves ([`specular::VertexAreas`]). Empty without it.
+    received_spec: Vec<DVec3>,
+    vertex_areas: specular::VertexAreas,
+    /// A per-vertex buffer of zeros for the splats.
+    scratch: Vec<DVec3>,
     /// Per patch: unshot and shot radiosity, split by origin.
     unshot_emit: Vec<DVec3>,
     unshot_refl: Vec<DVec3>,
@@ -148,6 +160,9 @@ impl<'s> Progressive<'s> {
                 limit: options.memory_limit,
             });
         }
+        let specular = options
+            .specular
+            .and_then(|settings| Specular::new(scene, settings, &takes_part));
         let started = Instant::now();
         let mut mesh = ElementMesh::new(scene, &takes_part);
         mesh.refine_to(patch_size);
@@ -163,6 +178,10 @@ impl<'s> Progressive<'s> {
             receivers: Vec::new(),
             received_emit: Vec::new(),
             received_refl: Vec::new(),
+            specular,
+            received_spec: Vec::new(),
+            vertex_areas: specular::VertexAreas::default(),
+            scratch: Vec::new(),
             unshot_emit: Vec::new(),
             unshot_refl: Vec::new(),
             shot_emit: Vec::new(),
@@ -189,7 +208,124 @@ impl<'s> Progressive<'s> {
         s.energy.emitted = (0..n).map(|p| s.unshot_emit[p] * s.patch_area(p)).sum();
         s.energy.unshot = s.energy.emitted;
         s.rebuild_patch_leaves();
+        s.resplat();
         Ok(s)
+    }
+
+    /// With the specular transfer: the vertex areas of the current mesh, and every deposit so
+    /// far splatted onto it (after a refinement the deposits land on the finer elements).
+    fn resplat(&mut self) {
+        let Some(spec) = &mut self.specular else {
+            return;
+        };
+        self.vertex_areas = specular::VertexAreas::new(&self.mesh);
+        self.received_spec = vec![DVec3::ZERO; self.mesh.vertices.len()];
+        let all = specular::splat(
+            &self.mesh,
+            &self.vertex_areas,
+            &mut spec.deposits,
+            &mut self.scratch,
+        );
+        for (v, e) in all {
+            self.received_spec[v as usize] = e;
+        }
+    }
+
+    /// Irradiance received at vertex `v` from every path, W/m^2.
+    fn received(&self, v: usize) -> DVec3 {
+        let r = self.received_emit[v] + self.received_refl[v];
+        if self.specular.is_some() {
+            r + self.received_spec[v]
+        } else {
+            r
+        }
+    }
+
+    /// Irradiance at vertex `v` from light reflected at least once or carried through specular
+    /// surfaces (what shadow rays to the emitters do not find), W/m^2.
+    fn received_indirect(&self, v: usize) -> DVec3 {
+        if self.specular.is_some() {
+            self.received_refl[v] + self.received_spec[v]
+        } else {
+            self.received_refl[v]
+        }
+    }
+
+    /// The specular transfer of the shot of patch `p` with radiosity `radiosity` (W/m^2):
+    /// traces its rays through the specular surfaces, splats what lands onto the vertices and
+    /// hands the power to the receiving patches as unshot reflected radiosity, as the form
+    /// factors' transfer does. Returns the power that arrived (W per channel).
+    fn shoot_specular(&mut self, p: usize, radiosity: DVec3) -> DVec3 {
+        let Some(spec) = &self.specular else {
+            return DVec3::ZERO;
+        };
+        let area = self.patch_area(p);
+        let n = spec.rays_for(
+            luminance(radiosity.abs()) * area,
+            luminance(self.energy.emitted),
+        );
+        let node = self.mesh.patches[p];
+        let key = hash(self.options.seed ^ hash(0x5bec_0000_0000_0000 ^ self.shots) ^ p as u64);
+        let shooter = specular::Shooter {
+            corners: self.mesh.corners(node),
+            tri: self.mesh.nodes[node as usize].scene_triangle,
+            radiosity,
+            area,
+        };
+        let (mut deposits, rays) = spec.shoot(self.scene, &shooter, n, key);
+        self.rays += rays;
+        if deposits.is_empty() {
+            if let Some(spec) = &mut self.specular {
+                spec.rays += rays;
+            }
+            return DVec3::ZERO;
+        }
+        // Only the leaves around the vertices that received anything gain power: an element
+        // receives its area times the mean of its vertices' irradiance.
+        let delta = specular::splat(
+            &self.mesh,
+            &self.vertex_areas,
+            &mut deposits,
+            &mut self.scratch,
+        );
+        let mut gains: Vec<(u32, DVec3)> = Vec::new();
+        for &(v, e) in &delta {
+            self.received_spec[v as usize] += e;
+            for &leaf in &self.vertex_areas.leaves[v as usize] {
+                let node = &self.mesh.nodes[leaf as usize];
+                gains.push((node.patch, e * (f64::from(node.area) / 3.0)));
+            }
+        }
+        gains.sort_by_key(|g| g.0);
+        gains.dedup_by(|later, first| {
+            if later.0 == first.0 {
+                first.1 += later.1;
+                true
+            } else {
+                false
+            }
+        });
+        let mut arrived = DVec3::ZERO;
+        for (q, gained) in gains {
+            let q = q as usize;
+            let rho = self.patch_rho(q);
+            arrived += gained;
+            self.energy.absorbed += gained * (DVec3::ONE - rho);
+            let a = self.patch_area(q);
+            self.unshot_refl[q] += gained * rho / a;
+            self.energy.unshot += gained * rho;
+        }
+        if let Some(spec) = &mut self.specular {
+            spec.rays += rays;
+            spec.deposits.extend(deposits);
+        }
+        arrived
+    }
+
+    /// With the specular transfer: rays it cast and deposits it made so far; `None` when the
+    /// scene does not need it ([`specular::decide`]) or the options turned it off.
+    pub fn specular_transfer(&self) -> Option<(u64, usize)> {
+        self.specular.as_ref().map(|s| (s.rays, s.deposits.len()))
     }
 
     fn object_of_patch(&self, p: usize) -> u32 {
@@ -357,6 +493,9 @@ impl<'s> Progressive<'s> {
                 self.energy.unshot += gained * rho;
             }
         }
+        if self.specular.is_some() {
+            arrived += self.shoot_specular(p, de + dr);
+        }
         let shot = (de + dr) * area;
         self.energy.escaped += shot - arrived;
         self.energy.unshot -= shot;
@@ -406,7 +545,7 @@ impl<'s> Progressive<'s> {
 
     /// Displayed radiosity of vertex `v` without the ambient term, W/m^2.
     fn radiosity(&self, v: usize) -> DVec3 {
-        self.emission[v] + self.rho[v] * (self.received_emit[v] + self.received_refl[v])
+        self.emission[v] + self.rho[v] * self.received(v)
     }
 
     /// One round of adaptive subdivision: splits (conformingly) every element whose vertices'
@@ -471,6 +610,7 @@ impl<'s> Progressive<'s> {
             }
         }
         self.rebuild_patch_leaves();
+        self.resplat();
         // Re-estimate each patch's reflected radiosity from its (finer) elements.
         for p in 0..self.mesh.patches.len() {
             let mut reflected = DVec3::ZERO;
@@ -479,10 +619,7 @@ impl<'s> Progressive<'s> {
                 let r: DVec3 = node
                     .vertices
                     .iter()
-                    .map(|&v| {
-                        self.rho[v as usize]
-                            * (self.received_emit[v as usize] + self.received_refl[v as usize])
-                    })
+                    .map(|&v| self.rho[v as usize] * self.received(v as usize))
                     .sum::<DVec3>()
                     / 3.0;
                 reflected += r * f64::from(node.area);
@@ -574,7 +711,7 @@ impl<'s> Progressive<'s> {
                 .map(|v| to32(self.rho[v] * self.received_emit[v]))
                 .collect(),
             (0..n)
-                .map(|v| to32(self.rho[v] * self.received_refl[v]))
+                .map(|v| to32(self.rho[v] * self.received_indirect(v)))
                 .collect(),
             (0..n).map(|v| to32(self.rho[v] * ambient)).collect(),
         )

@@ -13,9 +13,9 @@ pub struct Solution {
     mesh: ElementMesh,
     /// Emission + all reflected light (without the ambient term).
     radiosity: Vec<Rgb>,
-    /// Light reflected once from the emitters.
+    /// Light reflected once from the emitters (seen directly: what shadow rays find).
     direct: Vec<Rgb>,
-    /// Light reflected after two or more bounces.
+    /// Light reflected after two or more bounces, or carried through specular surfaces.
     indirect: Vec<Rgb>,
     /// The ambient estimate of what is not shot yet, times the reflectance.
     ambient: Vec<Rgb>,
@@ -63,12 +63,13 @@ impl Solution {
         &self.radiosity
     }
 
-    /// Direct part per vertex (light reflected once from the emitters), W/m^2.
+    /// Direct part per vertex (light reflected once from the emitters, seen directly), W/m^2.
     pub fn direct(&self) -> &[Rgb] {
         &self.direct
     }
 
-    /// Indirect part per vertex (two or more bounces, without ambient), W/m^2.
+    /// Indirect part per vertex (two or more bounces, or through mirrors and glass; without
+    /// ambient), W/m^2.
     pub fn indirect(&self) -> &[Rgb] {
         &self.indirect
     }

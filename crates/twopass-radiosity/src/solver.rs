@@ -14,6 +14,7 @@ use crate::form_factor::VisibilityRays;
 use crate::hierarchical::HierarchicalSolver;
 use crate::progressive::Progressive;
 use crate::solution::Solution;
+use crate::specular::SpecularTransfer;
 
 /// When the solver stops. The first criterion met ends the solve.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -94,6 +95,10 @@ pub struct Options {
     /// to need more is refused before it is built ([`SolveError::TooLarge`]), and the
     /// hierarchical solver stops refining links when it reaches it.
     pub memory_limit: u64,
+    /// Light carried through mirrors and glass onto diffuse surfaces (progressive refinement
+    /// only; the hierarchical solver does not do it yet), or `None` to treat specular objects
+    /// as absorbers. It runs only where [`crate::specular::decide`] says the scene needs it.
+    pub specular: Option<SpecularTransfer>,
 }
 
 impl Default for Options {
@@ -110,6 +115,7 @@ impl Default for Options {
             method: Method::Auto,
             hierarchical: Hierarchical::default(),
             memory_limit: 16 << 30,
+            specular: Some(SpecularTransfer::default()),
         }
     }
 }
@@ -207,7 +213,7 @@ pub struct SolveProgress {
     pub clusters: usize,
     /// The convergence measure: residual (unshot) power / emitted power, sums over channels.
     pub unshot_fraction: f64,
-    /// Shadow rays cast so far.
+    /// Rays cast so far: shadow rays, and the specular transfer's rays (progressive).
     pub rays: u64,
     /// Elements (leaves) now.
     pub elements: usize,

@@ -12,7 +12,8 @@ pub trait DiffuseRadiance: Sync {
     fn radiance(&self, triangle: u32, barycentric: [f32; 3]) -> Rgb;
 
     /// The indirect part only: diffuse light reflected after two or more bounces from the
-    /// emitters (no emission, no direct light). A renderer that computes direct light per pixel
-    /// adds this to avoid counting the direct light twice.
+    /// emitters, and light that reached the surface through mirrors or glass (no emission, no
+    /// direct light: none of what a shadow ray to an emitter finds). A renderer that computes
+    /// direct light per pixel adds this to avoid counting the direct light twice.
     fn indirect_radiance(&self, triangle: u32, barycentric: [f32; 3]) -> Rgb;
 }

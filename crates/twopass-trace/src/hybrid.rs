@@ -2,10 +2,14 @@
 //! Greenberg 1987) and the hybrid with per-pixel direct light (Chen et al. 1991), all on the
 //! Whitted shading core of [`crate::whitted`] with a different source of diffuse light.
 //!
-//! **No double counting** (ARCHITECTURE.md, "The physics, in brief"): the radiosity solution holds
-//! all diffuse light, direct and indirect, and emission. The hybrid adds only what radiosity cannot
-//! hold: glossy lobes against the emitters and delta reflection and refraction paths, whose rays
-//! take the radiosity where they land. On a scene whose materials are all Lambertian none of those
+//! **No double counting** (ARCHITECTURE.md, "The physics, in brief" and "Specular transfer"): the
+//! radiosity solution holds all diffuse light, direct and indirect, and emission, including the
+//! light that reached a diffuse surface through mirrors and glass (L S+ D, D S+ D: the radiosity
+//! pass's specular transfer). The hybrid adds only what radiosity cannot hold: glossy lobes
+//! against the emitters and delta reflection and refraction paths from the eye (E S+ D), whose
+//! rays take the radiosity where they land. Shadow rays stop at mirrors and glass (they are
+//! occluders), so they never add a path through them again; the per-pixel direct light of
+//! hybrid-direct replaces only the solution's direct part, which holds no such path either. On a scene whose materials are all Lambertian none of those
 //! terms exists, no shadow ray is traced and the hybrid computes exactly what radiosity alone does
 //! (the same floating-point operations: the images are bit-identical, and a test says so).
 //!

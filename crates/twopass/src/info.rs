@@ -141,17 +141,18 @@ pub fn run(args: &InfoArgs, ctx: &Context) -> Result<(), CliError> {
     }
     let say = |name: &str, d: &crate::plan::Decision| -> Result<(), CliError> {
         outln!(
-            "{name} {}: {}",
+            "{name:<17} {}: {}",
             if d.required { "required" } else { "skipped " },
             d.reason
         );
         Ok(())
     };
-    say("diffuse pass  ", &info.plan.diffuse)?;
-    say("specular pass ", &info.plan.specular)?;
+    say("diffuse pass", &info.plan.diffuse)?;
+    say("specular pass", &info.plan.specular)?;
+    say("specular transfer", &info.plan.specular_transfer)?;
     if info.plan.diffuse.required {
         outln!(
-            "radiosity      {}: {}",
+            "radiosity         {}: {}",
             info.plan.solver.method,
             info.plan.solver.reason
         );

@@ -20,6 +20,11 @@ pub struct Plan {
     pub diffuse: Decision,
     /// Ray-traced specular terms: needed when a used material has a non-diffuse lobe.
     pub specular: Decision,
+    /// Specular transfer in the radiosity pass (light through mirrors and glass onto diffuse
+    /// surfaces, `twopass_radiosity::specular`): needed when a mirror, conductor or dielectric
+    /// faces diffuse surfaces that light it and that it lights, and the solver is progressive
+    /// refinement.
+    pub specular_transfer: Decision,
     /// The radiosity solver `--solver auto` runs, and why.
     pub solver: SolverDecision,
 }
@@ -86,6 +91,30 @@ pub fn plan(scene: &Scene) -> Plan {
         }
     };
     let (method, reason) = twopass_radiosity::Method::Auto.choose(scene);
+    let specular_transfer = if diffuse.required {
+        let (needed, why) = twopass_radiosity::specular::decide(scene);
+        match (needed, method) {
+            (false, _) => Decision {
+                required: false,
+                reason: why,
+            },
+            (true, twopass_radiosity::Method::Hierarchical) => Decision {
+                required: false,
+                reason: format!(
+                    "{why}, but the hierarchical solver this scene's size picks does not carry                      light through them yet (`--solver progressive` does)"
+                ),
+            },
+            (true, _) => Decision {
+                required: true,
+                reason: why,
+            },
+        }
+    } else {
+        Decision {
+            required: false,
+            reason: "no radiosity pass".into(),
+        }
+    };
     let solver = SolverDecision {
         method: method.name().into(),
         reason,
@@ -93,6 +122,7 @@ pub fn plan(scene: &Scene) -> Plan {
     Plan {
         diffuse,
         specular,
+        specular_transfer,
         solver,
     }
 }

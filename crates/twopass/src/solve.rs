@@ -9,7 +9,7 @@ use std::time::Duration;
 
 use clap::{Args, ValueEnum};
 use twopass_radiosity::{
-    Adaptive, Finish, Hierarchical, Method, Options, Solver, Stop, VisibilityRays,
+    Adaptive, Finish, Hierarchical, Method, Options, Solver, SpecularTransfer, Stop, VisibilityRays,
 };
 use twopass_scene::Scene;
 
@@ -74,6 +74,13 @@ pub struct SolveArgs {
     /// visibility is partial or the receiver is close.
     #[arg(long, value_name = "MIN,MAX", value_parser = parse_rays, default_value = "4,16")]
     pub visibility_rays: VisibilityRays,
+    /// Specular transfer (progressive refinement, scenes with mirrors or glass that face
+    /// diffuse surfaces; `info` says whether a scene has them): rays a shot of the whole
+    /// emitted power traces through the specular surfaces, later shots in proportion to their
+    /// power; 0 treats mirrors and glass as absorbers in the radiosity pass.
+    #[arg(long, value_name = "N", default_value_t = SpecularTransfer::default().rays,
+          value_parser = clap::value_parser!(u32).range(0..=i64::from(SpecularTransfer::MAX_RAYS)))]
+    pub specular_rays: u32,
 }
 
 impl Default for SolveArgs {
@@ -90,6 +97,7 @@ impl Default for SolveArgs {
             element_size: None,
             no_adaptive: false,
             visibility_rays: VisibilityRays::default(),
+            specular_rays: SpecularTransfer::default().rays,
         }
     }
 }
@@ -140,6 +148,10 @@ impl SolveArgs {
                 ..Hierarchical::default()
             },
             memory_limit: crate::context::memory_limit(),
+            specular: (self.specular_rays > 0).then(|| SpecularTransfer {
+                rays: self.specular_rays,
+                ..SpecularTransfer::default()
+            }),
             ..Options::default()
         }
     }

@@ -20,6 +20,12 @@ fn info_json_describes_the_cornell_box() {
         v["plan"]["specular"]["required"], false,
         "an all-Lambertian scene needs no specular pass"
     );
+    assert_eq!(v["plan"]["specular_transfer"]["required"], false);
+    let reason = v["plan"]["specular_transfer"]["reason"].as_str().unwrap();
+    assert!(
+        reason.contains("no mirror, conductor or dielectric"),
+        "{reason}"
+    );
     assert_eq!(v["emitters"].as_array().unwrap().len(), 1);
 }
 
@@ -32,6 +38,13 @@ fn specular_pass_is_planned_only_for_non_diffuse_materials() {
     let reason = v["plan"]["specular"]["reason"].as_str().unwrap();
     assert!(
         reason.contains("mirror") && reason.contains("glass"),
+        "{reason}"
+    );
+    // The spheres face the walls: light through them goes to the radiosity elements.
+    assert_eq!(v["plan"]["specular_transfer"]["required"], true);
+    let reason = v["plan"]["specular_transfer"]["reason"].as_str().unwrap();
+    assert!(
+        reason.contains("mirror-sphere, glass-sphere face diffuse surfaces"),
         "{reason}"
     );
 }
@@ -218,4 +231,38 @@ fn render_exr_says_how_it_was_made() {
     assert_eq!(attr("twopass:seed"), "7");
     assert!(attr("twopass:seconds").parse::<f64>().unwrap() > 0.0);
     assert_eq!(attr("twopass:version"), env!("CARGO_PKG_VERSION"));
+}
+
+#[test]
+fn render_says_when_the_specular_transfer_does_not_run() {
+    let scene = repo("scenes/cornell-spheres.toml");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("h.exr");
+    let args = |extra: &[&str]| {
+        let mut a = vec![
+            "render",
+            scene.to_str().unwrap(),
+            "--method",
+            "hybrid",
+            "--width",
+            "16",
+            "--spp",
+            "1",
+            "--json",
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        a.extend_from_slice(extra);
+        let v = common::ok_json(&twopass(&a));
+        v["skipped"].to_string()
+    };
+    // By default the spheres get the transfer: nothing is skipped.
+    assert_eq!(args(&[]), "[]");
+    let hierarchical = args(&["--solver", "hierarchical"]);
+    assert!(
+        hierarchical.contains("specular transfer skipped: the hierarchical solver"),
+        "{hierarchical}"
+    );
+    let off = args(&["--specular-rays", "0"]);
+    assert!(off.contains("--specular-rays 0"), "{off}");
 }

@@ -1,0 +1,519 @@
+//! Specular transfer in the view-independent pass: light that leaves a shooting patch, bounces
+//! off or through delta surfaces (mirror, smooth conductor, smooth dielectric) and lands on a
+//! diffuse surface, in Heckbert's notation the paths L S+ D and D S+ D.
+//!
+//! When progressive refinement shoots a patch, the form factors carry its light to every
+//! vertex the patch sees directly (with the specular objects as occluders, since they do not
+//! take part). This module carries the rest: it traces rays from the shooter toward the
+//! specular objects, follows them through the delta lobes of `twopass-brdf`
+//! ([`twopass_brdf::delta::DeltaLobe::sample_flux`]: the power a refraction carries, not its
+//! radiance) up to [`SpecularTransfer::max_depth`] bounces, and hands back where they land on
+//! a surface that takes part in radiosity, with the power they carry. A ray whose first hit is
+//! not specular carries nothing here: that light is the form factors' (nothing is counted
+//! twice). The solver splats the landed power onto the element vertices as irradiance, so it
+//! is then reflected and shot again like any other light. Choice and justification:
+//! ARCHITECTURE.md, "Specular transfer".
+//!
+//! Sampling: a point on the shooting patch stratified over a k x k grid, paired with a
+//! direction from another k x k grid through a shuffle (the two 2-D strata are each covered
+//! once), the direction drawn from the cones that the specular objects' bounding spheres
+//! subtend (a mixture, one cone per object, chosen by solid angle), weighted by the patch's
+//! cosine over the mixture density. Directions outside every cone cannot reach a specular
+//! surface first, so they carry nothing here and need no ray. Every random number comes from
+//! a SplitMix64 stream keyed by (seed, patch, shot, ray): the same seed gives the same
+//! solution on any number of threads.
+
+use glam::{DVec3, Vec2, Vec3};
+use rayon::prelude::*;
+use twopass_brdf::frame::Frame;
+use twopass_brdf::random::{SplitMix64, hash, unit_f32};
+use twopass_scene::{Scene, SurfacePoint};
+
+use crate::element::ElementMesh;
+
+/// Settings of the specular transfer ([`crate::Options::specular`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SpecularTransfer {
+    /// Rays a shot of the whole emitted power casts toward the specular objects; a shot of a
+    /// fraction of it casts that fraction (at least [`SpecularTransfer::MIN_RAYS`]), so every
+    /// ray carries about the same power. Rounded up to a square number per shot.
+    pub rays: u32,
+    /// Most delta bounces a ray follows (reflections and refractions) before it is dropped.
+    pub max_depth: u32,
+}
+
+impl SpecularTransfer {
+    /// Fewest rays a shot casts toward the specular objects (a 4 x 4 grid).
+    pub const MIN_RAYS: u32 = 16;
+    /// Most rays one shot may cast (a 2048 x 2048 grid).
+    pub const MAX_RAYS: u32 = 1 << 22;
+}
+
+impl Default for SpecularTransfer {
+    fn default() -> Self {
+        Self {
+            rays: 1 << 20,
+            max_depth: 16,
+        }
+    }
+}
+
+/// Probe rays cast from the specular surfaces by [`decide`].
+pub const PROBE_RAYS: u32 = 4096;
+
+/// Whether a scene needs the specular transfer, and why, in words: it runs when some object
+/// has a delta material (mirror, conductor, dielectric), something emits, something reflects
+/// diffusely, and at least one of [`PROBE_RAYS`] rays leaving the front of the specular
+/// surfaces (cosine-distributed, stratified over their area; deterministic, whatever the seed)
+/// first reaches the front of a diffusely reflecting surface: such a surface then both lights
+/// the specular one and receives from it (the same ray read both ways). A scene without such a
+/// pair solves exactly as it would without this module.
+pub fn decide(scene: &Scene) -> (bool, String) {
+    let specular: Vec<usize> = specular_objects(scene);
+    if specular.is_empty() {
+        return (
+            false,
+            "no mirror, conductor or dielectric surface: all transfer is diffuse".into(),
+        );
+    }
+    if scene.emitters.is_empty() {
+        return (false, "nothing emits light".into());
+    }
+    let takes_part = crate::solver::participating(scene);
+    let diffuse = |o: usize| {
+        scene.materials[scene.objects[o].material as usize]
+            .material
+            .reflects_diffusely()
+    };
+    if !(0..scene.objects.len()).any(|o| takes_part[o] && diffuse(o)) {
+        return (false, "no surface reflects diffusely".into());
+    }
+    let names: Vec<&str> = specular
+        .iter()
+        .map(|&o| scene.objects[o].name.as_str())
+        .collect();
+    let per_object = (PROBE_RAYS / specular.len() as u32).max(1);
+    let mut reached = 0u32;
+    let mut cast = 0u32;
+    for &o in &specular {
+        let tris = scene.objects[o].triangles.clone();
+        let mut cdf = Vec::with_capacity(tris.len());
+        let mut acc = 0.0f64;
+        for t in tris.clone() {
+            acc += f64::from(scene.mesh.areas[t as usize]);
+            cdf.push(acc);
+        }
+        let k = f64::from(per_object).sqrt().ceil() as u32;
+        for i in 0..k * k {
+            let h = hash(0x5eec_0001 ^ ((o as u64) << 32 | u64::from(i)));
+            let mut rng = SplitMix64::new(h);
+            let u = stratum(i, k, Vec2::new(rng.next_f32(), rng.next_f32()));
+            let target = f64::from(u.x) * acc;
+            let j = cdf.partition_point(|&c| c <= target).min(cdf.len() - 1);
+            let t = tris.start + j as u32;
+            let point = scene
+                .mesh
+                .sample_triangle(t, Vec2::new(u.y, rng.next_f32()));
+            let w = twopass_brdf::sample::square_to_cosine_hemisphere(Vec2::new(
+                rng.next_f32(),
+                rng.next_f32(),
+            ));
+            let dir = Frame::from_normal(point.normal).to_world(w);
+            cast += 1;
+            if let Some(hit) = scene.intersect_from(&point, dir)
+                && hit.front_face
+                && takes_part[hit.object as usize]
+                && diffuse(hit.object as usize)
+            {
+                reached += 1;
+            }
+        }
+    }
+    if reached == 0 {
+        return (
+            false,
+            format!(
+                "{} is lit by and seen from no diffuse surface (none of {cast} probe rays from \
+                 it reaches one)",
+                names.join(", ")
+            ),
+        );
+    }
+    (
+        true,
+        format!(
+            "{} face diffuse surfaces ({reached} of {cast} probe rays from them reach one): \
+             light through them is carried to the elements",
+            names.join(", ")
+        ),
+    )
+}
+
+/// Objects whose material has a delta lobe.
+fn specular_objects(scene: &Scene) -> Vec<usize> {
+    (0..scene.objects.len())
+        .filter(|&o| {
+            scene.materials[scene.objects[o].material as usize]
+                .material
+                .delta()
+                .is_some()
+        })
+        .collect()
+}
+
+/// Point `u` in [0, 1)^2 moved into stratum `i` of a `k` x `k` grid.
+fn stratum(i: u32, k: u32, u: Vec2) -> Vec2 {
+    let (x, y) = (i % k, i / k);
+    Vec2::new(
+        ((x as f32 + u.x) / k as f32).min(1.0 - f32::EPSILON / 2.0),
+        ((y as f32 + u.y) / k as f32).min(1.0 - f32::EPSILON / 2.0),
+    )
+}
+
+/// Power landed on a surface that takes part, after at least one specular bounce.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Deposit {
+    /// Scene triangle.
+    pub triangle: u32,
+    /// Barycentrics (b1, b2) on it.
+    pub b: Vec2,
+    /// The element-mesh node it was last found in (`u32::MAX`: not looked up yet): the search
+    /// after a refinement starts there.
+    pub node: u32,
+    /// Power per channel, W (with areas in scene units).
+    pub power: Vec3,
+}
+
+/// A shooting patch: its triangle `corners` on scene triangle `tri` (light leaves its front),
+/// its unshot radiosity (W/m^2 per channel) and its area (scene units squared).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Shooter {
+    pub corners: [DVec3; 3],
+    pub tri: u32,
+    pub radiosity: DVec3,
+    pub area: f64,
+}
+
+/// A bounding sphere of a specular object: the cone it subtends is where rays are aimed.
+#[derive(Debug, Clone, Copy)]
+struct Target {
+    center: DVec3,
+    radius: f64,
+}
+
+/// The specular transfer of one solve: the targets, the deposits so far (kept so that they can
+/// be splatted again onto a refined mesh), and the rays cast.
+#[derive(Debug, Clone)]
+pub(crate) struct Specular {
+    settings: SpecularTransfer,
+    targets: Vec<Target>,
+    /// Per object: whether it takes part (receives deposits).
+    takes_part: Vec<bool>,
+    /// Every deposit so far, in shot order.
+    pub deposits: Vec<Deposit>,
+    /// Rays cast so far.
+    pub rays: u64,
+}
+
+impl Specular {
+    /// The transfer for `scene`, or `None` when [`decide`] says it is not needed.
+    pub fn new(scene: &Scene, settings: SpecularTransfer, takes_part: &[bool]) -> Option<Self> {
+        if settings.rays == 0 || !decide(scene).0 {
+            return None;
+        }
+        let targets = specular_objects(scene)
+            .into_iter()
+            .map(|o| {
+                let tris = scene.objects[o].triangles.clone();
+                let (mut lo, mut hi) = (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN));
+                for t in tris.clone() {
+                    for c in scene.mesh.corners(t) {
+                        lo = lo.min(c.as_dvec3());
+                        hi = hi.max(c.as_dvec3());
+                    }
+                }
+                let center = (lo + hi) * 0.5;
+                let radius = tris
+                    .flat_map(|t| scene.mesh.corners(t))
+                    .map(|c| (c.as_dvec3() - center).length())
+                    .fold(0.0, f64::max);
+                // A hair larger, so the cones hold the object's surface whatever the rounding.
+                Target {
+                    center,
+                    radius: radius * (1.0 + 1e-6) + 1e-9 * center.length(),
+                }
+            })
+            .collect();
+        Some(Self {
+            settings,
+            targets,
+            takes_part: takes_part.to_vec(),
+            deposits: Vec::new(),
+            rays: 0,
+        })
+    }
+
+    /// Rays for a shot of `power` (luminance) when the whole emitted power is `emitted`.
+    pub fn rays_for(&self, power: f64, emitted: f64) -> u32 {
+        let n = f64::from(self.settings.rays) * power / emitted.max(f64::MIN_POSITIVE);
+        let n = n.ceil().clamp(
+            f64::from(SpecularTransfer::MIN_RAYS),
+            f64::from(SpecularTransfer::MAX_RAYS),
+        ) as u32;
+        let k = f64::from(n).sqrt().ceil() as u32;
+        k * k
+    }
+
+    /// Traces the specular paths of one shot of `shooter` with `n` rays (a square), random
+    /// stream keyed by `key`. Returns the deposits in ray order and the rays cast. Parallel
+    /// over rays; the result does not depend on scheduling.
+    pub fn shoot(&self, scene: &Scene, shooter: &Shooter, n: u32, key: u64) -> (Vec<Deposit>, u64) {
+        let Shooter {
+            corners,
+            tri,
+            radiosity,
+            area,
+        } = *shooter;
+        let k = f64::from(n).sqrt().round() as u32;
+        let n = k * k;
+        // Direction strata paired with point strata through a shuffle (Fisher-Yates).
+        let mut pairing: Vec<u32> = (0..n).collect();
+        let mut rng = SplitMix64::new(hash(key ^ 0x5eec_5eec));
+        for i in (1..n as usize).rev() {
+            let j = (rng.next_u64() % (i as u64 + 1)) as usize;
+            pairing.swap(i, j);
+        }
+        let corner_b = corners.map(|c| scene.mesh.barycentric(tri, c));
+        let normal = scene.mesh.geometric_normals[tri as usize].as_dvec3();
+        // Power per ray before the cosine over the density: B A / n.
+        let per_ray = radiosity * area / f64::from(n);
+        let results: Vec<(Option<Deposit>, u64)> = (0..n)
+            .into_par_iter()
+            .with_min_len(64)
+            .map(|i| {
+                let mut rng = SplitMix64::new(hash(key ^ u64::from(i)));
+                let up = stratum(i, k, Vec2::new(rng.next_f32(), rng.next_f32()));
+                let ud = stratum(
+                    pairing[i as usize],
+                    k,
+                    Vec2::new(rng.next_f32(), rng.next_f32()),
+                );
+                // Uniform point on the patch (triangle-square warp).
+                let s = f64::from(up.x).sqrt();
+                let (b1, b2) = (s * (1.0 - f64::from(up.y)), s * f64::from(up.y));
+                let w = [1.0 - b1 - b2, b1, b2];
+                let b = [0, 1, 2].map(|c| {
+                    (corner_b[0][c] * w[0] + corner_b[1][c] * w[1] + corner_b[2][c] * w[2]) as f32
+                });
+                let from = scene.mesh.surface_point(tri, b);
+                let x = from.position.as_dvec3();
+                let Some((dir, pdf)) = self.direction(x, ud) else {
+                    return (None, 0);
+                };
+                let cos = dir.dot(normal);
+                if cos <= 0.0 {
+                    return (None, 0);
+                }
+                let power = per_ray * (cos / std::f64::consts::PI / pdf);
+                self.follow(scene, &from, dir.as_vec3(), power, &mut rng)
+            })
+            .collect();
+        let rays = results.iter().map(|r| r.1).sum();
+        (results.into_iter().filter_map(|r| r.0).collect(), rays)
+    }
+
+    /// A direction toward the targets from `x` for `u` in [0, 1)^2, and its density (1/sr)
+    /// under the mixture of the targets' cones (each chosen with probability proportional to
+    /// its solid angle).
+    fn direction(&self, x: DVec3, u: Vec2) -> Option<(DVec3, f64)> {
+        use std::f64::consts::PI;
+        // The cone of target `t` seen from `x`: axis and cosine of its half angle (-1, the
+        // whole sphere of directions, from inside the bounding sphere).
+        let cone = |t: &Target| {
+            let d = t.center - x;
+            let dist = d.length();
+            if dist <= t.radius {
+                (DVec3::Z, -1.0)
+            } else {
+                (d / dist, (1.0 - (t.radius / dist).powi(2)).max(0.0).sqrt())
+            }
+        };
+        let solid = |cos_max: f64| 2.0 * PI * (1.0 - cos_max);
+        let total: f64 = self.targets.iter().map(|t| solid(cone(t).1)).sum();
+        if total.is_nan() || total <= 0.0 {
+            return None;
+        }
+        // Pick a cone with the first coordinate, reusing its remainder (keeps stratification).
+        let target = f64::from(u.x) * total;
+        let mut acc = 0.0;
+        let mut picked = (DVec3::Z, -1.0, 0.5);
+        for (j, t) in self.targets.iter().enumerate() {
+            let (axis, cos_max) = cone(t);
+            let w = solid(cos_max);
+            if target < acc + w || j + 1 == self.targets.len() {
+                let ux = ((target - acc) / w).clamp(0.0, 1.0 - 1e-12);
+                picked = (axis, cos_max, ux);
+                break;
+            }
+            acc += w;
+        }
+        let (axis, cos_max, ux) = picked;
+        let cos_t = 1.0 - ux * (1.0 - cos_max);
+        let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
+        let phi = 2.0 * PI * f64::from(u.y);
+        let (s, t) = axis.any_orthonormal_pair();
+        let dir = (s * (sin_t * phi.cos()) + t * (sin_t * phi.sin()) + axis * cos_t).normalize();
+        // Mixture density: each cone holding the direction adds its probability over its solid
+        // angle, (solid / total) / solid = 1 / total.
+        let holding = self
+            .targets
+            .iter()
+            .filter(|t| {
+                let (axis, cos_max) = cone(t);
+                dir.dot(axis) >= cos_max
+            })
+            .count()
+            .max(1);
+        Some((dir, holding as f64 / total))
+    }
+
+    /// Follows a ray leaving `from` in `dir` with `power` through the delta surfaces; returns
+    /// where it lands (after at least one specular bounce, on the front of a surface that takes
+    /// part) and the rays cast.
+    fn follow(
+        &self,
+        scene: &Scene,
+        from: &SurfacePoint,
+        mut dir: Vec3,
+        mut power: DVec3,
+        rng: &mut SplitMix64,
+    ) -> (Option<Deposit>, u64) {
+        let mut rays = 1;
+        let Some(mut hit) = scene.intersect_from(from, dir) else {
+            return (None, rays);
+        };
+        let mut bounces = 0;
+        loop {
+            let material = &scene.materials[hit.material as usize].material;
+            let Some(lobe) = material.delta() else {
+                // The first hit is diffuse: the form factors carry that light, not this pass.
+                if bounces == 0 || !hit.front_face || !self.takes_part[hit.object as usize] {
+                    return (None, rays);
+                }
+                let p = power.as_vec3();
+                if !(p.is_finite() && p.max_element() > 0.0) {
+                    return (None, rays);
+                }
+                return (
+                    Some(Deposit {
+                        triangle: hit.point.triangle,
+                        b: Vec2::new(hit.barycentric[1], hit.barycentric[2]),
+                        node: u32::MAX,
+                        power: p,
+                    }),
+                    rays,
+                );
+            };
+            if bounces >= self.settings.max_depth {
+                return (None, rays);
+            }
+            let frame = Frame::from_normal(hit.shading_normal);
+            let wo = frame.to_local(-dir);
+            let u = Vec2::new(unit_f32(rng.next_u64()), unit_f32(rng.next_u64()));
+            let Some(sample) = lobe.sample_flux(wo, u) else {
+                return (None, rays);
+            };
+            power *= sample.weight.as_dvec3();
+            if power.max_element() <= 0.0 {
+                return (None, rays);
+            }
+            dir = frame.to_world(sample.wi).normalize();
+            bounces += 1;
+            rays += 1;
+            match scene.intersect_from(&hit.point, dir) {
+                Some(h) => hit = h,
+                None => return (None, rays),
+            }
+        }
+    }
+}
+
+/// Per vertex: a third of the area of the leaves around it (scene units squared), the area a
+/// vertex's irradiance stands for in the solver's power bookkeeping (an element receives its
+/// area times the mean of its vertices' irradiance); and the leaves around it.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct VertexAreas {
+    /// Per vertex: a third of the area of the leaves around it.
+    pub area: Vec<f64>,
+    /// Per vertex: the leaves around it.
+    pub leaves: Vec<Vec<u32>>,
+}
+
+impl VertexAreas {
+    /// The areas and leaves of the current mesh.
+    pub fn new(mesh: &ElementMesh) -> Self {
+        let mut area = vec![0.0; mesh.vertices.len()];
+        let mut leaves = vec![Vec::new(); mesh.vertices.len()];
+        for leaf in mesh.leaves() {
+            let node = &mesh.nodes[leaf as usize];
+            for &v in &node.vertices {
+                area[v as usize] += f64::from(node.area) / 3.0;
+                leaves[v as usize].push(leaf);
+            }
+        }
+        Self { area, leaves }
+    }
+}
+
+/// The deposits' irradiance per vertex (W/m^2), sorted by vertex, each vertex once: each
+/// deposit's power is shared among the three vertices of the element it lands in by its
+/// barycentric weights there, and divided by each vertex's area ([`VertexAreas`]), so the
+/// power the solver's bookkeeping sees arriving is exactly the power deposited. `scratch` is
+/// a per-vertex buffer of zeros (resized here), left zero. Each deposit remembers its element
+/// for the next splat.
+pub(crate) fn splat(
+    mesh: &ElementMesh,
+    areas: &VertexAreas,
+    deposits: &mut [Deposit],
+    scratch: &mut Vec<DVec3>,
+) -> Vec<(u32, DVec3)> {
+    if scratch.len() != mesh.vertices.len() {
+        *scratch = vec![DVec3::ZERO; mesh.vertices.len()];
+    }
+    let mut touched: Vec<u32> = Vec::new();
+    for d in deposits {
+        let found = if d.node == u32::MAX {
+            mesh.locate(d.triangle, d.b.x, d.b.y)
+        } else {
+            Some(mesh.locate_from(d.node, d.b.x, d.b.y))
+        };
+        let Some((leaf, w)) = found else {
+            continue;
+        };
+        d.node = leaf;
+        let w = w.map(|x| f64::from(x).max(0.0));
+        let sum = w[0] + w[1] + w[2];
+        let w = if sum > 0.0 {
+            w.map(|x| x / sum)
+        } else {
+            [1.0 / 3.0; 3]
+        };
+        let power = d.power.as_dvec3();
+        for (k, &v) in mesh.nodes[leaf as usize].vertices.iter().enumerate() {
+            let a = areas.area[v as usize];
+            let e = power * (w[k] / a);
+            // Powers are never negative: a vertex's sum, once not zero, stays so.
+            if a > 0.0 && e != DVec3::ZERO {
+                if scratch[v as usize] == DVec3::ZERO {
+                    touched.push(v);
+                }
+                scratch[v as usize] += e;
+            }
+        }
+    }
+    touched.sort_unstable();
+    touched
+        .into_iter()
+        .map(|v| (v, std::mem::take(&mut scratch[v as usize])))
+        .collect()
+}
