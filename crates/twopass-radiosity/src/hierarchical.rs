@@ -1757,9 +1757,10 @@ impl<'s> HierarchicalSolver<'s> {
             .par_iter()
             .flat_map_iter(|&root| {
                 let mut fixes = Vec::new();
-                // (node, the links above it: each with the node it is attached to and its
-                // visible fraction)
-                let mut stack: Vec<(u32, Vec<(Link, u32, f64)>)> = vec![(root, Vec::new())];
+                // A node and the links above it, each with the node it is attached to and its
+                // visible fraction.
+                type Above = Vec<(Link, u32, f64)>;
+                let mut stack: Vec<(u32, Above)> = vec![(root, Vec::new())];
                 while let Some((n, mut above)) = stack.pop() {
                     let node = &self.mesh.nodes[n as usize];
                     if let Some(children) = node.children {
