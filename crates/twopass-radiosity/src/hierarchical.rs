@@ -1755,6 +1755,7 @@ impl<'s> HierarchicalSolver<'s> {
             .mesh
             .roots
             .par_iter()
+            .filter(|&&root| (root as usize) < self.mesh.nodes.len())
             .flat_map_iter(|&root| {
                 let mut fixes = Vec::new();
                 // A node and the links above it, each with the node it is attached to and its
