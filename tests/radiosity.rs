@@ -36,7 +36,8 @@ fn lambert(name: &str, rho: f64) -> String {
     format!("[[material]]\nname = \"{name}\"\ntype = \"lambert\"\ndiffuse = {rho}\n")
 }
 
-fn run(solver: &mut Progressive<'_>) {
+/// Runs progressive refinement to its stop criteria and checks the energy balance.
+pub(crate) fn run(solver: &mut Progressive<'_>) {
     solver.run(|_| ControlFlow::Continue(()));
     let p = solver.progress();
     assert!(

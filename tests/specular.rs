@@ -13,16 +13,26 @@ use twopass_radiosity::specular::decide;
 use twopass_radiosity::{Adaptive, Options, Progressive, SpecularTransfer, Stop};
 use twopass_scene::{Scene, load, load_toml};
 
+use crate::radiosity::run;
 use crate::scene_path;
 
-fn run(solver: &mut Progressive<'_>) {
-    solver.run(|_| ControlFlow::Continue(()));
-    let p = solver.progress();
-    assert!(
-        p.worst_imbalance < 1e-6,
-        "energy imbalance {}",
-        p.worst_imbalance
-    );
+/// Coarse progressive-refinement settings (150 mm patches, 60 mm elements, one adaptive round)
+/// to the unshot fraction `unshot`, with the specular transfer `specular`.
+fn coarse(specular: Option<SpecularTransfer>, unshot: f64) -> Options {
+    Options {
+        patch_size: Some(150.0),
+        element_size: Some(60.0),
+        adaptive: Some(Adaptive {
+            rounds: 1,
+            ..Adaptive::default()
+        }),
+        stop: Stop {
+            unshot_fraction: unshot,
+            ..Stop::default()
+        },
+        specular,
+        ..Options::default()
+    }
 }
 
 fn bits(v: &[DVec3]) -> Vec<[u64; 3]> {
@@ -35,20 +45,7 @@ fn all_diffuse_box_is_untouched_bit_for_bit() {
     let (needed, why) = decide(&s);
     assert!(!needed, "{why}");
     assert!(why.contains("no mirror, conductor or dielectric"), "{why}");
-    let options = |specular| Options {
-        patch_size: Some(150.0),
-        element_size: Some(60.0),
-        adaptive: Some(Adaptive {
-            rounds: 1,
-            ..Adaptive::default()
-        }),
-        stop: Stop {
-            unshot_fraction: 1e-3,
-            ..Stop::default()
-        },
-        specular,
-        ..Options::default()
-    };
+    let options = |specular| coarse(specular, 1e-3);
     let solve = |specular| {
         let mut solver = Progressive::new(&s, options(specular)).unwrap();
         run(&mut solver);
@@ -392,20 +389,7 @@ fn the_tracer_adds_no_light_through_glass_again() {
     use twopass_trace::hybrid::{hybrid, hybrid_direct};
     use twopass_trace::{RenderProgress, RenderSettings, WhittedSettings, render};
     let (s, _) = load(scene_path("cornell-spheres.toml")).unwrap();
-    let options = |specular| Options {
-        patch_size: Some(150.0),
-        element_size: Some(60.0),
-        adaptive: Some(Adaptive {
-            rounds: 1,
-            ..Adaptive::default()
-        }),
-        stop: Stop {
-            unshot_fraction: 1e-2,
-            ..Stop::default()
-        },
-        specular,
-        ..Options::default()
-    };
+    let options = |specular| coarse(specular, 1e-2);
     let camera = s.camera.with_resolution(Some(64), Some(64));
     let settings = RenderSettings {
         samples_per_pixel: 16,

@@ -294,6 +294,12 @@ struct Ends {
 
 /// Approximate bytes per surface node (mesh node, vertex share, per-node sums and corners).
 const BYTES_PER_NODE: u64 = 480;
+/// Bytes per cluster (about one per triangle): its node, its incoming light, the light it sends
+/// by direction and its projected area by direction.
+const BYTES_PER_CLUSTER: u64 = (std::mem::size_of::<Incoming>()
+    + std::mem::size_of::<Table>()
+    + std::mem::size_of::<[f32; DIRECTIONS]>()
+    + 120) as u64;
 /// Approximate bytes per link (the link, sorting and the candidates of a refinement pass).
 const BYTES_PER_LINK: u64 = 96;
 /// Candidates evaluated between two looks at the clock.
@@ -334,9 +340,9 @@ pub struct HierarchicalSolver<'s> {
     /// from reflected light), and its area-averaged exitance (emitted, reflected).
     gathered: Vec<[[DVec3; 4]; 2]>,
     exitance: Vec<[DVec3; 2]>,
-    /// Per surface node split off since the last push-pull: its parent's exitance, which the
-    /// oracle takes for what it will send when it judges a partly blocked link from it.
-    pending: Vec<[DVec3; 2]>,
+    /// Surface nodes at the last push-pull: those from this index on were split off since, and
+    /// have sent nothing yet.
+    settled: usize,
     /// Per surface node and per cluster: the range (largest less smallest) of the exitance
     /// luminance of the leaves below, W/m^2: how far from uniform a source is.
     spread: Vec<f64>,
@@ -453,7 +459,7 @@ impl<'s> HierarchicalSolver<'s> {
             .count() as u64;
         // The triangles themselves, their clusters, and room for links: refuse up front what
         // cannot fit.
-        let base = triangles * (BYTES_PER_NODE + 2 * 120);
+        let base = triangles * (BYTES_PER_NODE + BYTES_PER_CLUSTER);
         if base > options.memory_limit {
             return Err(SolveError::TooLarge {
                 what: format!("the hierarchy over {triangles} triangles"),
@@ -495,7 +501,7 @@ impl<'s> HierarchicalSolver<'s> {
             receivers: Vec::new(),
             gathered: Vec::new(),
             exitance: Vec::new(),
-            pending: Vec::new(),
+            settled: 0,
             spread: Vec::new(),
             cluster_spread: Vec::new(),
             corners_in: Vec::new(),
@@ -622,35 +628,46 @@ impl<'s> HierarchicalSolver<'s> {
     /// Extends the per-node arrays to new surface nodes and clusters.
     fn grow_arrays(&mut self) {
         let n = self.mesh.nodes.len();
-        let old = self.exitance.len();
         self.gathered.resize(n, [[DVec3::ZERO; 4]; 2]);
         self.exitance.resize(n, [DVec3::ZERO; 2]);
         self.spread.resize(n, 0.0);
-        // New elements have sent nothing yet: until the next push-pull the oracle judges their
-        // partly blocked links by what their parent sent (see `link_error`).
-        self.pending.resize(n, [DVec3::ZERO; 2]);
-        for p in 0..n {
-            if let Some(children) = self.mesh.nodes[p].children {
-                let sent = if p < old && self.exitance[p] != [DVec3::ZERO; 2] {
-                    self.exitance[p]
-                } else {
-                    self.pending[p]
-                };
-                for c in children
-                    .map(|c| c as usize)
-                    .into_iter()
-                    .filter(|&c| c >= old)
-                {
-                    self.pending[c] = sent;
-                }
-            }
-        }
         self.corners_in.resize(n, [[DVec3::ZERO; 4]; 2]);
         let c = self.clusters.nodes.len();
         self.cluster_gathered.resize(c, NOTHING);
         self.cluster_exitance.resize(c, [DVec3::ZERO; 2]);
         self.radiant.resize(c, EMPTY);
         self.cluster_spread.resize(c, 0.0);
+    }
+
+    /// The deepest ancestor of surface node `n` that took part in the last push-pull (`n`
+    /// itself if it did).
+    fn settled_ancestor(&self, n: u32) -> u32 {
+        let t = self.mesh.nodes[n as usize].scene_triangle;
+        let uv = self.mesh.nodes[n as usize].uv;
+        let centre = (uv[0] + uv[1] + uv[2]) / 3.0;
+        let mut at = self.mesh.roots[t as usize];
+        let mut settled = at;
+        while at != n {
+            if (at as usize) < self.settled {
+                settled = at;
+            }
+            let Some([c0, c1]) = self.mesh.nodes[at as usize].children else {
+                break;
+            };
+            // The child whose side of the split edge holds `n`'s centroid.
+            let [a, m, c] = self.mesh.nodes[c0 as usize].uv;
+            let side = |q: Vec2| (c - m).perp_dot(q - m);
+            at = if side(centre) * side(a) >= 0.0 {
+                c0
+            } else {
+                c1
+            };
+        }
+        if (n as usize) < self.settled {
+            n
+        } else {
+            settled
+        }
     }
 
     /// The oracle: estimated error of a link's transport, as power (W, luminance).
@@ -663,9 +680,9 @@ impl<'s> HierarchicalSolver<'s> {
         // piece's parent sent. Only partly blocked links: refining unblocked ones by it too
         // refines a closed room's creases to the smallest elements in the first pass.
         if let (true, Kind::Surface(n)) = (l.partial, l.source.kind())
-            && e == [DVec3::ZERO; 2]
+            && n as usize >= self.settled
         {
-            e = self.pending[n as usize];
+            e = self.exitance[self.settled_ancestor(n) as usize];
         }
         // A surface source's departure from uniform exitance (a cluster link's error is its
         // whole transport already).
@@ -1394,7 +1411,9 @@ impl<'s> HierarchicalSolver<'s> {
     fn iterate(&mut self) {
         let links = &self.links;
         let receivers = &self.receivers;
-        let sums: Vec<([[DVec3; 4]; 2], Incoming)> = receivers
+        // A cluster's incoming light is boxed: most receivers are surfaces, and an unboxed
+        // table per receiver was the largest transient of a large solve.
+        let sums: Vec<([[DVec3; 4]; 2], Option<Box<Incoming>>)> = receivers
             .par_iter()
             .enumerate()
             .with_min_len(64)
@@ -1436,10 +1455,14 @@ impl<'s> HierarchicalSolver<'s> {
                     acc[0][3] += be * s;
                     acc[1][3] += br * s;
                 }
-                let table = Incoming {
-                    flux: std::array::from_fn(|o| std::array::from_fn(|j| flux[o][j].as_vec3())),
-                    aim: std::array::from_fn(|j| aim[j].as_vec3().extend(aim_weight[j] as f32)),
-                };
+                let table = cluster.then(|| {
+                    Box::new(Incoming {
+                        flux: std::array::from_fn(|o| {
+                            std::array::from_fn(|j| flux[o][j].as_vec3())
+                        }),
+                        aim: std::array::from_fn(|j| aim[j].as_vec3().extend(aim_weight[j] as f32)),
+                    })
+                });
                 (acc, table)
             })
             .collect();
@@ -1452,7 +1475,9 @@ impl<'s> HierarchicalSolver<'s> {
         for (&(r, _), (s, table)) in self.receivers.iter().zip(sums) {
             match r.kind() {
                 Kind::Surface(n) => self.gathered[n as usize] = s,
-                Kind::Cluster(c) => self.cluster_gathered[c as usize] = table,
+                Kind::Cluster(c) => {
+                    self.cluster_gathered[c as usize] = table.map_or(NOTHING, |t| *t);
+                }
             }
         }
         let before = self.leaf_power();
@@ -1504,7 +1529,7 @@ impl<'s> HierarchicalSolver<'s> {
             }
         }
         // Every node has sent its own light now.
-        self.pending.fill([DVec3::ZERO; 2]);
+        self.settled = self.mesh.nodes.len();
     }
 
     /// Returns the cluster's area-weighted exitance sum (W) and the range of its leaves'

@@ -307,13 +307,8 @@ impl<'s> Progressive<'s> {
         });
         let mut arrived = DVec3::ZERO;
         for (q, gained) in gains {
-            let q = q as usize;
-            let rho = self.patch_rho(q);
             arrived += gained;
-            self.energy.absorbed += gained * (DVec3::ONE - rho);
-            let a = self.patch_area(q);
-            self.unshot_refl[q] += gained * rho / a;
-            self.energy.unshot += gained * rho;
+            self.receive(q as usize, gained);
         }
         if let Some(spec) = &mut self.specular {
             spec.rays += rays;
@@ -335,6 +330,16 @@ impl<'s> Progressive<'s> {
 
     fn patch_emission(&self, p: usize) -> DVec3 {
         rgb(self.scene.objects[self.object_of_patch(p) as usize].emission) * std::f64::consts::PI
+    }
+
+    /// Patch `q` receives `gained` (W per channel): it absorbs `1 - rho` of it and keeps the
+    /// rest as unshot exitance.
+    fn receive(&mut self, q: usize, gained: DVec3) {
+        let rho = self.patch_rho(q);
+        self.energy.absorbed += gained * (DVec3::ONE - rho);
+        let a = self.patch_area(q);
+        self.unshot_refl[q] += gained * rho / a;
+        self.energy.unshot += gained * rho;
     }
 
     fn patch_rho(&self, p: usize) -> DVec3 {
@@ -485,12 +490,8 @@ impl<'s> Progressive<'s> {
                 }
             }
             if gained != DVec3::ZERO {
-                let rho = self.patch_rho(q);
                 arrived += gained;
-                self.energy.absorbed += gained * (DVec3::ONE - rho);
-                let a = self.patch_area(q);
-                self.unshot_refl[q] += gained * rho / a;
-                self.energy.unshot += gained * rho;
+                self.receive(q, gained);
             }
         }
         if self.specular.is_some() {
