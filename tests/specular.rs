@@ -4,7 +4,6 @@
 //! all-diffuse Cornell box is untouched bit for bit, and the power balances on the spheres.
 
 use std::f64::consts::PI;
-use std::ops::ControlFlow;
 use std::path::Path;
 
 use glam::DVec3;

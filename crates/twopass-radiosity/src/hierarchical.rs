@@ -1413,7 +1413,8 @@ impl<'s> HierarchicalSolver<'s> {
         let receivers = &self.receivers;
         // A cluster's incoming light is boxed: most receivers are surfaces, and an unboxed
         // table per receiver was the largest transient of a large solve.
-        let sums: Vec<([[DVec3; 4]; 2], Option<Box<Incoming>>)> = receivers
+        type Gathered = ([[DVec3; 4]; 2], Option<Box<Incoming>>);
+        let sums: Vec<Gathered> = receivers
             .par_iter()
             .enumerate()
             .with_min_len(64)
@@ -1847,7 +1848,8 @@ impl<'s> HierarchicalSolver<'s> {
     }
 
     /// The current solution: per-vertex radiosity over the leaves, the area-weighted mean of
-    /// the leaves' corner values at each vertex (see [`Self::display_corners`]).
+    /// the leaves' corner values at each vertex. Each vertex shows the point values of the
+    /// unblocked surface links above it (a final gather), not their linear interpolation.
     pub fn solution(&self) -> Solution {
         let corners = self.display_corners();
         let nv = self.mesh.vertices.len();
