@@ -258,7 +258,8 @@ fn ambient_term_makes_partial_solutions_plausible() {
     assert!(with < without / 5.0, "ambient {with} vs none {without}");
 }
 
-fn cornell_options(unshot: f64) -> Options {
+/// Cornell-box settings: 150 mm patches, 60 mm elements, one adaptive round, to `unshot`.
+pub(crate) fn cornell_options(unshot: f64) -> Options {
     Options {
         patch_size: Some(150.0),
         element_size: Some(60.0),

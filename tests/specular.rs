@@ -9,28 +9,18 @@ use std::path::Path;
 use glam::DVec3;
 use twopass_radiosity::form_factor::point_to_polygon;
 use twopass_radiosity::specular::decide;
-use twopass_radiosity::{Adaptive, Options, Progressive, SpecularTransfer, Stop};
+use twopass_radiosity::{Options, Progressive, SpecularTransfer, Stop};
 use twopass_scene::{Scene, load, load_toml};
 
-use crate::radiosity::run;
+use crate::radiosity::{cornell_options, run};
 use crate::scene_path;
 
-/// Coarse progressive-refinement settings (150 mm patches, 60 mm elements, one adaptive round)
-/// to the unshot fraction `unshot`, with the specular transfer `specular`.
+/// The radiosity tests' Cornell settings (150 mm patches, 60 mm elements, one adaptive
+/// round) to the unshot fraction `unshot`, with the specular transfer `specular`.
 fn coarse(specular: Option<SpecularTransfer>, unshot: f64) -> Options {
     Options {
-        patch_size: Some(150.0),
-        element_size: Some(60.0),
-        adaptive: Some(Adaptive {
-            rounds: 1,
-            ..Adaptive::default()
-        }),
-        stop: Stop {
-            unshot_fraction: unshot,
-            ..Stop::default()
-        },
         specular,
-        ..Options::default()
+        ..cornell_options(unshot)
     }
 }
 

@@ -642,14 +642,25 @@ impl<'s> HierarchicalSolver<'s> {
     /// The deepest ancestor of surface node `n` that took part in the last push-pull (`n`
     /// itself if it did).
     fn settled_ancestor(&self, n: u32) -> u32 {
+        let path = self.path_to(n);
+        path.iter()
+            .rev()
+            .copied()
+            .find(|&a| (a as usize) < self.settled)
+            .unwrap_or(path[0])
+    }
+
+    /// The surface nodes from `n`'s scene triangle's root down to `n`, both included.
+    fn path_to(&self, n: u32) -> Vec<u32> {
         let t = self.mesh.nodes[n as usize].scene_triangle;
         let uv = self.mesh.nodes[n as usize].uv;
         let centre = (uv[0] + uv[1] + uv[2]) / 3.0;
+        let mut path = Vec::new();
         let mut at = self.mesh.roots[t as usize];
-        let mut settled = at;
-        while at != n {
-            if (at as usize) < self.settled {
-                settled = at;
+        loop {
+            path.push(at);
+            if at == n {
+                break;
             }
             let Some([c0, c1]) = self.mesh.nodes[at as usize].children else {
                 break;
@@ -663,11 +674,7 @@ impl<'s> HierarchicalSolver<'s> {
                 c1
             };
         }
-        if (n as usize) < self.settled {
-            n
-        } else {
-            settled
-        }
+        path
     }
 
     /// The oracle: estimated error of a link's transport, as power (W, luminance).
@@ -1934,29 +1941,8 @@ impl<'s> HierarchicalSolver<'s> {
     /// ancestors', interpolated to it), averaged over its corners.
     fn row_sum(&self, leaf: u32) -> f64 {
         // Walk from the root to the leaf, summing the links of every node on the way.
-        let mut path = Vec::new();
+        let path = self.path_to(leaf);
         let t = self.mesh.nodes[leaf as usize].scene_triangle;
-        let root = self.mesh.roots[t as usize];
-        // Surface ancestors: descend the bisection tree toward the leaf's centroid.
-        let uv = self.mesh.nodes[leaf as usize].uv;
-        let centre = (uv[0] + uv[1] + uv[2]) / 3.0;
-        let mut n = root;
-        loop {
-            path.push(n);
-            if n == leaf {
-                break;
-            }
-            let Some([c0, c1]) = self.mesh.nodes[n as usize].children else {
-                break;
-            };
-            let [a, m, c] = self.mesh.nodes[c0 as usize].uv;
-            let side = |q: Vec2| (c - m).perp_dot(q - m);
-            n = if side(centre) * side(a) >= 0.0 {
-                c0
-            } else {
-                c1
-            };
-        }
         let sum_links = |r: NodeRef| -> f64 {
             let Ok(i) = self.receivers.binary_search_by_key(&r, |&(x, _)| x) else {
                 return 0.0;
