@@ -157,19 +157,21 @@ pub(crate) fn cube(rho: f64, emission: f64) -> Scene {
     cube_lit(rho, |_| Some(emission))
 }
 
+/// The six faces of the unit cube as (origin, edge_u, edge_v), all facing in (edge_u x edge_v
+/// points into the cube); face 0 is z = 0.
+pub(crate) const CUBE_FACES: [([f64; 3], [f64; 3], [f64; 3]); 6] = [
+    ([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
+    ([0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]),
+    ([0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]),
+    ([0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]),
+    ([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]),
+    ([1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]),
+];
+
 /// A closed unit cube, all faces facing in and reflecting `rho`; face `i` emits
 /// `emission(i)` (L_e) where that is `Some`.
 pub(crate) fn cube_lit(rho: f64, emission: impl Fn(usize) -> Option<f64>) -> Scene {
-    // Six unit faces, all facing in (edge_u x edge_v points into the cube).
-    let faces = [
-        ([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
-        ([0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]),
-        ([0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]),
-        ([0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]),
-        ([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]),
-        ([1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]),
-    ];
-    let objects: String = faces
+    let objects: String = CUBE_FACES
         .iter()
         .enumerate()
         .map(|(i, (o, u, v))| quad(&format!("face{i}"), "w", *o, *u, *v, emission(i)))

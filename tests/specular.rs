@@ -12,7 +12,7 @@ use twopass_radiosity::specular::decide;
 use twopass_radiosity::{Options, Progressive, SpecularTransfer, Stop};
 use twopass_scene::{Scene, load, load_toml};
 
-use crate::radiosity::{cornell_options, run};
+use crate::radiosity::{CUBE_FACES, cornell_options, run};
 use crate::scene_path;
 
 /// The radiosity tests' Cornell settings (150 mm patches, 60 mm elements, one adaptive
@@ -198,20 +198,12 @@ fn irradiance_through_a_mirror_is_the_mirrored_emitters_times_the_reflectance() 
 /// A closed unit cube whose face 0 (z = 0) is a perfect mirror and whose five other faces emit
 /// L_e = 1 and reflect `rho`, all facing in.
 fn mirror_furnace(rho: f64) -> Scene {
-    let faces = [
-        ([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
-        ([0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]),
-        ([0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]),
-        ([0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]),
-        ([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]),
-        ([1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]),
-    ];
     let mut text = format!(
         "version = 1\n[camera]\nposition = [0.5, 0.5, 0.1]\nlook_at = [0.5, 0.5, 1]\nfov_y = 60\n\
          [[material]]\nname = \"w\"\ntype = \"lambert\"\ndiffuse = {rho}\n\
          [[material]]\nname = \"m\"\ntype = \"mirror\"\nreflectance = 1\n"
     );
-    for (i, (o, u, v)) in faces.iter().enumerate() {
+    for (i, (o, u, v)) in CUBE_FACES.iter().enumerate() {
         let (material, emission) = if i == 0 {
             ("m", "")
         } else {

@@ -33,24 +33,18 @@ fn same_seed_gives_bit_identical_images_at_one_and_two_threads() {
         WhittedSettings::default(),
     );
     for integrator in [&reference as &dyn Integrator, &whitted] {
-        let one = on_threads(1, || {
-            render(
-                &scene,
-                &camera,
-                integrator,
-                &settings,
-                &RenderProgress::new(),
-            )
-        });
-        let two = on_threads(2, || {
-            render(
-                &scene,
-                &camera,
-                integrator,
-                &settings,
-                &RenderProgress::new(),
-            )
-        });
+        let on = |threads| {
+            on_threads(threads, || {
+                render(
+                    &scene,
+                    &camera,
+                    integrator,
+                    &settings,
+                    &RenderProgress::new(),
+                )
+            })
+        };
+        let (one, two) = (on(1), on(2));
         assert_eq!(one.layers, two.layers, "{} differs", integrator.name());
         assert_eq!(
             (one.stats.rays, one.stats.shadow_rays, one.stats.non_finite),

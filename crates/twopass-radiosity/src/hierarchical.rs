@@ -639,6 +639,21 @@ impl<'s> HierarchicalSolver<'s> {
         self.cluster_spread.resize(c, 0.0);
     }
 
+    /// The links node `r` receives (they are sorted by receiver).
+    fn received(&self, r: NodeRef) -> &[Link] {
+        match self.receivers.binary_search_by_key(&r, |&(x, _)| x) {
+            Ok(i) => {
+                let start = self.receivers[i].1 as usize;
+                let end = self
+                    .receivers
+                    .get(i + 1)
+                    .map_or(self.links.len(), |&(_, e)| e as usize);
+                &self.links[start..end]
+            }
+            Err(_) => &[],
+        }
+    }
+
     /// The deepest ancestor of surface node `n` that took part in the last push-pull (`n`
     /// itself if it did).
     fn settled_ancestor(&self, n: u32) -> u32 {
@@ -986,10 +1001,7 @@ impl<'s> HierarchicalSolver<'s> {
     /// receiver area).
     fn surface_transport(&self, p: u32, q: u32) -> ([f64; 7], f64, f64) {
         let (x, n) = self.receiving_points(p);
-        let poly = self.mesh.corners(q);
-        let ns = self.scene.mesh.geometric_normals
-            [self.mesh.nodes[q as usize].scene_triangle as usize]
-            .as_dvec3();
+        let (poly, ns) = self.source_polygon(q);
         let f: [f64; 7] =
             std::array::from_fn(|i| form_factor::point_to_polygon(x[i], n[i], &poly, Some(ns)));
         // The corners keep their exact point values; the receiver's area-averaged form factor
@@ -1016,11 +1028,16 @@ impl<'s> HierarchicalSolver<'s> {
     /// receiving corners.
     fn corner_form_factors(&self, p: u32, q: u32) -> [f64; 3] {
         let (x, n) = self.receiving_points(p);
-        let poly = self.mesh.corners(q);
+        let (poly, ns) = self.source_polygon(q);
+        std::array::from_fn(|i| form_factor::point_to_polygon(x[i], n[i], &poly, Some(ns)))
+    }
+
+    /// Surface node `q` as a source polygon: its corners and its scene triangle's normal.
+    fn source_polygon(&self, q: u32) -> ([DVec3; 3], DVec3) {
         let ns = self.scene.mesh.geometric_normals
             [self.mesh.nodes[q as usize].scene_triangle as usize]
             .as_dvec3();
-        std::array::from_fn(|i| form_factor::point_to_polygon(x[i], n[i], &poly, Some(ns)))
+        (self.mesh.corners(q), ns)
     }
 
     /// Transport, error estimate and visibility of the link `s -> r`, with `rays` shadow rays.
@@ -1769,18 +1786,7 @@ impl<'s> HierarchicalSolver<'s> {
         }
         // The unblocked surface-to-surface links a surface node receives.
         let received = |n: u32| {
-            let r = NodeRef::surface(n);
-            let range = match self.receivers.binary_search_by_key(&r, |&(x, _)| x) {
-                Ok(i) => {
-                    self.receivers[i].1 as usize
-                        ..self
-                            .receivers
-                            .get(i + 1)
-                            .map_or(self.links.len(), |&(_, e)| e as usize)
-                }
-                Err(_) => 0..0,
-            };
-            self.links[range]
+            self.received(NodeRef::surface(n))
                 .iter()
                 .filter(|l| matches!(l.source.kind(), Kind::Surface(_)) && !l.partial)
         };
@@ -1944,15 +1950,7 @@ impl<'s> HierarchicalSolver<'s> {
         let path = self.path_to(leaf);
         let t = self.mesh.nodes[leaf as usize].scene_triangle;
         let sum_links = |r: NodeRef| -> f64 {
-            let Ok(i) = self.receivers.binary_search_by_key(&r, |&(x, _)| x) else {
-                return 0.0;
-            };
-            let start = self.receivers[i].1 as usize;
-            let end = self
-                .receivers
-                .get(i + 1)
-                .map_or(self.links.len(), |&(_, e)| e as usize);
-            self.links[start..end]
+            self.received(r)
                 .iter()
                 .map(|l| self.unit_transport(l))
                 .sum()
