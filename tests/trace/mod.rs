@@ -2,6 +2,7 @@
 //! optics, spawned rays, the hybrid invariant, determinism and non-finite samples.
 
 mod analytic;
+mod caustics;
 mod common;
 mod determinism;
 mod furnace;

@@ -27,7 +27,8 @@ use glam::{DVec3, Vec2, Vec3};
 use rayon::prelude::*;
 use twopass_brdf::frame::Frame;
 use twopass_brdf::random::{SplitMix64, hash, unit_f32};
-use twopass_scene::{Scene, SurfacePoint};
+use twopass_scene::targets::specular_objects;
+use twopass_scene::{Scene, SpecularTargets, SurfacePoint};
 
 use crate::element::ElementMesh;
 
@@ -149,18 +150,6 @@ pub fn decide(scene: &Scene) -> (bool, String) {
     )
 }
 
-/// Objects whose material has a delta lobe.
-fn specular_objects(scene: &Scene) -> Vec<usize> {
-    (0..scene.objects.len())
-        .filter(|&o| {
-            scene.materials[scene.objects[o].material as usize]
-                .material
-                .delta()
-                .is_some()
-        })
-        .collect()
-}
-
 /// Point `u` in [0, 1)^2 moved into stratum `i` of a `k` x `k` grid.
 fn stratum(i: u32, k: u32, u: Vec2) -> Vec2 {
     let (x, y) = (i % k, i / k);
@@ -194,19 +183,12 @@ pub(crate) struct Shooter {
     pub area: f64,
 }
 
-/// A bounding sphere of a specular object: the cone it subtends is where rays are aimed.
-#[derive(Debug, Clone, Copy)]
-struct Target {
-    center: DVec3,
-    radius: f64,
-}
-
 /// The specular transfer of one solve: the targets, the deposits so far (kept so that they can
 /// be splatted again onto a refined mesh), and the rays cast.
 #[derive(Debug, Clone)]
 pub(crate) struct Specular {
     settings: SpecularTransfer,
-    targets: Vec<Target>,
+    targets: SpecularTargets,
     /// Per object: whether it takes part (receives deposits).
     takes_part: Vec<bool>,
     /// Every deposit so far, in shot order.
@@ -221,29 +203,7 @@ impl Specular {
         if settings.rays == 0 || !decide(scene).0 {
             return None;
         }
-        let targets = specular_objects(scene)
-            .into_iter()
-            .map(|o| {
-                let tris = scene.objects[o].triangles.clone();
-                let (mut lo, mut hi) = (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN));
-                for t in tris.clone() {
-                    for c in scene.mesh.corners(t) {
-                        lo = lo.min(c.as_dvec3());
-                        hi = hi.max(c.as_dvec3());
-                    }
-                }
-                let center = (lo + hi) * 0.5;
-                let radius = tris
-                    .flat_map(|t| scene.mesh.corners(t))
-                    .map(|c| (c.as_dvec3() - center).length())
-                    .fold(0.0, f64::max);
-                // A hair larger, so the cones hold the object's surface whatever the rounding.
-                Target {
-                    center,
-                    radius: radius * (1.0 + 1e-6) + 1e-9 * center.length(),
-                }
-            })
-            .collect();
+        let targets = SpecularTargets::new(scene);
         Some(Self {
             settings,
             targets,
@@ -307,7 +267,7 @@ impl Specular {
                 });
                 let from = scene.mesh.surface_point(tri, b);
                 let x = from.position.as_dvec3();
-                let Some((dir, pdf)) = self.direction(x, ud) else {
+                let Some((dir, pdf)) = self.targets.direction(x, ud) else {
                     return (None, 0);
                 };
                 let cos = dir.dot(normal);
@@ -320,61 +280,6 @@ impl Specular {
             .collect();
         let rays = results.iter().map(|r| r.1).sum();
         (results.into_iter().filter_map(|r| r.0).collect(), rays)
-    }
-
-    /// A direction toward the targets from `x` for `u` in [0, 1)^2, and its density (1/sr)
-    /// under the mixture of the targets' cones (each chosen with probability proportional to
-    /// its solid angle).
-    fn direction(&self, x: DVec3, u: Vec2) -> Option<(DVec3, f64)> {
-        use std::f64::consts::PI;
-        // The cone of target `t` seen from `x`: axis and cosine of its half angle (-1, the
-        // whole sphere of directions, from inside the bounding sphere).
-        let cone = |t: &Target| {
-            let d = t.center - x;
-            let dist = d.length();
-            if dist <= t.radius {
-                (DVec3::Z, -1.0)
-            } else {
-                (d / dist, (1.0 - (t.radius / dist).powi(2)).max(0.0).sqrt())
-            }
-        };
-        let solid = |cos_max: f64| 2.0 * PI * (1.0 - cos_max);
-        let total: f64 = self.targets.iter().map(|t| solid(cone(t).1)).sum();
-        if total.is_nan() || total <= 0.0 {
-            return None;
-        }
-        // Pick a cone with the first coordinate, reusing its remainder (keeps stratification).
-        let target = f64::from(u.x) * total;
-        let mut acc = 0.0;
-        let mut picked = (DVec3::Z, -1.0, 0.5);
-        for (j, t) in self.targets.iter().enumerate() {
-            let (axis, cos_max) = cone(t);
-            let w = solid(cos_max);
-            if target < acc + w || j + 1 == self.targets.len() {
-                let ux = ((target - acc) / w).clamp(0.0, 1.0 - 1e-12);
-                picked = (axis, cos_max, ux);
-                break;
-            }
-            acc += w;
-        }
-        let (axis, cos_max, ux) = picked;
-        let cos_t = 1.0 - ux * (1.0 - cos_max);
-        let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
-        let phi = 2.0 * PI * f64::from(u.y);
-        let (s, t) = axis.any_orthonormal_pair();
-        let dir = (s * (sin_t * phi.cos()) + t * (sin_t * phi.sin()) + axis * cos_t).normalize();
-        // Mixture density: each cone holding the direction adds its probability over its solid
-        // angle, (solid / total) / solid = 1 / total.
-        let holding = self
-            .targets
-            .iter()
-            .filter(|t| {
-                let (axis, cos_max) = cone(t);
-                dir.dot(axis) >= cos_max
-            })
-            .count()
-            .max(1);
-        Some((dir, holding as f64 / total))
     }
 
     /// Follows a ray leaving `from` in `dir` with `power` through the delta surfaces; returns

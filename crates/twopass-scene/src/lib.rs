@@ -33,6 +33,7 @@ mod obj;
 mod radiance;
 mod scene;
 pub mod shape;
+pub mod targets;
 mod transform;
 mod unit;
 pub mod workload;
@@ -49,5 +50,6 @@ pub use load::{
 };
 pub use radiance::DiffuseRadiance;
 pub use scene::{Bounds, Emitter, Hit, Mesh, Object, Scene, SceneMaterial};
+pub use targets::SpecularTargets;
 pub use transform::Transform;
 pub use unit::Unit;

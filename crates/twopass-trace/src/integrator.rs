@@ -48,6 +48,12 @@ pub trait Integrator: Sync {
         sampler: &mut Sampler,
         tally: &mut Tally,
     ) -> Radiance;
+
+    /// The light tracing pass whose per-pixel result the render loop adds to this
+    /// integrator's image (the caustics it leaves to light tracing), if any.
+    fn light_tracer(&self) -> Option<&crate::light_tracing::LightTracer> {
+        None
+    }
 }
 
 /// What a shader needs at a hit: the material, the local shading frame and the outgoing
@@ -154,6 +160,64 @@ impl Lights {
         scene
             .mesh
             .sample_triangle(*first + i as u32, glam::Vec2::new(fx, u.y))
+    }
+}
+
+/// Which emitter a path samples: each with probability proportional to its mean emitted power
+/// over the three channels (uniform when nothing emits power).
+#[derive(Debug, Clone)]
+pub struct EmitterChoice {
+    /// Cumulative probabilities, last = 1.
+    cdf: Vec<f32>,
+    /// Probability of each emitter.
+    probability: Vec<f32>,
+}
+
+impl EmitterChoice {
+    /// The choice among `scene`'s emitters.
+    pub fn new(scene: &Scene) -> Self {
+        let weights: Vec<f64> = scene
+            .emitters
+            .iter()
+            .map(|e| f64::from((e.power.x + e.power.y + e.power.z) / 3.0).max(0.0))
+            .collect();
+        let total: f64 = weights.iter().sum();
+        let n = weights.len();
+        let probability: Vec<f32> = weights
+            .iter()
+            .map(|&w| {
+                if total > 0.0 {
+                    (w / total) as f32
+                } else {
+                    1.0 / n as f32
+                }
+            })
+            .collect();
+        let mut acc = 0.0_f32;
+        let mut cdf: Vec<f32> = probability
+            .iter()
+            .map(|p| {
+                acc += p;
+                acc
+            })
+            .collect();
+        if let Some(last) = cdf.last_mut() {
+            *last = 1.0;
+        }
+        Self { cdf, probability }
+    }
+
+    /// The emitter (index into `Scene::emitters`) for `u` uniform in [0, 1); the scene must
+    /// have one.
+    pub fn pick(&self, u: f32) -> usize {
+        self.cdf
+            .partition_point(|&c| c <= u)
+            .min(self.cdf.len() - 1)
+    }
+
+    /// Probability of picking emitter `e`.
+    pub fn probability(&self, e: usize) -> f32 {
+        self.probability[e]
     }
 }
 

@@ -33,6 +33,7 @@ pub mod diffuse;
 pub mod film;
 pub mod hybrid;
 pub mod integrator;
+pub mod light_tracing;
 pub mod reference;
 pub mod render;
 pub mod sampler;
@@ -42,6 +43,7 @@ pub use film::{FilmImage, Layer, LayerImages, Radiance};
 pub use render::{RenderOutput, RenderProgress, RenderSettings, RenderStats, render};
 
 pub use integrator::{Integrator, Lights, Tally};
-pub use reference::{Reference, ReferenceSettings};
+pub use light_tracing::{CausticScope, LightImage, LightTracer, LightTracingSettings};
+pub use reference::{Caustics, Reference, ReferenceSettings};
 pub use sampler::Sampler;
 pub use whitted::{Whitted, WhittedSettings};

@@ -14,14 +14,27 @@
 //! | `max_depth` | vertices | 64 | longest path (camera hit = 1) |
 //! | `roulette_depth` | vertices | 3 | Russian roulette from this path length on |
 //!
+//! | `caustics` | | `LightTracing` | who counts the caustic paths (below) |
+//!
 //! Emitters are chosen for next-event estimation in proportion to their mean emitted power.
+//!
+//! **Caustics.** A path that sees a diffuse or glossy surface first and reaches the emitter
+//! through a mirror or glass last (E D ... S+ L) is found by a camera path only when its
+//! sampled direction happens to hit the emitter through the specular chain: for a small
+//! light the noise of the caustic under a glass sphere dominates the image's for thousands of
+//! samples. With [`Caustics::LightTracing`] (the default) the path tracer leaves exactly those
+//! paths to a light tracing pass ([`crate::light_tracing`], scope
+//! [`crate::light_tracing::CausticScope::All`], one light path per camera sample), which the
+//! render loop adds to the image: each path is counted once, by the strategy that finds it
+//! easily. A scene without a delta surface has no such path and renders exactly as before.
 
 use glam::Vec3;
 use twopass_brdf::{BrdfSample, Material, Rgb, SampleKind};
 use twopass_scene::{Hit, Ray, Scene, SurfacePoint};
 
 use crate::film::{Layer, Radiance};
-use crate::integrator::{Integrator, Shading, Tally};
+use crate::integrator::{EmitterChoice, Integrator, Shading, Tally};
+use crate::light_tracing::{CausticScope, LightTracer, LightTracingSettings};
 use crate::sampler::Sampler;
 
 /// Path length settings of the reference path tracer.
@@ -32,6 +45,18 @@ pub struct ReferenceSettings {
     /// Path length (vertices) from which Russian roulette may end a path; survival probability
     /// is the largest channel of the throughput, capped at 1.
     pub roulette_depth: u32,
+    /// Which strategy counts the caustic paths E (D|G) ... S+ L.
+    pub caustics: Caustics,
+}
+
+/// Which strategy counts the paths that see a diffuse or glossy surface first and reach the
+/// emitter through a delta bounce last.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Caustics {
+    /// The path tracer alone (when its BRDF-sampled direction hits the emitter).
+    PathTracing,
+    /// A light tracing pass that the render loop adds (see the module documentation).
+    LightTracing,
 }
 
 impl Default for ReferenceSettings {
@@ -39,6 +64,7 @@ impl Default for ReferenceSettings {
         Self {
             max_depth: 64,
             roulette_depth: 3,
+            caustics: Caustics::LightTracing,
         }
     }
 }
@@ -47,12 +73,13 @@ impl Default for ReferenceSettings {
 #[derive(Debug, Clone)]
 pub struct Reference {
     settings: ReferenceSettings,
-    /// Cumulative emitter-choice probabilities, last = 1.
-    cdf: Vec<f32>,
-    /// Probability of choosing each emitter.
-    choice: Vec<f32>,
+    /// Which emitter next-event estimation samples.
+    choice: EmitterChoice,
     /// Emitter index of each scene object, if it emits.
     emitter_of: Vec<Option<u32>>,
+    /// The light tracing pass that counts the caustic paths, with
+    /// [`Caustics::LightTracing`] in a scene that has any.
+    light: Option<LightTracer>,
 }
 
 /// How a contribution is split among layers: by the first scattering event of the path.
@@ -91,50 +118,29 @@ fn power_heuristic(a: f32, b: f32) -> f32 {
     }
 }
 
-fn mean(c: Rgb) -> f32 {
-    (c.x + c.y + c.z) / 3.0
-}
-
 impl Reference {
     /// The path tracer for `scene`.
     pub fn new(scene: &Scene, settings: ReferenceSettings) -> Self {
-        let weights: Vec<f64> = scene
-            .emitters
-            .iter()
-            .map(|e| f64::from(mean(e.power)).max(0.0))
-            .collect();
-        let total: f64 = weights.iter().sum();
-        let n = weights.len();
-        let choice: Vec<f32> = weights
-            .iter()
-            .map(|&w| {
-                if total > 0.0 {
-                    (w / total) as f32
-                } else {
-                    1.0 / n as f32
-                }
-            })
-            .collect();
-        let mut acc = 0.0_f32;
-        let mut cdf: Vec<f32> = choice
-            .iter()
-            .map(|p| {
-                acc += p;
-                acc
-            })
-            .collect();
-        if let Some(last) = cdf.last_mut() {
-            *last = 1.0;
-        }
         let mut emitter_of = vec![None; scene.objects.len()];
         for (i, e) in scene.emitters.iter().enumerate() {
             emitter_of[e.object as usize] = Some(i as u32);
         }
+        let light = match settings.caustics {
+            Caustics::PathTracing => None,
+            Caustics::LightTracing => LightTracer::new(
+                scene,
+                LightTracingSettings {
+                    max_depth: settings.max_depth,
+                    roulette_depth: settings.roulette_depth,
+                    ..LightTracingSettings::new(CausticScope::All)
+                },
+            ),
+        };
         Self {
             settings,
-            cdf,
-            choice,
+            choice: EmitterChoice::new(scene),
             emitter_of,
+            light,
         }
     }
 
@@ -155,7 +161,7 @@ impl Reference {
         if cos_y <= 0.0 {
             return 0.0;
         }
-        self.choice[e as usize] / emitter.area * dist2 / cos_y
+        self.choice.probability(e as usize) / emitter.area * dist2 / cos_y
     }
 
     /// Next-event estimation at a non-delta shading point: one emitter sample weighted by MIS.
@@ -168,14 +174,10 @@ impl Reference {
         tally: &mut Tally,
     ) -> [Rgb; 2] {
         let zero = [Rgb::ZERO; 2];
-        if self.cdf.is_empty() || !s.hit.front_face {
+        if scene.emitters.is_empty() || !s.hit.front_face {
             return zero;
         }
-        let u = sampler.next_f32();
-        let e = self
-            .cdf
-            .partition_point(|&c| c <= u)
-            .min(self.cdf.len() - 1);
+        let e = self.choice.pick(sampler.next_f32());
         let emitter = &scene.emitters[e];
         let pick = sampler.next_f32();
         let y = emitter.sample(scene, pick, sampler.next_2d());
@@ -201,7 +203,7 @@ impl Reference {
         if scene.occluded_between(&x, &y) {
             return zero;
         }
-        let pl = self.choice[e] / emitter.area * dist2 / cos_y;
+        let pl = self.choice.probability(e) / emitter.area * dist2 / cos_y;
         let pb = m.pdf(s.wo, wl);
         let w = power_heuristic(pl, pb);
         let scale = emitter.radiance * (wl.z * w / pl);
@@ -212,6 +214,10 @@ impl Reference {
 impl Integrator for Reference {
     fn name(&self) -> &'static str {
         "reference"
+    }
+
+    fn light_tracer(&self) -> Option<&LightTracer> {
+        self.light.as_ref()
     }
 
     fn radiance(
@@ -230,11 +236,18 @@ impl Integrator for Reference {
         // The previous vertex and how the current direction was sampled (for MIS on emitters).
         let mut prev: Option<(SurfacePoint, f32, bool)> = None;
         let mut depth = 1;
+        // Whether the camera's first vertex is a diffuse or glossy one: then a path reaching
+        // the emitter through a delta bounce is the light tracer's.
+        let mut seen_non_delta = false;
         while let Some(h) = hit {
             let s = Shading::new(scene, h, dir);
+            if depth == 1 {
+                seen_non_delta = s.material.delta().is_none();
+            }
 
             if s.emitted.max_element() > 0.0 {
                 let w = match prev {
+                    Some((_, _, true)) if seen_non_delta && self.light.is_some() => 0.0,
                     None | Some((_, _, true)) => 1.0,
                     Some((from, pdf_bsdf, false)) => {
                         power_heuristic(pdf_bsdf, self.light_pdf(scene, &from, &h, dir))

@@ -55,14 +55,21 @@ impl RenderProgress {
         Self::default()
     }
 
-    /// Pixels finished so far.
+    /// Work finished so far, in pixels (a light tracing pass counts as many units as the
+    /// image has pixels).
     pub fn done(&self) -> u64 {
         self.done.load(Ordering::Relaxed)
     }
 
-    /// Pixels of the render (0 before it starts).
+    /// Work of the whole render, in pixels (twice the image's pixels when the integrator adds
+    /// a light tracing pass; 0 before it starts).
     pub fn total(&self) -> u64 {
         self.total.load(Ordering::Relaxed)
+    }
+
+    /// Adds `units` to the work done.
+    pub(crate) fn add_done(&self, units: u64) {
+        self.done.fetch_add(units, Ordering::Relaxed);
     }
 
     /// Fraction finished, in [0, 1] (0 before the render starts).
@@ -94,8 +101,10 @@ pub struct RenderStats {
     pub non_finite: u64,
     /// Closest-hit rays traced (camera rays included).
     pub rays: u64,
-    /// Shadow rays traced.
+    /// Shadow rays traced (with the light tracing pass's connections to the camera).
     pub shadow_rays: u64,
+    /// Light paths of the integrator's light tracing pass (0 without one).
+    pub light_paths: u64,
     /// Wall-clock time of the render.
     pub elapsed: Duration,
 }
@@ -139,10 +148,13 @@ pub fn render(
     let spp = settings.samples_per_pixel.max(1);
     let k = spp.isqrt();
     let tile = settings.tile_size.max(1);
+    let pixels = u64::from(width) * u64::from(height);
+    let light = integrator.light_tracer();
     progress.done.store(0, Ordering::Relaxed);
-    progress
-        .total
-        .store(u64::from(width) * u64::from(height), Ordering::Relaxed);
+    progress.total.store(
+        if light.is_some() { 2 * pixels } else { pixels },
+        Ordering::Relaxed,
+    );
 
     let tiles: Vec<(u32, u32)> = (0..height.div_ceil(tile))
         .flat_map(|ty| (0..width.div_ceil(tile)).map(move |tx| (tx * tile, ty * tile)))
@@ -220,6 +232,19 @@ pub fn render(
             }
         }
     }
+    let mut light_paths = 0;
+    if let Some(tracer) = light {
+        let paths = tracer.paths_for(camera, spp);
+        let lit = tracer.trace(scene, camera, paths, settings.seed, progress, pixels);
+        for (img, add) in layers.images.iter_mut().zip(&lit.layers.images) {
+            for (p, a) in img.pixels.iter_mut().zip(&add.pixels) {
+                *p += *a;
+            }
+        }
+        tally.add(lit.tally);
+        non_finite += lit.non_finite;
+        light_paths = lit.paths;
+    }
     debug_assert!(
         layers
             .images
@@ -237,6 +262,7 @@ pub fn render(
             non_finite,
             rays: tally.rays,
             shadow_rays: tally.shadow_rays,
+            light_paths,
             elapsed: start.elapsed(),
         },
     }

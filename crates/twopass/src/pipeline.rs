@@ -332,6 +332,7 @@ mod tests {
             non_finite,
             rays: 0,
             shadow_rays: 0,
+            light_paths: 0,
             elapsed: Duration::ZERO,
         }
     }

@@ -53,6 +53,8 @@ pub struct ReferenceKey {
     pub max_depth: u32,
     /// Path length from which Russian roulette may end a path.
     pub roulette_depth: u32,
+    /// Who counts the caustic paths (`path tracing` or `light tracing`).
+    pub caustics: String,
     /// Version of twopass that rendered it.
     pub version: String,
 }
@@ -104,6 +106,11 @@ pub fn key(
         seed,
         max_depth: settings.max_depth,
         roulette_depth: settings.roulette_depth,
+        caustics: match settings.caustics {
+            twopass_trace::Caustics::PathTracing => "path tracing",
+            twopass_trace::Caustics::LightTracing => "light tracing",
+        }
+        .to_owned(),
         version: env!("CARGO_PKG_VERSION").to_owned(),
     }
 }

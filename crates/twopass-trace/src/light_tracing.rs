@@ -1,0 +1,409 @@
+//! Light tracing of caustics: paths that leave an emitter, go through at least one mirror or
+//! glass surface (delta lobes), and are connected to the camera at a diffuse or glossy vertex.
+//! In Heckbert's notation from the light: L S+ D E, and with [`CausticScope::All`] also every
+//! longer path L S+ (D|G|S)* (D|G) E. Tracing these from the camera is hopeless for a small
+//! light (a camera path must hit the emitter through the specular chain by chance); from the
+//! light they are found directly, which is what the reference path tracer and the hybrid's
+//! per-pixel caustics need (Chen et al. 1991; Veach 1997, section 10.2).
+//!
+//! **Splitting the work without double counting.** Each light path is counted by exactly one
+//! strategy:
+//! - [`CausticScope::All`] (the reference): the path tracer ([`crate::Reference`] with
+//!   [`crate::reference::Caustics::LightTracing`]) drops every path whose first vertex seen
+//!   from the camera is not a delta surface and whose last bounce before the emitter is a delta
+//!   one; the light tracer counts exactly those, connecting each light path to the camera at
+//!   every diffuse or glossy vertex after its first delta bounce. The union is every path once.
+//! - [`CausticScope::Focused`] (the hybrid): only the paths whose delta chain holds a
+//!   refraction, connected at their first diffuse vertex with its diffuse reflectance: the light
+//!   the radiosity pass deposits on its elements blurred by their size (the focus under a glass
+//!   sphere). The hybrid shows the solution less that part there
+//!   ([`twopass_scene::DiffuseRadiance::focused_caustic_radiance`]), and the light tracer's
+//!   value in its place.
+//!
+//! **Estimator.** A light path starts at a point of an emitter chosen by power, uniform over
+//! its area, in a direction drawn from the cones its specular objects subtend
+//! ([`twopass_scene::SpecularTargets`]; a direction outside every cone cannot reach a specular
+//! surface first), with throughput L_e cos(theta_e) A / (P(emitter) p(direction)). Delta
+//! bounces carry power ([`twopass_brdf::delta::DeltaLobe::sample_flux`]). At a vertex x
+//! connected to the camera the pixel j that sees x gains
+//! beta f(x) |cos(theta_x)| / d^2 * W_j, with W_j = 1 / (A_pixel cos^3(theta_c)) the importance
+//! of a pinhole camera's pixel for the box filter the render loop uses (A_pixel: the pixel's
+//! area on the image plane at unit distance), the sum over N paths divided by N. Shading normals
+//! get Veach's adjoint correction. The result is unbiased; it is a pixel's mean radiance, in
+//! W/(m^2 sr), like the camera passes'.
+//!
+//! **Determinism.** Path i draws from the stream keyed by (seed, i); paths are traced in fixed
+//! chunks and their splats added chunk by chunk in order, so the image does not depend on the
+//! thread count.
+//!
+//! | setting | unit | default | meaning |
+//! | --- | --- | --- | --- |
+//! | `paths_per_sample` | light paths per camera sample | 1 | N = this x spp x pixels |
+//! | `max_depth` | bounces | 64 | longest light path |
+//! | `roulette_depth` | bounces | 3 | Russian roulette from this bounce on |
+
+use glam::{Vec2, Vec3};
+use rayon::prelude::*;
+use twopass_brdf::Rgb;
+use twopass_brdf::frame::Frame;
+use twopass_scene::{Camera, Hit, Scene, SpecularTargets};
+
+use crate::film::{Layer, LayerImages};
+use crate::integrator::{EmitterChoice, Tally};
+use crate::render::RenderProgress;
+use crate::sampler::Sampler;
+
+/// Which light paths the light tracer counts (see the module documentation).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CausticScope {
+    /// Every path through at least one delta bounce from the emitter, connected at every
+    /// diffuse or glossy vertex: the reference's half of the path space.
+    All,
+    /// Paths whose delta chain holds a refraction, connected at their first diffuse vertex
+    /// with its diffuse reflectance only: the hybrid's per-pixel caustics.
+    Focused,
+}
+
+/// Settings of the light tracer.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LightTracingSettings {
+    /// Light paths per camera sample: a render of `spp` samples over `pixels` pixels traces
+    /// `ceil(paths_per_sample * spp * pixels)` paths.
+    pub paths_per_sample: f32,
+    /// Which paths count.
+    pub scope: CausticScope,
+    /// Longest light path, in bounces.
+    pub max_depth: u32,
+    /// Bounce from which Russian roulette may end a path (on its throughput relative to its
+    /// start, capped at 1).
+    pub roulette_depth: u32,
+}
+
+impl LightTracingSettings {
+    /// The defaults for `scope`: one light path per camera sample, 64 bounces, roulette from
+    /// the third.
+    pub fn new(scope: CausticScope) -> Self {
+        Self {
+            paths_per_sample: 1.0,
+            scope,
+            max_depth: 64,
+            roulette_depth: 3,
+        }
+    }
+}
+
+/// Light paths per parallel job; the splats of a job are added to the image in job order.
+const CHUNK: u64 = 4096;
+/// Jobs whose splats are held in memory at once before they are added.
+const BATCH: u64 = 64;
+/// Mixed into the render's seed, so light paths never share a stream with camera samples.
+const LIGHT_SEED_MIX: u64 = 0x6c69_6768_7470_6174;
+
+/// What a light tracing pass produced.
+#[derive(Debug, Clone)]
+pub struct LightImage {
+    /// Per layer, the pixels' mean radiance from the light paths, W/(m^2 sr).
+    pub layers: LayerImages,
+    /// Light paths traced.
+    pub paths: u64,
+    /// Rays counted like the render's.
+    pub tally: Tally,
+    /// Splats dropped because a value was not finite.
+    pub non_finite: u64,
+}
+
+/// A light tracer for one scene: the emitter choice and the specular targets.
+#[derive(Debug, Clone)]
+pub struct LightTracer {
+    settings: LightTracingSettings,
+    targets: SpecularTargets,
+    choice: EmitterChoice,
+}
+
+/// One splat: pixel index, layer, value (radiance times N).
+type Splat = (u32, Layer, Rgb);
+
+impl LightTracer {
+    /// The light tracer of `scene`, or `None` when it has nothing to do: no emitter or no
+    /// specular object (then no path of its scope exists).
+    pub fn new(scene: &Scene, settings: LightTracingSettings) -> Option<Self> {
+        let targets = SpecularTargets::new(scene);
+        if targets.is_empty() || scene.emitters.is_empty() {
+            return None;
+        }
+        Some(Self {
+            settings,
+            targets,
+            choice: EmitterChoice::new(scene),
+        })
+    }
+
+    /// The settings.
+    pub fn settings(&self) -> LightTracingSettings {
+        self.settings
+    }
+
+    /// Light paths a render of `spp` samples per pixel at `camera`'s size traces.
+    pub fn paths_for(&self, camera: &Camera, spp: u32) -> u64 {
+        let n = f64::from(self.settings.paths_per_sample)
+            * f64::from(spp.max(1))
+            * f64::from(camera.width)
+            * f64::from(camera.height);
+        n.ceil().max(0.0) as u64
+    }
+
+    /// Traces `paths` light paths with streams keyed by `seed` and returns each pixel's mean
+    /// radiance from them. `progress` advances by `progress_units` over the pass. Runs on the
+    /// current rayon pool; the result does not depend on its thread count.
+    pub fn trace(
+        &self,
+        scene: &Scene,
+        camera: &Camera,
+        paths: u64,
+        seed: u64,
+        progress: &RenderProgress,
+        progress_units: u64,
+    ) -> LightImage {
+        let (width, height) = (camera.width, camera.height);
+        let mut layers = LayerImages::new(width, height);
+        let mut tally = Tally::default();
+        let mut non_finite = 0;
+        let chunks = paths.div_ceil(CHUNK);
+        let seed = seed ^ LIGHT_SEED_MIX;
+        let view = PixelImportance::new(camera);
+        let mut done_units = 0;
+        let mut first = 0;
+        while first < chunks {
+            let last = (first + BATCH).min(chunks);
+            let results: Vec<(Vec<Splat>, Tally)> = (first..last)
+                .into_par_iter()
+                .map(|c| {
+                    let mut splats = Vec::new();
+                    let mut tally = Tally::default();
+                    for i in c * CHUNK..((c + 1) * CHUNK).min(paths) {
+                        let mut sampler = Sampler::new(seed, i, 0);
+                        self.path(scene, &view, &mut sampler, &mut tally, &mut splats);
+                    }
+                    (splats, tally)
+                })
+                .collect();
+            for (splats, t) in results {
+                tally.add(t);
+                for (pixel, layer, value) in splats {
+                    if value.is_finite() {
+                        layers.images[layer.index()].pixels[pixel as usize] += value;
+                    } else {
+                        non_finite += 1;
+                    }
+                }
+            }
+            let units = progress_units * last / chunks.max(1);
+            progress.add_done(units - done_units);
+            done_units = units;
+            first = last;
+        }
+        let scale = if paths > 0 { 1.0 / paths as f32 } else { 0.0 };
+        for img in &mut layers.images {
+            for p in &mut img.pixels {
+                *p *= scale;
+                if !p.is_finite() {
+                    *p = Rgb::ZERO;
+                    non_finite += 1;
+                }
+            }
+        }
+        LightImage {
+            layers,
+            paths,
+            tally,
+            non_finite,
+        }
+    }
+
+    /// One light path: its splats (radiance times the number of paths) go to `splats`.
+    fn path(
+        &self,
+        scene: &Scene,
+        view: &PixelImportance,
+        sampler: &mut Sampler,
+        tally: &mut Tally,
+        splats: &mut Vec<Splat>,
+    ) {
+        let s = &self.settings;
+        let e = self.choice.pick(sampler.next_f32());
+        let emitter = &scene.emitters[e];
+        let y = emitter.sample(scene, sampler.next_f32(), sampler.next_2d());
+        let Some((dir, pdf)) = self
+            .targets
+            .direction(y.position.as_dvec3(), sampler.next_2d())
+        else {
+            return;
+        };
+        let mut dir = dir.as_vec3().normalize();
+        let cos_e = dir.dot(y.normal);
+        if cos_e <= 0.0 || pdf <= 0.0 {
+            return;
+        }
+        let start =
+            emitter.radiance * (cos_e * emitter.area / (self.choice.probability(e) * pdf as f32));
+        let mut beta = start;
+        tally.rays += 1;
+        let mut hit = scene.intersect_from(&y, dir);
+        let mut bounces = 0u32;
+        let mut refracted = false;
+        while let Some(h) = hit {
+            let material = &scene.materials[h.material as usize].material;
+            let frame = Frame::from_normal(h.shading_normal);
+            let wo = frame.to_local(-dir);
+            if let Some(lobe) = material.delta() {
+                if bounces >= s.max_depth {
+                    return;
+                }
+                let Some(b) = lobe.sample_flux(wo, sampler.next_2d()) else {
+                    return;
+                };
+                refracted |= b.kind == twopass_brdf::SampleKind::SpecularTransmission;
+                beta *= b.weight;
+                dir = frame.to_world(b.wi).normalize();
+            } else {
+                // The first vertex must be a delta one: every other path is the camera's.
+                if bounces == 0 || !h.front_face {
+                    return;
+                }
+                match s.scope {
+                    CausticScope::Focused => {
+                        if refracted {
+                            self.connect(scene, view, &h, &frame, wo, beta, true, tally, splats);
+                        }
+                        return;
+                    }
+                    CausticScope::All => {
+                        self.connect(scene, view, &h, &frame, wo, beta, false, tally, splats);
+                    }
+                }
+                if bounces >= s.max_depth {
+                    return;
+                }
+                // Continue with the adjoint BRDF: f(next, previous) with the shading normal
+                // correction |wo.ns| |wi.ng| / |wo.ng| (Veach 1997, section 5.3).
+                let Some(b) = material.sample(wo, sampler.next_2d()) else {
+                    return;
+                };
+                let next = frame.to_world(b.wi).normalize();
+                let ng = h.point.normal;
+                let (cos_in_g, cos_out_g) = ((-dir).dot(ng), next.dot(ng));
+                if cos_out_g <= 0.0 || cos_in_g <= 0.0 || b.pdf <= 0.0 {
+                    return;
+                }
+                let f = material.eval(b.wi, wo);
+                beta *= f * (wo.z.abs() * cos_out_g / (cos_in_g * b.pdf));
+                dir = next;
+            }
+            bounces += 1;
+            if bounces >= s.roulette_depth {
+                let survive = (beta.max_element() / start.max_element()).min(1.0);
+                // A NaN throughput ends the path.
+                if survive.is_nan() || sampler.next_f32() >= survive {
+                    return;
+                }
+                beta /= survive;
+            }
+            tally.rays += 1;
+            hit = scene.intersect_from(&h.point, dir);
+        }
+    }
+
+    /// Connects vertex `h` (local frame `frame`, `wo` toward where the light came from) holding
+    /// throughput `beta` to the camera; with `diffuse_only`, with its diffuse reflectance only.
+    #[allow(clippy::too_many_arguments)]
+    fn connect(
+        &self,
+        scene: &Scene,
+        view: &PixelImportance,
+        h: &Hit,
+        frame: &Frame,
+        wo: Vec3,
+        beta: Rgb,
+        diffuse_only: bool,
+        tally: &mut Tally,
+        splats: &mut Vec<Splat>,
+    ) {
+        let material = &scene.materials[h.material as usize].material;
+        let x = &h.point;
+        let to_cam = view.camera.position - x.position;
+        let d2 = to_cam.length_squared();
+        if d2.is_nan() || d2 <= 0.0 {
+            return;
+        }
+        let wc = to_cam / d2.sqrt();
+        let cos_cam_g = wc.dot(x.normal);
+        if cos_cam_g <= 0.0 {
+            return;
+        }
+        let Some((pixel, importance)) = view.pixel(-wc) else {
+            return;
+        };
+        let wc_local = frame.to_local(wc);
+        let f_d = material.eval_diffuse(wc_local, wo);
+        let f_g = if diffuse_only {
+            Rgb::ZERO
+        } else {
+            material.eval_non_diffuse(wc_local, wo)
+        };
+        if (f_d + f_g).max_element() <= 0.0 {
+            return;
+        }
+        // |wi.ns| |wc.ng| / |wi.ng|: the cosine at x with the adjoint shading correction.
+        let cos_in_g = frame.to_world(wo).dot(x.normal);
+        if cos_in_g <= 0.0 {
+            return;
+        }
+        let g = wo.z.abs() * cos_cam_g / (cos_in_g * d2) * importance;
+        tally.shadow_rays += 1;
+        if scene.occluded(x, view.camera.position) {
+            return;
+        }
+        if f_d.max_element() > 0.0 {
+            splats.push((pixel, Layer::Diffuse, beta * f_d * g));
+        }
+        if f_g.max_element() > 0.0 {
+            splats.push((pixel, Layer::DirectSpecular, beta * f_g * g));
+        }
+    }
+}
+
+/// Where a direction from the eye lands on the image, and the importance of that pixel.
+struct PixelImportance {
+    camera: Camera,
+    /// Area of one pixel on the image plane at unit distance from the eye.
+    pixel_area: f32,
+}
+
+impl PixelImportance {
+    fn new(camera: &Camera) -> Self {
+        let side = 2.0 * (camera.fov_y * 0.5).tan() / camera.height as f32;
+        Self {
+            camera: *camera,
+            pixel_area: side * side,
+        }
+    }
+
+    /// The pixel (row-major index) unit direction `dir` from the eye falls in, and its
+    /// importance 1 / (A_pixel cos^3 theta), 1/sr.
+    fn pixel(&self, dir: Vec3) -> Option<(u32, f32)> {
+        let c = &self.camera;
+        let p: Vec2 = c.project(dir)?;
+        if !(p.x >= 0.0 && p.y >= 0.0 && p.x < c.width as f32 && p.y < c.height as f32) {
+            return None;
+        }
+        let (px, py) = (p.x as u32, p.y as u32);
+        if px >= c.width || py >= c.height {
+            return None;
+        }
+        let cos = dir.dot(c.forward);
+        if cos <= 0.0 {
+            return None;
+        }
+        Some((py * c.width + px, 1.0 / (self.pixel_area * cos * cos * cos)))
+    }
+}

@@ -1,0 +1,216 @@
+//! Light tracing of caustics (twopass_trace::light_tracing) and the reference path tracer that
+//! leaves the caustic paths to it: the light through a flat mirror against the exact
+//! form factor of the mirrored emitter, the two strategies of the reference against each other
+//! on the Cornell spheres (each path counted once: same image in expectation), and the same
+//! image on one and two threads.
+
+use std::f64::consts::PI;
+
+use glam::{DVec3, Vec2};
+use twopass_radiosity::form_factor::point_to_polygon;
+use twopass_scene::Scene;
+use twopass_trace::{
+    CausticScope, Caustics, FilmImage, LightTracer, LightTracingSettings, Reference,
+    ReferenceSettings, RenderOutput, RenderProgress, RenderSettings, render,
+};
+
+use super::common::{repo_scene, scene};
+
+/// A flat mirror of reflectance `r` in y = 0 (x in [-1.2, 0], facing up), a small emitter
+/// (0.2 x 0.2, L_e = 1, black) and a grey receiver (rho = 0.5, 0.4 x 0.4) side by side in the
+/// plane y = 1, both facing down, and a camera under the receiver looking up at it. The
+/// receiver sees the emitter only through the mirror: every bit of its light is a caustic path
+/// L S D E, which the reference leaves to light tracing.
+fn mirror_scene() -> Scene {
+    scene(
+        "version = 1\n[camera]\nposition = [0.5, 0.35, 0.0]\nlook_at = [0.5, 1, 0]\nup = [0, 0, 1]\nfov_y = 40\n\
+         [[material]]\nname = \"mirror\"\ntype = \"mirror\"\nreflectance = [0.9, 0.6, 0.3]\n\
+         [[material]]\nname = \"black\"\ntype = \"lambert\"\ndiffuse = 0\n\
+         [[material]]\nname = \"grey\"\ntype = \"lambert\"\ndiffuse = 0.5\n\
+         [[object]]\nname = \"mirror\"\nmaterial = \"mirror\"\n\
+         shape = { type = \"quad\", origin = [-1.2, 0, -0.4], edge_u = [0, 0, 0.8], edge_v = [1.2, 0, 0] }\n\
+         [[object]]\nname = \"light\"\nmaterial = \"black\"\nemission = 1\n\
+         shape = { type = \"quad\", origin = [-1.6, 1, -0.1], edge_u = [0.2, 0, 0], edge_v = [0, 0, 0.2] }\n\
+         [[object]]\nname = \"receiver\"\nmaterial = \"grey\"\n\
+         shape = { type = \"quad\", origin = [0.3, 1, -0.2], edge_u = [0.4, 0, 0], edge_v = [0, 0, 0.4] }\n",
+    )
+}
+
+/// Irradiance at `x` on the receiver (normal -y) from the emitter's mirror image (the plane
+/// y = -1, facing up), per unit reflectance: pi L_e F with the exact point-to-polygon form
+/// factor.
+fn through_mirror(x: DVec3) -> f64 {
+    let image = [
+        DVec3::new(-1.6, -1.0, -0.1),
+        DVec3::new(-1.4, -1.0, -0.1),
+        DVec3::new(-1.4, -1.0, 0.1),
+        DVec3::new(-1.6, -1.0, 0.1),
+    ];
+    PI * point_to_polygon(x, -DVec3::Y, &image, Some(DVec3::Y))
+}
+
+fn render_reference(
+    scene: &Scene,
+    size: u32,
+    spp: u32,
+    seed: u64,
+    caustics: Caustics,
+) -> RenderOutput {
+    let camera = scene.camera.with_resolution(Some(size), Some(size));
+    let reference = Reference::new(
+        scene,
+        ReferenceSettings {
+            caustics,
+            ..ReferenceSettings::default()
+        },
+    );
+    let settings = RenderSettings {
+        samples_per_pixel: spp,
+        seed,
+        ..RenderSettings::default()
+    };
+    render(
+        scene,
+        &camera,
+        &reference,
+        &settings,
+        &RenderProgress::new(),
+    )
+}
+
+#[test]
+fn light_traced_caustic_through_a_mirror_is_the_mirrored_emitters_light() {
+    let s = mirror_scene();
+    let size = 24;
+    let camera = s.camera.with_resolution(Some(size), Some(size));
+    let tracer = LightTracer::new(&s, LightTracingSettings::new(CausticScope::All))
+        .expect("a mirror and an emitter: light tracing has work");
+    let paths = 1 << 22;
+    let lit = tracer.trace(&s, &camera, paths, 7, &RenderProgress::new(), 0);
+    assert_eq!(lit.paths, paths);
+    assert_eq!(lit.non_finite, 0);
+    let image = lit.layers.composite();
+    // Per pixel, the exact mean radiance: rho / pi times the irradiance through the mirror,
+    // averaged over an 8 x 8 grid of points of the pixel's footprint on the plane y = 1; only
+    // pixels whose footprint lies inside the receiver count.
+    let r = [0.9, 0.6, 0.3];
+    let (mut measured, mut expected, mut pixels) = (DVec3::ZERO, DVec3::ZERO, 0);
+    let mut worst_block: f64 = 0.0;
+    let mut blocks = std::collections::BTreeMap::<(u32, u32), (DVec3, DVec3)>::new();
+    for y in 0..size {
+        for x in 0..size {
+            let mut sum = 0.0;
+            let mut inside = true;
+            for k in 0..64 {
+                let p = Vec2::new(
+                    x as f32 + ((k % 8) as f32 + 0.5) / 8.0,
+                    y as f32 + ((k / 8) as f32 + 0.5) / 8.0,
+                );
+                let d = camera.direction(p).as_dvec3();
+                let o = camera.position.as_dvec3();
+                let hit = o + d * ((1.0 - o.y) / d.y);
+                if !(0.3..=0.7).contains(&hit.x) || !(-0.2..=0.2).contains(&hit.z) {
+                    inside = false;
+                }
+                sum += through_mirror(hit);
+            }
+            if !inside {
+                continue;
+            }
+            let want = DVec3::from_array(r) * (0.5 / PI * sum / 64.0);
+            let got = image.get(x, y).as_dvec3();
+            measured += got;
+            expected += want;
+            pixels += 1;
+            let b = blocks.entry((x / 4, y / 4)).or_default();
+            b.0 += got;
+            b.1 += want;
+        }
+    }
+    assert!(pixels >= 200, "{pixels} pixels see only the receiver");
+    // About 1.5 % of the light paths aimed at the mirror land on the receiver (its solid angle
+    // seen from the emitter's image, 0.014 sr, over the cone the mirror's bounding sphere
+    // subtends, 0.95 sr): some 60,000 splats of 2^22 paths, so the sum over the receiver has a
+    // relative standard error near 0.4 %, and a 4 x 4 block of pixels (a 25th of them) near
+    // 2.5 %. Bounds: five standard errors.
+    for c in 0..3 {
+        let ratio = measured[c] / expected[c];
+        assert!(
+            (ratio - 1.0).abs() < 0.02,
+            "channel {c}: light traced {} vs exact {} (ratio {ratio})",
+            measured[c],
+            expected[c]
+        );
+    }
+    for (block, (got, want)) in &blocks {
+        let ratio = got.element_sum() / want.element_sum();
+        worst_block = worst_block.max((ratio - 1.0).abs());
+        assert!(
+            (ratio - 1.0).abs() < 0.12,
+            "block {block:?}: light traced {got} vs exact {want}"
+        );
+    }
+    eprintln!(
+        "mirror caustic: {pixels} pixels, ratio {:.4} {:.4} {:.4}, worst 4x4 block off by {:.3}",
+        measured.x / expected.x,
+        measured.y / expected.y,
+        measured.z / expected.z,
+        worst_block
+    );
+}
+
+/// Mean over a rectangle given in fractions of the image.
+fn region(img: &FilmImage, x: (f32, f32), y: (f32, f32)) -> f64 {
+    let (w, h) = (img.width as f32, img.height as f32);
+    let (mut sum, mut n) = (0.0, 0.0);
+    for py in (y.0 * h) as u32..(y.1 * h) as u32 {
+        for px in (x.0 * w) as u32..(x.1 * w) as u32 {
+            sum += img.get(px, py).as_dvec3().element_sum();
+            n += 1.0;
+        }
+    }
+    sum / n
+}
+
+#[test]
+fn both_strategies_of_the_reference_agree_on_the_spheres() {
+    let s = repo_scene("cornell-spheres.toml");
+    let size = 24;
+    let light = render_reference(&s, size, 256, 11, Caustics::LightTracing);
+    let path = render_reference(&s, size, 4096, 12, Caustics::PathTracing);
+    let (a, b) = (light.layers.composite(), path.layers.composite());
+    // The whole image and its four quadrants: the same integral by two estimators with no
+    // sample in common. The path tracer's own noise on the caustics bounds the agreement.
+    let halves = [(0.0, 0.5), (0.5, 1.0)];
+    let mut report = Vec::new();
+    for (name, x, y, tolerance) in [("image", (0.0, 1.0), (0.0, 1.0), 0.01)].into_iter().chain(
+        halves
+            .iter()
+            .flat_map(|&x| halves.iter().map(move |&y| ("quadrant", x, y, 0.03))),
+    ) {
+        let ratio = region(&a, x, y) / region(&b, x, y);
+        report.push(format!("{name} {x:?} {y:?}: {ratio:.4}"));
+        assert!(
+            (ratio - 1.0).abs() < tolerance,
+            "{name} {x:?} {y:?}: light tracing / path tracing = {ratio}"
+        );
+    }
+    eprintln!("{}", report.join("\n"));
+}
+
+#[test]
+fn light_tracing_gives_the_same_image_on_one_and_two_threads() {
+    let s = repo_scene("cornell-spheres.toml");
+    // 24 x 24 x 480 light paths: more than one batch of parallel jobs.
+    let on = |threads| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| render_reference(&s, 24, 480, 5, Caustics::LightTracing))
+    };
+    let (one, two) = (on(1), on(2));
+    assert!(one.stats.light_paths > 4096 * 64);
+    assert_eq!(one.layers, two.layers);
+    assert_eq!(one.stats.shadow_rays, two.stats.shadow_rays);
+}
