@@ -448,3 +448,92 @@ fn a_mirror_facing_no_diffuse_surface_is_not_modelled() {
     // The same mirror facing up is modelled (the scene of the closed-form test).
     assert!(decide(&mirror_scene([1.0; 3])).0);
 }
+
+#[test]
+fn per_pixel_caustics_replace_the_meshs_focused_light_once() {
+    // The hybrid shows the light the glass sphere focuses either from the element mesh
+    // (caustic_paths = 0) or per pixel by light tracing, with the mesh's focused part taken
+    // out where the camera sees it. Each counts it once: the image's and the caustic's mean
+    // agree. Per pixel the caustic is sharper, so closer to the reference there.
+    use twopass_trace::hybrid::hybrid;
+    use twopass_trace::{
+        Reference, ReferenceSettings, RenderProgress, RenderSettings, WhittedSettings, render,
+    };
+    let (s, _) = load(scene_path("cornell-spheres.toml")).unwrap();
+    let mut solver = Progressive::new(
+        &s,
+        coarse(
+            Some(SpecularTransfer {
+                rays: 1 << 18,
+                ..SpecularTransfer::default()
+            }),
+            1e-2,
+        ),
+    )
+    .unwrap();
+    run(&mut solver);
+    let solution = solver.solution();
+    let focused = solution.focused_caustics().expect("the solve separates it");
+    assert!(focused.iter().any(|f| f.max_element() > 0.0));
+    let camera = s.camera.with_resolution(Some(48), Some(48));
+    let settings = RenderSettings {
+        samples_per_pixel: 64,
+        seed: 9,
+        ..RenderSettings::default()
+    };
+    let image = |paths: f32| {
+        let h = hybrid(
+            &s,
+            &solution,
+            WhittedSettings {
+                caustic_paths: paths,
+                ..WhittedSettings::default()
+            },
+        );
+        let out = render(&s, &camera, &h, &settings, &RenderProgress::new());
+        assert_eq!(out.stats.light_paths > 0, paths > 0.0);
+        out.layers.composite()
+    };
+    let (mesh, per_pixel) = (image(0.0), image(4.0));
+    let reference = render(
+        &s,
+        &camera,
+        &Reference::new(&s, ReferenceSettings::default()),
+        &RenderSettings {
+            samples_per_pixel: 1024,
+            seed: 10,
+            ..RenderSettings::default()
+        },
+        &RenderProgress::new(),
+    )
+    .layers
+    .composite();
+    let whole = ((0.0, 1.0), (0.0, 1.0));
+    // The floor under and beside the glass sphere, where the focused light lands.
+    let caustic = (
+        (110.0 / 256.0, 200.0 / 256.0),
+        (205.0 / 256.0, 250.0 / 256.0),
+    );
+    for (name, (x, y), tolerance) in [("image", whole, 0.01), ("caustic", caustic, 0.04)] {
+        let (m, p) = (region_mean(&mesh, x, y), region_mean(&per_pixel, x, y));
+        let off = ((p - m).abs() / m).max_element();
+        assert!(off < tolerance, "{name}: mesh {m} vs per pixel {p}");
+    }
+    // Relative RMS difference from the reference over the caustic's pixels.
+    let error = |img: &twopass_trace::FilmImage| {
+        let (w, h) = (img.width as f32, img.height as f32);
+        let (mut num, mut den) = (0.0, 0.0);
+        for py in (caustic.1.0 * h) as u32..(caustic.1.1 * h) as u32 {
+            for px in (caustic.0.0 * w) as u32..(caustic.0.1 * w) as u32 {
+                let i = (py * img.width + px) as usize;
+                let (a, r) = (img.pixels[i].as_dvec3(), reference.pixels[i].as_dvec3());
+                num += (a - r).length_squared();
+                den += r.length_squared();
+            }
+        }
+        (num / den).sqrt()
+    };
+    let (e_mesh, e_pixel) = (error(&mesh), error(&per_pixel));
+    eprintln!("caustic region vs reference: mesh {e_mesh:.4}, per pixel {e_pixel:.4}");
+    assert!(e_pixel < e_mesh, "mesh {e_mesh} vs per pixel {e_pixel}");
+}

@@ -93,6 +93,7 @@ fn glass_slab_transmits_per_exact_fresnel() {
             max_depth: 32,
             min_throughput: 1e-9,
             shadow_grid: 1,
+            ..WhittedSettings::default()
         },
     );
     let out = render(&s, &s.camera, &w, &centres(), &RenderProgress::new());

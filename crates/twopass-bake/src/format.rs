@@ -14,7 +14,8 @@ use crate::error::{BakeError, BakeProblem};
 use crate::fingerprint::{Fingerprint, geometry_fingerprint, lighting_fingerprint};
 
 /// Version of the bake file layout written by [`encode_bake`]; readers refuse other versions.
-pub const BAKE_FORMAT_VERSION: u32 = 1;
+/// Version 2 added the focused caustic part ([`Solution::focused_caustics`]).
+pub const BAKE_FORMAT_VERSION: u32 = 2;
 
 const MAGIC: [u8; 8] = *b"\x89TPBAKE\n";
 const HEADER_LEN: usize = 24;
@@ -49,6 +50,8 @@ struct BakePayload {
     direct: Vec<[f32; 3]>,
     indirect: Vec<[f32; 3]>,
     ambient: Vec<[f32; 3]>,
+    /// Empty when the solve did not separate the focused caustics.
+    focused: Vec<[f32; 3]>,
 }
 
 fn rgb_records(values: &[Rgb]) -> Vec<[f32; 3]> {
@@ -89,6 +92,7 @@ pub fn encode_bake(solution: &Solution, scene: &Scene) -> Result<Vec<u8>, BakeEr
         direct: rgb_records(solution.direct()),
         indirect: rgb_records(solution.indirect()),
         ambient: rgb_records(solution.ambient()),
+        focused: rgb_records(solution.focused_caustics().unwrap_or_default()),
     };
     let body = postcard::to_stdvec(&payload).map_err(|e| BakeError::Encode {
         path: PathBuf::from("bake"),
@@ -225,13 +229,19 @@ pub fn decode_bake(bytes: &[u8], scene: &Scene) -> Result<Solution, BakeProblem>
         .collect();
     let mesh =
         ElementMesh::from_parts(vertices, nodes, p.roots, p.patches).map_err(BakeProblem::Mesh)?;
+    let focused = if p.focused.is_empty() {
+        Vec::new()
+    } else {
+        rgb_values("focused", p.focused, n)?
+    };
     Ok(Solution::new(
         mesh,
         rgb_values("radiosity", p.radiosity, n)?,
         rgb_values("direct", p.direct, n)?,
         rgb_values("indirect", p.indirect, n)?,
         rgb_values("ambient", p.ambient, n)?,
-    ))
+    )
+    .with_focused_caustics(focused))
 }
 
 /// Largest bake file read, bytes (4 GiB: far above the bake of

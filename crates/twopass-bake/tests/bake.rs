@@ -104,6 +104,47 @@ fn bake_file_round_trips_bit_for_bit() {
 }
 
 #[test]
+fn focused_caustics_round_trip_through_the_bake_file() {
+    // The spheres' solve separates the light focused through glass (format 2): it must load
+    // back bit for bit, and a solution without it must load back without it.
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell-spheres.toml");
+    let (scene, _) = twopass_scene::load(&path).unwrap();
+    let options = Options {
+        specular: Some(twopass_radiosity::SpecularTransfer {
+            rays: 1 << 14,
+            ..Default::default()
+        }),
+        ..coarse()
+    };
+    let mut solver = Solver::new(&scene, options).unwrap();
+    solver.run(|_| std::ops::ControlFlow::Continue(()));
+    let solution = solver.solution();
+    let focused = solution.focused_caustics().expect("separated");
+    assert!(focused.iter().any(|f| f.max_element() > 0.0));
+    let bytes = bake::encode_bake(&solution, &scene).unwrap();
+    let loaded = bake::decode_bake(&bytes, &scene).unwrap();
+    let bits = |v: &[twopass_brdf::Rgb]| {
+        v.iter()
+            .map(|c| c.to_array().map(f32::to_bits))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(
+        bits(loaded.focused_caustics().unwrap()),
+        bits(focused),
+        "focused part"
+    );
+    assert!(loaded.separates_focused_caustics());
+    let (box_scene, box_solution, _) = solved();
+    assert!(box_solution.focused_caustics().is_none());
+    let reloaded = bake::decode_bake(
+        &bake::encode_bake(box_solution, box_scene).unwrap(),
+        box_scene,
+    )
+    .unwrap();
+    assert!(reloaded.focused_caustics().is_none());
+}
+
+#[test]
 fn bake_file_is_written_atomically_and_read_back() {
     let (scene, solution, _) = solved();
     let dir = tempfile::tempdir().unwrap();

@@ -50,6 +50,9 @@ pub struct Progressive<'s> {
     /// surfaces (every deposit so far, splatted on the current mesh), W/m^2; and the area each
     /// vertex stands for, with its leaves ([`specular::VertexAreas`]). Empty without it.
     received_spec: Vec<DVec3>,
+    /// Per vertex, with the specular transfer: the part of `received_spec` that left an
+    /// emitter as emission and went through a refraction (the focused caustic), W/m^2.
+    received_focused: Vec<DVec3>,
     vertex_areas: specular::VertexAreas,
     /// A per-vertex buffer of zeros for the splats.
     scratch: Vec<DVec3>,
@@ -179,6 +182,7 @@ impl<'s> Progressive<'s> {
             received_emit: Vec::new(),
             received_refl: Vec::new(),
             specular,
+            received_focused: Vec::new(),
             received_spec: Vec::new(),
             vertex_areas: specular::VertexAreas::default(),
             scratch: Vec::new(),
@@ -220,14 +224,26 @@ impl<'s> Progressive<'s> {
         };
         self.vertex_areas = specular::VertexAreas::new(&self.mesh);
         self.received_spec = vec![DVec3::ZERO; self.mesh.vertices.len()];
+        self.received_focused = vec![DVec3::ZERO; self.mesh.vertices.len()];
         let all = specular::splat(
             &self.mesh,
             &self.vertex_areas,
             &mut spec.deposits,
             &mut self.scratch,
+            |d| d.power,
         );
         for (v, e) in all {
             self.received_spec[v as usize] = e;
+        }
+        let focused = specular::splat(
+            &self.mesh,
+            &self.vertex_areas,
+            &mut spec.deposits,
+            &mut self.scratch,
+            |d| d.focused,
+        );
+        for (v, e) in focused {
+            self.received_focused[v as usize] = e;
         }
     }
 
@@ -255,7 +271,7 @@ impl<'s> Progressive<'s> {
     /// traces its rays through the specular surfaces, splats what lands onto the vertices and
     /// hands the power to the receiving patches as unshot reflected radiosity, as the form
     /// factors' transfer does. Returns the power that arrived (W per channel).
-    fn shoot_specular(&mut self, p: usize, radiosity: DVec3) -> DVec3 {
+    fn shoot_specular(&mut self, p: usize, radiosity: DVec3, emitted: DVec3) -> DVec3 {
         let Some(spec) = &self.specular else {
             return DVec3::ZERO;
         };
@@ -270,6 +286,7 @@ impl<'s> Progressive<'s> {
             corners: self.mesh.corners(node),
             tri: self.mesh.nodes[node as usize].scene_triangle,
             radiosity,
+            emitted,
             area,
         };
         let (mut deposits, rays) = spec.shoot(self.scene, &shooter, n, key);
@@ -287,7 +304,18 @@ impl<'s> Progressive<'s> {
             &self.vertex_areas,
             &mut deposits,
             &mut self.scratch,
+            |d| d.power,
         );
+        let focused = specular::splat(
+            &self.mesh,
+            &self.vertex_areas,
+            &mut deposits,
+            &mut self.scratch,
+            |d| d.focused,
+        );
+        for (v, e) in focused {
+            self.received_focused[v as usize] += e;
+        }
         let mut gains: Vec<(u32, DVec3)> = Vec::new();
         for &(v, e) in &delta {
             self.received_spec[v as usize] += e;
@@ -495,7 +523,13 @@ impl<'s> Progressive<'s> {
             }
         }
         if self.specular.is_some() {
-            arrived += self.shoot_specular(p, de + dr);
+            let total = de + dr;
+            let emitted = DVec3::select(
+                total.cmpgt(DVec3::ZERO),
+                (de / total).clamp(DVec3::ZERO, DVec3::ONE),
+                DVec3::ZERO,
+            );
+            arrived += self.shoot_specular(p, total, emitted);
         }
         let shot = (de + dr) * area;
         self.energy.escaped += shot - arrived;
@@ -705,7 +739,7 @@ impl<'s> Progressive<'s> {
         let ambient = self.ambient();
         let n = self.mesh.vertices.len();
         let to32 = |v: DVec3| Vec3::new(v.x as f32, v.y as f32, v.z as f32);
-        Solution::new(
+        let solution = Solution::new(
             self.mesh.clone(),
             (0..n).map(|v| to32(self.radiosity(v))).collect(),
             (0..n)
@@ -715,7 +749,16 @@ impl<'s> Progressive<'s> {
                 .map(|v| to32(self.rho[v] * self.received_indirect(v)))
                 .collect(),
             (0..n).map(|v| to32(self.rho[v] * ambient)).collect(),
-        )
+        );
+        if self.specular.is_some() {
+            solution.with_focused_caustics(
+                (0..n)
+                    .map(|v| to32(self.rho[v] * self.received_focused[v]))
+                    .collect(),
+            )
+        } else {
+            solution
+        }
     }
 
     /// Checks of the solve's consistency: the energy balance, the form-factor row sums of up

@@ -19,6 +19,10 @@ pub struct Solution {
     indirect: Vec<Rgb>,
     /// The ambient estimate of what is not shot yet, times the reflectance.
     ambient: Vec<Rgb>,
+    /// The part of `indirect` that left an emitter as emission and reached the surface through
+    /// at least one refraction (the focused caustic, L S+ D with a refraction in S+); empty when
+    /// the solve did not separate it.
+    focused: Vec<Rgb>,
 }
 
 impl Solution {
@@ -41,7 +45,26 @@ impl Solution {
             direct,
             indirect,
             ambient,
+            focused: Vec::new(),
         }
+    }
+
+    /// The same solution with its focused caustic part per vertex, W/m^2 (the part of the
+    /// indirect light that left an emitter and reached the surface through a refraction: the
+    /// light a renderer may show per pixel instead, [`DiffuseRadiance::focused_caustic_radiance`]).
+    /// `focused` has one value per vertex, or none (the solve did not separate it).
+    pub fn with_focused_caustics(mut self, focused: Vec<Rgb>) -> Self {
+        assert!(
+            focused.is_empty() || focused.len() == self.mesh.vertices.len(),
+            "one value per vertex"
+        );
+        self.focused = focused;
+        self
+    }
+
+    /// The focused caustic part per vertex, W/m^2, when the solve separated it.
+    pub fn focused_caustics(&self) -> Option<&[Rgb]> {
+        (!self.focused.is_empty()).then_some(&self.focused[..])
     }
 
     /// The element mesh the values live on.
@@ -110,5 +133,16 @@ impl DiffuseRadiance for Solution {
             triangle,
             barycentric,
         ) * std::f32::consts::FRAC_1_PI
+    }
+
+    fn separates_focused_caustics(&self) -> bool {
+        !self.focused.is_empty()
+    }
+
+    fn focused_caustic_radiance(&self, triangle: u32, barycentric: [f32; 3]) -> Rgb {
+        if self.focused.is_empty() {
+            return Rgb::ZERO;
+        }
+        self.interpolate(|v| self.focused[v], triangle, barycentric) * std::f32::consts::FRAC_1_PI
     }
 }

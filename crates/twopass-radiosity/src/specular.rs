@@ -171,15 +171,21 @@ pub(crate) struct Deposit {
     pub node: u32,
     /// Power per channel, W (with areas in scene units).
     pub power: Vec3,
+    /// The part of `power` that left an emitter as emission and went through at least one
+    /// refraction: the focused caustic a renderer may show per pixel instead
+    /// ([`crate::Solution::focused_caustics`]), W per channel.
+    pub focused: Vec3,
 }
 
 /// A shooting patch: its triangle `corners` on scene triangle `tri` (light leaves its front),
-/// its unshot radiosity (W/m^2 per channel) and its area (scene units squared).
+/// its unshot radiosity (W/m^2 per channel), the fraction of it per channel that is emission
+/// (in [0, 1]) and its area (scene units squared).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Shooter {
     pub corners: [DVec3; 3],
     pub tri: u32,
     pub radiosity: DVec3,
+    pub emitted: DVec3,
     pub area: f64,
 }
 
@@ -232,6 +238,7 @@ impl Specular {
             corners,
             tri,
             radiosity,
+            emitted,
             area,
         } = *shooter;
         let k = f64::from(n).sqrt().round() as u32;
@@ -275,24 +282,26 @@ impl Specular {
                     return (None, 0);
                 }
                 let power = per_ray * (cos / std::f64::consts::PI / pdf);
-                self.follow(scene, &from, dir.as_vec3(), power, &mut rng)
+                self.follow(scene, &from, dir.as_vec3(), power, emitted, &mut rng)
             })
             .collect();
         let rays = results.iter().map(|r| r.1).sum();
         (results.into_iter().filter_map(|r| r.0).collect(), rays)
     }
 
-    /// Follows a ray leaving `from` in `dir` with `power` through the delta surfaces; returns
-    /// where it lands (after at least one specular bounce, on the front of a surface that takes
-    /// part) and the rays cast.
+    /// Follows a ray leaving `from` in `dir` with `power` (of which the fraction `emitted` per
+    /// channel is emission) through the delta surfaces; returns where it lands (after at least
+    /// one specular bounce, on the front of a surface that takes part) and the rays cast.
     fn follow(
         &self,
         scene: &Scene,
         from: &SurfacePoint,
         mut dir: Vec3,
         mut power: DVec3,
+        emitted: DVec3,
         rng: &mut SplitMix64,
     ) -> (Option<Deposit>, u64) {
+        let mut refracted = false;
         let mut rays = 1;
         let Some(mut hit) = scene.intersect_from(from, dir) else {
             return (None, rays);
@@ -315,6 +324,11 @@ impl Specular {
                         b: Vec2::new(hit.barycentric[1], hit.barycentric[2]),
                         node: u32::MAX,
                         power: p,
+                        focused: if refracted {
+                            (power * emitted).as_vec3()
+                        } else {
+                            Vec3::ZERO
+                        },
                     }),
                     rays,
                 );
@@ -328,6 +342,7 @@ impl Specular {
             let Some(sample) = lobe.sample_flux(wo, u) else {
                 return (None, rays);
             };
+            refracted |= sample.kind == twopass_brdf::SampleKind::SpecularTransmission;
             power *= sample.weight.as_dvec3();
             if power.max_element() <= 0.0 {
                 return (None, rays);
@@ -370,7 +385,8 @@ impl VertexAreas {
     }
 }
 
-/// The deposits' irradiance per vertex (W/m^2), sorted by vertex, each vertex once: each
+/// The deposits' irradiance per vertex (W/m^2) from the power `part` picks of each
+/// ([`Deposit::power`] or [`Deposit::focused`]), sorted by vertex, each vertex once: each
 /// deposit's power is shared among the three vertices of the element it lands in by its
 /// barycentric weights there, and divided by each vertex's area ([`VertexAreas`]), so the
 /// power the solver's bookkeeping sees arriving is exactly the power deposited. `scratch` is
@@ -381,12 +397,17 @@ pub(crate) fn splat(
     areas: &VertexAreas,
     deposits: &mut [Deposit],
     scratch: &mut Vec<DVec3>,
+    part: fn(&Deposit) -> Vec3,
 ) -> Vec<(u32, DVec3)> {
     if scratch.len() != mesh.vertices.len() {
         *scratch = vec![DVec3::ZERO; mesh.vertices.len()];
     }
     let mut touched: Vec<u32> = Vec::new();
     for d in deposits {
+        let power = part(d);
+        if power == Vec3::ZERO {
+            continue;
+        }
         let found = if d.node == u32::MAX {
             mesh.locate(d.triangle, d.b.x, d.b.y)
         } else {
@@ -403,7 +424,7 @@ pub(crate) fn splat(
         } else {
             [1.0 / 3.0; 3]
         };
-        let power = d.power.as_dvec3();
+        let power = power.as_dvec3();
         for (k, &v) in mesh.nodes[leaf as usize].vertices.iter().enumerate() {
             let a = areas.area[v as usize];
             let e = power * (w[k] / a);

@@ -16,4 +16,20 @@ pub trait DiffuseRadiance: Sync {
     /// direct light: none of what a shadow ray to an emitter finds). A renderer that computes
     /// direct light per pixel adds this to avoid counting the direct light twice.
     fn indirect_radiance(&self, triangle: u32, barycentric: [f32; 3]) -> Rgb;
+
+    /// Whether [`DiffuseRadiance::focused_caustic_radiance`] is known (the solution separated
+    /// it); `false` by default.
+    fn separates_focused_caustics(&self) -> bool {
+        false
+    }
+
+    /// The focused caustic part of [`DiffuseRadiance::radiance`] and of
+    /// [`DiffuseRadiance::indirect_radiance`], W/(m^2 sr): light that left an emitter and reached
+    /// the surface through at least one refraction (L S+ D with a refraction in S+), which an
+    /// element mesh shows blurred by the size of its elements; a renderer that shows it per pixel
+    /// (light tracing) subtracts this where it does. Zero unless
+    /// [`DiffuseRadiance::separates_focused_caustics`].
+    fn focused_caustic_radiance(&self, _triangle: u32, _barycentric: [f32; 3]) -> Rgb {
+        Rgb::ZERO
+    }
 }

@@ -26,9 +26,30 @@ pub enum DiffuseSource<'a> {
 }
 
 impl DiffuseSource<'_> {
+    /// Whether the source is a solution that separates its focused caustic part.
+    pub(crate) fn separates_focused_caustics(&self) -> bool {
+        match *self {
+            DiffuseSource::Ambient { .. } => false,
+            DiffuseSource::Radiosity(solution) | DiffuseSource::RadiosityIndirect(solution) => {
+                solution.separates_focused_caustics()
+            }
+        }
+    }
+
     /// Adds the emission and the diffuse light this source provides at `s` to `r`; returns
-    /// whether the direct diffuse light must still be added with shadow rays.
-    pub(crate) fn diffuse(&self, s: &Shading<'_>, r: &mut Radiance) -> bool {
+    /// whether the direct diffuse light must still be added with shadow rays. With
+    /// `without_focused`, the solution's focused caustic part is left out (a light tracing
+    /// pass shows it per pixel instead).
+    pub(crate) fn diffuse(&self, s: &Shading<'_>, without_focused: bool, r: &mut Radiance) -> bool {
+        // Leaves the focused part out of `l` when asked (never below zero).
+        let less_focused = |solution: &dyn DiffuseRadiance, l: Rgb| {
+            if without_focused {
+                let f = solution.focused_caustic_radiance(s.hit.point.triangle, s.hit.barycentric);
+                (l - f).max(Rgb::ZERO)
+            } else {
+                l
+            }
+        };
         match *self {
             DiffuseSource::Ambient { ambient } => {
                 r.add(Layer::Emission, s.emitted);
@@ -44,17 +65,16 @@ impl DiffuseSource<'_> {
                     let l = solution.radiance(s.hit.point.triangle, s.hit.barycentric);
                     let diffuse = (l - s.emitted).max(Rgb::ZERO);
                     r.add(Layer::Emission, l - diffuse);
-                    r.add(Layer::Diffuse, diffuse);
+                    r.add(Layer::Diffuse, less_focused(solution, diffuse));
                 }
                 false
             }
             DiffuseSource::RadiosityIndirect(solution) => {
                 r.add(Layer::Emission, s.emitted);
                 if s.hit.front_face {
-                    r.add(
-                        Layer::Diffuse,
-                        solution.indirect_radiance(s.hit.point.triangle, s.hit.barycentric),
-                    );
+                    let indirect =
+                        solution.indirect_radiance(s.hit.point.triangle, s.hit.barycentric);
+                    r.add(Layer::Diffuse, less_focused(solution, indirect));
                 }
                 true
             }

@@ -13,6 +13,15 @@
 //! terms exists, no shadow ray is traced and the hybrid computes exactly what radiosity alone does
 //! (the same floating-point operations: the images are bit-identical, and a test says so).
 //!
+//! **Per-pixel caustics.** Light that an emitter sends through glass onto a diffuse surface
+//! (L S+ D with a refraction) is focused more sharply than the element mesh can show. When the
+//! solution separates it ([`DiffuseRadiance::separates_focused_caustics`]) and the scene has a
+//! refracting surface, the hybrids show, where the camera sees a diffuse surface first, the
+//! solution without that part, and the render loop adds a light tracing pass of exactly those
+//! paths ([`crate::light_tracing::CausticScope::Focused`],
+//! [`WhittedSettings::caustic_paths`] light paths per camera sample): counted once, per pixel.
+//! Seen through a mirror or glass (deeper in the recursion) the solution is shown whole.
+//!
 //! The solution is read only through [`DiffuseRadiance`]; this crate does not depend on the
 //! solver.
 
@@ -20,6 +29,7 @@ use twopass_scene::{DiffuseRadiance, Scene};
 
 use crate::diffuse::DiffuseSource;
 use crate::integrator::Lights;
+use crate::light_tracing::{CausticScope, LightTracer, LightTracingSettings};
 use crate::whitted::{Whitted, WhittedSettings};
 
 /// Radiosity alone, for rendering `scene`: camera rays shaded with the solution (interpolated per
@@ -73,11 +83,39 @@ fn radiosity_based<'a>(
     settings: WhittedSettings,
     name: &'static str,
 ) -> Whitted<'a> {
+    // Per-pixel focused caustics: only where the view-dependent terms are traced, the solution
+    // separates that light, and the scene has a refracting surface to focus it.
+    let caustics = (view_dependent
+        && settings.caustic_paths > 0.0
+        && source.separates_focused_caustics()
+        && has_dielectric(scene))
+    .then(|| {
+        LightTracer::new(
+            scene,
+            LightTracingSettings {
+                paths_per_sample: settings.caustic_paths,
+                max_depth: settings.max_depth,
+                ..LightTracingSettings::new(CausticScope::Focused)
+            },
+        )
+    })
+    .flatten();
     Whitted {
         lights: Lights::new(scene),
         source,
         view_dependent,
         settings,
         name,
+        caustics,
     }
+}
+
+/// Whether some object of `scene` is a smooth dielectric (refracts light).
+fn has_dielectric(scene: &Scene) -> bool {
+    scene.objects.iter().any(|o| {
+        matches!(
+            scene.materials[o.material as usize].material.delta(),
+            Some(twopass_brdf::delta::DeltaLobe::Dielectric { .. })
+        )
+    })
 }

@@ -14,6 +14,7 @@
 //! | `max_depth` | bounces | 8 | delta bounces followed after the camera hit |
 //! | `min_throughput` | dimensionless | 1e-3 | a branch whose largest channel weight falls below is cut |
 //! | `shadow_grid` | samples per axis | 4 | shadow rays per emitter per shading point: grid^2 |
+//! | `caustic_paths` | light paths per camera sample | 1 | the hybrids' per-pixel focused caustics ([`crate::hybrid`]); 0: off |
 
 use twopass_brdf::Rgb;
 use twopass_scene::{Ray, Scene};
@@ -21,6 +22,7 @@ use twopass_scene::{Ray, Scene};
 use crate::diffuse::DiffuseSource;
 use crate::film::{Layer, Radiance};
 use crate::integrator::{Integrator, Lights, Shading, Tally, direct_light, trace_from};
+use crate::light_tracing::LightTracer;
 use crate::sampler::Sampler;
 
 /// Recursion and shadow-ray settings of the Whitted-family tracers.
@@ -34,6 +36,10 @@ pub struct WhittedSettings {
     /// Shadow rays per emitter and shading point along each axis of the stratification grid
     /// (`shadow_grid`^2 rays; at least 1).
     pub shadow_grid: u32,
+    /// Light paths per camera sample of the hybrids' per-pixel focused caustics (light through
+    /// glass, [`crate::light_tracing::CausticScope::Focused`]); 0 turns them off. Used only when
+    /// the scene has a refracting surface and the solution separates that light.
+    pub caustic_paths: f32,
 }
 
 impl Default for WhittedSettings {
@@ -42,6 +48,7 @@ impl Default for WhittedSettings {
             max_depth: 8,
             min_throughput: 1e-3,
             shadow_grid: 4,
+            caustic_paths: 1.0,
         }
     }
 }
@@ -58,6 +65,10 @@ pub struct Whitted<'a> {
     pub(crate) view_dependent: bool,
     pub(crate) settings: WhittedSettings,
     pub(crate) name: &'static str,
+    /// The per-pixel focused caustics (the hybrids only): the render loop adds this light
+    /// tracer's image, and the camera's first diffuse hit shows the solution without its
+    /// focused part.
+    pub(crate) caustics: Option<LightTracer>,
 }
 
 impl std::fmt::Debug for Whitted<'_> {
@@ -82,6 +93,7 @@ impl<'a> Whitted<'a> {
             view_dependent: true,
             settings,
             name: "whitted",
+            caustics: None,
         }
     }
 
@@ -108,7 +120,8 @@ impl<'a> Whitted<'a> {
 
         // Diffuse light (and emission) from the source; direct diffuse light by shadow rays
         // when the source asks for it, sharing the shadow rays with the glossy lobe.
-        let direct_diffuse = self.source.diffuse(s, &mut r);
+        let per_pixel_caustics = depth == 0 && self.caustics.is_some();
+        let direct_diffuse = self.source.diffuse(s, per_pixel_caustics, &mut r);
         let need_diffuse = direct_diffuse && m.reflects_diffusely();
         if s.hit.front_face && (need_diffuse || glossy) {
             let [d, g] = direct_light(
@@ -167,6 +180,10 @@ impl<'a> Whitted<'a> {
 impl Integrator for Whitted<'_> {
     fn name(&self) -> &'static str {
         self.name
+    }
+
+    fn light_tracer(&self) -> Option<&LightTracer> {
+        self.caustics.as_ref()
     }
 
     fn radiance(

@@ -150,6 +150,7 @@ pub fn run(args: &InfoArgs, ctx: &Context) -> Result<(), CliError> {
     say("diffuse pass", &info.plan.diffuse)?;
     say("specular pass", &info.plan.specular)?;
     say("specular transfer", &info.plan.specular_transfer)?;
+    say("caustics", &info.plan.caustics)?;
     if info.plan.diffuse.required {
         outln!(
             "radiosity         {}: {}",

@@ -25,6 +25,10 @@ pub struct Plan {
     /// faces diffuse surfaces that light it and that it lights, and the solver is progressive
     /// refinement.
     pub specular_transfer: Decision,
+    /// Per-pixel caustics in the hybrids (light traced through glass onto the diffuse surfaces
+    /// the camera sees, `twopass_trace::light_tracing`): needed when the specular transfer
+    /// runs and a dielectric is among the specular objects.
+    pub caustics: Decision,
     /// The radiosity solver `--solver auto` runs, and why.
     pub solver: SolverDecision,
 }
@@ -101,7 +105,8 @@ pub fn plan(scene: &Scene) -> Plan {
             (true, twopass_radiosity::Method::Hierarchical) => Decision {
                 required: false,
                 reason: format!(
-                    "{why}, but the hierarchical solver this scene's size picks does not carry                      light through them yet (`--solver progressive` does)"
+                    "{why}, but the hierarchical solver this scene's size picks does not carry \
+                     light through them yet (`--solver progressive` does)"
                 ),
             },
             (true, _) => Decision {
@@ -115,6 +120,37 @@ pub fn plan(scene: &Scene) -> Plan {
             reason: "no radiosity pass".into(),
         }
     };
+    let glass: Vec<&str> = used()
+        .filter(|(_, m)| {
+            matches!(
+                m.material.delta(),
+                Some(twopass_brdf::delta::DeltaLobe::Dielectric { .. })
+            )
+        })
+        .map(|(o, _)| o.name.as_str())
+        .collect();
+    let caustics = if !specular_transfer.required {
+        Decision {
+            required: false,
+            reason: "no light through mirrors and glass in the radiosity pass".into(),
+        }
+    } else if glass.is_empty() {
+        Decision {
+            required: false,
+            reason: "no refracting surface focuses light: the element mesh shows what mirrors \
+                     reflect"
+                .into(),
+        }
+    } else {
+        Decision {
+            required: true,
+            reason: format!(
+                "light focused through {} is light-traced per pixel by the hybrids instead of \
+                 shown blurred by the element mesh",
+                glass.join(", ")
+            ),
+        }
+    };
     let solver = SolverDecision {
         method: method.name().into(),
         reason,
@@ -123,6 +159,7 @@ pub fn plan(scene: &Scene) -> Plan {
         diffuse,
         specular,
         specular_transfer,
+        caustics,
         solver,
     }
 }

@@ -26,6 +26,7 @@ fn info_json_describes_the_cornell_box() {
         reason.contains("no mirror, conductor or dielectric"),
         "{reason}"
     );
+    assert_eq!(v["plan"]["caustics"]["required"], false);
     assert_eq!(v["emitters"].as_array().unwrap().len(), 1);
 }
 
@@ -47,6 +48,10 @@ fn specular_pass_is_planned_only_for_non_diffuse_materials() {
         reason.contains("mirror-sphere, glass-sphere face diffuse surfaces"),
         "{reason}"
     );
+    // The glass sphere focuses light: the hybrids show that caustic per pixel.
+    assert_eq!(v["plan"]["caustics"]["required"], true);
+    let reason = v["plan"]["caustics"]["reason"].as_str().unwrap();
+    assert!(reason.contains("focused through glass-sphere"), "{reason}");
 }
 
 #[test]
