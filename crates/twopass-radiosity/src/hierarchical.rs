@@ -28,6 +28,11 @@
 //! emitted power. Links are re-refined with the converged radiosities (BF refinement needs B)
 //! until no link needs it. The leaves are the element mesh: bisection with conforming
 //! neighbour splits keeps it free of cracks and T-vertices.
+//!
+//! Light through mirrors and glass ([`crate::specular`]): after every gather the leaves whose
+//! exitance changed since they last sent send that change through the specular surfaces
+//! (`shoot_specular`); what lands is splatted onto the vertices and joins the leaves'
+//! reflected light at the next gather.
 
 use std::f64::consts::PI;
 use std::ops::ControlFlow;
@@ -45,6 +50,7 @@ use crate::solver::{
     Energy, Finish, Method, Options, Residuals, SolveError, SolveProgress, check_common, luminance,
     participating,
 };
+use crate::specular::{self, Deposit, Shooter, Specular, SpecularTransfer};
 
 /// A link: light from `source` gathered at `receiver`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -383,6 +389,22 @@ pub struct HierarchicalSolver<'s> {
     refreshed: bool,
     max_links: usize,
     max_nodes: usize,
+    /// The specular transfer, when the scene needs it ([`specular::decide`]): light the
+    /// leaves send through mirrors and glass, deposited on the vertices it lands near.
+    specular: Option<Specular>,
+    /// Per vertex, with the specular transfer: irradiance from every deposit so far, and the
+    /// part of it that left an emitter and went through a refraction (W/m^2); the vertices'
+    /// areas. Empty without it.
+    spec_in: Vec<DVec3>,
+    spec_focused: Vec<DVec3>,
+    vertex_areas: specular::VertexAreas,
+    scratch: Vec<DVec3>,
+    /// Per surface node, with the specular transfer: the exitance (emitted, reflected) already
+    /// sent through the specular surfaces, W/m^2; `None` for nodes split off since (they have
+    /// their parent's).
+    spec_sent: Vec<Option<[DVec3; 2]>>,
+    /// The mesh changed since the deposits were last splatted onto it.
+    spec_stale: bool,
     started: Instant,
     meshing: Duration,
     refining: Duration,
@@ -524,6 +546,15 @@ impl<'s> HierarchicalSolver<'s> {
             refreshed: false,
             max_links: (spare / 2 / BYTES_PER_LINK) as usize,
             max_nodes: (spare / 2 / BYTES_PER_NODE) as usize,
+            specular: options
+                .specular
+                .and_then(|settings| Specular::new(scene, settings, &takes_part)),
+            spec_in: Vec::new(),
+            spec_focused: Vec::new(),
+            vertex_areas: specular::VertexAreas::default(),
+            scratch: Vec::new(),
+            spec_sent: Vec::new(),
+            spec_stale: false,
             options,
             started,
             meshing: Duration::ZERO,
@@ -637,6 +668,184 @@ impl<'s> HierarchicalSolver<'s> {
         self.cluster_exitance.resize(c, [DVec3::ZERO; 2]);
         self.radiant.resize(c, EMPTY);
         self.cluster_spread.resize(c, 0.0);
+        if self.specular.is_some() {
+            self.spec_sent.resize(n, None);
+            self.spec_stale = true;
+        }
+    }
+
+    /// With the specular transfer: the vertex areas of the current mesh, and every deposit so
+    /// far splatted onto it (after a refinement the deposits land on the finer leaves).
+    fn resplat(&mut self) {
+        self.spec_stale = false;
+        let Some(spec) = &mut self.specular else {
+            return;
+        };
+        self.vertex_areas = specular::VertexAreas::new(&self.mesh);
+        let nv = self.mesh.vertices.len();
+        self.spec_in = vec![DVec3::ZERO; nv];
+        self.spec_focused = vec![DVec3::ZERO; nv];
+        for (v, e) in specular::splat(
+            &self.mesh,
+            &self.vertex_areas,
+            &mut spec.deposits,
+            &mut self.scratch,
+            |d| d.power,
+        ) {
+            self.spec_in[v as usize] = e;
+        }
+        for (v, e) in specular::splat(
+            &self.mesh,
+            &self.vertex_areas,
+            &mut spec.deposits,
+            &mut self.scratch,
+            |d| d.focused,
+        ) {
+            self.spec_focused[v as usize] = e;
+        }
+    }
+
+    /// With the specular transfer: sends what the leaves' exitance grew by since they last
+    /// sent through the specular surfaces. The rays of a shot of the whole emitted power
+    /// ([`SpecularTransfer::rays`]) are spread over the leaves in proportion to that growth
+    /// (luminance of its magnitude) by systematic sampling, every ray carrying the same share,
+    /// so the transfer is unbiased whatever the leaf count; changes totalling under a tenth of
+    /// the stop's unshot fraction of the emitted power wait for the next gather. A decrease
+    /// (a re-refinement moves light between leaves, a split leaf's darker child) is sent as
+    /// negative power, so what has been sent always equals the exitance. The deposits are
+    /// splatted onto the vertices as irradiance, which the next gather adds to the leaves'
+    /// reflected light.
+    fn shoot_specular(&mut self) {
+        let Some(spec) = &self.specular else {
+            return;
+        };
+        let leaves: Vec<u32> = self.mesh.leaves().collect();
+        let grown: Vec<(u32, [DVec3; 2], f64)> = leaves
+            .iter()
+            .map(|&n| {
+                let sent = self.spec_sent_or_parent(n);
+                let [e, r] = self.exitance[n as usize];
+                let d = [e - sent[0], r - sent[1]];
+                let p =
+                    luminance((d[0] + d[1]).abs()) * f64::from(self.mesh.nodes[n as usize].area);
+                (n, d, p)
+            })
+            .collect();
+        let total: f64 = grown.iter().map(|g| g.2).sum();
+        let emitted = luminance(self.emitted).max(f64::MIN_POSITIVE);
+        if total.is_nan() || total <= 0.1 * self.options.stop.unshot_fraction * emitted {
+            return;
+        }
+        let rays = (f64::from(spec.settings().rays) * total / emitted)
+            .ceil()
+            .clamp(1.0, f64::from(SpecularTransfer::MAX_RAYS) * 16.0) as u64;
+        // Systematic sampling: ray j sits at (j + u) / rays of the cumulative growth.
+        let key = hash(self.options.seed ^ hash(0x5bec_4e00_0000_0000 ^ self.iterations));
+        let u = unit(key);
+        let mut shots: Vec<(u32, [DVec3; 2], u32)> = Vec::new();
+        let mut acc = 0.0;
+        for &(n, d, p) in &grown {
+            if p <= 0.0 {
+                continue;
+            }
+            let lo = acc / total * rays as f64;
+            acc += p;
+            let hi = acc / total * rays as f64;
+            let count = ((hi - u).ceil() - (lo - u).ceil()).max(0.0) as u32;
+            if count > 0 {
+                shots.push((n, d, count));
+            }
+        }
+        let per_power = total / rays as f64;
+        let results: Vec<(Vec<Deposit>, u64)> = shots
+            .par_iter()
+            .map(|&(n, d, count)| {
+                let node = &self.mesh.nodes[n as usize];
+                let area = f64::from(node.area);
+                let total = d[0] + d[1];
+                let p = luminance(total.abs()) * area;
+                // Each ray carries the same luminance, per_power: the shot's radiosity is the
+                // change's magnitude scaled so that B A / count = |d| A per_power / p; the
+                // deposits take the change's sign per channel afterwards.
+                let scale = f64::from(count) * per_power / p;
+                let emitted = DVec3::select(
+                    total.cmpne(DVec3::ZERO),
+                    (d[0] / total).clamp(DVec3::ZERO, DVec3::ONE),
+                    DVec3::ZERO,
+                );
+                let shooter = Shooter {
+                    corners: self.mesh.corners(n),
+                    tri: node.scene_triangle,
+                    radiosity: total.abs() * scale,
+                    emitted,
+                    area,
+                };
+                let sign =
+                    DVec3::select(total.cmplt(DVec3::ZERO), -DVec3::ONE, DVec3::ONE).as_vec3();
+                let (mut deposits, rays) =
+                    spec.shoot(self.scene, &shooter, count, hash(key ^ u64::from(n)));
+                if sign != Vec3::ONE {
+                    for d in &mut deposits {
+                        d.power *= sign;
+                        d.focused *= sign;
+                    }
+                }
+                (deposits, rays)
+            })
+            .collect();
+        let mut deposits: Vec<Deposit> = Vec::new();
+        let mut cast = 0;
+        for (d, r) in results {
+            deposits.extend(d);
+            cast += r;
+        }
+        for &(n, d, _) in &grown {
+            let sent = self.spec_sent_or_parent(n);
+            self.spec_sent[n as usize] = Some([sent[0] + d[0], sent[1] + d[1]]);
+        }
+        self.rays += cast;
+        for (v, e) in specular::splat(
+            &self.mesh,
+            &self.vertex_areas,
+            &mut deposits,
+            &mut self.scratch,
+            |d| d.power,
+        ) {
+            self.spec_in[v as usize] += e;
+        }
+        for (v, e) in specular::splat(
+            &self.mesh,
+            &self.vertex_areas,
+            &mut deposits,
+            &mut self.scratch,
+            |d| d.focused,
+        ) {
+            self.spec_focused[v as usize] += e;
+        }
+        if let Some(spec) = &mut self.specular {
+            spec.rays += cast;
+            spec.deposits.extend(deposits);
+        }
+    }
+
+    /// The exitance surface node `n` has sent through the specular surfaces: its own record,
+    /// else its deepest ancestor's.
+    fn spec_sent_or_parent(&self, n: u32) -> [DVec3; 2] {
+        match self.spec_sent[n as usize] {
+            Some(s) => s,
+            None => self
+                .path_to(n)
+                .iter()
+                .rev()
+                .find_map(|&a| self.spec_sent[a as usize])
+                .unwrap_or([DVec3::ZERO; 2]),
+        }
+    }
+
+    /// With the specular transfer: rays it cast and deposits it made so far; `None` when the
+    /// scene does not need it ([`specular::decide`]) or the options turned it off.
+    pub fn specular_transfer(&self) -> Option<(u64, usize)> {
+        self.specular.as_ref().map(|s| (s.rays, s.deposits.len()))
     }
 
     /// The links node `r` receives (they are sorted by receiver).
@@ -1505,9 +1714,13 @@ impl<'s> HierarchicalSolver<'s> {
                 }
             }
         }
+        if self.spec_stale {
+            self.resplat();
+        }
         let before = self.leaf_power();
         self.push_pull();
         let after = self.leaf_power();
+        self.shoot_specular();
         // Energy: what the sources sent (their exitance before this gather) against what
         // arrived, was absorbed, and is reflected but not yet passed on.
         let (mut arrived, mut absorbed) = (DVec3::ZERO, DVec3::ZERO);
@@ -1618,6 +1831,14 @@ impl<'s> HierarchicalSolver<'s> {
         let (power, range) = match node.children {
             None => {
                 let t = node.scene_triangle as usize;
+                // What arrived through mirrors and glass, per vertex: reflected light (vertices
+                // made since the last splat get theirs at the next gather).
+                let mut here = here;
+                for (k, &v) in node.vertices.iter().enumerate() {
+                    if let Some(e) = self.spec_in.get(v as usize) {
+                        here[1][k] += *e;
+                    }
+                }
                 // The light the leaf gets: its corners' linear interpolant plus the shifts of
                 // the links above it (see `Link::shift`).
                 let mean = |o: usize| (here[o][0] + here[o][1] + here[o][2]) / 3.0 + here[o][3];
@@ -1898,7 +2119,37 @@ impl<'s> HierarchicalSolver<'s> {
             indirect.push(to_f32(i));
             amb.push(to_f32(rho * ambient));
         }
-        Solution::new(self.mesh.clone(), radiosity, direct, indirect, amb)
+        let solution = Solution::new(self.mesh.clone(), radiosity, direct, indirect, amb);
+        if let Some(spec) = &self.specular {
+            // Splatted afresh when the mesh changed since the last gather.
+            let fresh;
+            let per_vertex = if self.spec_stale {
+                let areas = specular::VertexAreas::new(&self.mesh);
+                let mut deposits = spec.deposits.clone();
+                let mut values = vec![DVec3::ZERO; nv];
+                for (v, e) in
+                    specular::splat(&self.mesh, &areas, &mut deposits, &mut Vec::new(), |d| {
+                        d.focused
+                    })
+                {
+                    values[v as usize] = e;
+                }
+                fresh = values;
+                &fresh
+            } else {
+                &self.spec_focused
+            };
+            let focused = self
+                .mesh
+                .vertices
+                .iter()
+                .zip(per_vertex)
+                .map(|(vert, &f)| to_f32(self.tri_rho[vert.triangle as usize] * f))
+                .collect();
+            solution.with_focused_caustics(focused)
+        } else {
+            solution
+        }
     }
 
     /// Consistency checks, their cost bounded by `samples`: the energy balance; the row sums

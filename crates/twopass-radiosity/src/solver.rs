@@ -95,9 +95,8 @@ pub struct Options {
     /// to need more is refused before it is built ([`SolveError::TooLarge`]), and the
     /// hierarchical solver stops refining links when it reaches it.
     pub memory_limit: u64,
-    /// Light carried through mirrors and glass onto diffuse surfaces (progressive refinement
-    /// only; the hierarchical solver does not do it yet), or `None` to treat specular objects
-    /// as absorbers. It runs only where [`crate::specular::decide`] says the scene needs it.
+    /// Light carried through mirrors and glass onto diffuse surfaces (both solvers), or `None`
+    /// to treat specular objects as absorbers. It runs only where [`crate::specular::decide`] says the scene needs it.
     pub specular: Option<SpecularTransfer>,
 }
 

@@ -35,7 +35,9 @@ use crate::element::ElementMesh;
 /// Settings of the specular transfer ([`crate::Options::specular`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct SpecularTransfer {
-    /// Rays a shot of the whole emitted power casts toward the specular objects; a shot of a
+    /// Rays a shot of the whole emitted power casts toward the specular objects (progressive
+    /// refinement; the hierarchical solver spreads as many over the leaves whose exitance grew
+    /// since it last shot, in proportion to that growth); a shot of a
     /// fraction of it casts that fraction (at least [`SpecularTransfer::MIN_RAYS`]), so every
     /// ray carries about the same power. Rounded up to a square number per shot.
     pub rays: u32,
@@ -219,6 +221,11 @@ impl Specular {
         })
     }
 
+    /// The settings.
+    pub fn settings(&self) -> SpecularTransfer {
+        self.settings
+    }
+
     /// Rays for a shot of `power` (luminance) when the whole emitted power is `emitted`.
     pub fn rays_for(&self, power: f64, emitted: f64) -> u32 {
         let n = f64::from(self.settings.rays) * power / emitted.max(f64::MIN_POSITIVE);
@@ -230,8 +237,8 @@ impl Specular {
         k * k
     }
 
-    /// Traces the specular paths of one shot of `shooter` with `n` rays (a square), random
-    /// stream keyed by `key`. Returns the deposits in ray order and the rays cast. Parallel
+    /// Traces the specular paths of one shot of `shooter` with `n` rays (the first
+    /// floor(sqrt(n))^2 stratified, the rest uniform), random stream keyed by `key`. Returns the deposits in ray order and the rays cast. Parallel
     /// over rays; the result does not depend on scheduling.
     pub fn shoot(&self, scene: &Scene, shooter: &Shooter, n: u32, key: u64) -> (Vec<Deposit>, u64) {
         let Shooter {
@@ -241,12 +248,12 @@ impl Specular {
             emitted,
             area,
         } = *shooter;
-        let k = f64::from(n).sqrt().round() as u32;
-        let n = k * k;
+        // The first k^2 rays are stratified, the rest (when n is not a square) uniform.
+        let k = n.isqrt();
         // Direction strata paired with point strata through a shuffle (Fisher-Yates).
-        let mut pairing: Vec<u32> = (0..n).collect();
+        let mut pairing: Vec<u32> = (0..k * k).collect();
         let mut rng = SplitMix64::new(hash(key ^ 0x5eec_5eec));
-        for i in (1..n as usize).rev() {
+        for i in (1..(k * k) as usize).rev() {
             let j = (rng.next_u64() % (i as u64 + 1)) as usize;
             pairing.swap(i, j);
         }
@@ -259,12 +266,21 @@ impl Specular {
             .with_min_len(64)
             .map(|i| {
                 let mut rng = SplitMix64::new(hash(key ^ u64::from(i)));
-                let up = stratum(i, k, Vec2::new(rng.next_f32(), rng.next_f32()));
-                let ud = stratum(
-                    pairing[i as usize],
-                    k,
-                    Vec2::new(rng.next_f32(), rng.next_f32()),
-                );
+                let (up, ud) = if i < k * k {
+                    (
+                        stratum(i, k, Vec2::new(rng.next_f32(), rng.next_f32())),
+                        stratum(
+                            pairing[i as usize],
+                            k,
+                            Vec2::new(rng.next_f32(), rng.next_f32()),
+                        ),
+                    )
+                } else {
+                    (
+                        Vec2::new(rng.next_f32(), rng.next_f32()),
+                        Vec2::new(rng.next_f32(), rng.next_f32()),
+                    )
+                };
                 // Uniform point on the patch (triangle-square warp).
                 let s = f64::from(up.x).sqrt();
                 let (b1, b2) = (s * (1.0 - f64::from(up.y)), s * f64::from(up.y));
@@ -428,7 +444,9 @@ pub(crate) fn splat(
         for (k, &v) in mesh.nodes[leaf as usize].vertices.iter().enumerate() {
             let a = areas.area[v as usize];
             let e = power * (w[k] / a);
-            // Powers are never negative: a vertex's sum, once not zero, stays so.
+            // A vertex is listed when its sum leaves zero; signed powers (the hierarchical
+            // solver sends decreases) may bring it back to zero and list it again (deduplicated
+            // below).
             if a > 0.0 && e != DVec3::ZERO {
                 if scratch[v as usize] == DVec3::ZERO {
                     touched.push(v);
@@ -438,6 +456,7 @@ pub(crate) fn splat(
         }
     }
     touched.sort_unstable();
+    touched.dedup();
     touched
         .into_iter()
         .map(|v| (v, std::mem::take(&mut scratch[v as usize])))

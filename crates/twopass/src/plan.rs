@@ -22,8 +22,7 @@ pub struct Plan {
     pub specular: Decision,
     /// Specular transfer in the radiosity pass (light through mirrors and glass onto diffuse
     /// surfaces, `twopass_radiosity::specular`): needed when a mirror, conductor or dielectric
-    /// faces diffuse surfaces that light it and that it lights, and the solver is progressive
-    /// refinement.
+    /// faces diffuse surfaces that light it and that it lights (both solvers carry it).
     pub specular_transfer: Decision,
     /// Per-pixel caustics in the hybrids (light traced through glass onto the diffuse surfaces
     /// the camera sees, `twopass_trace::light_tracing`): needed when the specular transfer
@@ -97,22 +96,9 @@ pub fn plan(scene: &Scene) -> Plan {
     let (method, reason) = twopass_radiosity::Method::Auto.choose(scene);
     let specular_transfer = if diffuse.required {
         let (needed, why) = twopass_radiosity::specular::decide(scene);
-        match (needed, method) {
-            (false, _) => Decision {
-                required: false,
-                reason: why,
-            },
-            (true, twopass_radiosity::Method::Hierarchical) => Decision {
-                required: false,
-                reason: format!(
-                    "{why}, but the hierarchical solver this scene's size picks does not carry \
-                     light through them yet (`--solver progressive` does)"
-                ),
-            },
-            (true, _) => Decision {
-                required: true,
-                reason: why,
-            },
+        Decision {
+            required: needed,
+            reason: why,
         }
     } else {
         Decision {

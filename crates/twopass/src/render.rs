@@ -153,14 +153,7 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
     }
     if method.needs_radiosity() && args.bake.is_none() {
         let (needed, _) = twopass_radiosity::specular::decide(&scene);
-        let (solver, _) = solve.solver.method().choose(&scene);
-        if needed && solver == twopass_radiosity::Method::Hierarchical {
-            skipped.push(
-                "specular transfer skipped: the hierarchical solver does not carry light \
-                 through mirrors and glass yet (`--solver progressive` does)"
-                    .into(),
-            );
-        } else if needed && solve.specular_rays == 0 {
+        if needed && solve.specular_rays == 0 {
             skipped.push(
                 "specular transfer skipped: --specular-rays 0 (mirrors and glass absorb in the \
                  radiosity pass)"
