@@ -77,8 +77,9 @@ fn mirror_scene(r: [f64; 3]) -> Scene {
 
 /// Irradiance at `x` on the receiver (normal -y) from the emitter's mirror image (the emitter
 /// reflected in y = 0: the plane y = -1, facing up), per unit reflectance: pi L_e F, with the
-/// exact point-to-polygon form factor.
-fn through_mirror(x: DVec3) -> f64 {
+/// exact point-to-polygon form factor (shared with the light tracing tests, whose mirror scene
+/// has the same mirror and emitter).
+pub fn through_mirror(x: DVec3) -> f64 {
     let image = [
         DVec3::new(-1.6, -1.0, -0.1),
         DVec3::new(-1.4, -1.0, -0.1),
@@ -219,6 +220,18 @@ fn mirror_furnace(rho: f64) -> Scene {
         .0
 }
 
+/// The mirror furnace's solve: to an unshot fraction of 1e-5, with the transfer `specular`.
+fn furnace_options(specular: Option<SpecularTransfer>) -> Options {
+    Options {
+        stop: Stop {
+            unshot_fraction: 1e-5,
+            ..Stop::default()
+        },
+        specular,
+        ..Options::default()
+    }
+}
+
 #[test]
 fn furnace_with_a_perfect_mirror_wall_stays_uniform() {
     // In a closed room whose diffuse walls all emit E and reflect rho, a lossless mirror wall
@@ -235,12 +248,7 @@ fn furnace_with_a_perfect_mirror_wall_stays_uniform() {
             patch_size: Some(1.0),
             element_size: Some(0.25),
             adaptive: None,
-            stop: Stop {
-                unshot_fraction: 1e-5,
-                ..Stop::default()
-            },
-            specular,
-            ..Options::default()
+            ..furnace_options(specular)
         };
         let mut solver = Progressive::new(&s, options).unwrap();
         run(&mut solver);
@@ -568,12 +576,7 @@ fn hierarchical_solver_carries_light_through_a_mirror_in_the_furnace() {
     let solve = |specular| {
         let options = Options {
             method: Method::Hierarchical,
-            stop: Stop {
-                unshot_fraction: 1e-5,
-                ..Stop::default()
-            },
-            specular,
-            ..Options::default()
+            ..furnace_options(specular)
         };
         let mut solver = HierarchicalSolver::new(&s, options).unwrap();
         solver.run(|_| std::ops::ControlFlow::Continue(()));

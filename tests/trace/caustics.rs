@@ -7,7 +7,6 @@
 use std::f64::consts::PI;
 
 use glam::{DVec3, Vec2};
-use twopass_radiosity::form_factor::point_to_polygon;
 use twopass_scene::Scene;
 use twopass_trace::{
     CausticScope, Caustics, FilmImage, LightTracer, LightTracingSettings, Reference,
@@ -15,6 +14,7 @@ use twopass_trace::{
 };
 
 use super::common::{repo_scene, scene};
+use crate::specular::through_mirror;
 
 /// A flat mirror of reflectance `r` in y = 0 (x in [-1.2, 0], facing up), a small emitter
 /// (0.2 x 0.2, L_e = 1, black) and a grey receiver (rho = 0.5, 0.4 x 0.4) side by side in the
@@ -34,19 +34,6 @@ fn mirror_scene() -> Scene {
          [[object]]\nname = \"receiver\"\nmaterial = \"grey\"\n\
          shape = { type = \"quad\", origin = [0.3, 1, -0.2], edge_u = [0.4, 0, 0], edge_v = [0, 0, 0.4] }\n",
     )
-}
-
-/// Irradiance at `x` on the receiver (normal -y) from the emitter's mirror image (the plane
-/// y = -1, facing up), per unit reflectance: pi L_e F with the exact point-to-polygon form
-/// factor.
-fn through_mirror(x: DVec3) -> f64 {
-    let image = [
-        DVec3::new(-1.6, -1.0, -0.1),
-        DVec3::new(-1.4, -1.0, -0.1),
-        DVec3::new(-1.4, -1.0, 0.1),
-        DVec3::new(-1.6, -1.0, 0.1),
-    ];
-    PI * point_to_polygon(x, -DVec3::Y, &image, Some(DVec3::Y))
 }
 
 fn render_reference(

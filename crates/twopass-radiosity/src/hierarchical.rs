@@ -685,24 +685,27 @@ impl<'s> HierarchicalSolver<'s> {
         let nv = self.mesh.vertices.len();
         self.spec_in = vec![DVec3::ZERO; nv];
         self.spec_focused = vec![DVec3::ZERO; nv];
-        for (v, e) in specular::splat(
+        Self::splat_both(
             &self.mesh,
             &self.vertex_areas,
             &mut spec.deposits,
             &mut self.scratch,
-            |d| d.power,
-        ) {
-            self.spec_in[v as usize] = e;
-        }
-        for (v, e) in specular::splat(
-            &self.mesh,
-            &self.vertex_areas,
-            &mut spec.deposits,
-            &mut self.scratch,
-            |d| d.focused,
-        ) {
-            self.spec_focused[v as usize] = e;
-        }
+            [&mut self.spec_in, &mut self.spec_focused],
+        );
+    }
+
+    /// Splats `deposits`' whole power and their focused part onto the vertices, adding them to
+    /// `into` (whole, focused).
+    fn splat_both(
+        mesh: &ElementMesh,
+        areas: &specular::VertexAreas,
+        deposits: &mut [Deposit],
+        scratch: &mut Vec<DVec3>,
+        into: [&mut Vec<DVec3>; 2],
+    ) {
+        let [whole, focused] = into;
+        specular::splat_add(mesh, areas, deposits, scratch, specular::power, whole);
+        specular::splat_add(mesh, areas, deposits, scratch, specular::focused, focused);
     }
 
     /// With the specular transfer: sends what the leaves' exitance grew by since they last
@@ -804,24 +807,13 @@ impl<'s> HierarchicalSolver<'s> {
             self.spec_sent[n as usize] = Some([sent[0] + d[0], sent[1] + d[1]]);
         }
         self.rays += cast;
-        for (v, e) in specular::splat(
+        Self::splat_both(
             &self.mesh,
             &self.vertex_areas,
             &mut deposits,
             &mut self.scratch,
-            |d| d.power,
-        ) {
-            self.spec_in[v as usize] += e;
-        }
-        for (v, e) in specular::splat(
-            &self.mesh,
-            &self.vertex_areas,
-            &mut deposits,
-            &mut self.scratch,
-            |d| d.focused,
-        ) {
-            self.spec_focused[v as usize] += e;
-        }
+            [&mut self.spec_in, &mut self.spec_focused],
+        );
         if let Some(spec) = &mut self.specular {
             spec.rays += cast;
             spec.deposits.extend(deposits);

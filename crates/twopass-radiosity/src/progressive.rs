@@ -18,7 +18,7 @@ use crate::solver::{
     Adaptive, Energy, Finish, Options, Residuals, SolveError, SolveProgress, check_common,
     luminance, participating,
 };
-use crate::specular::{self, Specular};
+use crate::specular::{self, Deposit, Specular, focused, power};
 
 /// Most patches or elements a solve meshes before adaptive subdivision (about 2 GB of mesh,
 /// form-factor rows and radiosities); smaller patch or element sizes are refused up front.
@@ -225,25 +225,19 @@ impl<'s> Progressive<'s> {
         self.vertex_areas = specular::VertexAreas::new(&self.mesh);
         self.received_spec = vec![DVec3::ZERO; self.mesh.vertices.len()];
         self.received_focused = vec![DVec3::ZERO; self.mesh.vertices.len()];
-        let all = specular::splat(
-            &self.mesh,
-            &self.vertex_areas,
-            &mut spec.deposits,
-            &mut self.scratch,
-            |d| d.power,
-        );
-        for (v, e) in all {
-            self.received_spec[v as usize] = e;
-        }
-        let focused = specular::splat(
-            &self.mesh,
-            &self.vertex_areas,
-            &mut spec.deposits,
-            &mut self.scratch,
-            |d| d.focused,
-        );
-        for (v, e) in focused {
-            self.received_focused[v as usize] = e;
+        for (part, into) in [
+            (power as fn(&Deposit) -> Vec3, &mut self.received_spec),
+            (focused, &mut self.received_focused),
+        ] {
+            let (mesh, areas) = (&self.mesh, &self.vertex_areas);
+            specular::splat_add(
+                mesh,
+                areas,
+                &mut spec.deposits,
+                &mut self.scratch,
+                part,
+                into,
+            );
         }
     }
 
@@ -306,16 +300,14 @@ impl<'s> Progressive<'s> {
             &mut self.scratch,
             |d| d.power,
         );
-        let focused = specular::splat(
+        specular::splat_add(
             &self.mesh,
             &self.vertex_areas,
             &mut deposits,
             &mut self.scratch,
-            |d| d.focused,
+            focused,
+            &mut self.received_focused,
         );
-        for (v, e) in focused {
-            self.received_focused[v as usize] += e;
-        }
         let mut gains: Vec<(u32, DVec3)> = Vec::new();
         for &(v, e) in &delta {
             self.received_spec[v as usize] += e;

@@ -401,6 +401,30 @@ impl VertexAreas {
     }
 }
 
+/// A deposit's whole power (a `part` for [`splat`]).
+pub(crate) fn power(d: &Deposit) -> Vec3 {
+    d.power
+}
+
+/// A deposit's focused part (a `part` for [`splat`]).
+pub(crate) fn focused(d: &Deposit) -> Vec3 {
+    d.focused
+}
+
+/// [`splat`] of the power `part` picks, added into the per-vertex irradiance `into` (W/m^2).
+pub(crate) fn splat_add(
+    mesh: &ElementMesh,
+    areas: &VertexAreas,
+    deposits: &mut [Deposit],
+    scratch: &mut Vec<DVec3>,
+    part: fn(&Deposit) -> Vec3,
+    into: &mut [DVec3],
+) {
+    for (v, e) in splat(mesh, areas, deposits, scratch, part) {
+        into[v as usize] += e;
+    }
+}
+
 /// The deposits' irradiance per vertex (W/m^2) from the power `part` picks of each
 /// ([`Deposit::power`] or [`Deposit::focused`]), sorted by vertex, each vertex once: each
 /// deposit's power is shared among the three vertices of the element it lands in by its
