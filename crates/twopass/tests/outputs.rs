@@ -79,12 +79,7 @@ fn the_manifest_seals_the_bake_set() {
     std::fs::remove_file(&ply).unwrap();
     std::fs::create_dir(&ply).unwrap(); // the .ply cannot be renamed into place now
     let out = bake(&dir, &[]);
-    assert_eq!(
-        out.status.code(),
-        Some(1),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_exit(&out, 1);
     assert!(
         !manifest_path.exists(),
         "the old manifest must not survive beside a partial new set"

@@ -30,15 +30,21 @@ pub fn render_box(method: &str, width: u32, spp: u32, extra: &[&str]) -> Output 
     twopass(&[&args[..], &["--width", &width, "--spp", &spp], extra].concat())
 }
 
-/// Asserts that `out` is a successful run (exit code 0), showing its stderr when it is not.
+/// Asserts that `out` exited with `code`, showing its stderr when it did not.
 #[track_caller]
-pub fn assert_ok(out: &Output) {
+pub fn assert_exit(out: &Output, code: i32) {
     assert_eq!(
         out.status.code(),
-        Some(0),
+        Some(code),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+}
+
+/// Asserts that `out` is a successful run (exit code 0), showing its stderr when it is not.
+#[track_caller]
+pub fn assert_ok(out: &Output) {
+    assert_exit(out, 0);
 }
 
 /// Asserts that `out` succeeded and parses its standard output as the JSON summary.
@@ -46,6 +52,16 @@ pub fn assert_ok(out: &Output) {
 pub fn ok_json(out: &Output) -> serde_json::Value {
     assert_ok(out);
     serde_json::from_slice(&out.stdout).expect("the summary is JSON")
+}
+
+/// The `method` of every row of a JSON report, in order.
+pub fn row_methods(report: &serde_json::Value) -> Vec<&str> {
+    report["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["method"].as_str().unwrap())
+        .collect()
 }
 
 /// Bakes the Cornell box with a 5 mm lightmap into `dir` (the `.bake` and the lightmap files
