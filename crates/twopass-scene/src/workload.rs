@@ -112,6 +112,26 @@ pub fn occlusion_pairs(
         .collect()
 }
 
+/// The generated room's quads as (name, origin, edge u, edge v), TOML arrays in scene units:
+/// the Cornell room's five walls (facing in, open toward the camera), then its light.
+const ROOM: [(&str, &str, &str, &str); 6] = [
+    ("floor", "[0, 0, 0]", "[0, 0, 559.2]", "[556, 0, 0]"),
+    ("ceiling", "[0, 548.8, 0]", "[556, 0, 0]", "[0, 0, 559.2]"),
+    ("back", "[0, 0, 559.2]", "[0, 548.8, 0]", "[556, 0, 0]"),
+    ("left", "[556, 0, 0]", "[0, 0, 559.2]", "[0, 548.8, 0]"),
+    ("right", "[0, 0, 0]", "[0, 548.8, 0]", "[0, 0, 559.2]"),
+    ("light", "[213, 548.7, 227]", "[130, 0, 0]", "[0, 0, 105]"),
+];
+
+/// Appends one white object of the generated scene to `s`: its `extra` lines (each ending in a
+/// newline), then its inline `shape` table.
+fn push_object(s: &mut String, name: &str, extra: &str, shape: &str) {
+    let _ = write!(
+        s,
+        "[[object]]\nname = \"{name}\"\nmaterial = \"white\"\n{extra}shape = {shape}\n"
+    );
+}
+
 /// Triangles of one generated sphere (icosphere level 4).
 const SPHERE_TRIANGLES: usize = 20 * 4usize.pow(4);
 
@@ -138,38 +158,23 @@ type = "lambert"
 diffuse = [0.725, 0.71, 0.68]
 
 # The room: five walls facing in, open toward the camera.
-[[object]]
-name = "floor"
-material = "white"
-shape = { type = "quad", origin = [0, 0, 0], edge_u = [0, 0, 559.2], edge_v = [556, 0, 0] }
-
-[[object]]
-name = "ceiling"
-material = "white"
-shape = { type = "quad", origin = [0, 548.8, 0], edge_u = [556, 0, 0], edge_v = [0, 0, 559.2] }
-
-[[object]]
-name = "back"
-material = "white"
-shape = { type = "quad", origin = [0, 0, 559.2], edge_u = [0, 548.8, 0], edge_v = [556, 0, 0] }
-
-[[object]]
-name = "left"
-material = "white"
-shape = { type = "quad", origin = [556, 0, 0], edge_u = [0, 0, 559.2], edge_v = [0, 548.8, 0] }
-
-[[object]]
-name = "right"
-material = "white"
-shape = { type = "quad", origin = [0, 0, 0], edge_u = [0, 548.8, 0], edge_v = [0, 0, 559.2] }
-
-[[object]]
-name = "light"
-material = "white"
-emission = [17, 12, 4]
-shape = { type = "quad", origin = [213, 548.7, 227], edge_u = [130, 0, 0], edge_v = [0, 0, 105] }
 "#,
     );
+    for (k, (name, origin, edge_u, edge_v)) in ROOM.iter().enumerate() {
+        if k > 0 {
+            s.push('\n');
+        }
+        // The last quad is the light, under the ceiling.
+        let emission = if k + 1 == ROOM.len() {
+            "emission = [17, 12, 4]\n"
+        } else {
+            ""
+        };
+        let shape = format!(
+            "{{ type = \"quad\", origin = {origin}, edge_u = {edge_u}, edge_v = {edge_v} }}"
+        );
+        push_object(&mut s, name, emission, &shape);
+    }
     for i in 0..spheres {
         let (x, y, z) = (
             i % per_axis,
@@ -183,11 +188,12 @@ shape = { type = "quad", origin = [213, 548.7, 227], edge_u = [130, 0, 0], edge_
             8.0 + cell * (z as f32 + 0.5) + jitter(&mut r),
         );
         let radius = cell * (0.15 + 0.2 * r.next_f32());
-        let _ = write!(
-            s,
-            "\n[[object]]\nname = \"sphere{i}\"\nmaterial = \"white\"\nshape = {{ type = \"sphere\", center = [{}, {}, {}], radius = {radius}, subdivisions = 4 }}\n",
+        s.push('\n');
+        let shape = format!(
+            "{{ type = \"sphere\", center = [{}, {}, {}], radius = {radius}, subdivisions = 4 }}",
             c.x, c.y, c.z
         );
+        push_object(&mut s, &format!("sphere{i}"), "", &shape);
     }
     s
 }
