@@ -9,23 +9,21 @@ use common::{repo, twopass};
 fn lightmap_bake_writes_its_files_into_the_manifest() {
     let out_dir = tempfile::tempdir().unwrap();
     let dir = out_dir.path();
-    let scene = repo("scenes/cornell-box.toml");
-    let out = twopass(&[
-        "bake",
-        scene.to_str().unwrap(),
-        "--output",
-        dir.to_str().unwrap(),
-        "--format",
-        "glb,vertex-glb",
-        "--lightmap",
-        "--texel-size",
-        "10",
-        "--element-size",
-        "100",
-        "--unshot",
-        "1e-2",
-        "--json",
-    ]);
+    let out = common::bake_box(
+        dir,
+        &[
+            "--format",
+            "glb,vertex-glb",
+            "--lightmap",
+            "--texel-size",
+            "10",
+            "--element-size",
+            "100",
+            "--unshot",
+            "1e-2",
+            "--json",
+        ],
+    );
     let manifest = common::ok_json(&out);
     let files = manifest["files"].as_array().unwrap();
     let mut names: Vec<&str> = files

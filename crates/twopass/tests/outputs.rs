@@ -5,7 +5,7 @@ mod common;
 
 use std::time::{Duration, SystemTime};
 
-use common::{render_box, repo, twopass};
+use common::render_box;
 use twopass_bake::Manifest;
 
 const COARSE: [&str; 6] = [
@@ -18,17 +18,7 @@ const COARSE: [&str; 6] = [
 ];
 
 fn bake(dir: &std::path::Path, extra: &[&str]) -> std::process::Output {
-    let scene = repo("scenes/cornell-box.toml");
-    let mut args = vec![
-        "bake",
-        scene.to_str().unwrap(),
-        "--output",
-        dir.to_str().unwrap(),
-        "-q",
-    ];
-    args.extend(COARSE);
-    args.extend(extra);
-    twopass(&args)
+    common::bake_box(dir, &[&["-q"][..], &COARSE, extra].concat())
 }
 
 #[test]

@@ -30,6 +30,19 @@ pub fn render_box(method: &str, width: u32, spp: u32, extra: &[&str]) -> Output 
     twopass(&[&args[..], &["--width", &width, "--spp", &spp], extra].concat())
 }
 
+/// Runs `twopass bake` of the Cornell box (`scenes/cornell-box.toml`) with `--output dir`, then
+/// the `extra` arguments (formats, solver settings, ...).
+pub fn bake_box(dir: &Path, extra: &[&str]) -> Output {
+    let scene = repo("scenes/cornell-box.toml");
+    let args = [
+        "bake",
+        scene.to_str().unwrap(),
+        "--output",
+        dir.to_str().unwrap(),
+    ];
+    twopass(&[&args[..], extra].concat())
+}
+
 /// Asserts that `out` exited with `code`, showing its stderr when it did not.
 #[track_caller]
 pub fn assert_exit(out: &Output, code: i32) {
@@ -66,18 +79,14 @@ pub fn row_methods(report: &serde_json::Value) -> Vec<&str> {
 
 /// Bakes the Cornell box with a 5 mm lightmap into `dir` (the `.bake` and the lightmap files
 /// of one solve).
-pub fn bake_cornell_lightmap(dir: &std::path::Path) {
-    let scene = repo("scenes/cornell-box.toml");
-    assert_ok(&twopass(&[
-        "bake",
-        scene.to_str().unwrap(),
-        "--output",
-        dir.to_str().unwrap(),
+pub fn bake_cornell_lightmap(dir: &Path) {
+    let lightmap = [
         "--format",
         "bake",
         "--lightmap",
         "--texel-size",
         "5",
         "--quiet",
-    ]));
+    ];
+    assert_ok(&bake_box(dir, &lightmap));
 }
