@@ -1,19 +1,25 @@
 //! The BVH answers exactly what testing every triangle answers; spawned rays never re-hit their
 //! own surface; rays cannot slip between the triangles of a closed mesh.
 
-use glam::{Vec2, Vec3};
-use rand::Rng;
+use glam::Vec3;
+use twopass_brdf::random::Pcg64Mcg;
 use twopass_scene::workload::{self, rng};
 use twopass_scene::{Accel, Ray, Scene, load, load_toml};
 
 use crate::scene_path;
 
 /// Random directions, uniform on the sphere.
-fn random_dir(r: &mut impl Rng) -> Vec3 {
-    let z = 2.0 * r.random::<f32>() - 1.0;
-    let phi = std::f32::consts::TAU * r.random::<f32>();
+fn random_dir(r: &mut Pcg64Mcg) -> Vec3 {
+    let z = 2.0 * r.next_f32() - 1.0;
+    let phi = std::f32::consts::TAU * r.next_f32();
     let s = (1.0 - z * z).max(0.0).sqrt();
     Vec3::new(s * phi.cos(), s * phi.sin(), z)
+}
+
+/// A uniform random point in the box from `lo` to `hi` (x, y, z drawn in that order).
+fn point_in(lo: Vec3, hi: Vec3, r: &mut Pcg64Mcg) -> Vec3 {
+    let (x, y) = (r.next_f32(), r.next_f32());
+    lo + (hi - lo) * Vec3::new(x, y, r.next_f32())
 }
 
 /// Rays of every awkward kind: random in the bounds, leaving surfaces, and aimed exactly at
@@ -23,7 +29,7 @@ fn awkward_rays(scene: &Scene, n: usize, seed: u64) -> Vec<Ray> {
     let (lo, hi) = (scene.bounds.min, scene.bounds.max);
     let mut rays: Vec<Ray> = (0..n)
         .map(|_| {
-            let o = lo + (hi - lo) * Vec3::new(r.random(), r.random(), r.random());
+            let o = point_in(lo, hi, &mut r);
             Ray::new(o, random_dir(&mut r))
         })
         .collect();
@@ -32,16 +38,15 @@ fn awkward_rays(scene: &Scene, n: usize, seed: u64) -> Vec<Ray> {
     // Axis-aligned rays, with negative zeros in their other components (as `-Vec3::Z` has).
     for axis in [Vec3::X, Vec3::Y, Vec3::Z, -Vec3::X, -Vec3::Y, -Vec3::Z] {
         for _ in 0..n / 20 {
-            let o = lo + (hi - lo) * Vec3::new(r.random(), r.random(), r.random());
-            rays.push(Ray::new(o, axis));
+            rays.push(Ray::new(point_in(lo, hi, &mut r), axis));
         }
     }
     let m = &scene.mesh;
     for _ in 0..n {
-        let t = m.triangles[r.random_range(0..m.triangles.len())];
+        let t = m.triangles[r.below(m.triangles.len() as u32) as usize];
         let [a, b] = [t[0], t[1]].map(|i| m.positions[i as usize]);
-        let target = if r.random::<bool>() { a } else { (a + b) * 0.5 };
-        let o = lo + (hi - lo) * Vec3::new(r.random(), r.random(), r.random());
+        let target = if r.next_bool() { a } else { (a + b) * 0.5 };
+        let o = point_in(lo, hi, &mut r);
         if (target - o).length() > 1e-3 {
             rays.push(Ray::new(o, (target - o).normalize()));
         }
@@ -150,8 +155,8 @@ fn spawned_rays_never_rehit_their_own_surface() {
         na.dot(nb).abs() > 1.0 - 1e-6 && (na.dot(pb - pa)).abs() < 1e-3
     };
     for i in 0..20_000 {
-        let t = r.random_range(0..m.triangles.len()) as u32;
-        let p = m.sample_triangle(t, Vec2::new(r.random(), r.random()));
+        let t = r.below(m.triangles.len() as u32);
+        let p = m.sample_triangle(t, r.next_vec2());
         // Both sides, including directions within a hair of the surface.
         let mut d = random_dir(&mut r);
         if i % 4 == 0 {
@@ -170,7 +175,7 @@ fn spawned_rays_never_rehit_their_own_surface() {
             );
         }
         // A point on a surface sees itself unoccluded.
-        let q = m.sample_triangle(t, Vec2::new(r.random(), r.random()));
+        let q = m.sample_triangle(t, r.next_vec2());
         assert!(
             !scene.occluded_between(&p, &q),
             "ray {i}: point to point on one triangle {t} is occluded"
@@ -194,7 +199,7 @@ fn rays_from_inside_a_closed_mesh_never_escape() {
         }
     }
     for (i, target) in targets.iter().enumerate() {
-        let o = Vec3::new(0.1, -0.2, 0.3) + random_dir(&mut r) * r.random::<f32>() * 0.5;
+        let o = Vec3::new(0.1, -0.2, 0.3) + random_dir(&mut r) * r.next_f32() * 0.5;
         let d = (*target - o).normalize();
         assert!(
             scene.intersect(&Ray::new(o, d)).is_some(),

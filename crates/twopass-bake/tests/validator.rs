@@ -60,30 +60,31 @@ fn validate(name: &str, bytes: &[u8]) -> Option<serde_json::Value> {
     Some(serde_json::from_slice(&out.stdout).unwrap())
 }
 
-/// Asserts a report has no error and no warning, printing the report otherwise.
-fn assert_clean(name: &str, report: &serde_json::Value) {
+/// Validates `bytes` (as [`validate`]) and asserts the report has no error and no warning,
+/// printing it otherwise; returns the report for further checks.
+fn assert_valid(name: &str, bytes: &[u8]) -> Option<serde_json::Value> {
+    let report = validate(name, bytes)?;
     let issues = &report["issues"];
     let errors = issues["numErrors"].as_u64().unwrap();
     let warnings = issues["numWarnings"].as_u64().unwrap();
     assert!(
         errors == 0 && warnings == 0,
         "{name}: {errors} errors, {warnings} warnings:\n{}",
-        serde_json::to_string_pretty(report).unwrap()
+        serde_json::to_string_pretty(&report).unwrap()
     );
     // The validator did read the file: it counted the meshes' vertices.
     assert!(
         report["info"]["totalVertexCount"].as_u64().unwrap() > 0,
         "{report}"
     );
+    Some(report)
 }
 
 #[test]
 fn element_mesh_glb_passes_the_khronos_validator() {
     let (scene, solution) = solved();
     let glb = bake::encode_glb(solution, scene, ColorMapping::auto(solution)).unwrap();
-    if let Some(report) = validate("cornell-box.glb", &glb.bytes) {
-        assert_clean("cornell-box.glb", &report);
-    }
+    assert_valid("cornell-box.glb", &glb.bytes);
 }
 
 #[test]
@@ -94,8 +95,7 @@ fn lightmap_glb_passes_the_khronos_validator() {
         padding: 2,
     };
     let lm = bake::bake_lightmap(solution, scene, &settings, ColorMapping::auto(solution)).unwrap();
-    if let Some(report) = validate("cornell-box.lightmap.glb", &lm.glb) {
-        assert_clean("cornell-box.lightmap.glb", &report);
+    if let Some(report) = assert_valid("cornell-box.lightmap.glb", &lm.glb) {
         assert_eq!(report["info"]["hasTextures"], true, "{report}");
         assert_eq!(report["info"]["maxUVs"], 2, "{report}");
     }
@@ -105,9 +105,7 @@ fn lightmap_glb_passes_the_khronos_validator() {
 fn per_vertex_glb_passes_the_khronos_validator() {
     let (scene, solution) = solved();
     let glb = bake::encode_vertex_glb(solution, scene, ColorMapping::auto(solution)).unwrap();
-    if let Some(report) = validate("cornell-box.vertex.glb", &glb.bytes) {
-        assert_clean("cornell-box.vertex.glb", &report);
-    }
+    assert_valid("cornell-box.vertex.glb", &glb.bytes);
 }
 
 #[test]

@@ -4,7 +4,9 @@
 //! `cargo run --release -p twopass-brdf --example albedo_table`
 
 use glam::Vec3;
-use twopass_brdf::check::{Quadrature, direction_at_deg, incident_albedo, integrate_hemisphere};
+use twopass_brdf::check::direction_at_deg;
+use twopass_brdf::interface::incident_albedo;
+use twopass_brdf::quadrature::{Quadrature, integrate_hemisphere};
 use twopass_brdf::{
     BlinnPhongParams, BrdfModel, ComplexIor, CookTorranceParams, FresnelModel, Material,
     ParamError, PhongParams, Rgb, blinn_phong,

@@ -1,5 +1,6 @@
-//! The BRDF interface ([`Brdf`], [`BrdfSample`], [`SampleKind`]) and the diffuse-plus-glossy
-//! mixture every glossy model shares (`Glossy`, implemented into [`Brdf`] by one macro). The
+//! The BRDF interface ([`Brdf`], [`BrdfSample`], [`SampleKind`]), its two directional albedos
+//! ([`incident_albedo`], [`outgoing_albedo`], by the quadrature of [`crate::quadrature`]) and
+//! the diffuse-plus-glossy mixture every glossy model shares (`Glossy`, implemented into [`Brdf`] by one macro). The
 //! closed set of models is [`crate::model::BrdfModel`].
 //!
 //! # Conventions
@@ -15,8 +16,9 @@
 use glam::{Vec2, Vec3};
 
 use crate::Rgb;
-use crate::check::{self, Quadrature};
 use crate::colour::mean;
+use crate::frame::reflect;
+use crate::quadrature::{Quadrature, integrate_dvec3};
 use crate::sample::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
 
 /// Which lobe produced a sample.
@@ -73,11 +75,29 @@ pub trait Brdf {
 
     /// Hemispherical-directional reflectance seen from `wo`, the integral over `wi` of
     /// f(wo, wi) cos theta_i (dimensionless): the mean sample weight. For reciprocal models it
-    /// equals the energy albedo [`check::incident_albedo`]; for the published Phong it does not.
-    /// The default is deterministic quadrature ([`check::outgoing_albedo`]).
+    /// equals the energy albedo [`incident_albedo`]; for the published Phong it does not.
+    /// The default is deterministic quadrature ([`outgoing_albedo`]).
     fn albedo(&self, wo: Vec3) -> Rgb {
-        check::outgoing_albedo(self, wo, Quadrature::default())
+        outgoing_albedo(self, wo, Quadrature::default())
     }
+}
+
+/// Energy albedo for light arriving from `wi`: the integral over `wo` of f(wo, wi) cos theta_o
+/// (dimensionless, per channel). At most 1 for an energy-conserving model.
+pub fn incident_albedo<B: Brdf + ?Sized>(brdf: &B, wi: Vec3, q: Quadrature) -> Rgb {
+    if wi.z <= 0.0 {
+        return Rgb::ZERO;
+    }
+    integrate_dvec3(reflect(wi), q, |wo| (brdf.eval(wo, wi) * wo.z).as_dvec3()).as_vec3()
+}
+
+/// Hemispherical-directional reflectance seen from `wo`: the integral over `wi` of
+/// f(wo, wi) cos theta_i (dimensionless, per channel); the default of [`Brdf::albedo`].
+pub fn outgoing_albedo<B: Brdf + ?Sized>(brdf: &B, wo: Vec3, q: Quadrature) -> Rgb {
+    if wo.z <= 0.0 {
+        return Rgb::ZERO;
+    }
+    integrate_dvec3(reflect(wo), q, |wi| (brdf.eval(wo, wi) * wi.z).as_dvec3()).as_vec3()
 }
 
 /// A BRDF made of a Lambertian part of reflectance rho plus one glossy lobe, sampled as a

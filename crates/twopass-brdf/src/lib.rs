@@ -16,7 +16,7 @@
 //!
 //! ```
 //! use twopass_brdf::{Brdf, CookTorranceParams, FresnelModel, Material, ComplexIor, Rgb};
-//! use twopass_brdf::check::{self, Quadrature};
+//! use twopass_brdf::{check, interface, quadrature::Quadrature};
 //! use glam::{Vec2, Vec3};
 //!
 //! let white = Material::lambert(Rgb::new(0.725, 0.71, 0.68)).unwrap();
@@ -40,7 +40,7 @@
 //! assert!(s.wi.z > 0.0 && s.pdf > 0.0);
 //! // energy albedo for light from 30 degrees, by quadrature: at most 1
 //! let model = gold.model().unwrap();
-//! let a = check::incident_albedo(&model, check::direction_at_deg(30.0), Quadrature::default());
+//! let a = interface::incident_albedo(&model, check::direction_at_deg(30.0), Quadrature::default());
 //! assert!(a.max_element() <= 1.0);
 //! ```
 
@@ -61,6 +61,7 @@ pub mod model;
 pub mod modified_phong;
 mod param;
 pub mod phong;
+pub mod quadrature;
 pub mod random;
 pub mod sample;
 pub mod v_cavity;

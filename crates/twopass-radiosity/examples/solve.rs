@@ -3,16 +3,14 @@
 //!
 //! `cargo run --release -p twopass-radiosity --example solve -- scenes/cornell-box.toml [unshot]`
 
+mod common;
+
 use std::ops::ControlFlow;
 
 use twopass_radiosity::{Options, Progressive, Stop, dense_solve};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let mut args = std::env::args().skip(1);
-    let path = args
-        .next()
-        .unwrap_or_else(|| "scenes/cornell-box.toml".into());
-    let unshot: f64 = args.next().map_or(Ok(1e-3), |s| s.parse())?;
+    let (path, unshot) = common::scene_and_unshot()?;
     let (scene, _) = twopass_scene::load(&path)?;
     let options = Options {
         stop: Stop {

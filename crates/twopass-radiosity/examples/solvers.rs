@@ -12,6 +12,8 @@
 //! values), `HIERARCHICAL_ONLY` (skip progressive refinement, for large scenes), `VIS_MIN` and
 //! `VIS_MAX` (shadow rays per visibility estimate, first and most).
 
+mod common;
+
 use std::time::Instant;
 
 use glam::Vec3;
@@ -88,11 +90,7 @@ fn object_power(scene: &twopass_scene::Scene, s: &Solution) -> Vec<(f64, f64)> {
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let mut args = std::env::args().skip(1);
-    let path = args
-        .next()
-        .unwrap_or_else(|| "scenes/cornell-box.toml".into());
-    let unshot: f64 = args.next().map_or(Ok(1e-3), |s| s.parse())?;
+    let (path, unshot) = common::scene_and_unshot()?;
     let (scene, _) = match path.strip_prefix("generate:") {
         Some(n) => twopass_scene::workload::synthetic_scene(n.parse()?, 0)?,
         None => twopass_scene::load(&path)?,

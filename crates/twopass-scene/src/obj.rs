@@ -157,32 +157,22 @@ pub(crate) fn load(path: &Path, policy: &ReadPolicy) -> Result<ObjFile, SceneErr
             .chunks_exact(3)
             .map(Vec3::from_slice)
             .collect();
-        if let Some((index, value)) = first_non_finite(&positions) {
-            return Err(SceneError::NonFinite {
+        // The first non-finite vector of a list read from `keyword` lines, as an error.
+        let finite = |vectors: &[Vec3], keyword: &str, what| match first_non_finite(vectors) {
+            Some((index, value)) => Err(SceneError::NonFinite {
                 path: path.to_owned(),
-                line: find_non_finite_line(&text, "v"),
+                line: find_non_finite_line(&text, keyword),
                 object: m.name.clone(),
-                what: "vertex",
+                what,
                 index,
                 value,
-            });
-        }
+            }),
+            None => Ok(()),
+        };
+        finite(&positions, "v", "vertex")?;
         let normals: Vec<Vec3> = mesh.normals.chunks_exact(3).map(Vec3::from_slice).collect();
-        if let Some((index, value)) = first_non_finite(&normals) {
-            return Err(SceneError::NonFinite {
-                path: path.to_owned(),
-                line: find_non_finite_line(&text, "vn"),
-                object: m.name.clone(),
-                what: "normal",
-                index,
-                value,
-            });
-        }
-        let triangles: Vec<[u32; 3]> = mesh
-            .indices
-            .chunks_exact(3)
-            .map(|c| [c[0], c[1], c[2]])
-            .collect();
+        finite(&normals, "vn", "normal")?;
+        let triangles = triples(&mesh.indices);
         // Normals are used only when every corner of the group names one (tobj invents the
         // missing ones); zero-length ones fall back to flat.
         let smooth = agree
@@ -193,10 +183,7 @@ pub(crate) fn load(path: &Path, policy: &ReadPolicy) -> Result<ObjFile, SceneErr
         let (normals, normal_indices) = if smooth {
             (
                 normals.iter().map(|n| n.normalize()).collect(),
-                mesh.normal_indices
-                    .chunks_exact(3)
-                    .map(|c| [c[0], c[1], c[2]])
-                    .collect(),
+                triples(&mesh.normal_indices),
             )
         } else {
             (Vec::new(), Vec::new())
@@ -213,13 +200,7 @@ pub(crate) fn load(path: &Path, policy: &ReadPolicy) -> Result<ObjFile, SceneErr
             && mesh.texcoord_indices.len() == mesh.indices.len()
             && texcoords.iter().all(|t| t.is_finite());
         let (texcoords, texcoord_indices) = if keep_uv {
-            (
-                texcoords,
-                mesh.texcoord_indices
-                    .chunks_exact(3)
-                    .map(|c| [c[0], c[1], c[2]])
-                    .collect(),
-            )
+            (texcoords, triples(&mesh.texcoord_indices))
         } else {
             (Vec::new(), Vec::new())
         };
@@ -520,6 +501,15 @@ fn load_mtl(
         });
     }
     Ok(Some((result, origins)))
+}
+
+/// A triangulated group's flat index list (positions, normals or texture coordinates) as one
+/// triple per triangle.
+fn triples(indices: &[u32]) -> Vec<[u32; 3]> {
+    indices
+        .chunks_exact(3)
+        .map(|c| [c[0], c[1], c[2]])
+        .collect()
 }
 
 fn first_non_finite(v: &[Vec3]) -> Option<(usize, f32)> {

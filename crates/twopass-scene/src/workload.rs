@@ -6,8 +6,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use glam::{Vec2, Vec3};
-use rand::{Rng, SeedableRng};
-use rand_pcg::Pcg64Mcg;
+use twopass_brdf::random::Pcg64Mcg;
 
 use crate::{Ray, Scene, SceneError, SurfacePoint, Warning};
 
@@ -23,7 +22,9 @@ pub enum QueryKind {
     Occlusion,
 }
 
-/// A pseudo-random generator seeded from `seed` (the same seed, the same workload).
+/// A pseudo-random generator seeded from `seed` (the same seed, the same workload; the
+/// stream `rand_pcg`'s `Pcg64Mcg::seed_from_u64` gave, so the workloads of the published
+/// figures are unchanged).
 pub fn rng(seed: u64) -> Pcg64Mcg {
     Pcg64Mcg::seed_from_u64(seed)
 }
@@ -52,11 +53,9 @@ fn area_cdf(scene: &Scene) -> Vec<f64> {
 }
 
 fn sample_surface(scene: &Scene, cdf: &[f64], r: &mut Pcg64Mcg) -> SurfacePoint {
-    let target = r.random::<f64>() * cdf.last().copied().unwrap_or(0.0);
+    let target = r.next_f64() * cdf.last().copied().unwrap_or(0.0);
     let t = cdf.partition_point(|&c| c <= target).min(cdf.len() - 1) as u32;
-    scene
-        .mesh
-        .sample_triangle(t, Vec2::new(r.random(), r.random()))
+    scene.mesh.sample_triangle(t, r.next_vec2())
 }
 
 /// A cosine-distributed unit direction about unit `n` (Malley's method).
@@ -75,7 +74,7 @@ pub fn incoherent_rays(scene: &Scene, count: usize, seed: u64) -> Vec<Ray> {
     (0..count)
         .map(|_| {
             let p = sample_surface(scene, &cdf, &mut r);
-            let d = cosine_direction(p.normal, Vec2::new(r.random(), r.random()));
+            let d = cosine_direction(p.normal, r.next_vec2());
             Ray::new(p.spawn_origin(d), d)
         })
         .collect()
@@ -95,7 +94,7 @@ pub fn occlusion_pairs(
         .map(|_| {
             let a = sample_surface(scene, &cdf, &mut r);
             let b = if total > 0.0 {
-                let mut x = r.random::<f32>() * total;
+                let mut x = r.next_f32() * total;
                 let e = scene
                     .emitters
                     .iter()
@@ -104,13 +103,33 @@ pub fn occlusion_pairs(
                         x < 0.0
                     })
                     .unwrap_or(&scene.emitters[scene.emitters.len() - 1]);
-                e.sample(scene, r.random(), Vec2::new(r.random(), r.random()))
+                e.sample(scene, r.next_f32(), r.next_vec2())
             } else {
                 sample_surface(scene, &cdf, &mut r)
             };
             (a, b)
         })
         .collect()
+}
+
+/// The generated room's quads as (name, origin, edge u, edge v), TOML arrays in scene units:
+/// the Cornell room's five walls (facing in, open toward the camera), then its light.
+const ROOM: [(&str, &str, &str, &str); 6] = [
+    ("floor", "[0, 0, 0]", "[0, 0, 559.2]", "[556, 0, 0]"),
+    ("ceiling", "[0, 548.8, 0]", "[556, 0, 0]", "[0, 0, 559.2]"),
+    ("back", "[0, 0, 559.2]", "[0, 548.8, 0]", "[556, 0, 0]"),
+    ("left", "[556, 0, 0]", "[0, 0, 559.2]", "[0, 548.8, 0]"),
+    ("right", "[0, 0, 0]", "[0, 548.8, 0]", "[0, 0, 559.2]"),
+    ("light", "[213, 548.7, 227]", "[130, 0, 0]", "[0, 0, 105]"),
+];
+
+/// Appends one white object of the generated scene to `s`: its `extra` lines (each ending in a
+/// newline), then its inline `shape` table.
+fn push_object(s: &mut String, name: &str, extra: &str, shape: &str) {
+    let _ = write!(
+        s,
+        "[[object]]\nname = \"{name}\"\nmaterial = \"white\"\n{extra}shape = {shape}\n"
+    );
 }
 
 /// Triangles of one generated sphere (icosphere level 4).
@@ -139,56 +158,42 @@ type = "lambert"
 diffuse = [0.725, 0.71, 0.68]
 
 # The room: five walls facing in, open toward the camera.
-[[object]]
-name = "floor"
-material = "white"
-shape = { type = "quad", origin = [0, 0, 0], edge_u = [0, 0, 559.2], edge_v = [556, 0, 0] }
-
-[[object]]
-name = "ceiling"
-material = "white"
-shape = { type = "quad", origin = [0, 548.8, 0], edge_u = [556, 0, 0], edge_v = [0, 0, 559.2] }
-
-[[object]]
-name = "back"
-material = "white"
-shape = { type = "quad", origin = [0, 0, 559.2], edge_u = [0, 548.8, 0], edge_v = [556, 0, 0] }
-
-[[object]]
-name = "left"
-material = "white"
-shape = { type = "quad", origin = [556, 0, 0], edge_u = [0, 0, 559.2], edge_v = [0, 548.8, 0] }
-
-[[object]]
-name = "right"
-material = "white"
-shape = { type = "quad", origin = [0, 0, 0], edge_u = [0, 548.8, 0], edge_v = [0, 0, 559.2] }
-
-[[object]]
-name = "light"
-material = "white"
-emission = [17, 12, 4]
-shape = { type = "quad", origin = [213, 548.7, 227], edge_u = [130, 0, 0], edge_v = [0, 0, 105] }
 "#,
     );
+    for (k, (name, origin, edge_u, edge_v)) in ROOM.iter().enumerate() {
+        if k > 0 {
+            s.push('\n');
+        }
+        // The last quad is the light, under the ceiling.
+        let emission = if k + 1 == ROOM.len() {
+            "emission = [17, 12, 4]\n"
+        } else {
+            ""
+        };
+        let shape = format!(
+            "{{ type = \"quad\", origin = {origin}, edge_u = {edge_u}, edge_v = {edge_v} }}"
+        );
+        push_object(&mut s, name, emission, &shape);
+    }
     for i in 0..spheres {
         let (x, y, z) = (
             i % per_axis,
             (i / per_axis) % per_axis,
             i / (per_axis * per_axis),
         );
-        let jitter = |r: &mut Pcg64Mcg| (r.random::<f32>() - 0.5) * 0.3 * cell;
+        let jitter = |r: &mut Pcg64Mcg| (r.next_f32() - 0.5) * 0.3 * cell;
         let c = Vec3::new(
             8.0 + cell * (x as f32 + 0.5) + jitter(&mut r),
             4.0 + cell * (y as f32 + 0.5) * 0.98 + jitter(&mut r),
             8.0 + cell * (z as f32 + 0.5) + jitter(&mut r),
         );
-        let radius = cell * (0.15 + 0.2 * r.random::<f32>());
-        let _ = write!(
-            s,
-            "\n[[object]]\nname = \"sphere{i}\"\nmaterial = \"white\"\nshape = {{ type = \"sphere\", center = [{}, {}, {}], radius = {radius}, subdivisions = 4 }}\n",
+        let radius = cell * (0.15 + 0.2 * r.next_f32());
+        s.push('\n');
+        let shape = format!(
+            "{{ type = \"sphere\", center = [{}, {}, {}], radius = {radius}, subdivisions = 4 }}",
             c.x, c.y, c.z
         );
+        push_object(&mut s, &format!("sphere{i}"), "", &shape);
     }
     s
 }

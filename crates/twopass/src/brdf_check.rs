@@ -10,7 +10,8 @@ use glam::Vec3;
 use plotters::prelude::*;
 use rayon::prelude::*;
 use serde_json::json;
-use twopass_brdf::check::{self, CheckOptions, INCIDENCE_DEG, Plausibility, Quadrature};
+use twopass_brdf::check::{self, CheckOptions, INCIDENCE_DEG, Plausibility};
+use twopass_brdf::quadrature::Quadrature;
 use twopass_brdf::{
     BlinnPhongParams, Brdf, BrdfModel, ComplexIor, CookTorranceParams, FresnelModel, Material,
     ParamError, PhongParams, Rgb,

@@ -22,7 +22,7 @@ use twopass_trace::{RenderStats, WhittedSettings};
 use crate::context::Context;
 use crate::error::CliError;
 use crate::pipeline::{
-    Method, integrator, load_lit, methods, render_settings, render_with_bar, to_layers,
+    RenderMethod, integrator, load_lit, methods, render_settings, render_with_bar, to_layers,
 };
 
 /// Arguments of `twopass compare`.
@@ -93,7 +93,7 @@ struct RadiosityInfo {
 
 /// One method's render: its image, costs and EXR.
 struct Rendered {
-    method: Method,
+    method: RenderMethod,
     image: Image,
     /// The shared radiosity solve, seconds (0 for the methods without radiosity).
     radiosity_seconds: f64,
@@ -223,7 +223,7 @@ fn solve_shared(
 fn render_methods(
     scene: &Scene,
     camera: &Camera,
-    methods: &[Method],
+    methods: &[RenderMethod],
     solved: Option<(&Solution, f64)>,
     (spp, reference_spp): (u32, u32),
     (dir, stem): (&Path, &str),
@@ -238,7 +238,7 @@ fn render_methods(
             WhittedSettings::default(),
         );
         let settings = render_settings(
-            if method == Method::Reference {
+            if method == RenderMethod::Reference {
                 reference_spp
             } else {
                 spp

@@ -28,7 +28,7 @@ use crate::solve::SolveArgs;
 /// A rendering method.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
-pub enum Method {
+pub enum RenderMethod {
     /// Whitted ray tracing alone, with the Phong ambient term for interreflection.
     Whitted,
     /// Radiosity alone: camera rays shaded by the radiosity solution.
@@ -41,7 +41,7 @@ pub enum Method {
     Reference,
 }
 
-impl Method {
+impl RenderMethod {
     /// Whether the method reads a radiosity solution.
     pub fn needs_radiosity(self) -> bool {
         matches!(self, Self::Radiosity | Self::Hybrid | Self::HybridDirect)
@@ -63,21 +63,21 @@ impl Method {
 pub const MAX_DEPTH: u32 = 64;
 
 /// The methods a scene calls for, and what was skipped and why.
-pub fn methods(scene: &Scene) -> (Vec<Method>, Vec<String>) {
+pub fn methods(scene: &Scene) -> (Vec<RenderMethod>, Vec<String>) {
     let p = plan(scene);
-    let mut methods = vec![Method::Reference, Method::Whitted];
+    let mut methods = vec![RenderMethod::Reference, RenderMethod::Whitted];
     let mut skipped = Vec::new();
     if p.diffuse.required {
-        methods.push(Method::Radiosity);
+        methods.push(RenderMethod::Radiosity);
         if p.specular.required {
-            methods.push(Method::Hybrid);
+            methods.push(RenderMethod::Hybrid);
         } else {
             skipped.push(format!(
                 "hybrid: identical to radiosity alone, the specular pass is skipped ({})",
                 p.specular.reason
             ));
         }
-        methods.push(Method::HybridDirect);
+        methods.push(RenderMethod::HybridDirect);
     } else {
         skipped.push(format!(
             "radiosity, hybrid, hybrid-direct: {}",
@@ -255,18 +255,18 @@ pub fn to_layers(images: &LayerImages) -> Result<Layers, CliError> {
 
 /// The integrator of a method; `solution` must be given for the radiosity-based ones.
 pub fn integrator<'a>(
-    method: Method,
+    method: RenderMethod,
     scene: &'a Scene,
     solution: Option<&'a dyn DiffuseRadiance>,
     whitted: WhittedSettings,
 ) -> Box<dyn Integrator + 'a> {
     let solution = || solution.expect("radiosity-based methods get a solution");
     match method {
-        Method::Whitted => Box::new(Whitted::new(scene, ambient_estimate(scene), whitted)),
-        Method::Radiosity => Box::new(radiosity_only(scene, solution())),
-        Method::Hybrid => Box::new(hybrid(scene, solution(), whitted)),
-        Method::HybridDirect => Box::new(hybrid_direct(scene, solution(), whitted)),
-        Method::Reference => Box::new(Reference::new(scene, ReferenceSettings::default())),
+        RenderMethod::Whitted => Box::new(Whitted::new(scene, ambient_estimate(scene), whitted)),
+        RenderMethod::Radiosity => Box::new(radiosity_only(scene, solution())),
+        RenderMethod::Hybrid => Box::new(hybrid(scene, solution(), whitted)),
+        RenderMethod::HybridDirect => Box::new(hybrid_direct(scene, solution(), whitted)),
+        RenderMethod::Reference => Box::new(Reference::new(scene, ReferenceSettings::default())),
     }
 }
 

@@ -11,7 +11,7 @@ use serde::{Deserialize, Serialize};
 use twopass_trace::WhittedSettings;
 
 use crate::error::CliError;
-use crate::pipeline::{MAX_DEPTH, Method};
+use crate::pipeline::{MAX_DEPTH, RenderMethod};
 use crate::solve::{MAX_VISIBILITY_RAYS, SolveArgs};
 
 /// The arguments a preset sets, which conflict with `--preset`.
@@ -101,7 +101,7 @@ pub struct Preset {
     /// Wall-clock seconds measured for this setting, radiosity solve included.
     pub measured_seconds: f64,
     /// The method.
-    pub method: Method,
+    pub method: RenderMethod,
     /// The tracer's knobs.
     pub render: RenderKnobs,
     /// The solver's knobs, for the radiosity-based methods.

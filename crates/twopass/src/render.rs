@@ -22,7 +22,8 @@ use crate::args::checked;
 use crate::context::Context;
 use crate::error::CliError;
 use crate::pipeline::{
-    MAX_DEPTH, Method, integrator, is_glb, radiosity, render_settings, render_with_bar, to_layers,
+    MAX_DEPTH, RenderMethod, integrator, is_glb, radiosity, render_settings, render_with_bar,
+    to_layers,
 };
 use crate::plan::plan;
 use crate::preset::{PRESET_SETS, RadiosityKnobs, RenderKnobs};
@@ -35,7 +36,7 @@ pub struct RenderArgs {
     pub scene: PathBuf,
     /// The method.
     #[arg(long, value_enum, default_value = "hybrid")]
-    pub method: Method,
+    pub method: RenderMethod,
     /// Bake file from `twopass bake` for the radiosity-based methods (default: solve now): a
     /// `.bake` file, or a lightmap `<stem>.lightmap.glb` (its HDR `<stem>.lightmap.exr` beside
     /// it gives the light, sampled bilinearly at each hit's `TEXCOORD_1`; radiosity and hybrid
@@ -74,7 +75,7 @@ pub struct RenderArgs {
 #[derive(Debug, Serialize)]
 struct Summary {
     scene: PathBuf,
-    method: Method,
+    method: RenderMethod,
     preset: Option<String>,
     width: u32,
     height: u32,
@@ -127,7 +128,7 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
             method.name()
         )));
     }
-    if args.bake.as_deref().is_some_and(is_glb) && method == Method::HybridDirect {
+    if args.bake.as_deref().is_some_and(is_glb) && method == RenderMethod::HybridDirect {
         return Err(CliError::Input(format!(
             "--bake {}: a lightmap holds the total diffuse light, not the indirect part \
              hybrid-direct adds to its direct light; use radiosity or hybrid, or a .bake file",
@@ -145,7 +146,9 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
             decisions.diffuse.reason
         )));
     }
-    if matches!(method, Method::Hybrid | Method::HybridDirect) && !decisions.specular.required {
+    if matches!(method, RenderMethod::Hybrid | RenderMethod::HybridDirect)
+        && !decisions.specular.required
+    {
         skipped.push(format!(
             "specular pass skipped: {}",
             decisions.specular.reason
@@ -278,7 +281,7 @@ const IMAGE_EXTENSIONS: [&str; 10] = [
 fn targets(
     output: Option<&Path>,
     scene: &Path,
-    method: Method,
+    method: RenderMethod,
     png: bool,
 ) -> Result<Targets, CliError> {
     let stem = scene
@@ -337,7 +340,7 @@ mod tests {
         targets(
             output.map(Path::new),
             Path::new("scenes/box.toml"),
-            Method::Hybrid,
+            RenderMethod::Hybrid,
             png,
         )
     }

@@ -31,16 +31,7 @@ const COARSE: [&str; 6] = [
 fn cornell_bake_writes_every_file_and_a_truthful_manifest() {
     let out_dir = tempfile::tempdir().unwrap();
     let dir = out_dir.path().join("lighting");
-    let scene_path = repo("scenes/cornell-box.toml");
-    let mut args = vec![
-        "bake",
-        scene_path.to_str().unwrap(),
-        "--output",
-        dir.to_str().unwrap(),
-        "--json",
-    ];
-    args.extend(COARSE);
-    let out = twopass(&args);
+    let out = common::bake_box(&dir, &[&["--json"][..], &COARSE].concat());
     common::assert_ok(&out);
     assert_eq!(
         file_names(&dir),
@@ -81,7 +72,7 @@ fn cornell_bake_writes_every_file_and_a_truthful_manifest() {
     assert!(color["exposure"].as_f64().unwrap() > 0.0);
 
     // The manifest's counts are those of the solution in the bake file.
-    let (scene, _) = twopass_scene::load(&scene_path).unwrap();
+    let (scene, _) = twopass_scene::load(repo("scenes/cornell-box.toml")).unwrap();
     let solution = bake::read_bake(&dir.join("cornell-box.bake"), &scene).unwrap();
     let mesh = solution.mesh();
     assert_eq!(

@@ -172,12 +172,7 @@ fn bench_render_times_every_method_and_the_bake_frame_rate() {
         "2",
     ]);
     let v = common::ok_json(&out);
-    let methods: Vec<&str> = v["rows"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|r| r["method"].as_str().unwrap())
-        .collect();
+    let methods = common::row_methods(&v);
     assert_eq!(
         methods,
         [

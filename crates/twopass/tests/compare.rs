@@ -34,7 +34,7 @@ fn report_matches_the_images_it_wrote() {
     let out = quick_compare(&scene, dir.path(), ["24", "2", "16"]);
     let report = common::ok_json(&out);
     let rows = report["rows"].as_array().unwrap();
-    let methods: Vec<&str> = rows.iter().map(|r| r["method"].as_str().unwrap()).collect();
+    let methods = common::row_methods(&report);
     // The spheres call for every method; the reference comes first.
     assert_eq!(
         methods,
@@ -94,12 +94,7 @@ fn a_diffuse_scene_skips_the_hybrid_and_says_why() {
     let scene = repo("scenes/cornell-box.toml");
     let out = quick_compare(&scene, dir.path(), ["16", "1", "4"]);
     let report = common::ok_json(&out);
-    let methods: Vec<&str> = report["rows"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|r| r["method"].as_str().unwrap())
-        .collect();
+    let methods = common::row_methods(&report);
     assert!(!methods.contains(&"hybrid"));
     let skipped = report["skipped"][0].as_str().unwrap();
     assert!(

@@ -9,30 +9,22 @@ use common::{repo, twopass};
 fn lightmap_bake_writes_its_files_into_the_manifest() {
     let out_dir = tempfile::tempdir().unwrap();
     let dir = out_dir.path();
-    let scene = repo("scenes/cornell-box.toml");
-    let out = twopass(&[
-        "bake",
-        scene.to_str().unwrap(),
-        "--output",
-        dir.to_str().unwrap(),
-        "--format",
-        "glb,vertex-glb",
-        "--lightmap",
-        "--texel-size",
-        "10",
-        "--element-size",
-        "100",
-        "--unshot",
-        "1e-2",
-        "--json",
-    ]);
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let out = common::bake_box(
+        dir,
+        &[
+            "--format",
+            "glb,vertex-glb",
+            "--lightmap",
+            "--texel-size",
+            "10",
+            "--element-size",
+            "100",
+            "--unshot",
+            "1e-2",
+            "--json",
+        ],
     );
-    let manifest: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let manifest = common::ok_json(&out);
     let files = manifest["files"].as_array().unwrap();
     let mut names: Vec<&str> = files
         .iter()
@@ -74,12 +66,7 @@ fn lightmap_bake_writes_its_files_into_the_manifest() {
 fn texel_size_needs_lightmap() {
     let scene = repo("scenes/cornell-box.toml");
     let out = twopass(&["bake", scene.to_str().unwrap(), "--texel-size", "5"]);
-    assert_eq!(
-        out.status.code(),
-        Some(2),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_exit(&out, 2);
     let out = twopass(&[
         "bake",
         scene.to_str().unwrap(),
@@ -87,10 +74,5 @@ fn texel_size_needs_lightmap() {
         "--texel-size",
         "-1",
     ]);
-    assert_eq!(
-        out.status.code(),
-        Some(2),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_exit(&out, 2);
 }

@@ -5,7 +5,7 @@ mod common;
 
 use std::time::{Duration, SystemTime};
 
-use common::{render_box, repo, twopass};
+use common::render_box;
 use twopass_bake::Manifest;
 
 const COARSE: [&str; 6] = [
@@ -18,17 +18,7 @@ const COARSE: [&str; 6] = [
 ];
 
 fn bake(dir: &std::path::Path, extra: &[&str]) -> std::process::Output {
-    let scene = repo("scenes/cornell-box.toml");
-    let mut args = vec![
-        "bake",
-        scene.to_str().unwrap(),
-        "--output",
-        dir.to_str().unwrap(),
-        "-q",
-    ];
-    args.extend(COARSE);
-    args.extend(extra);
-    twopass(&args)
+    common::bake_box(dir, &[&["-q"][..], &COARSE, extra].concat())
 }
 
 #[test]
@@ -79,12 +69,7 @@ fn the_manifest_seals_the_bake_set() {
     std::fs::remove_file(&ply).unwrap();
     std::fs::create_dir(&ply).unwrap(); // the .ply cannot be renamed into place now
     let out = bake(&dir, &[]);
-    assert_eq!(
-        out.status.code(),
-        Some(1),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_exit(&out, 1);
     assert!(
         !manifest_path.exists(),
         "the old manifest must not survive beside a partial new set"

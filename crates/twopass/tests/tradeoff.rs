@@ -23,13 +23,7 @@ fn sweep(out: &Path) -> Value {
         "--output",
         out.to_str().unwrap(),
     ]);
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    serde_json::from_slice(&o.stdout).unwrap()
+    common::ok_json(&o)
 }
 
 fn f(v: &Value) -> f64 {
@@ -156,13 +150,7 @@ fn front_presets_and_cache_agree_with_the_measured_rows() {
         "--output",
         exr.to_str().unwrap(),
     ]);
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    let summary: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let summary = common::ok_json(&o);
     assert_eq!(summary["method"], presets[0]["method"]);
     assert_eq!(summary["spp"], presets[0]["render"]["spp"]);
     assert_eq!(summary["preset"], "draft");

@@ -3,8 +3,9 @@
 
 use glam::{Vec2, Vec3};
 use proptest::prelude::*;
-use twopass_brdf::check::{Quadrature, incident_albedo};
 use twopass_brdf::delta::DeltaLobe;
+use twopass_brdf::interface::incident_albedo;
+use twopass_brdf::quadrature::Quadrature;
 use twopass_brdf::{Brdf, BrdfModel, ComplexIor, FresnelModel, Rgb};
 
 use crate::{blinn, cook, lambert, phong};

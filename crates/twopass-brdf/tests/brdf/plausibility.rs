@@ -4,10 +4,9 @@ use std::f64::consts::PI;
 
 use glam::Vec3;
 use twopass_brdf::beckmann::Beckmann;
-use twopass_brdf::check::{
-    self, CheckOptions, INCIDENCE_DEG, Quadrature, direction_at_deg, incident_albedo,
-    integrate_hemisphere,
-};
+use twopass_brdf::check::{self, CheckOptions, INCIDENCE_DEG, direction_at_deg};
+use twopass_brdf::interface::incident_albedo;
+use twopass_brdf::quadrature::{Quadrature, integrate_hemisphere};
 use twopass_brdf::{BrdfModel, ComplexIor, FresnelModel, blinn_phong};
 
 use crate::{blinn, cook, lambert, phong, white_ior};

@@ -3,9 +3,8 @@
 
 use glam::{Vec2, Vec3};
 use statrs::distribution::{ChiSquared, ContinuousCDF};
-use twopass_brdf::check::{
-    self, Chi2Options, Pcg32, Quadrature, chi2_test, chi2_test_brdf, direction_at_deg,
-};
+use twopass_brdf::check::{self, Chi2Options, Pcg32, chi2_test, chi2_test_brdf, direction_at_deg};
+use twopass_brdf::quadrature::Quadrature;
 use twopass_brdf::sample::*;
 use twopass_brdf::{Brdf, BrdfModel, ComplexIor, FresnelModel};
 

@@ -59,7 +59,7 @@ struct RenderReport {
 
 /// Renders with every method, then new views from the solution.
 pub fn run(args: &RenderBenchArgs, ctx: &Context) -> Result<(), CliError> {
-    use crate::pipeline::{Method, check_in_set, integrator, render_settings};
+    use crate::pipeline::{RenderMethod, check_in_set, integrator, render_settings};
     use twopass_trace::hybrid::radiosity_only;
     use twopass_trace::{Integrator, RenderProgress, WhittedSettings};
 
@@ -92,11 +92,11 @@ pub fn run(args: &RenderBenchArgs, ctx: &Context) -> Result<(), CliError> {
     let settings = render_settings(args.spp, ctx.seed);
     let w = WhittedSettings::default();
     let methods: Vec<Box<dyn Integrator + '_>> = [
-        Method::Whitted,
-        Method::Radiosity,
-        Method::Hybrid,
-        Method::HybridDirect,
-        Method::Reference,
+        RenderMethod::Whitted,
+        RenderMethod::Radiosity,
+        RenderMethod::Hybrid,
+        RenderMethod::HybridDirect,
+        RenderMethod::Reference,
     ]
     .into_iter()
     .map(|m| {

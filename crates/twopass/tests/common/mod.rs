@@ -30,15 +30,34 @@ pub fn render_box(method: &str, width: u32, spp: u32, extra: &[&str]) -> Output 
     twopass(&[&args[..], &["--width", &width, "--spp", &spp], extra].concat())
 }
 
-/// Asserts that `out` is a successful run (exit code 0), showing its stderr when it is not.
+/// Runs `twopass bake` of the Cornell box (`scenes/cornell-box.toml`) with `--output dir`, then
+/// the `extra` arguments (formats, solver settings, ...).
+pub fn bake_box(dir: &Path, extra: &[&str]) -> Output {
+    let scene = repo("scenes/cornell-box.toml");
+    let args = [
+        "bake",
+        scene.to_str().unwrap(),
+        "--output",
+        dir.to_str().unwrap(),
+    ];
+    twopass(&[&args[..], extra].concat())
+}
+
+/// Asserts that `out` exited with `code`, showing its stderr when it did not.
 #[track_caller]
-pub fn assert_ok(out: &Output) {
+pub fn assert_exit(out: &Output, code: i32) {
     assert_eq!(
         out.status.code(),
-        Some(0),
+        Some(code),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+}
+
+/// Asserts that `out` is a successful run (exit code 0), showing its stderr when it is not.
+#[track_caller]
+pub fn assert_ok(out: &Output) {
+    assert_exit(out, 0);
 }
 
 /// Asserts that `out` succeeded and parses its standard output as the JSON summary.
@@ -48,20 +67,26 @@ pub fn ok_json(out: &Output) -> serde_json::Value {
     serde_json::from_slice(&out.stdout).expect("the summary is JSON")
 }
 
+/// The `method` of every row of a JSON report, in order.
+pub fn row_methods(report: &serde_json::Value) -> Vec<&str> {
+    report["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["method"].as_str().unwrap())
+        .collect()
+}
+
 /// Bakes the Cornell box with a 5 mm lightmap into `dir` (the `.bake` and the lightmap files
 /// of one solve).
-pub fn bake_cornell_lightmap(dir: &std::path::Path) {
-    let scene = repo("scenes/cornell-box.toml");
-    assert_ok(&twopass(&[
-        "bake",
-        scene.to_str().unwrap(),
-        "--output",
-        dir.to_str().unwrap(),
+pub fn bake_cornell_lightmap(dir: &Path) {
+    let lightmap = [
         "--format",
         "bake",
         "--lightmap",
         "--texel-size",
         "5",
         "--quiet",
-    ]));
+    ];
+    assert_ok(&bake_box(dir, &lightmap));
 }

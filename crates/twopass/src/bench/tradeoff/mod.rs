@@ -36,7 +36,7 @@ use twopass_trace::RenderStats;
 use crate::bench::memory::{mib, peak_memory, reset_peak_memory};
 use crate::context::Context;
 use crate::error::CliError;
-use crate::pipeline::{Method, integrator, load_lit, methods, render_settings, to_image};
+use crate::pipeline::{RenderMethod, integrator, load_lit, methods, render_settings, to_image};
 use crate::preset::{Preset, PresetFile};
 use sweep::{RunSpec, SolveSpec, Sweep, plan_runs};
 
@@ -60,7 +60,7 @@ pub struct TradeoffArgs {
     pub targets: Vec<f64>,
     /// Methods to sweep, comma separated [default: every method the scene calls for].
     #[arg(long, value_enum, value_delimiter = ',')]
-    pub methods: Vec<Method>,
+    pub methods: Vec<RenderMethod>,
     /// Also write the presets beside the scene (`<stem>.presets.toml`), where `--preset`
     /// looks for them.
     #[arg(long)]
@@ -306,12 +306,12 @@ pub fn run(args: &TradeoffArgs, ctx: &Context) -> Result<(), CliError> {
 fn chosen_methods(
     args: &TradeoffArgs,
     scene: &twopass_scene::Scene,
-) -> Result<(Vec<Method>, Vec<String>), CliError> {
+) -> Result<(Vec<RenderMethod>, Vec<String>), CliError> {
     let (called_for, skipped) = methods(scene);
-    let chosen: Vec<Method> = if args.methods.is_empty() {
+    let chosen: Vec<RenderMethod> = if args.methods.is_empty() {
         called_for
     } else {
-        let mut m: Vec<Method> = Vec::new();
+        let mut m: Vec<RenderMethod> = Vec::new();
         for &method in &args.methods {
             if !m.contains(&method) {
                 m.push(method);
@@ -509,7 +509,7 @@ fn derive_presets(
 }
 
 /// Time to reach each target, per method, with the ratio to the path tracer's.
-fn reach_table(rows: &[SweepRow], methods: &[Method], targets: &[f64]) -> Vec<Reach> {
+fn reach_table(rows: &[SweepRow], methods: &[RenderMethod], targets: &[f64]) -> Vec<Reach> {
     let curve = |name: &str| -> Vec<(f64, f64)> {
         rows.iter()
             .filter(|r| r.method == name)
@@ -518,7 +518,7 @@ fn reach_table(rows: &[SweepRow], methods: &[Method], targets: &[f64]) -> Vec<Re
     };
     let mut out = Vec::new();
     for &target in targets {
-        let pt = front::time_to_reach(&curve(Method::Reference.name()), target);
+        let pt = front::time_to_reach(&curve(RenderMethod::Reference.name()), target);
         for m in methods {
             let reached = front::time_to_reach(&curve(m.name()), target);
             out.push(Reach {

@@ -2,7 +2,7 @@
 //! pairs (element size x samples per pixel for the radiosity-based methods, samples per pixel
 //! x shadow grid for Whitted and the hybrids), and which solve each render reads.
 
-use crate::pipeline::Method;
+use crate::pipeline::RenderMethod;
 use crate::preset::{RadiosityKnobs, RenderKnobs};
 
 /// The knobs swept, and the base setting the others vary around.
@@ -83,7 +83,7 @@ pub(super) struct SolveSpec {
 
 /// One render of the sweep.
 pub(super) struct RunSpec {
-    pub(super) method: Method,
+    pub(super) method: RenderMethod,
     pub(super) knob: &'static str,
     pub(super) render: RenderKnobs,
     /// Index into the solves, for the radiosity-based methods.
@@ -94,7 +94,7 @@ pub(super) struct RunSpec {
 pub(super) fn plan_runs(
     sweep: &Sweep,
     diagonal: f32,
-    methods: &[Method],
+    methods: &[RenderMethod],
 ) -> (Vec<SolveSpec>, Vec<RunSpec>) {
     let knobs =
         |divisor: f32, unshot: f64, (vmin, vmax): (u32, u32), adaptive: bool| RadiosityKnobs {
@@ -166,7 +166,7 @@ pub(super) fn plan_runs(
                 });
             }
         };
-        if method == Method::Reference {
+        if method == RenderMethod::Reference {
             for &spp in &sweep.reference_spps {
                 push("spp", RenderKnobs { spp, ..base_render }, None);
             }
@@ -186,7 +186,7 @@ pub(super) fn plan_runs(
                     }
                 }
             }
-            if method == Method::Radiosity {
+            if method == RenderMethod::Radiosity {
                 continue; // no shadow rays, no recursion: nothing else to vary
             }
         }
