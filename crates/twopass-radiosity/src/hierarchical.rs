@@ -704,8 +704,8 @@ impl<'s> HierarchicalSolver<'s> {
         into: [&mut Vec<DVec3>; 2],
     ) {
         let [whole, focused] = into;
-        specular::splat_add(mesh, areas, deposits, scratch, specular::power, whole);
-        specular::splat_add(mesh, areas, deposits, scratch, specular::focused, focused);
+        specular::splat(mesh, areas, deposits, scratch, specular::power, whole);
+        specular::splat(mesh, areas, deposits, scratch, specular::focused, focused);
     }
 
     /// With the specular transfer: sends what the leaves' exitance grew by since they last
@@ -2119,13 +2119,15 @@ impl<'s> HierarchicalSolver<'s> {
                 let areas = specular::VertexAreas::new(&self.mesh);
                 let mut deposits = spec.deposits.clone();
                 let mut values = vec![DVec3::ZERO; nv];
-                for (v, e) in
-                    specular::splat(&self.mesh, &areas, &mut deposits, &mut Vec::new(), |d| {
-                        d.focused
-                    })
-                {
-                    values[v as usize] = e;
-                }
+                let part = specular::focused;
+                specular::splat(
+                    &self.mesh,
+                    &areas,
+                    &mut deposits,
+                    &mut Vec::new(),
+                    part,
+                    &mut values,
+                );
                 fresh = values;
                 &fresh
             } else {

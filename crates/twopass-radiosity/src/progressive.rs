@@ -230,7 +230,7 @@ impl<'s> Progressive<'s> {
             (focused, &mut self.received_focused),
         ] {
             let (mesh, areas) = (&self.mesh, &self.vertex_areas);
-            specular::splat_add(
+            specular::splat(
                 mesh,
                 areas,
                 &mut spec.deposits,
@@ -298,9 +298,10 @@ impl<'s> Progressive<'s> {
             &self.vertex_areas,
             &mut deposits,
             &mut self.scratch,
-            |d| d.power,
+            power,
+            &mut self.received_spec,
         );
-        specular::splat_add(
+        specular::splat(
             &self.mesh,
             &self.vertex_areas,
             &mut deposits,
@@ -310,7 +311,6 @@ impl<'s> Progressive<'s> {
         );
         let mut gains: Vec<(u32, DVec3)> = Vec::new();
         for &(v, e) in &delta {
-            self.received_spec[v as usize] += e;
             for &leaf in &self.vertex_areas.leaves[v as usize] {
                 let node = &self.mesh.nodes[leaf as usize];
                 gains.push((node.patch, e * (f64::from(node.area) / 3.0)));

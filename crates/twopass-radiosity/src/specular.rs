@@ -411,33 +411,20 @@ pub(crate) fn focused(d: &Deposit) -> Vec3 {
     d.focused
 }
 
-/// [`splat`] of the power `part` picks, added into the per-vertex irradiance `into` (W/m^2).
-pub(crate) fn splat_add(
-    mesh: &ElementMesh,
-    areas: &VertexAreas,
-    deposits: &mut [Deposit],
-    scratch: &mut Vec<DVec3>,
-    part: fn(&Deposit) -> Vec3,
-    into: &mut [DVec3],
-) {
-    for (v, e) in splat(mesh, areas, deposits, scratch, part) {
-        into[v as usize] += e;
-    }
-}
-
 /// The deposits' irradiance per vertex (W/m^2) from the power `part` picks of each
 /// ([`Deposit::power`] or [`Deposit::focused`]), sorted by vertex, each vertex once: each
 /// deposit's power is shared among the three vertices of the element it lands in by its
 /// barycentric weights there, and divided by each vertex's area ([`VertexAreas`]), so the
 /// power the solver's bookkeeping sees arriving is exactly the power deposited. `scratch` is
 /// a per-vertex buffer of zeros (resized here), left zero. Each deposit remembers its element
-/// for the next splat.
+/// for the next splat. The irradiance is also added into `into`, one value per vertex.
 pub(crate) fn splat(
     mesh: &ElementMesh,
     areas: &VertexAreas,
     deposits: &mut [Deposit],
     scratch: &mut Vec<DVec3>,
     part: fn(&Deposit) -> Vec3,
+    into: &mut [DVec3],
 ) -> Vec<(u32, DVec3)> {
     if scratch.len() != mesh.vertices.len() {
         *scratch = vec![DVec3::ZERO; mesh.vertices.len()];
@@ -483,6 +470,10 @@ pub(crate) fn splat(
     touched.dedup();
     touched
         .into_iter()
-        .map(|v| (v, std::mem::take(&mut scratch[v as usize])))
+        .map(|v| {
+            let e = std::mem::take(&mut scratch[v as usize]);
+            into[v as usize] += e;
+            (v, e)
+        })
         .collect()
 }
