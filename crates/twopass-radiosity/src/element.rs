@@ -74,6 +74,33 @@ fn edge(a: u32, b: u32) -> (u32, u32) {
 }
 
 impl ElementMesh {
+    /// The surface nodes from `n`'s scene triangle's root down to `n`, both included.
+    pub fn path_to(&self, n: u32) -> Vec<u32> {
+        let t = self.nodes[n as usize].scene_triangle;
+        let uv = self.nodes[n as usize].uv;
+        let centre = (uv[0] + uv[1] + uv[2]) / 3.0;
+        let mut path = Vec::new();
+        let mut at = self.roots[t as usize];
+        loop {
+            path.push(at);
+            if at == n {
+                break;
+            }
+            let Some([c0, c1]) = self.nodes[at as usize].children else {
+                break;
+            };
+            // The child whose side of the split edge holds `n`'s centroid.
+            let [a, m, c] = self.nodes[c0 as usize].uv;
+            let side = |q: Vec2| (c - m).perp_dot(q - m);
+            at = if side(centre) * side(a) >= 0.0 {
+                c0
+            } else {
+                c1
+            };
+        }
+        path
+    }
+
     /// One root per participating scene triangle (`takes_part[object]`).
     pub fn new(scene: &Scene, takes_part: &[bool]) -> Self {
         let m = &scene.mesh;

@@ -50,7 +50,7 @@ use crate::solver::{
     Energy, Finish, Method, Options, Residuals, SolveError, SolveProgress, check_common, luminance,
     participating,
 };
-use crate::specular::{self, Deposit, Shooter, Specular, SpecularTransfer};
+use crate::specular::{self, Deposit, Specular};
 
 /// A link: light from `source` gathered at `receiver`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -708,102 +708,34 @@ impl<'s> HierarchicalSolver<'s> {
         specular::splat(mesh, areas, deposits, scratch, specular::focused, focused);
     }
 
-    /// With the specular transfer: sends what the leaves' exitance grew by since they last
-    /// sent through the specular surfaces. The rays of a shot of the whole emitted power
-    /// ([`SpecularTransfer::rays`]) are spread over the leaves in proportion to that growth
-    /// (luminance of its magnitude) by systematic sampling, every ray carrying the same share,
-    /// so the transfer is unbiased whatever the leaf count; changes totalling under a tenth of
-    /// the stop's unshot fraction of the emitted power wait for the next gather. A decrease
-    /// (a re-refinement moves light between leaves, a split leaf's darker child) is sent as
-    /// negative power, so what has been sent always equals the exitance. The deposits are
-    /// splatted onto the vertices as irradiance, which the next gather adds to the leaves'
-    /// reflected light.
+    /// With the specular transfer: every leaf sends what its exitance changed by since it last
+    /// sent through the specular surfaces ([`Specular::shoot_changes`]); changes totalling
+    /// under a tenth of the stop's unshot fraction of the emitted power wait for the next
+    /// gather. The deposits are splatted onto the vertices as irradiance, which the next gather
+    /// adds to the leaves' reflected light.
     fn shoot_specular(&mut self) {
         let Some(spec) = &self.specular else {
             return;
         };
-        let leaves: Vec<u32> = self.mesh.leaves().collect();
-        let grown: Vec<(u32, [DVec3; 2], f64)> = leaves
-            .iter()
-            .map(|&n| {
-                let sent = self.spec_sent_or_parent(n);
+        let changes: Vec<(u32, [DVec3; 2])> = self
+            .mesh
+            .leaves()
+            .map(|n| {
+                let sent = specular::sent(&self.mesh, &self.spec_sent, n);
                 let [e, r] = self.exitance[n as usize];
-                let d = [e - sent[0], r - sent[1]];
-                let p =
-                    luminance((d[0] + d[1]).abs()) * f64::from(self.mesh.nodes[n as usize].area);
-                (n, d, p)
+                (n, [e - sent[0], r - sent[1]])
             })
             .collect();
-        let total: f64 = grown.iter().map(|g| g.2).sum();
         let emitted = luminance(self.emitted).max(f64::MIN_POSITIVE);
-        if total.is_nan() || total <= 0.1 * self.options.stop.unshot_fraction * emitted {
-            return;
-        }
-        let rays = (f64::from(spec.settings().rays) * total / emitted)
-            .ceil()
-            .clamp(1.0, f64::from(SpecularTransfer::MAX_RAYS) * 16.0) as u64;
-        // Systematic sampling: ray j sits at (j + u) / rays of the cumulative growth.
         let key = hash(self.options.seed ^ hash(0x5bec_4e00_0000_0000 ^ self.iterations));
-        let u = unit(key);
-        let mut shots: Vec<(u32, [DVec3; 2], u32)> = Vec::new();
-        let mut acc = 0.0;
-        for &(n, d, p) in &grown {
-            if p <= 0.0 {
-                continue;
-            }
-            let lo = acc / total * rays as f64;
-            acc += p;
-            let hi = acc / total * rays as f64;
-            let count = ((hi - u).ceil() - (lo - u).ceil()).max(0.0) as u32;
-            if count > 0 {
-                shots.push((n, d, count));
-            }
-        }
-        let per_power = total / rays as f64;
-        let results: Vec<(Vec<Deposit>, u64)> = shots
-            .par_iter()
-            .map(|&(n, d, count)| {
-                let node = &self.mesh.nodes[n as usize];
-                let area = f64::from(node.area);
-                let total = d[0] + d[1];
-                let p = luminance(total.abs()) * area;
-                // Each ray carries the same luminance, per_power: the shot's radiosity is the
-                // change's magnitude scaled so that B A / count = |d| A per_power / p; the
-                // deposits take the change's sign per channel afterwards.
-                let scale = f64::from(count) * per_power / p;
-                let emitted = DVec3::select(
-                    total.cmpne(DVec3::ZERO),
-                    (d[0] / total).clamp(DVec3::ZERO, DVec3::ONE),
-                    DVec3::ZERO,
-                );
-                let shooter = Shooter {
-                    corners: self.mesh.corners(n),
-                    tri: node.scene_triangle,
-                    radiosity: total.abs() * scale,
-                    emitted,
-                    area,
-                };
-                let sign =
-                    DVec3::select(total.cmplt(DVec3::ZERO), -DVec3::ONE, DVec3::ONE).as_vec3();
-                let (mut deposits, rays) =
-                    spec.shoot(self.scene, &shooter, count, hash(key ^ u64::from(n)));
-                if sign != Vec3::ONE {
-                    for d in &mut deposits {
-                        d.power *= sign;
-                        d.focused *= sign;
-                    }
-                }
-                (deposits, rays)
-            })
-            .collect();
-        let mut deposits: Vec<Deposit> = Vec::new();
-        let mut cast = 0;
-        for (d, r) in results {
-            deposits.extend(d);
-            cast += r;
-        }
-        for &(n, d, _) in &grown {
-            let sent = self.spec_sent_or_parent(n);
+        let threshold = 0.1 * self.options.stop.unshot_fraction * emitted;
+        let Some((mut deposits, cast)) =
+            spec.shoot_changes(self.scene, &self.mesh, &changes, emitted, threshold, key)
+        else {
+            return;
+        };
+        for &(n, d) in &changes {
+            let sent = specular::sent(&self.mesh, &self.spec_sent, n);
             self.spec_sent[n as usize] = Some([sent[0] + d[0], sent[1] + d[1]]);
         }
         self.rays += cast;
@@ -817,20 +749,6 @@ impl<'s> HierarchicalSolver<'s> {
         if let Some(spec) = &mut self.specular {
             spec.rays += cast;
             spec.deposits.extend(deposits);
-        }
-    }
-
-    /// The exitance surface node `n` has sent through the specular surfaces: its own record,
-    /// else its deepest ancestor's.
-    fn spec_sent_or_parent(&self, n: u32) -> [DVec3; 2] {
-        match self.spec_sent[n as usize] {
-            Some(s) => s,
-            None => self
-                .path_to(n)
-                .iter()
-                .rev()
-                .find_map(|&a| self.spec_sent[a as usize])
-                .unwrap_or([DVec3::ZERO; 2]),
         }
     }
 
@@ -858,39 +776,12 @@ impl<'s> HierarchicalSolver<'s> {
     /// The deepest ancestor of surface node `n` that took part in the last push-pull (`n`
     /// itself if it did).
     fn settled_ancestor(&self, n: u32) -> u32 {
-        let path = self.path_to(n);
+        let path = self.mesh.path_to(n);
         path.iter()
             .rev()
             .copied()
             .find(|&a| (a as usize) < self.settled)
             .unwrap_or(path[0])
-    }
-
-    /// The surface nodes from `n`'s scene triangle's root down to `n`, both included.
-    fn path_to(&self, n: u32) -> Vec<u32> {
-        let t = self.mesh.nodes[n as usize].scene_triangle;
-        let uv = self.mesh.nodes[n as usize].uv;
-        let centre = (uv[0] + uv[1] + uv[2]) / 3.0;
-        let mut path = Vec::new();
-        let mut at = self.mesh.roots[t as usize];
-        loop {
-            path.push(at);
-            if at == n {
-                break;
-            }
-            let Some([c0, c1]) = self.mesh.nodes[at as usize].children else {
-                break;
-            };
-            // The child whose side of the split edge holds `n`'s centroid.
-            let [a, m, c] = self.mesh.nodes[c0 as usize].uv;
-            let side = |q: Vec2| (c - m).perp_dot(q - m);
-            at = if side(centre) * side(a) >= 0.0 {
-                c0
-            } else {
-                c1
-            };
-        }
-        path
     }
 
     /// The oracle: estimated error of a link's transport, as power (W, luminance).
@@ -2192,7 +2083,7 @@ impl<'s> HierarchicalSolver<'s> {
     /// ancestors', interpolated to it), averaged over its corners.
     fn row_sum(&self, leaf: u32) -> f64 {
         // Walk from the root to the leaf, summing the links of every node on the way.
-        let path = self.path_to(leaf);
+        let path = self.mesh.path_to(leaf);
         let t = self.mesh.nodes[leaf as usize].scene_triangle;
         let sum_links = |r: NodeRef| -> f64 {
             self.received(r)

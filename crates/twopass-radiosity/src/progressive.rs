@@ -53,6 +53,10 @@ pub struct Progressive<'s> {
     /// Per vertex, with the specular transfer: the part of `received_spec` that left an
     /// emitter as emission and went through a refraction (the focused caustic), W/m^2.
     received_focused: Vec<DVec3>,
+    /// Per element-mesh node, with the specular transfer: the exitance (emitted, reflected,
+    /// W/m^2) it has sent through the specular surfaces; `None` for nodes split off since
+    /// (they have their parent's, [`specular::sent`]).
+    spec_sent: Vec<Option<[DVec3; 2]>>,
     vertex_areas: specular::VertexAreas,
     /// A per-vertex buffer of zeros for the splats.
     scratch: Vec<DVec3>,
@@ -183,6 +187,7 @@ impl<'s> Progressive<'s> {
             received_refl: Vec::new(),
             specular,
             received_focused: Vec::new(),
+            spec_sent: Vec::new(),
             received_spec: Vec::new(),
             vertex_areas: specular::VertexAreas::default(),
             scratch: Vec::new(),
@@ -223,6 +228,7 @@ impl<'s> Progressive<'s> {
             return;
         };
         self.vertex_areas = specular::VertexAreas::new(&self.mesh);
+        self.spec_sent.resize(self.mesh.nodes.len(), None);
         self.received_spec = vec![DVec3::ZERO; self.mesh.vertices.len()];
         self.received_focused = vec![DVec3::ZERO; self.mesh.vertices.len()];
         for (part, into) in [
@@ -261,29 +267,39 @@ impl<'s> Progressive<'s> {
         }
     }
 
-    /// The specular transfer of the shot of patch `p` with radiosity `radiosity` (W/m^2):
-    /// traces its rays through the specular surfaces, splats what lands onto the vertices and
-    /// hands the power to the receiving patches as unshot reflected radiosity, as the form
-    /// factors' transfer does. Returns the power that arrived (W per channel).
-    fn shoot_specular(&mut self, p: usize, radiosity: DVec3, emitted: DVec3) -> DVec3 {
+    /// The specular transfer of the shot of patch `p`: each of its elements sends what its
+    /// exitance changed by since it last sent ([`Specular::shoot_changes`]: from where the light
+    /// leaves it, not as the uniform patch), what lands is splatted onto the vertices and
+    /// handed to the receiving patches as unshot reflected radiosity, as the form factors'
+    /// transfer does. Returns the power that arrived (W per channel).
+    fn shoot_specular(&mut self, p: usize) -> DVec3 {
         let Some(spec) = &self.specular else {
             return DVec3::ZERO;
         };
-        let area = self.patch_area(p);
-        let n = spec.rays_for(
-            luminance(radiosity.abs()) * area,
-            luminance(self.energy.emitted),
-        );
-        let node = self.mesh.patches[p];
-        let key = hash(self.options.seed ^ hash(0x5bec_0000_0000_0000 ^ self.shots) ^ p as u64);
-        let shooter = specular::Shooter {
-            corners: self.mesh.corners(node),
-            tri: self.mesh.nodes[node as usize].scene_triangle,
-            radiosity,
-            emitted,
-            area,
+        let mean = |node: &crate::element::Node, f: &dyn Fn(usize) -> DVec3| {
+            node.vertices.iter().map(|&v| f(v as usize)).sum::<DVec3>() / 3.0
         };
-        let (mut deposits, rays) = spec.shoot(self.scene, &shooter, n, key);
+        let changes: Vec<(u32, [DVec3; 2])> = self.patch_leaves[p]
+            .iter()
+            .map(|&leaf| {
+                let node = &self.mesh.nodes[leaf as usize];
+                let e = mean(node, &|v| self.emission[v]);
+                let r = mean(node, &|v| self.rho[v] * self.received(v));
+                let sent = specular::sent(&self.mesh, &self.spec_sent, leaf);
+                (leaf, [e - sent[0], r - sent[1]])
+            })
+            .collect();
+        let key = hash(self.options.seed ^ hash(0x5bec_0000_0000_0000 ^ self.shots) ^ p as u64);
+        let emitted = luminance(self.energy.emitted);
+        let Some((mut deposits, rays)) =
+            spec.shoot_changes(self.scene, &self.mesh, &changes, emitted, 0.0, key)
+        else {
+            return DVec3::ZERO;
+        };
+        for &(leaf, d) in &changes {
+            let sent = specular::sent(&self.mesh, &self.spec_sent, leaf);
+            self.spec_sent[leaf as usize] = Some([sent[0] + d[0], sent[1] + d[1]]);
+        }
         self.rays += rays;
         if deposits.is_empty() {
             if let Some(spec) = &mut self.specular {
@@ -515,13 +531,7 @@ impl<'s> Progressive<'s> {
             }
         }
         if self.specular.is_some() {
-            let total = de + dr;
-            let emitted = DVec3::select(
-                total.cmpgt(DVec3::ZERO),
-                (de / total).clamp(DVec3::ZERO, DVec3::ONE),
-                DVec3::ZERO,
-            );
-            arrived += self.shoot_specular(p, total, emitted);
+            arrived += self.shoot_specular(p);
         }
         let shot = (de + dr) * area;
         self.energy.escaped += shot - arrived;

@@ -26,7 +26,9 @@
 use glam::{DVec3, Vec2, Vec3};
 use rayon::prelude::*;
 use twopass_brdf::frame::Frame;
-use twopass_brdf::random::{SplitMix64, hash, unit_f32};
+use twopass_brdf::random::{SplitMix64, hash, unit_f32, unit_f64};
+
+use crate::solver::luminance;
 use twopass_scene::targets::specular_objects;
 use twopass_scene::{Scene, SpecularTargets, SurfacePoint};
 
@@ -221,20 +223,100 @@ impl Specular {
         })
     }
 
-    /// The settings.
-    pub fn settings(&self) -> SpecularTransfer {
-        self.settings
-    }
-
-    /// Rays for a shot of `power` (luminance) when the whole emitted power is `emitted`.
-    pub fn rays_for(&self, power: f64, emitted: f64) -> u32 {
-        let n = f64::from(self.settings.rays) * power / emitted.max(f64::MIN_POSITIVE);
-        let n = n.ceil().clamp(
-            f64::from(SpecularTransfer::MIN_RAYS),
-            f64::from(SpecularTransfer::MAX_RAYS),
-        ) as u32;
-        let k = f64::from(n).sqrt().ceil() as u32;
-        k * k
+    /// Sends the exitance changes of element-mesh leaves through the specular surfaces:
+    /// `changes` holds, per leaf, its (emitted, reflected) exitance change since it last sent
+    /// (W/m^2, either sign). The rays of a shot of the whole emitted power
+    /// ([`SpecularTransfer::rays`], `emitted` its luminance) are spread over the leaves in
+    /// proportion to the luminance of each change's magnitude times the leaf's area, by
+    /// systematic sampling, so every ray carries the same share and the transfer is unbiased
+    /// whatever the leaf count (at least [`SpecularTransfer::MIN_RAYS`] in all); a decrease
+    /// is sent as negative power, so what a leaf has sent always equals its exitance. Leaves
+    /// are shot where the light leaves them, not as the uniform patch they belong to: a caustic
+    /// spot sends its light through the glass again from the spot. Returns `None` when the
+    /// changes total no more than `threshold` (luminance power, W): nothing is sent, the
+    /// caller keeps them for later. Otherwise the deposits in leaf order and the rays cast.
+    pub fn shoot_changes(
+        &self,
+        scene: &Scene,
+        mesh: &ElementMesh,
+        changes: &[(u32, [DVec3; 2])],
+        emitted: f64,
+        threshold: f64,
+        key: u64,
+    ) -> Option<(Vec<Deposit>, u64)> {
+        let power = |n: u32, d: &[DVec3; 2]| {
+            luminance((d[0] + d[1]).abs()) * f64::from(mesh.nodes[n as usize].area)
+        };
+        let total: f64 = changes.iter().map(|(n, d)| power(*n, d)).sum();
+        if total.is_nan() || total <= threshold || total <= 0.0 {
+            return None;
+        }
+        let rays = (f64::from(self.settings.rays) * total / emitted.max(f64::MIN_POSITIVE))
+            .ceil()
+            .clamp(
+                f64::from(SpecularTransfer::MIN_RAYS),
+                16.0 * f64::from(SpecularTransfer::MAX_RAYS),
+            ) as u64;
+        // Systematic sampling: ray j sits at (j + u) / rays of the cumulative change.
+        let u = unit_f64(hash(key ^ 0x5eec_0515));
+        let mut shots: Vec<(u32, [DVec3; 2], u32)> = Vec::new();
+        let mut acc = 0.0;
+        for (n, d) in changes {
+            let p = power(*n, d);
+            if p <= 0.0 {
+                continue;
+            }
+            let lo = acc / total * rays as f64;
+            acc += p;
+            let hi = acc / total * rays as f64;
+            let count = ((hi - u).ceil() - (lo - u).ceil()).max(0.0) as u32;
+            if count > 0 {
+                shots.push((*n, *d, count));
+            }
+        }
+        let per_ray = total / rays as f64;
+        let results: Vec<(Vec<Deposit>, u64)> = shots
+            .par_iter()
+            .map(|&(n, d, count)| {
+                let node = &mesh.nodes[n as usize];
+                let area = f64::from(node.area);
+                let change = d[0] + d[1];
+                // Each ray carries the luminance per_ray: the shot's radiosity is the change's
+                // magnitude scaled so that B A / count = |change| A per_ray / p.
+                let scale = f64::from(count) * per_ray / power(n, &d);
+                let emitted = DVec3::select(
+                    change.cmpne(DVec3::ZERO),
+                    (d[0] / change).clamp(DVec3::ZERO, DVec3::ONE),
+                    DVec3::ZERO,
+                );
+                let shooter = Shooter {
+                    corners: mesh.corners(n),
+                    tri: node.scene_triangle,
+                    radiosity: change.abs() * scale,
+                    emitted,
+                    area,
+                };
+                let (mut deposits, rays) =
+                    self.shoot(scene, &shooter, count, hash(key ^ u64::from(n)));
+                // The change's sign, per channel.
+                let sign =
+                    DVec3::select(change.cmplt(DVec3::ZERO), -DVec3::ONE, DVec3::ONE).as_vec3();
+                if sign != Vec3::ONE {
+                    for d in &mut deposits {
+                        d.power *= sign;
+                        d.focused *= sign;
+                    }
+                }
+                (deposits, rays)
+            })
+            .collect();
+        let mut deposits = Vec::new();
+        let mut cast = 0;
+        for (d, r) in results {
+            deposits.extend(d);
+            cast += r;
+        }
+        Some((deposits, cast))
     }
 
     /// Traces the specular paths of one shot of `shooter` with `n` rays (the first
@@ -371,6 +453,21 @@ impl Specular {
                 None => return (None, rays),
             }
         }
+    }
+}
+
+/// What leaf `n` has sent through the specular surfaces, (emitted, reflected) exitance in
+/// W/m^2: its own record in `sent` (per node), else its deepest ancestor's (a leaf split off
+/// since has its parent's), else nothing.
+pub(crate) fn sent(mesh: &ElementMesh, sent: &[Option<[DVec3; 2]>], n: u32) -> [DVec3; 2] {
+    match sent.get(n as usize).copied().flatten() {
+        Some(s) => s,
+        None => mesh
+            .path_to(n)
+            .iter()
+            .rev()
+            .find_map(|&a| sent.get(a as usize).copied().flatten())
+            .unwrap_or([DVec3::ZERO; 2]),
     }
 }
 
