@@ -503,6 +503,13 @@ fn per_pixel_caustics_replace_the_meshs_focused_light_once() {
         out.layers.composite()
     };
     let (mesh, per_pixel) = (image(0.0), image(4.0));
+    // Same seed, same image on one thread (the light tracing pass included).
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap()
+        .install(|| image(4.0));
+    assert_eq!(one, per_pixel, "one and two threads differ");
     let reference = render(
         &s,
         &camera,
