@@ -60,19 +60,37 @@ fn all_diffuse_box_is_untouched_bit_for_bit() {
 /// beyond the mirror's edge), and what it reflects can only escape or fall on the black
 /// emitter: its radiosity is rho times the irradiance through the mirror, nothing else.
 fn mirror_scene(r: [f64; 3]) -> Scene {
-    let text = format!(
-        "version = 1\n[camera]\nposition = [0, 3, 0.01]\nlook_at = [0, 0, 0]\nfov_y = 60\n\
+    let camera = "position = [0, 3, 0.01]\nlook_at = [0, 0, 0]\nfov_y = 60";
+    load_toml(
+        &mirror_text(camera, r, false, "black"),
+        Path::new("mirror.toml"),
+    )
+    .unwrap()
+    .0
+}
+
+/// The mirror scenes' TOML: a mirror of per-channel reflectance `r` in the plane y = 0 (x in
+/// [-1.2, 0], z in [-0.4, 0.4]) facing up (or down, `turned`), a 0.2 x 0.2 emitter (L_e = 1)
+/// of material `light` (`black` or `grey`) and a grey receiver (rho = 0.5, 0.4 x 0.4) side by
+/// side in the plane y = 1, both facing down; `camera` is the body of the `[camera]` table.
+pub fn mirror_text(camera: &str, r: [f64; 3], turned: bool, light: &str) -> String {
+    let (u, v) = if turned {
+        ("[1.2, 0, 0]", "[0, 0, 0.8]")
+    } else {
+        ("[0, 0, 0.8]", "[1.2, 0, 0]")
+    };
+    format!(
+        "version = 1\n[camera]\n{camera}\n\
          [[material]]\nname = \"mirror\"\ntype = \"mirror\"\nreflectance = {r:?}\n\
          [[material]]\nname = \"black\"\ntype = \"lambert\"\ndiffuse = 0\n\
          [[material]]\nname = \"grey\"\ntype = \"lambert\"\ndiffuse = 0.5\n\
          [[object]]\nname = \"mirror\"\nmaterial = \"mirror\"\n\
-         shape = {{ type = \"quad\", origin = [-1.2, 0, -0.4], edge_u = [0, 0, 0.8], edge_v = [1.2, 0, 0] }}\n\
-         [[object]]\nname = \"light\"\nmaterial = \"black\"\nemission = 1\n\
+         shape = {{ type = \"quad\", origin = [-1.2, 0, -0.4], edge_u = {u}, edge_v = {v} }}\n\
+         [[object]]\nname = \"light\"\nmaterial = \"{light}\"\nemission = 1\n\
          shape = {{ type = \"quad\", origin = [-1.6, 1, -0.1], edge_u = [0.2, 0, 0], edge_v = [0, 0, 0.2] }}\n\
          [[object]]\nname = \"receiver\"\nmaterial = \"grey\"\n\
          shape = {{ type = \"quad\", origin = [0.3, 1, -0.2], edge_u = [0.4, 0, 0], edge_v = [0, 0, 0.4] }}\n"
-    );
-    load_toml(&text, Path::new("mirror.toml")).unwrap().0
+    )
 }
 
 /// Irradiance at `x` on the receiver (normal -y) from the emitter's mirror image (the emitter
@@ -435,16 +453,9 @@ fn a_mirror_facing_no_diffuse_surface_is_not_modelled() {
     // The receiver scene with its mirror turned over (facing down, away from the emitter and
     // the receiver above it): no light reaches its front and nothing it would reflect lands
     // anywhere, so the planner skips the transfer and the solve casts none of its rays.
-    let text = "version = 1\n[camera]\nposition = [0, 3, 0.01]\nlook_at = [0, 0, 0]\nfov_y = 60\n\
-         [[material]]\nname = \"mirror\"\ntype = \"mirror\"\nreflectance = 1\n\
-         [[material]]\nname = \"grey\"\ntype = \"lambert\"\ndiffuse = 0.5\n\
-         [[object]]\nname = \"mirror\"\nmaterial = \"mirror\"\n\
-         shape = { type = \"quad\", origin = [-1.2, 0, -0.4], edge_u = [1.2, 0, 0], edge_v = [0, 0, 0.8] }\n\
-         [[object]]\nname = \"light\"\nmaterial = \"grey\"\nemission = 1\n\
-         shape = { type = \"quad\", origin = [-1.6, 1, -0.1], edge_u = [0.2, 0, 0], edge_v = [0, 0, 0.2] }\n\
-         [[object]]\nname = \"receiver\"\nmaterial = \"grey\"\n\
-         shape = { type = \"quad\", origin = [0.3, 1, -0.2], edge_u = [0.4, 0, 0], edge_v = [0, 0, 0.4] }\n";
-    let s = load_toml(text, Path::new("turned.toml")).unwrap().0;
+    let camera = "position = [0, 3, 0.01]\nlook_at = [0, 0, 0]\nfov_y = 60";
+    let text = mirror_text(camera, [1.0; 3], true, "grey");
+    let s = load_toml(&text, Path::new("turned.toml")).unwrap().0;
     let (needed, why) = decide(&s);
     assert!(!needed, "{why}");
     assert!(

@@ -14,26 +14,16 @@ use twopass_trace::{
 };
 
 use super::common::{repo_scene, scene};
-use crate::specular::through_mirror;
+use crate::specular::{mirror_text, through_mirror};
 
-/// A flat mirror of reflectance `r` in y = 0 (x in [-1.2, 0], facing up), a small emitter
+/// A flat mirror of reflectance (0.9, 0.6, 0.3) in y = 0 (x in [-1.2, 0], facing up), a small emitter
 /// (0.2 x 0.2, L_e = 1, black) and a grey receiver (rho = 0.5, 0.4 x 0.4) side by side in the
 /// plane y = 1, both facing down, and a camera under the receiver looking up at it. The
 /// receiver sees the emitter only through the mirror: every bit of its light is a caustic path
 /// L S D E, which the reference leaves to light tracing.
 fn mirror_scene() -> Scene {
-    scene(
-        "version = 1\n[camera]\nposition = [0.5, 0.35, 0.0]\nlook_at = [0.5, 1, 0]\nup = [0, 0, 1]\nfov_y = 40\n\
-         [[material]]\nname = \"mirror\"\ntype = \"mirror\"\nreflectance = [0.9, 0.6, 0.3]\n\
-         [[material]]\nname = \"black\"\ntype = \"lambert\"\ndiffuse = 0\n\
-         [[material]]\nname = \"grey\"\ntype = \"lambert\"\ndiffuse = 0.5\n\
-         [[object]]\nname = \"mirror\"\nmaterial = \"mirror\"\n\
-         shape = { type = \"quad\", origin = [-1.2, 0, -0.4], edge_u = [0, 0, 0.8], edge_v = [1.2, 0, 0] }\n\
-         [[object]]\nname = \"light\"\nmaterial = \"black\"\nemission = 1\n\
-         shape = { type = \"quad\", origin = [-1.6, 1, -0.1], edge_u = [0.2, 0, 0], edge_v = [0, 0, 0.2] }\n\
-         [[object]]\nname = \"receiver\"\nmaterial = \"grey\"\n\
-         shape = { type = \"quad\", origin = [0.3, 1, -0.2], edge_u = [0.4, 0, 0], edge_v = [0, 0, 0.4] }\n",
-    )
+    let camera = "position = [0.5, 0.35, 0.0]\nlook_at = [0.5, 1, 0]\nup = [0, 0, 1]\nfov_y = 40";
+    scene(&mirror_text(camera, [0.9, 0.6, 0.3], false, "black"))
 }
 
 fn render_reference(
