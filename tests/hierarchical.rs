@@ -195,11 +195,9 @@ fn leaves_form_a_crack_free_mesh() {
 fn same_solution_on_any_thread_count() {
     let (s, _) = load(scene_path("cornell-box.toml")).unwrap();
     let run = |threads| {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap()
-            .install(|| solve(&s, options(1e-2)).solution().vertex_radiosity())
+        crate::on_threads(threads, || {
+            solve(&s, options(1e-2)).solution().vertex_radiosity()
+        })
     };
     assert_eq!(run(1), run(2));
 }

@@ -27,3 +27,12 @@ pub fn data(name: &str) -> PathBuf {
         .join("data")
         .join(name)
 }
+
+/// Runs `f` on a rayon pool of `threads` threads (the determinism tests compare one and two).
+pub fn on_threads<R: Send>(threads: usize, f: impl FnOnce() -> R + Send) -> R {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("a thread pool")
+        .install(f)
+}

@@ -303,11 +303,7 @@ fn progressive_refinement_converges_to_the_dense_solve() {
 fn same_seed_same_solution_on_one_or_two_threads() {
     let (s, _) = load(scene_path("cornell-box.toml")).unwrap();
     let solve = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| {
+        crate::on_threads(threads, || {
             let mut solver = Progressive::new(&s, cornell_options(1e-2)).unwrap();
             run(&mut solver);
             solver.vertex_radiosity()

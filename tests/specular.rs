@@ -13,7 +13,7 @@ use twopass_radiosity::{Options, Progressive, SpecularTransfer, Stop};
 use twopass_scene::{Scene, load, load_toml};
 
 use crate::radiosity::{CUBE_FACES, cornell_options, run};
-use crate::scene_path;
+use crate::{on_threads, scene_path};
 
 /// The radiosity tests' Cornell settings (150 mm patches, 60 mm elements, one adaptive
 /// round) to the unshot fraction `unshot`, with the specular transfer `specular`.
@@ -341,11 +341,7 @@ fn spheres_balance_power_and_solve_alike_on_one_or_two_threads() {
         ..Options::default()
     };
     let solve = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| {
+        on_threads(threads, || {
             let mut solver = Progressive::new(&s, options.clone()).unwrap();
             run(&mut solver);
             let (rays, deposits) = solver.specular_transfer().unwrap();
@@ -515,11 +511,7 @@ fn per_pixel_caustics_replace_the_meshs_focused_light_once() {
     };
     let (mesh, per_pixel) = (image(0.0), image(4.0));
     // Same seed, same image on one thread (the light tracing pass included).
-    let one = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .unwrap()
-        .install(|| image(4.0));
+    let one = on_threads(1, || image(4.0));
     assert_eq!(one, per_pixel, "one and two threads differ");
     let reference = render(
         &s,
@@ -650,27 +642,23 @@ fn hierarchical_and_progressive_transfer_agree_on_the_spheres() {
         wall_means(&solver.solution(), s.objects.len())
     };
     let hierarchical = |specular, threads: usize| -> Solution {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap()
-            .install(|| {
-                let mut solver = HierarchicalSolver::new(
-                    &s,
-                    Options {
-                        method: Method::Hierarchical,
-                        stop: Stop {
-                            unshot_fraction: 1e-3,
-                            ..Stop::default()
-                        },
-                        specular,
-                        ..Options::default()
+        on_threads(threads, || {
+            let mut solver = HierarchicalSolver::new(
+                &s,
+                Options {
+                    method: Method::Hierarchical,
+                    stop: Stop {
+                        unshot_fraction: 1e-3,
+                        ..Stop::default()
                     },
-                )
-                .unwrap();
-                solver.run(|_| std::ops::ControlFlow::Continue(()));
-                solver.solution()
-            })
+                    specular,
+                    ..Options::default()
+                },
+            )
+            .unwrap();
+            solver.run(|_| std::ops::ControlFlow::Continue(()));
+            solver.solution()
+        })
     };
     let (one, two) = (hierarchical(transfer, 1), hierarchical(transfer, 2));
     let vertex_bits = |s: &Solution| {

@@ -14,6 +14,7 @@ use twopass_trace::{
 };
 
 use super::common::{repo_scene, scene};
+use crate::on_threads;
 use crate::specular::{mirror_text, through_mirror};
 
 /// A flat mirror of reflectance (0.9, 0.6, 0.3) in y = 0 (x in [-1.2, 0], facing up), a small emitter
@@ -180,11 +181,9 @@ fn light_tracing_gives_the_same_image_on_one_and_two_threads() {
     let s = repo_scene("cornell-spheres.toml");
     // 24 x 24 x 480 light paths: more than one batch of parallel jobs.
     let on = |threads| {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap()
-            .install(|| render_reference(&s, 24, 480, 5, Caustics::LightTracing))
+        on_threads(threads, || {
+            render_reference(&s, 24, 480, 5, Caustics::LightTracing)
+        })
     };
     let (one, two) = (on(1), on(2));
     assert!(one.stats.light_paths > 4096 * 64);

@@ -2,19 +2,12 @@
 
 use twopass_scene::{Ray, Scene};
 use twopass_trace::{
-    Integrator, Layer, Radiance, Reference, ReferenceSettings, RenderOutput, RenderProgress,
-    RenderSettings, Sampler, Tally, Whitted, WhittedSettings, render,
+    Integrator, Layer, Radiance, Reference, ReferenceSettings, RenderProgress, RenderSettings,
+    Sampler, Tally, Whitted, WhittedSettings, render,
 };
 
 use super::common::repo_scene;
-
-fn on_threads(n: usize, f: impl FnOnce() -> RenderOutput + Send) -> RenderOutput {
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(n)
-        .build()
-        .unwrap()
-        .install(f)
-}
+use crate::on_threads;
 
 #[test]
 fn same_seed_gives_bit_identical_images_at_one_and_two_threads() {
