@@ -20,13 +20,13 @@ fn info_json_describes_the_cornell_box() {
         v["plan"]["specular"]["required"], false,
         "an all-Lambertian scene needs no specular pass"
     );
-    assert_eq!(v["plan"]["specular_transfer"]["required"], false);
-    let reason = v["plan"]["specular_transfer"]["reason"].as_str().unwrap();
-    assert!(
-        reason.contains("no mirror, conductor or dielectric"),
-        "{reason}"
+    decision(
+        &v,
+        "specular_transfer",
+        false,
+        "no mirror, conductor or dielectric",
     );
-    assert_eq!(v["plan"]["caustics"]["required"], false);
+    decision(&v, "caustics", false, "no light through mirrors and glass");
     assert_eq!(v["emitters"].as_array().unwrap().len(), 1);
 }
 
@@ -35,23 +35,20 @@ fn specular_pass_is_planned_only_for_non_diffuse_materials() {
     let scene = repo("scenes/cornell-spheres.toml");
     let out = twopass(&["info", scene.to_str().unwrap(), "--json"]);
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    assert_eq!(v["plan"]["specular"]["required"], true);
-    let reason = v["plan"]["specular"]["reason"].as_str().unwrap();
-    assert!(
-        reason.contains("mirror") && reason.contains("glass"),
-        "{reason}"
-    );
+    decision(&v, "specular", true, "glass (dielectric), mirror (mirror)");
     // The spheres face the walls: light through them goes to the radiosity elements.
-    assert_eq!(v["plan"]["specular_transfer"]["required"], true);
-    let reason = v["plan"]["specular_transfer"]["reason"].as_str().unwrap();
-    assert!(
-        reason.contains("mirror-sphere, glass-sphere face diffuse surfaces"),
-        "{reason}"
-    );
+    let why = "mirror-sphere, glass-sphere face diffuse surfaces";
+    decision(&v, "specular_transfer", true, why);
     // The glass sphere focuses light: the hybrids show that caustic per pixel.
-    assert_eq!(v["plan"]["caustics"]["required"], true);
-    let reason = v["plan"]["caustics"]["reason"].as_str().unwrap();
-    assert!(reason.contains("focused through glass-sphere"), "{reason}");
+    decision(&v, "caustics", true, "focused through glass-sphere");
+}
+
+/// Asserts that `info --json`'s plan has pass `pass` required or not, for a reason that
+/// contains `because`.
+fn decision(v: &serde_json::Value, pass: &str, required: bool, because: &str) {
+    assert_eq!(v["plan"][pass]["required"], required, "{pass}");
+    let reason = v["plan"][pass]["reason"].as_str().unwrap();
+    assert!(reason.contains(because), "{pass}: {reason}");
 }
 
 #[test]
