@@ -339,6 +339,11 @@ impl Material {
         self.lobe.as_ref().and_then(Lobe::delta)
     }
 
+    /// Whether the material is a smooth dielectric: it refracts, and is seen from both sides.
+    pub fn is_dielectric(&self) -> bool {
+        matches!(self.lobe, Some(Lobe::Dielectric { .. }))
+    }
+
     /// The diffuse part rho / pi (1/sr); zero below the horizon.
     pub fn eval_diffuse(&self, wo: Vec3, wi: Vec3) -> Rgb {
         Lambert::new_unchecked(self.diffuse).eval(wo, wi)

@@ -88,7 +88,11 @@ fn radiosity_based<'a>(
     let caustics = (view_dependent
         && settings.caustic_paths > 0.0
         && source.separates_focused_caustics()
-        && has_dielectric(scene))
+        && scene.objects.iter().any(|o| {
+            scene.materials[o.material as usize]
+                .material
+                .is_dielectric()
+        }))
     .then(|| {
         LightTracer::new(
             scene,
@@ -108,14 +112,4 @@ fn radiosity_based<'a>(
         name,
         caustics,
     }
-}
-
-/// Whether some object of `scene` is a smooth dielectric (refracts light).
-fn has_dielectric(scene: &Scene) -> bool {
-    scene.objects.iter().any(|o| {
-        matches!(
-            scene.materials[o.material as usize].material.delta(),
-            Some(twopass_brdf::delta::DeltaLobe::Dielectric { .. })
-        )
-    })
 }

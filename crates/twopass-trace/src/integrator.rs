@@ -102,10 +102,7 @@ impl<'a> Shading<'a> {
 
     /// Whether the material is a smooth dielectric (two-sided interface).
     pub fn is_dielectric(&self) -> bool {
-        matches!(
-            self.material.delta(),
-            Some(twopass_brdf::delta::DeltaLobe::Dielectric { .. })
-        )
+        self.material.is_dielectric()
     }
 }
 

@@ -107,12 +107,7 @@ pub fn plan(scene: &Scene) -> Plan {
         }
     };
     let glass: Vec<&str> = used()
-        .filter(|(_, m)| {
-            matches!(
-                m.material.delta(),
-                Some(twopass_brdf::delta::DeltaLobe::Dielectric { .. })
-            )
-        })
+        .filter(|(_, m)| m.material.is_dielectric())
         .map(|(o, _)| o.name.as_str())
         .collect();
     let caustics = if !specular_transfer.required {
