@@ -332,9 +332,22 @@ impl Scene {
     /// Whether anything blocks the segment between two surface points (visibility for shadow
     /// rays to emitter samples and radiosity form factors). Both ends are offset.
     pub fn occluded_between(&self, from: &SurfacePoint, to: &SurfacePoint) -> bool {
+        let r = Self::segment_between(from, to);
+        self.accel.any_hit(r.origin, r.direction, r.t_max)
+    }
+
+    /// The shadow ray [`Scene::occluded_between`] casts between two surface points: both ends
+    /// offset off their surfaces, `t` in (0, `t_max`) covering the segment without its ends.
+    /// Exposed so that other ray engines can be given exactly the same queries (`bench rays
+    /// --export`).
+    pub fn segment_between(from: &SurfacePoint, to: &SurfacePoint) -> Ray {
         let o = from.spawn_origin(to.position - from.position);
         let t = to.spawn_origin(o - to.position);
-        self.accel.any_hit(o, t - o, 1.0 - SHADOW_EPSILON)
+        Ray {
+            origin: o,
+            direction: t - o,
+            t_max: 1.0 - SHADOW_EPSILON,
+        }
     }
 
     /// [`Scene::intersect`] for many rays in parallel (rayon); results in input order.

@@ -31,6 +31,11 @@ pub struct RaysArgs {
     /// Minimum measuring time per query and thread count, seconds.
     #[arg(long, default_value_t = 1.0, value_parser = parse_seconds)]
     pub seconds: f64,
+    /// Also write the scene's triangles, the three ray batches exactly as cast, and this
+    /// engine's answers to DIR as raw little-endian arrays (described in DIR/rays.json), so
+    /// another ray engine can cast the same queries (`crates/twopass/bench/embree_rays.py`).
+    #[arg(long, value_name = "DIR")]
+    pub export: Option<PathBuf>,
 }
 
 /// One measured ray query: rates on one and on all threads.
@@ -68,6 +73,43 @@ enum Batch {
 }
 
 impl Batch {
+    /// The rays as the accelerator receives them (occlusion pairs as their offset segments).
+    fn rays(&self) -> Vec<Ray> {
+        match self {
+            Self::Closest(r) => r.clone(),
+            Self::Occlusion(p) => p
+                .iter()
+                .map(|(a, b)| Scene::segment_between(a, b))
+                .collect(),
+        }
+    }
+
+    /// This engine's answer per ray: the hit triangle and `t` (closest hit; -1 and infinity
+    /// for a miss), or 1 and 0 for blocked and 0 and infinity for clear (occlusion).
+    fn answers(&self, scene: &Scene) -> Vec<(i32, f32)> {
+        match self {
+            Self::Closest(r) => r
+                .par_iter()
+                .map(|r| {
+                    scene
+                        .accel()
+                        .closest(r.origin, r.direction, r.t_max)
+                        .map_or((-1, f32::INFINITY), |h| (h.triangle as i32, h.t))
+                })
+                .collect(),
+            Self::Occlusion(p) => p
+                .par_iter()
+                .map(|(a, b)| {
+                    if scene.occluded_between(a, b) {
+                        (1, 0.0)
+                    } else {
+                        (0, f32::INFINITY)
+                    }
+                })
+                .collect(),
+        }
+    }
+
     fn len(&self) -> usize {
         match self {
             Self::Closest(r) => r.len(),
@@ -113,6 +155,66 @@ impl Batch {
     }
 }
 
+/// Little-endian bytes of a list of f32 or i32/u32 values.
+fn le_bytes<T: Copy, const N: usize>(values: impl Iterator<Item = T>, f: fn(T) -> [u8; N]) -> Vec<u8> {
+    values.flat_map(f).collect()
+}
+
+/// Writes `bench rays --export`: the triangles, each batch's rays and this engine's answers.
+fn export(
+    dir: &std::path::Path,
+    scene: &Scene,
+    batches: &[(QueryKind, &str, Batch)],
+) -> Result<(), CliError> {
+    use crate::output::write_atomic;
+    let mesh = &scene.mesh;
+    let positions = mesh.positions.iter().flat_map(|p| p.to_array());
+    write_atomic(&dir.join("positions.f32"), &le_bytes(positions, f32::to_le_bytes))?;
+    let triangles = mesh.triangles.iter().flatten().copied();
+    write_atomic(&dir.join("triangles.u32"), &le_bytes(triangles, u32::to_le_bytes))?;
+    let mut kinds = Vec::new();
+    for (kind, _, batch) in batches {
+        let name = match kind {
+            QueryKind::Camera => "camera",
+            QueryKind::Incoherent => "incoherent",
+            QueryKind::Occlusion => "occlusion",
+        };
+        let rays = batch.rays().into_iter().flat_map(|r| {
+            let (o, d) = (r.origin, r.direction);
+            [o.x, o.y, o.z, d.x, d.y, d.z, r.t_max]
+        });
+        write_atomic(&dir.join(format!("{name}.rays")), &le_bytes(rays, f32::to_le_bytes))?;
+        let answers = batch.answers(scene);
+        let ids = answers.iter().map(|a| a.0);
+        write_atomic(&dir.join(format!("{name}.ids")), &le_bytes(ids, i32::to_le_bytes))?;
+        let ts = answers.iter().map(|a| a.1);
+        write_atomic(&dir.join(format!("{name}.t")), &le_bytes(ts, f32::to_le_bytes))?;
+        kinds.push(serde_json::json!({
+            "name": name,
+            "query": if matches!(batch, Batch::Closest(_)) { "closest" } else { "any" },
+            "rays": batch.len(),
+        }));
+    }
+    let manifest = serde_json::json!({
+        "format": "twopass bench rays export 1",
+        "triangles": mesh.triangles.len(),
+        "vertices": mesh.positions.len(),
+        "files": {
+            "positions.f32": "vertex positions, x y z, f32 little-endian",
+            "triangles.u32": "vertex indices, 3 per triangle, u32 little-endian",
+            "NAME.rays": "per ray: origin x y z, direction x y z, t_max (t in (0, t_max], in units of |direction|), f32 little-endian",
+            "NAME.ids": "per ray, i32 little-endian: the hit triangle or -1 (closest); 1 blocked, 0 clear (any)",
+            "NAME.t": "per ray, f32 little-endian: t of the closest hit, infinity for a miss; 0 blocked, infinity clear (any)",
+        },
+        "batches": kinds,
+    });
+    let text = serde_json::to_string_pretty(&manifest).map_err(|e| CliError::Encode {
+        path: dir.join("rays.json"),
+        message: e.to_string(),
+    })?;
+    write_atomic(&dir.join("rays.json"), text.as_bytes())
+}
+
 /// A measuring time: more than 0 and at most a day, seconds.
 fn parse_seconds(s: &str) -> Result<f64, String> {
     let in_range = |x: &f64| *x > 0.0 && *x <= 86_400.0;
@@ -149,6 +251,9 @@ pub fn run(args: &RaysArgs, ctx: &Context) -> Result<(), CliError> {
             Batch::Occlusion(workload::occlusion_pairs(&scene, n, ctx.seed ^ 0x5eed)),
         ),
     ];
+    if let Some(dir) = &args.export {
+        export(dir, &scene, &batches)?;
+    }
     let progress = ctx.progress(7, "bench rays");
     let mut builds: Vec<f64> = (0..5)
         .map(|_| {
