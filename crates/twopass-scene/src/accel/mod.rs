@@ -14,15 +14,15 @@ mod wide;
 
 use std::time::{Duration, Instant};
 
-use glam::{UVec2, Vec3, Vec3A};
+use glam::{Vec3, Vec3A};
 use obvhs::{Boundable, BvhBuildParams, aabb::Aabb, cwbvh::builder::build_cwbvh};
 
-use packet::{PacketRay, TriPacket, for_each_leaf_packet};
+use packet::{PacketRay, TriPacket};
 pub(crate) use ray::SHADOW_EPSILON;
 pub use ray::{Ray, SurfacePoint};
 pub(crate) use triangle::triangle_normal;
 use triangle::{AxisTriangle, ShearedRay};
-use wide::{NodeRay, WideBvh, WideNode};
+use wide::{NodeRay, WideBvh};
 
 /// Relative padding of primitive bounds: a slab test can round a ray that passes exactly
 /// through a box's corner or edge (a triangle vertex on the box face) to a miss. Boxes grow by
@@ -53,14 +53,15 @@ pub struct TriangleHit {
     pub corners: [Vec3; 3],
 }
 
-/// A CWBVH over the scene's triangles with the queries every pass uses.
+/// An 8-wide BVH over the scene's triangles (built by obvhs as a CWBVH, decoded) with the
+/// queries every pass uses.
 pub struct Accel {
-    /// The obvhs CWBVH's nodes, decoded for the node test.
+    /// The decoded tree.
     bvh: WideBvh,
-    /// Triangles in BVH slot order, four to a packet (slot `s` is lane `s % 4` of packet
-    /// `s / 4`).
+    /// One packet per leaf: the leaf's triangles (at most three, obvhs's CWBVH leaf size) in
+    /// its first lanes.
     packets: Vec<TriPacket>,
-    /// BVH slot -> scene triangle index.
+    /// Packet lane -> scene triangle index: `ids[4 * packet + lane]`.
     ids: Vec<u32>,
     build_time: Duration,
 }
@@ -68,7 +69,7 @@ pub struct Accel {
 impl std::fmt::Debug for Accel {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Accel")
-            .field("triangles", &self.ids.len())
+            .field("packets", &self.packets.len())
             .field("nodes", &self.bvh.nodes.len())
             .field("build_time", &self.build_time)
             .finish()
@@ -110,12 +111,33 @@ impl Accel {
             })
             .collect();
         let cwbvh = build_cwbvh(&boxes, params, &mut Duration::default());
-        let bvh = WideBvh {
-            nodes: cwbvh.nodes.iter().map(WideNode::decode).collect(),
-        };
-        let ids = cwbvh.primitive_indices;
-        let slots: Vec<[Vec3A; 3]> = ids.iter().map(|&i| corners[i as usize]).collect();
-        let packets = slots.chunks(4).map(TriPacket::new).collect();
+        // Every leaf gets its own packet, so a leaf is one four-lane test.
+        let mut packet_of_slot = vec![u32::MAX; cwbvh.primitive_indices.len()];
+        let mut packets = Vec::new();
+        let mut ids = Vec::new();
+        for n in &cwbvh.nodes {
+            for (c, &meta) in n.child_meta.iter().enumerate() {
+                if n.imask & (1 << c) != 0 || meta == 0 {
+                    continue;
+                }
+                let first = (n.primitive_base_idx + u32::from(meta & 0x1f)) as usize;
+                let count = (meta >> 5).count_ones() as usize;
+                let slots = first..first + count;
+                let tris: Vec<[Vec3A; 3]> = cwbvh.primitive_indices[slots.clone()]
+                    .iter()
+                    .map(|&i| corners[i as usize])
+                    .collect();
+                packet_of_slot[first] = packets.len() as u32;
+                packets.push(TriPacket::new(&tris));
+                ids.extend((0..4).map(|lane| {
+                    cwbvh.primitive_indices[slots.clone()]
+                        .get(lane)
+                        .copied()
+                        .unwrap_or(u32::MAX)
+                }));
+            }
+        }
+        let bvh = WideBvh::new(&cwbvh, |slot| packet_of_slot[slot as usize]);
         Self {
             bvh,
             packets,
@@ -136,33 +158,20 @@ impl Accel {
 
     /// The closest hit with `0 < t < t_max`, if any.
     pub fn closest(&self, origin: Vec3, direction: Vec3, t_max: f32) -> Option<TriangleHit> {
-        if self.ids.is_empty() {
-            return None;
-        }
         let sheared = PacketRay::new(&ShearedRay::new(origin, direction));
         let ray = NodeRay::new(origin, direction);
         // Packet, lane, barycentrics of the nearest hit so far; its t is `t_max`.
         let mut best: Option<(usize, usize, [f32; 3])> = None;
         let mut t_max = t_max;
-        let mut state = ray.traversal();
-        let mut node;
-        obvhs::traverse!(
-            self.bvh,
-            node,
-            state,
-            node.intersect(&ray, t_max, state.oct_inv4),
-            {
-                for_each_leaf_packet(&mut state, |p, lanes| {
-                    let hits = sheared.intersect(&self.packets[p], lanes, t_max);
-                    if hits.mask != 0 {
-                        let lane = hits.nearest();
-                        t_max = hits.t[lane];
-                        best = Some((p, lane, hits.barycentric(lane)));
-                    }
-                    false
-                });
+        self.bvh.walk(&ray, &mut t_max, true, |p, lanes, t_max| {
+            let hits = sheared.intersect(&self.packets[p], lanes, *t_max);
+            if hits.mask != 0 {
+                let lane = hits.nearest();
+                *t_max = hits.t[lane];
+                best = Some((p, lane, hits.barycentric(lane)));
             }
-        );
+            false
+        });
         let (p, lane, barycentric) = best?;
         let v = &self.packets[p].v;
         Some(TriangleHit {
@@ -175,31 +184,14 @@ impl Accel {
 
     /// Whether anything is hit with `0 < t < t_max`; stops at the first hit found.
     pub fn any_hit(&self, origin: Vec3, direction: Vec3, t_max: f32) -> bool {
-        if self.ids.is_empty() {
-            return false;
-        }
         let sheared = PacketRay::new(&ShearedRay::new(origin, direction));
         let ray = NodeRay::new(origin, direction);
-        let mut state = ray.traversal();
-        let mut node;
         let mut hit = false;
-        'search: {
-            obvhs::traverse!(
-                self.bvh,
-                node,
-                state,
-                node.intersect(&ray, t_max, state.oct_inv4),
-                {
-                    for_each_leaf_packet(&mut state, |p, lanes| {
-                        hit = sheared.intersect(&self.packets[p], lanes, t_max).mask != 0;
-                        hit
-                    });
-                    if hit {
-                        break 'search;
-                    }
-                }
-            );
-        }
+        let mut t_max = t_max;
+        self.bvh.walk(&ray, &mut t_max, false, |p, lanes, t_max| {
+            hit = sheared.intersect(&self.packets[p], lanes, *t_max).mask != 0;
+            hit
+        });
         hit
     }
 

@@ -1,16 +1,14 @@
 //! The watertight test on four triangles at once (one ray, four lanes), bit for bit the
-//! operations of the scalar test in [`super::triangle`], and walking a leaf's primitive group
-//! packet by packet.
+//! operations of the scalar test in [`super::triangle`].
 
 use glam::{Vec3A, Vec4};
-use obvhs::cwbvh::Traversal;
 
 use super::ray::gamma;
 use super::triangle::ShearedRay;
 
-/// Four triangles (four consecutive BVH slots) stored for a one-ray, four-triangle watertight
+/// Up to four triangles (one BVH leaf) stored for a one-ray, four-triangle watertight
 /// test: `v[axis][vertex]` holds that coordinate of that vertex for the four triangles (lanes).
-/// Lanes past the last slot are zero and never enabled.
+/// Lanes past the leaf's triangles are zero and never enabled.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct TriPacket {
     pub(super) v: [[Vec4; 3]; 3],
@@ -148,32 +146,5 @@ impl PacketRay {
             inv_det,
             mask,
         }
-    }
-}
-
-/// Takes the leaf's whole primitive group from the traversal (so it is tested at once, four
-/// triangles at a time) and calls `f(packet, lanes)` for every packet holding one of its
-/// slots, until `f` returns `true`.
-#[inline(always)]
-pub(super) fn for_each_leaf_packet(state: &mut Traversal, f: impl FnMut(usize, u32) -> bool) {
-    let group = state.primitive_group;
-    let bits = group.y | (1 << (state.primitive_id - group.x));
-    state.primitive_group.y = 0;
-    for_each_packet(group.x, bits, f);
-}
-
-/// Calls `f(packet, lanes)` for every packet holding a slot of the primitive group
-/// (`base`, `bits`): bit `i` of `bits` is slot `base + i`.
-#[inline(always)]
-pub(super) fn for_each_packet(base: u32, bits: u32, mut f: impl FnMut(usize, u32) -> bool) {
-    let mut rest = u64::from(bits) << (base % 4);
-    let mut packet = (base / 4) as usize;
-    while rest != 0 {
-        let lanes = (rest & 0xf) as u32;
-        if lanes != 0 && f(packet, lanes) {
-            return;
-        }
-        rest >>= 4;
-        packet += 1;
     }
 }

@@ -1,39 +1,22 @@
-//! obvhs's compressed 8-wide CWBVH nodes, decoded to f32 boxes once at build time, the
-//! eight-box slab test that produces obvhs's node hit mask, and the ray as that test sees it.
+//! 8-wide BVH nodes decoded from obvhs's compressed CWBVH (f32 boxes once at build time), the
+//! eight-box slab test, and the traversal: ordered front to back with distance culling for
+//! closest hits, early exit for occlusion.
 
-use glam::{UVec2, Vec3, Vec3A, Vec4};
-use obvhs::cwbvh::{Traversal, node::CwBvhNode};
+use glam::{Vec3, Vec4};
+use obvhs::cwbvh::{CwBvh, node::CwBvhNode};
+use obvhs::faststack::FastStack;
 
 /// Largest inverse direction component: finite, so the slab test never forms 0 * inf.
 pub(super) const MAX_INVERSE: f32 = 1e20;
 
-/// One obvhs CWBVH node with its eight children's boxes decoded from the 8-bit quantized
-/// planes to f32 once at build time (rounded outward, so every decoded box contains the
-/// quantized one), so the traversal does not convert bytes to floats at every visit. The
-/// field names `child_base_idx`, `primitive_base_idx` and `imask` are the ones obvhs's
-/// `traverse!` macro reads; they are copied from the obvhs node unchanged.
-#[derive(Clone, Copy, Debug)]
-#[repr(C, align(64))]
-pub(super) struct WideNode {
-    /// `bounds[4 * axis + 2 * side + half]`: lane `j` is child `4 * half + j`; side 0 is the
-    /// box minimum, 1 the maximum. Empty children are empty boxes (min +inf, max -inf).
-    pub(super) bounds: [Vec4; 12],
-    /// What each child adds to obvhs's node hit mask when hit, if it is a leaf (zero for
-    /// internal and empty children): its primitive count in unary, shifted to its first slot.
-    /// Always below 2^24, so exact in f32, and the leaves' bits are disjoint: summing the hit
-    /// lanes ORs them.
-    pub(super) leaf_bits: [Vec4; 2],
-    /// Index of the first child node.
-    pub(super) child_base_idx: u32,
-    /// Index of the first primitive slot.
-    pub(super) primitive_base_idx: u32,
-    /// Bit `i` set when child `i` is an internal node.
-    pub(super) imask: u8,
-}
+/// Depth of the traversal stack kept on the call stack; a tree that could need more (checked
+/// at build time, [`WideBvh::stack_need`]) traverses with a heap stack of the exact size.
+const INLINE_STACK: usize = 64;
 
-/// `XOR_PERMUTE[o][m]` moves bit `c` of `m` to bit `c ^ o`: obvhs orders the internal children
-/// of a node by slot XOR the ray's octant.
-pub(super) const XOR_PERMUTE: [[u8; 256]; 8] = {
+/// `XOR_PERMUTE[o][m]` moves bit `c` of `m` to bit `c ^ o`. obvhs's builder places a node's
+/// children in slots such that, for a ray whose octant is `o` (bit 2 set for x >= 0, bit 1
+/// for y, bit 0 for z), descending `slot ^ o` is roughly front to back.
+const XOR_PERMUTE: [[u8; 256]; 8] = {
     let mut table = [[0u8; 256]; 8];
     let mut o = 0;
     while o < 8 {
@@ -55,8 +38,29 @@ pub(super) const XOR_PERMUTE: [[u8; 256]; 8] = {
     table
 };
 
+/// One 8-wide node: its children's boxes decoded from obvhs's 8-bit quantized planes to f32
+/// once at build time (rounded outward, so every decoded box contains the quantized one), and
+/// what each child is: an inner node, a leaf (one triangle packet), or empty.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+pub(super) struct WideNode {
+    /// `bounds[4 * axis + 2 * side + half]`: lane `j` is child `4 * half + j`; side 0 is the
+    /// box minimum, 1 the maximum. Empty children are empty boxes (min +inf, max -inf).
+    pub(super) bounds: [Vec4; 12],
+    /// Per child: its node index (inner) or its packet index (leaf); 0 when empty.
+    pub(super) child: [u32; 8],
+    /// Per child, four bits from bit `4 * child`: the leaf's lanes in its packet.
+    pub(super) lanes: u32,
+    /// Bit `c` set when child `c` is an inner node.
+    pub(super) inner: u8,
+    /// Bit `c` set when child `c` is a leaf.
+    pub(super) leaf: u8,
+}
+
 impl WideNode {
-    pub(super) fn decode(n: &CwBvhNode) -> Self {
+    /// Decodes obvhs node `n`; `packet_of(slot)` is the packet that holds the leaf starting at
+    /// primitive slot `slot` (every leaf has its own packet).
+    fn decode(n: &CwBvhNode, packet_of: impl Fn(u32) -> u32) -> Self {
         let ext = n.compute_extent();
         let mut bounds = [Vec4::ZERO; 12];
         let planes = [
@@ -80,46 +84,46 @@ impl WideNode {
                 bounds[4 * axis + 2 + half] = Vec4::from_slice(&max[r]);
             }
         }
-        let mut leaf_bits = [0.0f32; 8];
+        let mut node = Self {
+            bounds,
+            child: [0; 8],
+            lanes: 0,
+            inner: n.imask,
+            leaf: 0,
+        };
         for (c, &meta) in n.child_meta.iter().enumerate() {
-            let offset = u32::from(meta & 0x1f);
             if n.imask & (1 << c) != 0 {
-                // obvhs numbers internal children by slot: 24 + slot.
-                assert_eq!(offset, 24 + c as u32, "unexpected CWBVH child numbering");
-            } else {
-                let bits = u32::from(meta >> 5) << offset;
-                assert!(bits < 1 << 24, "leaf primitive slots beyond 24");
-                leaf_bits[c] = bits as f32;
+                // Inner children are stored from `child_base_idx` in slot order.
+                let before = (u32::from(n.imask) & ((1 << c) - 1)).count_ones();
+                node.child[c] = n.child_base_idx + before;
+            } else if meta != 0 {
+                // A leaf: its primitives are slots `offset..offset + count` after the base,
+                // the count in unary in the top three bits.
+                let offset = u32::from(meta & 0x1f);
+                let count = (meta >> 5).count_ones();
+                node.child[c] = packet_of(n.primitive_base_idx + offset);
+                node.lanes |= ((1 << count) - 1) << (4 * c);
+                node.leaf |= 1 << c;
             }
         }
-        Self {
-            bounds,
-            leaf_bits: [
-                Vec4::from_slice(&leaf_bits[..4]),
-                Vec4::from_slice(&leaf_bits[4..]),
-            ],
-            child_base_idx: n.child_base_idx,
-            primitive_base_idx: n.primitive_base_idx,
-            imask: n.imask,
-        }
+        node
     }
 
-    /// The children hit by `ray` within `[0, t_max]`, encoded as obvhs's node hit mask: the
-    /// high byte holds internal children by traversal priority, the low 24 bits the primitive
-    /// slots (relative to `primitive_base_idx`) of the hit leaves.
+    /// The children hit by `ray` within `[0, t_max]` (bit `c` for child `c`) and each child's
+    /// entry distance.
     #[inline(always)]
-    pub(super) fn intersect(&self, ray: &NodeRay, t_max: f32, oct_inv4: u32) -> u32 {
+    fn intersect(&self, ray: &NodeRay, t_max: f32) -> (u32, [Vec4; 2]) {
         let b = &self.bounds;
         let t_max = Vec4::splat(t_max);
         let mut mask = 0u32;
-        let mut leaves = Vec4::ZERO;
-        for half in 0..2 {
+        let mut near = [Vec4::ZERO; 2];
+        for (half, near) in near.iter_mut().enumerate() {
             let slab = |axis: usize| {
-                let near = b[4 * axis + ray.near[axis] + half];
-                let far = b[4 * axis + (2 - ray.near[axis]) + half];
+                let n = b[4 * axis + ray.near[axis] + half];
+                let f = b[4 * axis + (2 - ray.near[axis]) + half];
                 (
-                    (near - ray.origin[axis]) * ray.inv[axis],
-                    (far - ray.origin[axis]) * ray.inv[axis],
+                    (n - ray.origin[axis]) * ray.inv[axis],
+                    (f - ray.origin[axis]) * ray.inv[axis],
                 )
             };
             let (nx, fx) = slab(0);
@@ -127,20 +131,151 @@ impl WideNode {
             let (nz, fz) = slab(2);
             let t_near = nx.max(ny).max(nz.max(Vec4::ZERO));
             let t_far = fx.min(fy).min(fz.min(t_max));
-            let hit = t_near.cmple(t_far);
-            mask |= hit.bitmask() << (4 * half);
-            leaves += Vec4::select(hit, self.leaf_bits[half], Vec4::ZERO);
+            mask |= t_near.cmple(t_far).bitmask() << (4 * half);
+            *near = t_near;
         }
-        // obvhs's hit mask: hit internal children in the high byte, at bit 24 + (slot XOR
-        // octant); hit leaves' primitive slots in the low 24 bits.
-        let inner = XOR_PERMUTE[(oct_inv4 & 7) as usize][(mask & u32::from(self.imask)) as usize];
-        (u32::from(inner) << 24) | leaves.element_sum() as u32
+        (mask, near)
     }
 }
 
-/// The decoded nodes, named as obvhs's `traverse!` macro expects (`.nodes[i]`).
+/// The decoded tree: node 0 is the root.
 pub(super) struct WideBvh {
     pub(super) nodes: Vec<WideNode>,
+    /// The most entries the traversal stack can hold at once: over every path from the root,
+    /// the sum of the inner children pushed beside the one descended into.
+    stack_need: usize,
+}
+
+impl WideBvh {
+    /// Decodes obvhs's tree; `packet_of` as in [`WideNode::decode`].
+    pub(super) fn new(bvh: &CwBvh, packet_of: impl Fn(u32) -> u32) -> Self {
+        let nodes: Vec<WideNode> = bvh
+            .nodes
+            .iter()
+            .map(|n| WideNode::decode(n, &packet_of))
+            .collect();
+        // Children come after their parents in obvhs's order, so one backward sweep sees every
+        // child's need before its parent's.
+        let mut need = vec![0usize; nodes.len()];
+        for (i, n) in nodes.iter().enumerate().rev() {
+            let inner = (0..8).filter(|c| n.inner & (1 << c) != 0);
+            let deepest = inner
+                .map(|c| {
+                    let child = n.child[c] as usize;
+                    assert!(child > i, "CWBVH child stored before its parent");
+                    need[child]
+                })
+                .max()
+                .unwrap_or(0);
+            need[i] = (n.inner.count_ones() as usize).saturating_sub(1) + deepest;
+        }
+        Self {
+            stack_need: need.first().copied().unwrap_or(0),
+            nodes,
+        }
+    }
+
+    /// Visits the leaves `ray` reaches within `t_max`, calling `leaf(packet, lanes, t_max)`;
+    /// the call may shorten `t_max` (a closer hit), and returns `true` to stop the walk. With
+    /// `ordered`, inner children are visited nearest first and a pushed child is skipped once
+    /// `t_max` is below its entry distance (closest hit); without, in slot order (any hit).
+    #[inline(always)]
+    pub(super) fn walk(
+        &self,
+        ray: &NodeRay,
+        t_max: &mut f32,
+        ordered: bool,
+        mut leaf: impl FnMut(usize, u32, &mut f32) -> bool,
+    ) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        obvhs::fast_stack!((u32, f32), (INLINE_STACK), self.stack_need, stack, {
+            self.walk_with(&mut stack, ray, t_max, ordered, &mut leaf)
+        });
+    }
+
+    #[inline(always)]
+    fn walk_with(
+        &self,
+        stack: &mut impl FastStack<(u32, f32)>,
+        ray: &NodeRay,
+        t_max: &mut f32,
+        ordered: bool,
+        leaf: &mut impl FnMut(usize, u32, &mut f32) -> bool,
+    ) {
+        let mut node = 0u32;
+        loop {
+            let n = &self.nodes[node as usize];
+            let (hit, near) = n.intersect(ray, *t_max);
+            let near: [f32; 8] = {
+                let mut a = [0.0; 8];
+                near[0].write_to_slice(&mut a[..4]);
+                near[1].write_to_slice(&mut a[4..]);
+                a
+            };
+            let mut leaves = hit & u32::from(n.leaf);
+            while leaves != 0 {
+                let c = leaves.trailing_zeros() as usize;
+                leaves &= leaves - 1;
+                if leaf(n.child[c] as usize, (n.lanes >> (4 * c)) & 0xf, t_max) {
+                    return;
+                }
+            }
+            let mut inner = hit & u32::from(n.inner);
+            let next = match inner.count_ones() {
+                0 => None,
+                1 => Some(n.child[inner.trailing_zeros() as usize]),
+                _ if !ordered => {
+                    // obvhs's order: descending `slot ^ octant`; push the rest so that the
+                    // next in that order is popped first.
+                    let o = ray.octant;
+                    let mut order = u32::from(XOR_PERMUTE[o][inner as usize]);
+                    let first = 31 - order.leading_zeros();
+                    order &= !(1 << first);
+                    while order != 0 {
+                        let b = order.trailing_zeros();
+                        order &= order - 1;
+                        stack.push((n.child[(b as usize) ^ o], 0.0));
+                    }
+                    Some(n.child[first as usize ^ o])
+                }
+                _ => {
+                    // Push the hit children farthest first, then descend into the nearest.
+                    let mut found = [(0u32, 0.0f32); 8];
+                    let mut k = 0;
+                    while inner != 0 {
+                        let c = inner.trailing_zeros() as usize;
+                        inner &= inner - 1;
+                        let t = near[c];
+                        // Insertion by distance, nearest last.
+                        let mut j = k;
+                        while j > 0 && found[j - 1].1 < t {
+                            found[j] = found[j - 1];
+                            j -= 1;
+                        }
+                        found[j] = (n.child[c], t);
+                        k += 1;
+                    }
+                    for &entry in &found[..k - 1] {
+                        stack.push(entry);
+                    }
+                    Some(found[k - 1].0)
+                }
+            };
+            node = match next {
+                Some(child) => child,
+                None => loop {
+                    let Some((child, t)) = stack.pop() else {
+                        return;
+                    };
+                    if t <= *t_max {
+                        break child;
+                    }
+                },
+            };
+        }
+    }
 }
 
 /// The ray as the node test sees it: origin and inverse direction splatted per axis, and for
@@ -153,8 +288,9 @@ pub(super) struct NodeRay {
     pub(super) inv: [Vec4; 3],
     /// 0 when the ray enters through the box minimum on this axis, 2 through the maximum.
     pub(super) near: [usize; 3],
-    /// The direction as obvhs orders children by (its octant only).
-    pub(super) direction: Vec3A,
+    /// The direction's octant as obvhs orders children by: bit 2 set for x >= 0, bit 1 for
+    /// y, bit 0 for z.
+    pub(super) octant: usize,
 }
 
 impl NodeRay {
@@ -177,25 +313,9 @@ impl NodeRay {
             ],
             inv: inv.map(Vec4::splat),
             near: inv.map(|i| if i < 0.0 { 2 } else { 0 }),
-            direction: Vec3A::new(inv[0], inv[1], inv[2]),
-        }
-    }
-
-    /// A fresh obvhs traversal state for this ray, starting at the root.
-    pub(super) fn traversal(&self) -> Traversal {
-        // obvhs's ray_get_octant_inv4: one bit per axis with a non-negative direction.
-        let d = self.direction;
-        let oct_inv4 = (if d.x < 0.0 { 0 } else { 0x0404_0404 })
-            | (if d.y < 0.0 { 0 } else { 0x0202_0202 })
-            | (if d.z < 0.0 { 0 } else { 0x0101_0101 });
-        Traversal {
-            stack: Default::default(),
-            current_group: UVec2::new(0, 0x8000_0000),
-            primitive_group: UVec2::ZERO,
-            oct_inv4,
-            traversal_direction: d,
-            primitive_id: 0,
-            hitmask: 0,
+            octant: usize::from(inv[0] >= 0.0) << 2
+                | usize::from(inv[1] >= 0.0) << 1
+                | usize::from(inv[2] >= 0.0),
         }
     }
 }
@@ -237,7 +357,7 @@ mod tests {
             &mut Duration::default(),
         );
         for n in &bvh.nodes {
-            let w = WideNode::decode(n);
+            let w = WideNode::decode(n, |_| 0);
             for c in 0..8 {
                 if n.child_meta[c] == 0 {
                     continue;

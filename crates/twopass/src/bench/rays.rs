@@ -1,5 +1,7 @@
 //! `twopass bench rays`: ray queries per second (camera, incoherent, occlusion) on one and on
-//! all threads, and the BVH build time.
+//! all threads, and the BVH build time. It measures the accelerator's queries
+//! ([`Accel::closest`], [`Accel::any_hit`]) as another engine's are measured: the hit's
+//! shading data that `Scene::intersect` adds (normals, material) is not part of a ray query.
 
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -8,7 +10,7 @@ use clap::Args;
 use rayon::prelude::*;
 use serde::Serialize;
 use twopass_scene::workload::{self, QueryKind};
-use twopass_scene::{Accel, Ray, Scene, SurfacePoint};
+use twopass_scene::{Accel, Ray, Scene};
 
 use super::memory::{fmt_mib, mib, peak_memory, reset_peak_memory};
 use crate::args::checked;
@@ -67,87 +69,70 @@ struct RayReport {
     rows: Vec<RayRow>,
 }
 
+/// One batch of rays as the accelerator receives them: closest-hit rays, or occlusion
+/// segments (already offset off their surfaces, [`Scene::segment_between`]).
 enum Batch {
     Closest(Vec<Ray>),
-    Occlusion(Vec<(SurfacePoint, SurfacePoint)>),
+    Occlusion(Vec<Ray>),
 }
 
 impl Batch {
-    /// The rays as the accelerator receives them (occlusion pairs as their offset segments).
-    fn rays(&self) -> Vec<Ray> {
+    fn rays(&self) -> &[Ray] {
         match self {
-            Self::Closest(r) => r.clone(),
-            Self::Occlusion(p) => p
-                .iter()
-                .map(|(a, b)| Scene::segment_between(a, b))
-                .collect(),
+            Self::Closest(r) | Self::Occlusion(r) => r,
+        }
+    }
+
+    /// Casts one ray: whether it hits (closest) or is blocked (occlusion). The accelerator's
+    /// queries, as another engine's (Embree's `rtcIntersect1`, `rtcOccluded1`): the shading
+    /// data `Scene::intersect` adds to a hit is not part of it.
+    #[inline]
+    fn cast_one(&self, accel: &Accel, r: &Ray) -> bool {
+        match self {
+            Self::Closest(_) => accel.closest(r.origin, r.direction, r.t_max).is_some(),
+            Self::Occlusion(_) => accel.any_hit(r.origin, r.direction, r.t_max),
         }
     }
 
     /// This engine's answer per ray: the hit triangle and `t` (closest hit; -1 and infinity
     /// for a miss), or 1 and 0 for blocked and 0 and infinity for clear (occlusion).
-    fn answers(&self, scene: &Scene) -> Vec<(i32, f32)> {
-        match self {
-            Self::Closest(r) => r
-                .par_iter()
-                .map(|r| {
-                    scene
-                        .accel()
-                        .closest(r.origin, r.direction, r.t_max)
-                        .map_or((-1, f32::INFINITY), |h| (h.triangle as i32, h.t))
-                })
-                .collect(),
-            Self::Occlusion(p) => p
-                .par_iter()
-                .map(|(a, b)| {
-                    if scene.occluded_between(a, b) {
-                        (1, 0.0)
-                    } else {
-                        (0, f32::INFINITY)
-                    }
-                })
-                .collect(),
-        }
+    fn answers(&self, accel: &Accel) -> Vec<(i32, f32)> {
+        self.rays()
+            .par_iter()
+            .map(|r| match self {
+                Self::Closest(_) => accel
+                    .closest(r.origin, r.direction, r.t_max)
+                    .map_or((-1, f32::INFINITY), |h| (h.triangle as i32, h.t)),
+                Self::Occlusion(_) if accel.any_hit(r.origin, r.direction, r.t_max) => (1, 0.0),
+                Self::Occlusion(_) => (0, f32::INFINITY),
+            })
+            .collect()
     }
 
     fn len(&self) -> usize {
-        match self {
-            Self::Closest(r) => r.len(),
-            Self::Occlusion(p) => p.len(),
-        }
+        self.rays().len()
     }
 
     /// Casts the whole batch once; returns how many rays hit.
-    fn cast(&self, scene: &Scene, parallel: bool) -> usize {
+    fn cast(&self, accel: &Accel, parallel: bool) -> usize {
         const CHUNK: usize = 1024;
-        match (self, parallel) {
-            (Self::Closest(r), false) => r.iter().filter(|r| scene.intersect(r).is_some()).count(),
-            (Self::Closest(r), true) => r
-                .par_chunks(CHUNK)
-                .map(|c| c.iter().filter(|r| scene.intersect(r).is_some()).count())
-                .sum(),
-            (Self::Occlusion(p), false) => p
-                .iter()
-                .filter(|(a, b)| scene.occluded_between(a, b))
-                .count(),
-            (Self::Occlusion(p), true) => p
-                .par_chunks(CHUNK)
-                .map(|c| {
-                    c.iter()
-                        .filter(|(a, b)| scene.occluded_between(a, b))
-                        .count()
-                })
-                .sum(),
+        let rays = self.rays();
+        if parallel {
+            rays.par_chunks(CHUNK)
+                .map(|c| c.iter().filter(|r| self.cast_one(accel, r)).count())
+                .sum()
+        } else {
+            rays.iter().filter(|r| self.cast_one(accel, r)).count()
         }
     }
 
     /// Rays per second (casting repeatedly for at least `min`) and the hit fraction.
-    fn measure(&self, scene: &Scene, parallel: bool, min: Duration) -> (f64, f64) {
-        let hits = self.cast(scene, parallel); // warm-up, also the hit count
+    fn measure(&self, accel: &Accel, parallel: bool, min: Duration) -> (f64, f64) {
+        let hits = self.cast(accel, parallel); // warm-up, also the hit count
         let start = Instant::now();
         let mut passes = 0usize;
         while passes == 0 || start.elapsed() < min {
-            std::hint::black_box(self.cast(scene, parallel));
+            std::hint::black_box(self.cast(accel, parallel));
             passes += 1;
         }
         let rate = (passes * self.len()) as f64 / start.elapsed().as_secs_f64();
@@ -156,7 +141,10 @@ impl Batch {
 }
 
 /// Little-endian bytes of a list of f32 or i32/u32 values.
-fn le_bytes<T: Copy, const N: usize>(values: impl Iterator<Item = T>, f: fn(T) -> [u8; N]) -> Vec<u8> {
+fn le_bytes<T: Copy, const N: usize>(
+    values: impl Iterator<Item = T>,
+    f: fn(T) -> [u8; N],
+) -> Vec<u8> {
     values.flat_map(f).collect()
 }
 
@@ -169,9 +157,15 @@ fn export(
     use crate::output::write_atomic;
     let mesh = &scene.mesh;
     let positions = mesh.positions.iter().flat_map(|p| p.to_array());
-    write_atomic(&dir.join("positions.f32"), &le_bytes(positions, f32::to_le_bytes))?;
+    write_atomic(
+        &dir.join("positions.f32"),
+        &le_bytes(positions, f32::to_le_bytes),
+    )?;
     let triangles = mesh.triangles.iter().flatten().copied();
-    write_atomic(&dir.join("triangles.u32"), &le_bytes(triangles, u32::to_le_bytes))?;
+    write_atomic(
+        &dir.join("triangles.u32"),
+        &le_bytes(triangles, u32::to_le_bytes),
+    )?;
     let mut kinds = Vec::new();
     for (kind, _, batch) in batches {
         let name = match kind {
@@ -179,16 +173,25 @@ fn export(
             QueryKind::Incoherent => "incoherent",
             QueryKind::Occlusion => "occlusion",
         };
-        let rays = batch.rays().into_iter().flat_map(|r| {
+        let rays = batch.rays().iter().flat_map(|r| {
             let (o, d) = (r.origin, r.direction);
             [o.x, o.y, o.z, d.x, d.y, d.z, r.t_max]
         });
-        write_atomic(&dir.join(format!("{name}.rays")), &le_bytes(rays, f32::to_le_bytes))?;
-        let answers = batch.answers(scene);
+        write_atomic(
+            &dir.join(format!("{name}.rays")),
+            &le_bytes(rays, f32::to_le_bytes),
+        )?;
+        let answers = batch.answers(scene.accel());
         let ids = answers.iter().map(|a| a.0);
-        write_atomic(&dir.join(format!("{name}.ids")), &le_bytes(ids, i32::to_le_bytes))?;
+        write_atomic(
+            &dir.join(format!("{name}.ids")),
+            &le_bytes(ids, i32::to_le_bytes),
+        )?;
         let ts = answers.iter().map(|a| a.1);
-        write_atomic(&dir.join(format!("{name}.t")), &le_bytes(ts, f32::to_le_bytes))?;
+        write_atomic(
+            &dir.join(format!("{name}.t")),
+            &le_bytes(ts, f32::to_le_bytes),
+        )?;
         kinds.push(serde_json::json!({
             "name": name,
             "query": if matches!(batch, Batch::Closest(_)) { "closest" } else { "any" },
@@ -248,7 +251,12 @@ pub fn run(args: &RaysArgs, ctx: &Context) -> Result<(), CliError> {
         (
             QueryKind::Occlusion,
             "occlusion",
-            Batch::Occlusion(workload::occlusion_pairs(&scene, n, ctx.seed ^ 0x5eed)),
+            Batch::Occlusion(
+                workload::occlusion_pairs(&scene, n, ctx.seed ^ 0x5eed)
+                    .iter()
+                    .map(|(a, b)| Scene::segment_between(a, b))
+                    .collect(),
+            ),
         ),
     ];
     if let Some(dir) = &args.export {
@@ -267,9 +275,9 @@ pub fn run(args: &RaysArgs, ctx: &Context) -> Result<(), CliError> {
     let mut rows = Vec::new();
     for (_, label, batch) in &batches {
         reset_peak_memory();
-        let (r1, hit) = batch.measure(&scene, false, min);
+        let (r1, hit) = batch.measure(scene.accel(), false, min);
         progress.inc(1);
-        let (rn, _) = batch.measure(&scene, true, min);
+        let (rn, _) = batch.measure(scene.accel(), true, min);
         progress.inc(1);
         rows.push(RayRow {
             query: label,
