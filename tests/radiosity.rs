@@ -590,3 +590,74 @@ fn cancelled_solves_give_usable_intermediate_solutions() {
         twopass_radiosity::Finish::Converged
     );
 }
+
+/// A light over a floor with a square floating between them, no two surfaces touching: no
+/// vertex lies on a crease, so every pair the shaft test clears would also have found all its
+/// shadow rays unblocked. Shaft culling must then change no number of the solution, and must
+/// save rays (the light and the floor see each other past the blocker for most pairs).
+#[test]
+fn shaft_culling_changes_nothing_but_the_rays_cast() {
+    let m = lambert("w", 0.7);
+    let objects = [
+        quad(
+            "floor",
+            "w",
+            [0.0, 0.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [1.0, 0.0, 0.0],
+            None,
+        ),
+        quad(
+            "light",
+            "w",
+            [0.3, 1.0, 0.3],
+            [0.4, 0.0, 0.0],
+            [0.0, 0.0, 0.4],
+            Some(1.0),
+        ),
+        quad(
+            "blocker",
+            "w",
+            [0.4, 0.5, 0.4],
+            [0.2, 0.0, 0.0],
+            [0.0, 0.0, 0.2],
+            None,
+        ),
+        quad(
+            "wall",
+            "w",
+            [0.0, 0.1, 1.2],
+            [0.0, 0.8, 0.0],
+            [1.0, 0.0, 0.0],
+            None,
+        ),
+    ]
+    .concat();
+    let s = scene(&objects, &m);
+    let solve = |shaft_culling: bool| {
+        let options = Options {
+            patch_size: Some(0.25),
+            element_size: Some(0.1),
+            shaft_culling,
+            stop: Stop {
+                unshot_fraction: 1e-4,
+                ..Stop::default()
+            },
+            ..Options::default()
+        };
+        let mut solver = Progressive::new(&s, options).unwrap();
+        run(&mut solver);
+        (solver.vertex_radiosity(), solver.progress().rays)
+    };
+    let (culled, culled_rays) = solve(true);
+    let (all, all_rays) = solve(false);
+    println!("rays: {culled_rays} with shaft culling, {all_rays} without");
+    assert_eq!(culled.len(), all.len());
+    for (v, (a, b)) in culled.iter().zip(&all).enumerate() {
+        assert_eq!(a, b, "vertex {v}: {a} with shaft culling, {b} without");
+    }
+    assert!(
+        (culled_rays as f64) < 0.75 * all_rays as f64,
+        "rays: {culled_rays} with shaft culling, {all_rays} without"
+    );
+}

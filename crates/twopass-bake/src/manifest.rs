@@ -30,6 +30,10 @@ pub struct SettingsRecord {
     pub visibility_rays_max: u32,
     /// Whether visibility was measured with shadow rays.
     pub occlusion: bool,
+    /// Whether shaft culling skipped the rays of pairs nothing can come between (progressive
+    /// refinement). Absent in manifests written before it existed, which did not cull.
+    #[serde(default)]
+    pub shaft_culling: bool,
     /// Stop at this unshot fraction of the emitted power.
     pub unshot_fraction: f64,
     /// Hierarchical solver: refine links whose estimated error exceeds this fraction of the
@@ -309,6 +313,7 @@ impl Manifest {
                 visibility_rays_min: options.visibility.min,
                 visibility_rays_max: options.visibility.max,
                 occlusion: options.occlusion,
+                shaft_culling: options.shaft_culling,
                 unshot_fraction: options.stop.unshot_fraction,
                 link_tolerance: options.hierarchical.link_tolerance,
                 min_element_size: options.hierarchical.min_element_size,

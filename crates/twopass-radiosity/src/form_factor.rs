@@ -115,6 +115,20 @@ fn stratified_point(p: [DVec3; 3], i: u32, j: u32, k: u32, h: u64) -> (DVec3, [f
     (p[0] * w[0] + p[1] * w[1] + p[2] * w[2], w)
 }
 
+/// Whether nothing in the scene can block any segment from receiver `from` to shooter
+/// triangle `shooter` (shaft culling, [`twopass_scene::Accel::shaft_clear`], with the
+/// receiver's plane: what lies behind it cannot block). Then [`visibility`] is 1 without a
+/// ray, up to [`twopass_scene::SHAFT_TOLERANCE`]: at a vertex on a crease, where shadow rays
+/// leave one surface already a hair beyond the other and find it blocking, the shaft sees
+/// both surfaces meet at the vertex and blocking nothing.
+pub fn shaft_clear(scene: &Scene, from: &SurfacePoint, shooter: [DVec3; 3]) -> bool {
+    scene.accel().shaft_clear(
+        from.position,
+        Some(from.normal),
+        shooter.map(|c| c.as_vec3()),
+    )
+}
+
 /// The visible fraction of shooter triangle `shooter` (corners, scene triangle `shooter_tri`)
 /// from receiver `from`, by stratified shadow rays. Samples behind the receiver's plane do not
 /// count. Starts with `rays.min` rays and goes to `rays.max` when they disagree or when the

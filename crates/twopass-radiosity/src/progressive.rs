@@ -449,6 +449,10 @@ impl<'s> Progressive<'s> {
                 }
                 let from = &self.receivers[v];
                 let seed = hash(self.options.seed ^ hash((v as u64) << 32 | p as u64));
+                if self.options.shaft_culling && form_factor::shaft_clear(self.scene, from, shooter)
+                {
+                    return (f as f32, 0);
+                }
                 let (vis, rays) = form_factor::visibility(
                     self.scene,
                     from,

@@ -81,6 +81,10 @@ pub struct Options {
     /// Measure visibility with shadow rays; `false` treats every pair as unoccluded (exact only
     /// for scenes where no surface hides another, such as one convex room).
     pub occlusion: bool,
+    /// Skip the shadow rays between a receiver and a shooter that nothing in the scene can
+    /// come between (shaft culling, progressive refinement): their visibility is 1. Off, every
+    /// pair casts its rays, as a check and to measure what culling saves.
+    pub shaft_culling: bool,
     /// Stop criteria.
     pub stop: Stop,
     /// Seed of the visibility sampling.
@@ -108,6 +112,7 @@ impl Default for Options {
             adaptive: Some(Adaptive::default()),
             visibility: VisibilityRays::default(),
             occlusion: true,
+            shaft_culling: true,
             stop: Stop::default(),
             seed: 0,
             cache_bytes: 1 << 30,

@@ -74,6 +74,10 @@ pub struct SolveArgs {
     /// visibility is partial or the receiver is close.
     #[arg(long, value_name = "MIN,MAX", value_parser = parse_rays, default_value = "4,16")]
     pub visibility_rays: VisibilityRays,
+    /// Cast the visibility rays of every receiver-shooter pair, also those nothing in the scene
+    /// can come between (progressive refinement skips them by default: shaft culling).
+    #[arg(long)]
+    pub no_shaft_culling: bool,
     /// Specular transfer (progressive refinement, scenes with mirrors or glass that face
     /// diffuse surfaces; `info` says whether a scene has them): rays a shot of the whole
     /// emitted power traces through the specular surfaces, later shots in proportion to their
@@ -97,6 +101,7 @@ impl Default for SolveArgs {
             element_size: None,
             no_adaptive: false,
             visibility_rays: VisibilityRays::default(),
+            no_shaft_culling: false,
             specular_rays: SpecularTransfer::default().rays,
         }
     }
@@ -136,6 +141,7 @@ impl SolveArgs {
             element_size: self.element_size,
             adaptive: (!self.no_adaptive).then(Adaptive::default),
             visibility: self.visibility_rays,
+            shaft_culling: !self.no_shaft_culling,
             stop: Stop {
                 unshot_fraction: self.unshot,
                 max_shots: self.max_shots,

@@ -9,6 +9,7 @@
 
 mod packet;
 mod ray;
+mod shaft;
 mod triangle;
 mod wide;
 
@@ -20,6 +21,8 @@ use obvhs::{Boundable, BvhBuildParams, aabb::Aabb, cwbvh::builder::build_cwbvh};
 use packet::{PacketRay, TriPacket};
 pub(crate) use ray::SHADOW_EPSILON;
 pub use ray::{Ray, SurfacePoint};
+pub use shaft::SHAFT_TOLERANCE;
+use shaft::Shaft;
 pub(crate) use triangle::triangle_normal;
 use triangle::{AxisTriangle, ShearedRay};
 use wide::{NodeRay, WideBvh};
@@ -163,15 +166,21 @@ impl Accel {
         // Packet, lane, barycentrics of the nearest hit so far; its t is `t_max`.
         let mut best: Option<(usize, usize, [f32; 3])> = None;
         let mut t_max = t_max;
-        self.bvh.walk(&ray, &mut t_max, true, |p, lanes, t_max| {
-            let hits = sheared.intersect(&self.packets[p], lanes, *t_max);
-            if hits.mask != 0 {
-                let lane = hits.nearest();
-                *t_max = hits.t[lane];
-                best = Some((p, lane, hits.barycentric(lane)));
-            }
-            false
-        });
+        self.bvh.walk(
+            &ray,
+            &mut t_max,
+            true,
+            #[inline(always)]
+            |p, lanes, t_max| {
+                let hits = sheared.intersect(&self.packets[p], lanes, *t_max);
+                if hits.mask != 0 {
+                    let lane = hits.nearest();
+                    *t_max = hits.t[lane];
+                    best = Some((p, lane, hits.barycentric(lane)));
+                }
+                false
+            },
+        );
         let (p, lane, barycentric) = best?;
         let v = &self.packets[p].v;
         Some(TriangleHit {
@@ -188,11 +197,34 @@ impl Accel {
         let ray = NodeRay::new(origin, direction);
         let mut hit = false;
         let mut t_max = t_max;
-        self.bvh.walk(&ray, &mut t_max, false, |p, lanes, t_max| {
-            hit = sheared.intersect(&self.packets[p], lanes, *t_max).mask != 0;
-            hit
-        });
+        self.bvh.walk(
+            &ray,
+            &mut t_max,
+            false,
+            #[inline(always)]
+            |p, lanes, t_max| {
+                hit = sheared.intersect(&self.packets[p], lanes, *t_max).mask != 0;
+                hit
+            },
+        );
         hit
+    }
+
+    /// Whether every segment from `apex` to a point of triangle `base` is certainly
+    /// unblocked: no scene triangle reaches into the tetrahedron they fill (shaft culling,
+    /// Haines & Wallace 1991). `false` means a triangle may block some of them, not that one
+    /// does: cast rays then. Triangles in the apex's or the base's plane never block (a
+    /// segment meets such a plane only at its end), so the receiver's and the shooter's own
+    /// surfaces do not count. With `apex_normal` (the receiver's geometric normal), when all
+    /// of `base` is in front of the receiver's plane, nothing behind that plane counts either
+    /// (a solid's other faces, seen from one of its faces). Conservative up to
+    /// [`SHAFT_TOLERANCE`].
+    pub fn shaft_clear(&self, apex: Vec3, apex_normal: Option<Vec3>, base: [Vec3; 3]) -> bool {
+        let shaft = Shaft::new(apex, apex_normal, base);
+        !self.bvh.any_leaf(
+            |node| shaft.overlap(node),
+            |p, lanes| shaft.may_block(&self.packets[p], lanes),
+        )
     }
 
     /// Reference answer by testing every triangle, O(n): the oracle for BVH tests.

@@ -195,6 +195,40 @@ impl WideBvh {
         });
     }
 
+    /// Visits, in no particular order, the leaves of every node whose box `overlap` keeps
+    /// (it returns the kept children of a node, bit `c` for child `c`), calling
+    /// `leaf(packet, lanes)` until it returns `true`; returns whether one did.
+    pub(super) fn any_leaf(
+        &self,
+        overlap: impl Fn(&WideNode) -> u32,
+        mut leaf: impl FnMut(usize, u32) -> bool,
+    ) -> bool {
+        if self.nodes.is_empty() {
+            return false;
+        }
+        obvhs::fast_stack!(u32, (INLINE_STACK), self.stack_need + 1, stack, {
+            stack.push(0);
+            while let Some(node) = stack.pop() {
+                let n = &self.nodes[node as usize];
+                let kept = overlap(n);
+                let mut leaves = kept & u32::from(n.leaf);
+                while leaves != 0 {
+                    let c = leaves.trailing_zeros() as usize;
+                    leaves &= leaves - 1;
+                    if leaf(n.child[c] as usize, (n.lanes >> (4 * c)) & 0xf) {
+                        return true;
+                    }
+                }
+                let mut inner = kept & u32::from(n.inner);
+                while inner != 0 {
+                    stack.push(n.child[inner.trailing_zeros() as usize]);
+                    inner &= inner - 1;
+                }
+            }
+            false
+        })
+    }
+
     #[inline(always)]
     fn walk_with(
         &self,

@@ -1,0 +1,160 @@
+//! Shaft culling (Haines & Wallace 1991) for the visibility between a point and a triangle:
+//! the segments from the point to every point of the triangle fill a tetrahedron, so when no
+//! scene triangle can reach into that tetrahedron (the BVH, walked with the tetrahedron, finds
+//! none) every such segment is unblocked, and no shadow ray needs to be cast.
+//!
+//! The test is conservative: a triangle is a candidate blocker unless it is clearly outside
+//! the tetrahedron (all three corners beyond one of its face planes, or its bounds outside the
+//! tetrahedron's), behind the receiver's own plane (when the whole shooter is in front of it),
+//! or cannot cross a segment (every corner of the tetrahedron on one side of the triangle's
+//! plane, as for the receiver's and the shooter's own surfaces). "Clearly" is a tolerance of
+//! [`SHAFT_TOLERANCE`] of the coordinates' size, above the offsets the shadow rays themselves
+//! leave their surfaces by.
+
+use glam::{DVec3, Vec3, Vec4};
+
+use super::packet::TriPacket;
+use super::wide::WideNode;
+
+/// Relative tolerance of the shaft test (of the largest coordinate of the tetrahedron): the
+/// tetrahedron's faces move out by this much, and a triangle must be this far from the
+/// tetrahedron's corners on both sides of its plane to count as crossing. Shadow rays leave
+/// and reach surfaces offset by `gamma(7)` (about 4e-7) of the coordinates, well inside it.
+pub const SHAFT_TOLERANCE: f32 = 2e-6;
+
+/// The tetrahedron spanned by an apex and a base triangle, set up for box and triangle tests.
+pub(super) struct Shaft {
+    /// Outward face planes `(n, d)`, moved out by the tolerance: `n . p + d > 0` is outside.
+    /// A face of a flat tetrahedron has no plane and culls nothing.
+    planes: Vec<(Vec3, f32)>,
+    /// Bounds of the four corners, grown by the tolerance.
+    lo: Vec3,
+    hi: Vec3,
+    corners: [Vec3; 4],
+    /// The tolerance in scene units.
+    eps: f32,
+}
+
+impl Shaft {
+    /// The tetrahedron of `apex` and `base`; with `apex_normal`, also the half-space in front
+    /// of the plane through `apex` with that normal, when the whole base is in front of it
+    /// (then every segment is, and whatever lies behind or in that plane cannot block one).
+    pub(super) fn new(apex: Vec3, apex_normal: Option<Vec3>, base: [Vec3; 3]) -> Self {
+        let corners = [apex, base[0], base[1], base[2]];
+        let scale = corners
+            .iter()
+            .map(|c| c.abs().max_element())
+            .fold(0.0f32, f32::max);
+        let eps = SHAFT_TOLERANCE * scale;
+        let c = corners.map(|p| p.as_dvec3());
+        let mut planes = Vec::with_capacity(4);
+        // Face opposite corner `o`, through the other three.
+        for o in 0..4 {
+            let [p, q, r] = [(o + 1) % 4, (o + 2) % 4, (o + 3) % 4].map(|i| c[i]);
+            let mut n: DVec3 = (q - p).cross(r - p);
+            let len = n.length();
+            if !(len.is_finite() && len > 0.0) {
+                continue;
+            }
+            n /= len;
+            let side = n.dot(c[o] - p);
+            if side.abs() <= f64::from(eps) {
+                // The opposite corner is (nearly) in this face's plane: flat tetrahedron.
+                continue;
+            }
+            if side > 0.0 {
+                n = -n;
+            }
+            planes.push((n.as_vec3(), (-n.dot(p)) as f32 - eps));
+        }
+        if let Some(n) = apex_normal {
+            let front = |p: Vec3| f64::from(n.dot(p - apex)) > f64::from(eps);
+            if base.iter().all(|&p| front(p)) {
+                // Outside: behind the plane or less than the tolerance in front of it.
+                planes.push((-n, n.dot(apex) + eps));
+            }
+        }
+        let (lo, hi) = corners.iter().fold(
+            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+        );
+        Self {
+            planes,
+            lo: lo - eps,
+            hi: hi + eps,
+            corners,
+            eps,
+        }
+    }
+
+    /// The children of `node` whose boxes may reach into the shaft (bit `c` for child `c`).
+    #[inline(always)]
+    pub(super) fn overlap(&self, node: &WideNode) -> u32 {
+        let b = &node.bounds;
+        let mut mask = 0u32;
+        for half in 0..2 {
+            let min = |axis: usize| b[4 * axis + half];
+            let max = |axis: usize| b[4 * axis + 2 + half];
+            let (lo, hi) = (self.lo, self.hi);
+            let mut inside = min(0).cmple(Vec4::splat(hi.x))
+                & max(0).cmpge(Vec4::splat(lo.x))
+                & min(1).cmple(Vec4::splat(hi.y))
+                & max(1).cmpge(Vec4::splat(lo.y))
+                & min(2).cmple(Vec4::splat(hi.z))
+                & max(2).cmpge(Vec4::splat(lo.z));
+            for &(n, d) in &self.planes {
+                // The box corner least far along `n`: outside the plane, the box is too.
+                let pick = |axis: usize| if n[axis] >= 0.0 { min(axis) } else { max(axis) };
+                let dist = pick(0) * n.x + pick(1) * n.y + pick(2) * n.z + Vec4::splat(d);
+                inside &= !dist.cmpgt(Vec4::ZERO);
+            }
+            mask |= inside.bitmask() << (4 * half);
+        }
+        mask
+    }
+
+    /// Whether any enabled lane (bits of `lanes`) of `packet` may block a segment inside the
+    /// shaft.
+    #[inline(always)]
+    pub(super) fn may_block(&self, packet: &TriPacket, lanes: u32) -> bool {
+        let v = &packet.v;
+        let p = |vertex: usize| [v[0][vertex], v[1][vertex], v[2][vertex]];
+        let (a, b, c) = (p(0), p(1), p(2));
+        let zero = Vec4::ZERO;
+        let mut keep = !0u32;
+        // Bounds.
+        let lo = [self.lo.x, self.lo.y, self.lo.z];
+        let hi = [self.hi.x, self.hi.y, self.hi.z];
+        for axis in 0..3 {
+            let min = a[axis].min(b[axis]).min(c[axis]);
+            let max = a[axis].max(b[axis]).max(c[axis]);
+            keep &= (min.cmple(Vec4::splat(hi[axis])) & max.cmpge(Vec4::splat(lo[axis]))).bitmask();
+        }
+        // All three corners outside one face plane.
+        for &(n, d) in &self.planes {
+            let dist = |q: [Vec4; 3]| q[0] * n.x + q[1] * n.y + q[2] * n.z + Vec4::splat(d);
+            let out = dist(a).cmpgt(zero) & dist(b).cmpgt(zero) & dist(c).cmpgt(zero);
+            keep &= !out.bitmask();
+        }
+        // The tetrahedron on one side of the triangle's plane: no segment crosses it.
+        let e1 = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+        let e2 = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+        let n = [
+            e1[1] * e2[2] - e1[2] * e2[1],
+            e1[2] * e2[0] - e1[0] * e2[2],
+            e1[0] * e2[1] - e1[1] * e2[0],
+        ];
+        let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        let tol = len * Vec4::splat(self.eps);
+        let (mut above, mut below) = (0u32, 0u32);
+        for q in &self.corners {
+            let d = n[0] * (Vec4::splat(q.x) - a[0])
+                + n[1] * (Vec4::splat(q.y) - a[1])
+                + n[2] * (Vec4::splat(q.z) - a[2]);
+            above |= d.cmpgt(tol).bitmask();
+            below |= d.cmplt(-tol).bitmask();
+        }
+        keep &= above & below;
+        keep & lanes != 0
+    }
+}
