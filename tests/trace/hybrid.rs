@@ -112,15 +112,15 @@ fn hybrid_with_a_real_solution_matches_radiosity_alone_and_the_reference() {
 }
 
 /// Relative RMS error of issue 7: sqrt(mean((x - r)^2 / (r^2 + 0.01))) over pixels and channels.
-fn relative_rmse(x: &twopass_trace::FilmImage, r: &twopass_trace::FilmImage) -> f64 {
+fn relative_rmse(x: &twopass_image::Image, r: &twopass_image::Image) -> f64 {
     let mut sum = 0.0;
-    for (a, b) in x.pixels.iter().zip(&r.pixels) {
+    for (a, b) in x.pixels().iter().zip(r.pixels()) {
         for c in 0..3 {
             let (a, b) = (f64::from(a[c]), f64::from(b[c]));
             sum += (a - b).powi(2) / (b * b + 0.01);
         }
     }
-    (sum / (3 * x.pixels.len()) as f64).sqrt()
+    (sum / (3 * x.pixels().len()) as f64).sqrt()
 }
 
 #[test]

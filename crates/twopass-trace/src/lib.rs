@@ -39,7 +39,7 @@ pub mod render;
 pub mod sampler;
 pub mod whitted;
 
-pub use film::{FilmImage, Layer, LayerImages, Radiance};
+pub use film::{Layer, LayerImages, Radiance};
 pub use render::{RenderOutput, RenderProgress, RenderSettings, RenderStats, render};
 
 pub use integrator::{Integrator, Lights, Tally};

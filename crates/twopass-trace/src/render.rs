@@ -228,7 +228,7 @@ pub fn render(
             let (x, y) = (t.x0 + i as u32 % t.w, t.y0 + i as u32 / t.w);
             let at = y as usize * width as usize + x as usize;
             for (img, v) in layers.images.iter_mut().zip(p.layers) {
-                img.pixels[at] = v;
+                img.pixels_mut()[at] = v;
             }
         }
     }
@@ -237,7 +237,7 @@ pub fn render(
         let paths = tracer.paths_for(camera, spp);
         let lit = tracer.trace(scene, camera, paths, settings.seed, progress, pixels);
         for (img, add) in layers.images.iter_mut().zip(&lit.layers.images) {
-            for (p, a) in img.pixels.iter_mut().zip(&add.pixels) {
+            for (p, a) in img.pixels_mut().iter_mut().zip(add.pixels()) {
                 *p += *a;
             }
         }
@@ -249,7 +249,7 @@ pub fn render(
         layers
             .images
             .iter()
-            .all(|i| i.pixels.iter().all(|p: &Rgb| p.is_finite()))
+            .all(|i| i.pixels().iter().all(|p: &Rgb| p.is_finite()))
     );
     RenderOutput {
         layers,
