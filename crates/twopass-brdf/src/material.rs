@@ -141,41 +141,37 @@ impl Material {
     /// A Phong material. The published form accepts any k_s in [0, 1]; the normalized form also
     /// requires diffuse + specular <= 1.
     pub fn phong(p: PhongParams) -> Result<Self, ParamError> {
-        check_diffuse(p.diffuse)?;
-        check_unit("specular", p.specular)?;
-        check_unit("ambient", p.ambient)?;
-        check_exponent(p.exponent)?;
-        if p.normalized {
-            check_sum(p.diffuse, p.specular)?;
-        }
-        Ok(Self {
-            diffuse: p.diffuse,
-            ambient: p.ambient,
-            lobe: nonzero(p.specular).then_some(Lobe::Phong {
-                specular: p.specular,
-                exponent: p.exponent,
-                normalized: p.normalized,
-            }),
-        })
+        let PhongParams {
+            diffuse,
+            specular,
+            exponent,
+            ambient,
+            normalized,
+        } = p;
+        check_exponent_lobe(diffuse, specular, Some(ambient), exponent, normalized)?;
+        let lobe = Lobe::Phong {
+            specular,
+            exponent,
+            normalized,
+        };
+        Ok(Self::glossy(diffuse, ambient, specular, lobe))
     }
 
     /// A Blinn-Phong material; the normalized form requires diffuse + specular <= 1.
     pub fn blinn_phong(p: BlinnPhongParams) -> Result<Self, ParamError> {
-        check_diffuse(p.diffuse)?;
-        check_unit("specular", p.specular)?;
-        check_exponent(p.exponent)?;
-        if p.normalized {
-            check_sum(p.diffuse, p.specular)?;
-        }
-        Ok(Self {
-            diffuse: p.diffuse,
-            ambient: p.diffuse,
-            lobe: nonzero(p.specular).then_some(Lobe::BlinnPhong {
-                specular: p.specular,
-                exponent: p.exponent,
-                normalized: p.normalized,
-            }),
-        })
+        let BlinnPhongParams {
+            diffuse,
+            specular,
+            exponent,
+            normalized,
+        } = p;
+        check_exponent_lobe(diffuse, specular, None, exponent, normalized)?;
+        let lobe = Lobe::BlinnPhong {
+            specular,
+            exponent,
+            normalized,
+        };
+        Ok(Self::glossy(diffuse, diffuse, specular, lobe))
     }
 
     /// A Cook-Torrance material; requires roughness > 0 and diffuse + specular <= 1.
@@ -191,16 +187,13 @@ impl Material {
             ));
         }
         let ior = ComplexIor::new(p.ior.n, p.ior.k)?;
-        Ok(Self {
-            diffuse: p.diffuse,
-            ambient: p.diffuse,
-            lobe: nonzero(p.specular).then_some(Lobe::CookTorrance {
-                specular: p.specular,
-                roughness: p.roughness,
-                ior,
-                fresnel: p.fresnel,
-            }),
-        })
+        let lobe = Lobe::CookTorrance {
+            specular: p.specular,
+            roughness: p.roughness,
+            ior,
+            fresnel: p.fresnel,
+        };
+        Ok(Self::glossy(p.diffuse, p.diffuse, p.specular, lobe))
     }
 
     /// A perfect mirror of per-channel `reflectance` in [0, 1].
@@ -219,6 +212,16 @@ impl Material {
     pub fn conductor(ior: ComplexIor) -> Result<Self, ParamError> {
         let ior = ComplexIor::new(ior.n, ior.k)?;
         Ok(Self::with_delta(Lobe::Conductor { ior }))
+    }
+
+    /// A diffuse part with a glossy `lobe` of reflectance `specular`; no lobe at all when
+    /// `specular` is zero in every channel.
+    fn glossy(diffuse: Rgb, ambient: Rgb, specular: Rgb, lobe: Lobe) -> Self {
+        Self {
+            diffuse,
+            ambient,
+            lobe: nonzero(specular).then_some(lobe),
+        }
     }
 
     fn with_delta(lobe: Lobe) -> Self {
@@ -259,6 +262,28 @@ impl Material {
 
 fn nonzero(v: Rgb) -> bool {
     v.max_element() > 0.0
+}
+
+/// Validates the parameters of the models with a Phong-style exponent (Phong, Blinn-Phong), in
+/// the order their errors are reported: diffuse, specular, Phong's `ambient` term (if given),
+/// the exponent, and for the normalized forms diffuse + specular <= 1.
+fn check_exponent_lobe(
+    diffuse: Rgb,
+    specular: Rgb,
+    ambient: Option<Rgb>,
+    exponent: f32,
+    normalized: bool,
+) -> Result<(), ParamError> {
+    check_diffuse(diffuse)?;
+    check_unit("specular", specular)?;
+    if let Some(ambient) = ambient {
+        check_unit("ambient", ambient)?;
+    }
+    check_exponent(exponent)?;
+    if normalized {
+        check_sum(diffuse, specular)?;
+    }
+    Ok(())
 }
 
 impl Lobe {
@@ -381,6 +406,62 @@ impl Material {
         match self.model() {
             Some(m) if self.delta().is_none() => m.pdf(wo, wi),
             _ => 0.0,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A material with two bad parameters reports the first in the validators' order: diffuse,
+    /// specular, Phong's ambient term, the exponent, then the normalized sum.
+    #[test]
+    fn two_bad_parameters_report_the_first_in_order() {
+        let (rho, bad) = (Rgb::splat(0.5), Rgb::splat(2.0));
+        let phong = |specular, ambient, exponent, normalized| {
+            Material::phong(PhongParams {
+                diffuse: rho,
+                specular,
+                exponent,
+                ambient,
+                normalized,
+            })
+        };
+        let blinn = |specular, exponent, normalized| {
+            Material::blinn_phong(BlinnPhongParams {
+                diffuse: rho,
+                specular,
+                exponent,
+                normalized,
+            })
+        };
+        let sum = "such that diffuse + specular <= 1 on every channel";
+        let cases = [
+            (phong(bad, bad, 10.0, false), "specular", "in [0, 1]"),
+            (phong(rho, bad, -1.0, false), "ambient", "in [0, 1]"),
+            (
+                phong(Rgb::splat(0.9), rho, -1.0, true),
+                "exponent",
+                "in [0, 1e6]",
+            ),
+            (
+                phong(Rgb::splat(0.9), bad, 10.0, true),
+                "ambient",
+                "in [0, 1]",
+            ),
+            (phong(Rgb::splat(0.9), rho, 10.0, true), "specular", sum),
+            (blinn(bad, -1.0, false), "specular", "in [0, 1]"),
+            (
+                blinn(Rgb::splat(0.9), -1.0, true),
+                "exponent",
+                "in [0, 1e6]",
+            ),
+            (blinn(Rgb::splat(0.9), 10.0, true), "specular", sum),
+        ];
+        for (i, (result, parameter, expected)) in cases.into_iter().enumerate() {
+            let e = result.expect_err("two bad parameters");
+            assert_eq!((e.parameter, e.expected), (parameter, expected), "case {i}");
         }
     }
 }
