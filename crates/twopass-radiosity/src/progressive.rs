@@ -4,7 +4,7 @@
 //! through mirrors and glass and deposits it where it lands.
 
 use std::ops::ControlFlow;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
@@ -15,7 +15,7 @@ use crate::element::ElementMesh;
 use crate::form_factor::{self, RECEIVER_INSET, hash};
 use crate::solution::Solution;
 use crate::solver::{
-    Adaptive, Energy, Finish, Options, Residuals, SolveError, SolveProgress, check_common,
+    Adaptive, Bookkeeping, Finish, Options, Residuals, SolveError, SolveProgress, check_common,
     luminance, participating,
 };
 use crate::specular::{self, Deposit, Specular, focused, power};
@@ -70,14 +70,10 @@ pub struct Progressive<'s> {
     /// Per patch: cached form factors (with visibility) to every vertex, once computed.
     cache: Vec<Option<Vec<f32>>>,
     cached_bytes: usize,
-    energy: Energy,
-    worst_imbalance: f64,
+    /// Rounds, time and power, kept as the other solver keeps them.
+    book: Bookkeeping,
     shots: u64,
     rays: u64,
-    rounds: u32,
-    started: Instant,
-    meshing: Duration,
-    refining: Duration,
 }
 
 fn rgb(v: Rgb) -> DVec3 {
@@ -198,14 +194,9 @@ impl<'s> Progressive<'s> {
             patch_leaves: Vec::new(),
             cache: Vec::new(),
             cached_bytes: 0,
-            energy: Energy::default(),
-            worst_imbalance: 0.0,
+            book: Bookkeeping::new(started, started.elapsed()),
             shots: 0,
             rays: 0,
-            rounds: 0,
-            started,
-            meshing: started.elapsed(),
-            refining: Duration::ZERO,
         };
         s.sync_vertices();
         let n = s.mesh.patches.len();
@@ -214,8 +205,8 @@ impl<'s> Progressive<'s> {
         s.shot_refl = vec![DVec3::ZERO; n];
         s.cache = vec![None; n];
         s.unshot_emit = (0..n).map(|p| s.patch_emission(p)).collect();
-        s.energy.emitted = (0..n).map(|p| s.unshot_emit[p] * s.patch_area(p)).sum();
-        s.energy.unshot = s.energy.emitted;
+        s.book.energy.emitted = (0..n).map(|p| s.unshot_emit[p] * s.patch_area(p)).sum();
+        s.book.energy.unshot = s.book.energy.emitted;
         s.rebuild_patch_leaves();
         s.resplat();
         Ok(s)
@@ -290,7 +281,7 @@ impl<'s> Progressive<'s> {
             })
             .collect();
         let key = hash(self.options.seed ^ hash(0x5bec_0000_0000_0000 ^ self.shots) ^ p as u64);
-        let emitted = luminance(self.energy.emitted);
+        let emitted = luminance(self.book.energy.emitted);
         let Some((mut deposits, rays)) =
             spec.shoot_changes(self.scene, &self.mesh, &changes, emitted, 0.0, key)
         else {
@@ -372,10 +363,10 @@ impl<'s> Progressive<'s> {
     /// rest as unshot exitance.
     fn receive(&mut self, q: usize, gained: DVec3) {
         let rho = self.patch_rho(q);
-        self.energy.absorbed += gained * (DVec3::ONE - rho);
+        self.book.energy.absorbed += gained * (DVec3::ONE - rho);
         let a = self.patch_area(q);
         self.unshot_refl[q] += gained * rho / a;
-        self.energy.unshot += gained * rho;
+        self.book.energy.unshot += gained * rho;
     }
 
     fn patch_rho(&self, p: usize) -> DVec3 {
@@ -534,14 +525,14 @@ impl<'s> Progressive<'s> {
             arrived += self.shoot_specular(p);
         }
         let shot = (de + dr) * area;
-        self.energy.escaped += shot - arrived;
-        self.energy.unshot -= shot;
+        self.book.energy.escaped += shot - arrived;
+        self.book.energy.unshot -= shot;
         self.shot_emit[p] += de;
         self.shot_refl[p] += dr;
         self.unshot_emit[p] -= de;
         self.unshot_refl[p] -= dr;
         self.shots += 1;
-        self.worst_imbalance = self.worst_imbalance.max(self.energy.imbalance());
+        self.book.note_imbalance();
         true
     }
 
@@ -555,28 +546,25 @@ impl<'s> Progressive<'s> {
                     * self.patch_area(p)
             })
             .sum();
-        unshot / self.energy.emitted.element_sum().max(f64::MIN_POSITIVE)
+        unshot
+            / self
+                .book
+                .energy
+                .emitted
+                .element_sum()
+                .max(f64::MIN_POSITIVE)
     }
 
     /// Where the solve stands.
     pub fn progress(&self) -> SolveProgress {
         SolveProgress {
-            method: crate::solver::Method::Progressive,
             shots: self.shots,
-            iterations: 0,
-            links: 0,
-            clusters: 0,
             unshot_fraction: self.unshot_fraction(),
             rays: self.rays,
             elements: self.patch_leaves.iter().map(Vec::len).sum(),
             vertices: self.mesh.vertices.len(),
             patches: self.mesh.patches.len(),
-            refinement_rounds: self.rounds,
-            elapsed: self.started.elapsed(),
-            meshing: self.meshing,
-            refining: self.refining,
-            energy: self.energy,
-            worst_imbalance: self.worst_imbalance,
+            ..self.book.progress(crate::solver::Method::Progressive)
         }
     }
 
@@ -592,7 +580,7 @@ impl<'s> Progressive<'s> {
     pub fn refine(&mut self, adaptive: &Adaptive) -> usize {
         let started = Instant::now();
         let splits = self.refine_round(adaptive);
-        self.refining += started.elapsed();
+        self.book.refining += started.elapsed();
         splits
     }
 
@@ -664,11 +652,11 @@ impl<'s> Progressive<'s> {
             let reflected = reflected / self.patch_area(p);
             let new_unshot = reflected - self.shot_refl[p];
             let change = (new_unshot - self.unshot_refl[p]) * self.patch_area(p);
-            self.energy.unshot += change;
-            self.energy.remeshing -= change;
+            self.book.energy.unshot += change;
+            self.book.energy.remeshing -= change;
             self.unshot_refl[p] = new_unshot;
         }
-        self.rounds += 1;
+        self.book.rounds += 1;
         splits
     }
 
@@ -690,7 +678,7 @@ impl<'s> Progressive<'s> {
             // as long as the shots so far: none is started past half the time budget.
             if stop
                 .time_budget
-                .is_some_and(|b| self.started.elapsed() * 2 >= b)
+                .is_some_and(|b| self.book.started.elapsed() * 2 >= b)
             {
                 rounds_left = 0;
             }
@@ -709,7 +697,7 @@ impl<'s> Progressive<'s> {
             }
             if stop
                 .time_budget
-                .is_some_and(|b| self.started.elapsed() >= b)
+                .is_some_and(|b| self.book.started.elapsed() >= b)
             {
                 return Finish::TimeBudget;
             }
@@ -808,7 +796,7 @@ impl<'s> Progressive<'s> {
                 areas[q] * patch_ff(self, q, p),
             ));
         }
-        Residuals::from_samples(self.worst_imbalance, &sums, pairs)
+        Residuals::from_samples(self.book.worst_imbalance, &sums, pairs)
     }
 
     /// Form factors of the given vertices to patch `p`: from the cache where the row is
