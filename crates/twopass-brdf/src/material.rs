@@ -141,37 +141,49 @@ impl Material {
     /// A Phong material. The published form accepts any k_s in [0, 1]; the normalized form also
     /// requires diffuse + specular <= 1.
     pub fn phong(p: PhongParams) -> Result<Self, ParamError> {
-        let PhongParams {
-            diffuse,
-            specular,
-            exponent,
-            ambient,
-            normalized,
-        } = p;
-        check_exponent_lobe(diffuse, specular, Some(ambient), exponent, normalized)?;
-        let lobe = Lobe::Phong {
-            specular,
-            exponent,
-            normalized,
-        };
-        Ok(Self::glossy(diffuse, ambient, specular, lobe))
+        let lobe = (p.specular, p.exponent, p.normalized);
+        Self::exponent_lobe(Form::Phong, p.diffuse, Some(p.ambient), lobe)
     }
 
     /// A Blinn-Phong material; the normalized form requires diffuse + specular <= 1.
     pub fn blinn_phong(p: BlinnPhongParams) -> Result<Self, ParamError> {
-        let BlinnPhongParams {
-            diffuse,
-            specular,
-            exponent,
-            normalized,
-        } = p;
-        check_exponent_lobe(diffuse, specular, None, exponent, normalized)?;
-        let lobe = Lobe::BlinnPhong {
-            specular,
-            exponent,
-            normalized,
+        let lobe = (p.specular, p.exponent, p.normalized);
+        Self::exponent_lobe(Form::BlinnPhong, p.diffuse, None, lobe)
+    }
+
+    /// A material whose lobe has a Phong-style exponent, `form`, with (specular, exponent,
+    /// normalized); `ambient` is Phong's own term (the diffuse reflectance otherwise).
+    /// Validated in the order errors are reported: diffuse, specular, the ambient term, the
+    /// exponent, and for the normalized forms diffuse + specular <= 1.
+    fn exponent_lobe(
+        form: Form,
+        diffuse: Rgb,
+        ambient: Option<Rgb>,
+        (specular, exponent, normalized): (Rgb, f32, bool),
+    ) -> Result<Self, ParamError> {
+        check_diffuse(diffuse)?;
+        check_unit("specular", specular)?;
+        if let Some(ambient) = ambient {
+            check_unit("ambient", ambient)?;
+        }
+        check_exponent(exponent)?;
+        if normalized {
+            check_sum(diffuse, specular)?;
+        }
+        let lobe = match form {
+            Form::Phong => Lobe::Phong {
+                specular,
+                exponent,
+                normalized,
+            },
+            Form::BlinnPhong => Lobe::BlinnPhong {
+                specular,
+                exponent,
+                normalized,
+            },
         };
-        Ok(Self::glossy(diffuse, diffuse, specular, lobe))
+        let ambient = ambient.unwrap_or(diffuse);
+        Ok(Self::glossy(diffuse, ambient, specular, lobe))
     }
 
     /// A Cook-Torrance material; requires roughness > 0 and diffuse + specular <= 1.
@@ -260,30 +272,17 @@ impl Material {
     }
 }
 
-fn nonzero(v: Rgb) -> bool {
-    v.max_element() > 0.0
+/// The two lobes with a Phong-style exponent, as [`Material::exponent_lobe`] builds them.
+#[derive(Clone, Copy)]
+enum Form {
+    /// Around the mirror direction ([`Lobe::Phong`]).
+    Phong,
+    /// Around the normal, of the half vector ([`Lobe::BlinnPhong`]).
+    BlinnPhong,
 }
 
-/// Validates the parameters of the models with a Phong-style exponent (Phong, Blinn-Phong), in
-/// the order their errors are reported: diffuse, specular, Phong's `ambient` term (if given),
-/// the exponent, and for the normalized forms diffuse + specular <= 1.
-fn check_exponent_lobe(
-    diffuse: Rgb,
-    specular: Rgb,
-    ambient: Option<Rgb>,
-    exponent: f32,
-    normalized: bool,
-) -> Result<(), ParamError> {
-    check_diffuse(diffuse)?;
-    check_unit("specular", specular)?;
-    if let Some(ambient) = ambient {
-        check_unit("ambient", ambient)?;
-    }
-    check_exponent(exponent)?;
-    if normalized {
-        check_sum(diffuse, specular)?;
-    }
-    Ok(())
+fn nonzero(v: Rgb) -> bool {
+    v.max_element() > 0.0
 }
 
 impl Lobe {

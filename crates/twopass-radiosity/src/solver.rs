@@ -198,21 +198,21 @@ impl Energy {
 }
 
 /// What both solvers keep alike about a solve: its refinement rounds, its clock and its power
-/// bookkeeping, reported in [`SolveProgress`].
+/// bookkeeping, reported in [`SolveProgress`]. Crate-private; its fields are the solvers' own.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Bookkeeping {
     /// Refinement rounds done (adaptive subdivision, or link refinement).
-    pub(crate) rounds: u32,
+    pub rounds: u32,
     /// When the solver was created.
-    pub(crate) started: Instant,
+    pub started: Instant,
     /// Time spent building the mesh.
-    pub(crate) meshing: Duration,
+    pub meshing: Duration,
     /// Time spent refining.
-    pub(crate) refining: Duration,
+    pub refining: Duration,
     /// Power bookkeeping, W per channel.
-    pub(crate) energy: Energy,
+    pub energy: Energy,
     /// Largest relative energy imbalance seen after any step.
-    pub(crate) worst_imbalance: f64,
+    pub worst_imbalance: f64,
 }
 
 impl Bookkeeping {
