@@ -3,7 +3,7 @@
 use twopass_scene::{Ray, Scene};
 use twopass_trace::{
     Integrator, Layer, Radiance, Reference, ReferenceSettings, RenderProgress, RenderSettings,
-    Sampler, Tally, Whitted, WhittedSettings, render,
+    SampleState, Whitted, WhittedSettings, render,
 };
 
 use super::common::repo_scene;
@@ -65,8 +65,8 @@ impl Integrator for Faulty {
     fn name(&self) -> &'static str {
         "faulty"
     }
-    fn radiance(&self, _: &Scene, _: &Ray, sampler: &mut Sampler, _: &mut Tally) -> Radiance {
-        let u = sampler.next_f32();
+    fn radiance(&self, _: &Scene, _: &Ray, sample: SampleState<'_>) -> Radiance {
+        let u = sample.sampler.next_f32();
         let v = if u < 0.2 {
             f32::NAN
         } else if u < 0.3 {

@@ -42,7 +42,7 @@ pub mod whitted;
 pub use film::{Layer, LayerImages, Radiance};
 pub use render::{RenderOutput, RenderProgress, RenderSettings, RenderStats, render};
 
-pub use integrator::{Integrator, Lights, Tally};
+pub use integrator::{Integrator, Lights, SampleState, Tally};
 pub use light_tracing::{CausticScope, LightImage, LightTracer, LightTracingSettings};
 pub use reference::{Caustics, Reference, ReferenceSettings};
 pub use sampler::Sampler;

@@ -13,7 +13,7 @@ use twopass_brdf::Rgb;
 use twopass_scene::{Camera, Ray, Scene};
 
 use crate::film::{LayerImages, Radiance};
-use crate::integrator::{Integrator, Tally};
+use crate::integrator::{Integrator, SampleState, Tally};
 use crate::sampler::{Sampler, stratum};
 
 /// Sampling settings of a render.
@@ -183,7 +183,11 @@ pub fn render(
                         let pixel = Vec2::new(x as f32, y as f32) + offset;
                         let ray = Ray::new(camera.position, camera.direction(pixel));
                         let mut t = Tally::default();
-                        let l = integrator.radiance(scene, &ray, &mut sampler, &mut t);
+                        let sample = SampleState {
+                            sampler: &mut sampler,
+                            tally: &mut t,
+                        };
+                        let l = integrator.radiance(scene, &ray, sample);
                         tally.add(t);
                         if l.is_finite() {
                             sum += l;
