@@ -457,6 +457,23 @@ impl<'s> Progressive<'s> {
     }
 
     /// The form factors of every vertex to patch `p`, from the cache when possible.
+    /// Each element (leaf) of patch `p`: the mean of the per-vertex `value` over its three
+    /// vertices, and its area (scene units squared).
+    fn element_means<'a, T>(
+        &'a self,
+        p: usize,
+        value: impl Fn(usize) -> T + 'a,
+    ) -> impl Iterator<Item = (T, f64)> + 'a
+    where
+        T: std::iter::Sum + std::ops::Div<f64, Output = T>,
+    {
+        self.patch_leaves[p].iter().map(move |&leaf| {
+            let node = &self.mesh.nodes[leaf as usize];
+            let sum: T = node.vertices.iter().map(|&v| value(v as usize)).sum();
+            (sum / 3.0, f64::from(node.area))
+        })
+    }
+
     fn patch_row(&mut self, p: usize) -> Vec<f32> {
         let n = self.mesh.vertices.len();
         let have = self.cache[p].as_ref().map_or(0, Vec::len);
@@ -504,16 +521,9 @@ impl<'s> Progressive<'s> {
         let mut arrived = DVec3::ZERO;
         for q in 0..self.mesh.patches.len() {
             let mut gained = DVec3::ZERO;
-            for &leaf in &self.patch_leaves[q] {
-                let node = &self.mesh.nodes[leaf as usize];
-                let h: f64 = node
-                    .vertices
-                    .iter()
-                    .map(|&v| f64::from(row[v as usize]))
-                    .sum::<f64>()
-                    / 3.0;
+            for (h, area) in self.element_means(q, |v| f64::from(row[v])) {
                 if h > 0.0 {
-                    gained += (de + dr) * h * f64::from(node.area);
+                    gained += (de + dr) * h * area;
                 }
             }
             if gained != DVec3::ZERO {
@@ -639,15 +649,8 @@ impl<'s> Progressive<'s> {
         // Re-estimate each patch's reflected radiosity from its (finer) elements.
         for p in 0..self.mesh.patches.len() {
             let mut reflected = DVec3::ZERO;
-            for &leaf in &self.patch_leaves[p] {
-                let node = &self.mesh.nodes[leaf as usize];
-                let r: DVec3 = node
-                    .vertices
-                    .iter()
-                    .map(|&v| self.rho[v as usize] * self.received(v as usize))
-                    .sum::<DVec3>()
-                    / 3.0;
-                reflected += r * f64::from(node.area);
+            for (r, area) in self.element_means(p, |v| self.rho[v] * self.received(v)) {
+                reflected += r * area;
             }
             let reflected = reflected / self.patch_area(p);
             let new_unshot = reflected - self.shot_refl[p];
