@@ -5,18 +5,10 @@ mod common;
 
 use common::{cli, repo, twopass};
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use twopass_bake as bake;
-
-fn file_names(dir: &Path) -> Vec<String> {
-    let mut names: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    names.sort();
-    names
-}
+use twopass_tests::file_names;
 
 /// A coarse radiosity mesh solved loosely: seconds, not minutes.
 const COARSE: &str = "--element-size 60 --patch-size 150 --unshot 1e-2";

@@ -168,7 +168,6 @@ fn bench_render_times_every_method_and_the_bake_frame_rate() {
 fn render_exr_says_how_it_was_made() {
     // The EXR of `render` carries the final image as plain R, G, B and the render's method,
     // samples, seed and version in its header, read back here by the exr crate itself.
-    use exr::meta::attribute::AttributeValue;
     let dir = tempfile::tempdir().unwrap();
     let exr_path = dir.path().join("box.exr");
     let out = common::render_box("whitted", 16, 2)
@@ -192,10 +191,7 @@ fn render_exr_says_how_it_was_made() {
     for c in ["R", "G", "B", "image.R"] {
         assert!(names.iter().any(|n| n == c), "no channel {c} in {names:?}");
     }
-    let attr = |name: &str| match layer.attributes.other.get(&exr::prelude::Text::from(name)) {
-        Some(AttributeValue::Text(t)) => t.to_string(),
-        other => panic!("{name}: {other:?}"),
-    };
+    let attr = |name: &str| twopass_tests::exr_text(&layer.attributes, name);
     assert_eq!(attr("twopass:method"), "whitted");
     assert_eq!(attr("twopass:spp"), "2");
     assert_eq!(attr("twopass:seed"), "7");
