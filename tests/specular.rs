@@ -389,7 +389,7 @@ fn the_tracer_adds_no_light_through_glass_again() {
     // (an occluder) and the solution's direct part is zero there, so the caustic lives only in
     // the solution's indirect part. The hybrid (the whole solution) and hybrid-direct (shadow
     // rays plus the indirect part) must then agree on the caustic, and both must see it.
-    use twopass_trace::hybrid::{hybrid, hybrid_direct};
+    use twopass_trace::hybrid::{DirectLight, hybrid};
     use twopass_trace::{RenderProgress, RenderSettings, WhittedSettings, render};
     let (s, _) = load(scene_path("cornell-spheres.toml")).unwrap();
     let options = |specular| coarse(specular, 1e-2);
@@ -413,14 +413,24 @@ fn the_tracer_adds_no_light_through_glass_again() {
         let h = render(
             &s,
             &camera,
-            &hybrid(&s, &solution, WhittedSettings::default()),
+            &hybrid(
+                &s,
+                &solution,
+                DirectLight::FromSolution,
+                WhittedSettings::default(),
+            ),
             &settings,
             &p,
         );
         let hd = render(
             &s,
             &camera,
-            &hybrid_direct(&s, &solution, WhittedSettings::default()),
+            &hybrid(
+                &s,
+                &solution,
+                DirectLight::PerPixel,
+                WhittedSettings::default(),
+            ),
             &settings,
             &p,
         );
@@ -470,7 +480,7 @@ fn per_pixel_caustics_replace_the_meshs_focused_light_once() {
     // (caustic_paths = 0) or per pixel by light tracing, with the mesh's focused part taken
     // out where the camera sees it. Each counts it once: the image's and the caustic's mean
     // agree. Per pixel the caustic is sharper, so closer to the reference there.
-    use twopass_trace::hybrid::hybrid;
+    use twopass_trace::hybrid::{DirectLight, hybrid};
     use twopass_trace::{
         Reference, ReferenceSettings, RenderProgress, RenderSettings, WhittedSettings, render,
     };
@@ -500,6 +510,7 @@ fn per_pixel_caustics_replace_the_meshs_focused_light_once() {
         let h = hybrid(
             &s,
             &solution,
+            DirectLight::FromSolution,
             WhittedSettings {
                 caustic_paths: paths,
                 ..WhittedSettings::default()

@@ -7,7 +7,7 @@ use std::ops::ControlFlow;
 
 use twopass_brdf::Rgb;
 use twopass_scene::DiffuseRadiance;
-use twopass_trace::hybrid::{hybrid, hybrid_direct, radiosity_only};
+use twopass_trace::hybrid::{DirectLight, hybrid, radiosity_only};
 use twopass_trace::{
     Layer, Reference, ReferenceSettings, RenderProgress, RenderSettings, WhittedSettings, render,
 };
@@ -59,7 +59,12 @@ fn hybrid_equals_radiosity_alone_on_lambertian_scenes() {
     let b = render(
         &scene,
         &camera,
-        &hybrid(&scene, &double, WhittedSettings::default()),
+        &hybrid(
+            &scene,
+            &double,
+            DirectLight::FromSolution,
+            WhittedSettings::default(),
+        ),
         &settings(),
         &RenderProgress::new(),
     );
@@ -91,7 +96,12 @@ fn hybrid_with_a_real_solution_matches_radiosity_alone_and_the_reference() {
     let h = render(
         &scene,
         &camera,
-        &hybrid(&scene, &solution, WhittedSettings::default()),
+        &hybrid(
+            &scene,
+            &solution,
+            DirectLight::FromSolution,
+            WhittedSettings::default(),
+        ),
         &settings(),
         &p,
     );
@@ -101,7 +111,12 @@ fn hybrid_with_a_real_solution_matches_radiosity_alone_and_the_reference() {
     let hd = render(
         &scene,
         &camera,
-        &hybrid_direct(&scene, &solution, WhittedSettings::default()),
+        &hybrid(
+            &scene,
+            &solution,
+            DirectLight::PerPixel,
+            WhittedSettings::default(),
+        ),
         &settings(),
         &p,
     );
@@ -168,7 +183,12 @@ fn hybrid_error_against_the_reference_shrinks_as_the_mesh_is_refined() {
         let h = render(
             &scene,
             &camera,
-            &hybrid(&scene, &solution, WhittedSettings::default()),
+            &hybrid(
+                &scene,
+                &solution,
+                DirectLight::FromSolution,
+                WhittedSettings::default(),
+            ),
             &spp(1024, 3),
             &p,
         )

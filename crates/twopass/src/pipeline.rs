@@ -12,7 +12,7 @@ use twopass_bake::Manifest;
 use twopass_composite::layer::Layers;
 use twopass_radiosity::{Solution, Solver};
 use twopass_scene::{DiffuseRadiance, Scene};
-use twopass_trace::hybrid::{hybrid, hybrid_direct, radiosity_only};
+use twopass_trace::hybrid::{DirectLight, hybrid, radiosity_only};
 use twopass_trace::whitted::ambient_estimate;
 use twopass_trace::{
     Integrator, Layer, LayerImages, Reference, ReferenceSettings, RenderOutput, RenderProgress,
@@ -254,8 +254,15 @@ pub fn integrator<'a>(
     match method {
         RenderMethod::Whitted => Box::new(Whitted::new(scene, ambient_estimate(scene), whitted)),
         RenderMethod::Radiosity => Box::new(radiosity_only(scene, solution())),
-        RenderMethod::Hybrid => Box::new(hybrid(scene, solution(), whitted)),
-        RenderMethod::HybridDirect => Box::new(hybrid_direct(scene, solution(), whitted)),
+        RenderMethod::Hybrid => Box::new(hybrid(
+            scene,
+            solution(),
+            DirectLight::FromSolution,
+            whitted,
+        )),
+        RenderMethod::HybridDirect => {
+            Box::new(hybrid(scene, solution(), DirectLight::PerPixel, whitted))
+        }
         RenderMethod::Reference => Box::new(Reference::new(scene, ReferenceSettings::default())),
     }
 }
