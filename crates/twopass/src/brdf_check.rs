@@ -19,7 +19,7 @@ use twopass_brdf::{
 
 use crate::context::Context;
 use crate::error::CliError;
-use crate::figure::{self, FONT};
+use crate::figure;
 
 /// Options of `twopass brdf-check`.
 #[derive(Debug, Args)]
@@ -353,8 +353,7 @@ fn plot_lobe(path: &Path, title: &str, model: &BrdfModel, angles: &[f32]) -> Res
     const W: u32 = 720;
     const H: u32 = 420; // about equal scales on both axes, so the unit circle looks round
     figure::png(path, W, H, |root| {
-        let mut chart = ChartBuilder::on(root)
-            .caption(title, (FONT, 22))
+        let mut chart = figure::titled(root, title)
             .margin(12)
             .x_label_area_size(44)
             .y_label_area_size(52)

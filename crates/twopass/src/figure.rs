@@ -56,6 +56,16 @@ where
         .map_err(|e| e.to_string())
 }
 
+/// A chart on `root` whose caption is `title` in the style of every figure's title (22-point).
+pub fn titled<'a, 'b, DB: DrawingBackend>(
+    root: &'a DrawingArea<DB, Shift>,
+    title: &str,
+) -> ChartBuilder<'a, 'b, DB> {
+    let mut chart = ChartBuilder::on(root);
+    chart.caption(title, (FONT, 22));
+    chart
+}
+
 /// How a plot's axes are drawn: their descriptions, the size of those descriptions (points)
 /// and the grey of the light grid lines (each figure keeps its own published values). Tick
 /// labels are 14-point for every plot.

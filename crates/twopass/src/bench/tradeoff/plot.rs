@@ -62,8 +62,7 @@ pub fn plot(
     let (x0, x1) = (t0 / 1.6, t1 * 1.6);
     let (y0, y1) = (100.0 * e0 / 1.4, 100.0 * e1 * 1.4);
     figure::png(path, W, H, |root| {
-        let mut chart = ChartBuilder::on(root)
-            .caption(title, (FONT, 22))
+        let mut chart = figure::titled(root, title)
             .margin(14)
             .x_label_area_size(48)
             .y_label_area_size(64)
