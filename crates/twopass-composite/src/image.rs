@@ -1,7 +1,8 @@
 //! The images the compositor works on: [`Image`] (linear RGB), [`Rgb8Image`] (display-referred
 //! 8-bit) and [`Rect`], from `twopass-image`, the one home of the pixel raster that the tracer
-//! fills too (ARCHITECTURE.md, "Where each idea lives"); here, the checks that answer with this
-//! crate's error.
+//! fills too (ARCHITECTURE.md, "Where each idea lives"); here, the size check that answers with
+//! this crate's error (the image crate's own errors convert into this crate's variants of the
+//! same name).
 //!
 //! Conventions (ARCHITECTURE.md, "Conventions"): colour is linear RGB (Rec. 709 / sRGB
 //! primaries), `f32` per channel, no alpha; pixels are stored row-major with pixel (0, 0) at the
@@ -11,19 +12,6 @@ use crate::error::{CompositeError, Result};
 
 pub use twopass_brdf::colour::{LUMINANCE, luminance};
 pub use twopass_image::{Image, Raster, Rect, Rgb8Image};
-
-/// `rect` as a region of a `width` x `height` image: an error unless it lies inside.
-pub(crate) fn check_region(rect: Rect, width: u32, height: u32) -> Result<()> {
-    if rect.fits_in(width, height) {
-        Ok(())
-    } else {
-        Err(CompositeError::Region {
-            rect,
-            width,
-            height,
-        })
-    }
-}
 
 /// `Ok` when `image` has the size of `expected`; otherwise the error names `what`.
 pub(crate) fn check_same_size(expected: &Image, image: &Image, what: &str) -> Result<()> {

@@ -65,7 +65,7 @@ pub fn compare_regions(
 ) -> Result<Vec<Metrics>> {
     check_pair(image, reference)?;
     for r in regions {
-        crate::image::check_region(*r, reference.width(), reference.height())?;
+        reference.check_region(*r)?;
         if r.area() == 0 {
             return Err(CompositeError::Empty {
                 what: format!("region {r:?}"),
