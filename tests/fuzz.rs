@@ -207,7 +207,7 @@ fn exercise(result: Result<(Scene, Vec<Warning>), SceneError>) {
     let out = render(&scene, &camera, &whitted, &settings, &RenderProgress::new());
     let image = out.layers.composite();
     assert!(
-        image.pixels.iter().all(|p| p.is_finite()),
+        image.pixels().iter().all(|p| p.is_finite()),
         "a non-finite pixel reached the image"
     );
     let options = Options {

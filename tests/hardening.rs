@@ -243,11 +243,11 @@ fn a_scene_near_the_range_limit_renders_as_at_unit_scale() {
         out.layers.composite()
     };
     let (unit, big) = (render(1.0), render(1e9));
-    let mean = |img: &twopass_trace::FilmImage| {
-        img.pixels
+    let mean = |img: &twopass_image::Image| {
+        img.pixels()
             .iter()
             .fold(Vec3::ZERO, |a, p| a + Vec3::from_array(p.to_array()))
-            / img.pixels.len() as f32
+            / img.pixels().len() as f32
     };
     let (a, b) = (mean(&unit), mean(&big));
     assert!(a.min_element() > 0.01, "the unit-scale image is lit: {a}");

@@ -371,12 +371,12 @@ fn spheres_balance_power_and_solve_alike_on_one_or_two_threads() {
 }
 
 /// Mean radiance over the image rectangle `[x0, x1) x [y0, y1)` (fractions of the image).
-fn region_mean(image: &twopass_trace::FilmImage, x: (f32, f32), y: (f32, f32)) -> DVec3 {
-    let (w, h) = (image.width as f32, image.height as f32);
+fn region_mean(image: &twopass_image::Image, x: (f32, f32), y: (f32, f32)) -> DVec3 {
+    let (w, h) = (image.width() as f32, image.height() as f32);
     let (mut sum, mut n) = (DVec3::ZERO, 0.0);
     for py in (y.0 * h) as u32..(y.1 * h) as u32 {
         for px in (x.0 * w) as u32..(x.1 * w) as u32 {
-            sum += image.pixels[(py * image.width + px) as usize].as_dvec3();
+            sum += image.pixels()[(py * image.width() + px) as usize].as_dvec3();
             n += 1.0;
         }
     }
@@ -389,7 +389,7 @@ fn the_tracer_adds_no_light_through_glass_again() {
     // (an occluder) and the solution's direct part is zero there, so the caustic lives only in
     // the solution's indirect part. The hybrid (the whole solution) and hybrid-direct (shadow
     // rays plus the indirect part) must then agree on the caustic, and both must see it.
-    use twopass_trace::hybrid::{hybrid, hybrid_direct};
+    use twopass_trace::hybrid::{DirectLight, hybrid};
     use twopass_trace::{RenderProgress, RenderSettings, WhittedSettings, render};
     let (s, _) = load(scene_path("cornell-spheres.toml")).unwrap();
     let options = |specular| coarse(specular, 1e-2);
@@ -413,14 +413,24 @@ fn the_tracer_adds_no_light_through_glass_again() {
         let h = render(
             &s,
             &camera,
-            &hybrid(&s, &solution, WhittedSettings::default()),
+            &hybrid(
+                &s,
+                &solution,
+                DirectLight::FromSolution,
+                WhittedSettings::default(),
+            ),
             &settings,
             &p,
         );
         let hd = render(
             &s,
             &camera,
-            &hybrid_direct(&s, &solution, WhittedSettings::default()),
+            &hybrid(
+                &s,
+                &solution,
+                DirectLight::PerPixel,
+                WhittedSettings::default(),
+            ),
             &settings,
             &p,
         );
@@ -470,7 +480,7 @@ fn per_pixel_caustics_replace_the_meshs_focused_light_once() {
     // (caustic_paths = 0) or per pixel by light tracing, with the mesh's focused part taken
     // out where the camera sees it. Each counts it once: the image's and the caustic's mean
     // agree. Per pixel the caustic is sharper, so closer to the reference there.
-    use twopass_trace::hybrid::hybrid;
+    use twopass_trace::hybrid::{DirectLight, hybrid};
     use twopass_trace::{
         Reference, ReferenceSettings, RenderProgress, RenderSettings, WhittedSettings, render,
     };
@@ -500,6 +510,7 @@ fn per_pixel_caustics_replace_the_meshs_focused_light_once() {
         let h = hybrid(
             &s,
             &solution,
+            DirectLight::FromSolution,
             WhittedSettings {
                 caustic_paths: paths,
                 ..WhittedSettings::default()
@@ -538,13 +549,13 @@ fn per_pixel_caustics_replace_the_meshs_focused_light_once() {
         assert!(off < tolerance, "{name}: mesh {m} vs per pixel {p}");
     }
     // Relative RMS difference from the reference over the caustic's pixels.
-    let error = |img: &twopass_trace::FilmImage| {
-        let (w, h) = (img.width as f32, img.height as f32);
+    let error = |img: &twopass_image::Image| {
+        let (w, h) = (img.width() as f32, img.height() as f32);
         let (mut num, mut den) = (0.0, 0.0);
         for py in (caustic.1.0 * h) as u32..(caustic.1.1 * h) as u32 {
             for px in (caustic.0.0 * w) as u32..(caustic.0.1 * w) as u32 {
-                let i = (py * img.width + px) as usize;
-                let (a, r) = (img.pixels[i].as_dvec3(), reference.pixels[i].as_dvec3());
+                let i = (py * img.width() + px) as usize;
+                let (a, r) = (img.pixels()[i].as_dvec3(), reference.pixels()[i].as_dvec3());
                 num += (a - r).length_squared();
                 den += r.length_squared();
             }

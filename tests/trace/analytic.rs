@@ -102,7 +102,7 @@ fn whitted_matches_the_closed_form_within_one_percent() {
     let mut n = 0;
     for (i, e) in exact.iter().enumerate() {
         if let Some(e) = e {
-            let got = f64::from(img.pixels[i].x);
+            let got = f64::from(img.pixels()[i].x);
             worst = worst.max((got / e - 1.0).abs());
             n += 1;
         }
@@ -129,7 +129,7 @@ fn reference_matches_the_closed_form_within_its_noise_and_one_percent() {
     let diffs: Vec<f64> = exact
         .iter()
         .enumerate()
-        .filter_map(|(i, e)| e.map(|e| f64::from(img.pixels[i].x) / e - 1.0))
+        .filter_map(|(i, e)| e.map(|e| f64::from(img.pixels()[i].x) / e - 1.0))
         .collect();
     let (mean, err) = mean_and_error(&diffs);
     eprintln!("reference vs closed form: mean relative difference {mean:.2e} +- {err:.1e}");

@@ -9,8 +9,8 @@ use std::f64::consts::PI;
 use glam::{DVec3, Vec2};
 use twopass_scene::Scene;
 use twopass_trace::{
-    CausticScope, Caustics, FilmImage, LightTracer, LightTracingSettings, Reference,
-    ReferenceSettings, RenderOutput, RenderProgress, RenderSettings, render,
+    CausticScope, Caustics, LightTracer, LightTracingSettings, Reference, ReferenceSettings,
+    RenderOutput, RenderProgress, RenderSettings, render,
 };
 
 use super::common::{repo_scene, scene};
@@ -138,8 +138,8 @@ fn light_traced_caustic_through_a_mirror_is_the_mirrored_emitters_light() {
 }
 
 /// Mean over a rectangle given in fractions of the image.
-fn region(img: &FilmImage, x: (f32, f32), y: (f32, f32)) -> f64 {
-    let (w, h) = (img.width as f32, img.height as f32);
+fn region(img: &twopass_image::Image, x: (f32, f32), y: (f32, f32)) -> f64 {
+    let (w, h) = (img.width() as f32, img.height() as f32);
     let (mut sum, mut n) = (0.0, 0.0);
     for py in (y.0 * h) as u32..(y.1 * h) as u32 {
         for px in (x.0 * w) as u32..(x.1 * w) as u32 {

@@ -3,7 +3,7 @@
 use twopass_scene::{Ray, Scene};
 use twopass_trace::{
     Integrator, Layer, Radiance, Reference, ReferenceSettings, RenderProgress, RenderSettings,
-    Sampler, Tally, Whitted, WhittedSettings, render,
+    SampleState, Whitted, WhittedSettings, render,
 };
 
 use super::common::repo_scene;
@@ -65,8 +65,8 @@ impl Integrator for Faulty {
     fn name(&self) -> &'static str {
         "faulty"
     }
-    fn radiance(&self, _: &Scene, _: &Ray, sampler: &mut Sampler, _: &mut Tally) -> Radiance {
-        let u = sampler.next_f32();
+    fn radiance(&self, _: &Scene, _: &Ray, sample: SampleState<'_>) -> Radiance {
+        let u = sample.sampler.next_f32();
         let v = if u < 0.2 {
             f32::NAN
         } else if u < 0.3 {
@@ -94,12 +94,12 @@ fn non_finite_samples_are_counted_and_never_written() {
     let bad = out.stats.non_finite;
     assert!((200..420).contains(&bad), "{bad}");
     for img in &out.layers.images {
-        assert!(img.pixels.iter().all(|p| p.is_finite()));
+        assert!(img.pixels().iter().all(|p| p.is_finite()));
     }
     // Each pixel is the mean of its finite samples: 1, or 0 where all four were bad.
     let d = out.layers.layer(Layer::Diffuse);
     assert!(
-        d.pixels
+        d.pixels()
             .iter()
             .all(|p| *p == glam::Vec3::ONE || *p == glam::Vec3::ZERO)
     );
@@ -139,14 +139,14 @@ fn layers_sum_to_the_image_and_split_by_first_event() {
     // No glossy material in this scene.
     assert_eq!(l.layer(Layer::DirectSpecular).mean(), glam::Vec3::ZERO);
     let sum = l.composite();
-    let manual = l
-        .images
-        .iter()
-        .fold(vec![glam::Vec3::ZERO; sum.pixels.len()], |mut acc, img| {
-            for (a, p) in acc.iter_mut().zip(&img.pixels) {
+    let manual = l.images.iter().fold(
+        vec![glam::Vec3::ZERO; sum.pixels().len()],
+        |mut acc, img| {
+            for (a, p) in acc.iter_mut().zip(img.pixels()) {
                 *a += *p;
             }
             acc
-        });
-    assert_eq!(sum.pixels, manual);
+        },
+    );
+    assert_eq!(sum.pixels(), manual);
 }

@@ -36,7 +36,7 @@ fn path_tracer_furnace_has_radiance_one() {
     assert_eq!(out.stats.non_finite, 0);
     let img = out.layers.composite();
     for c in 0..3 {
-        let values: Vec<f64> = img.pixels.iter().map(|p| f64::from(p[c])).collect();
+        let values: Vec<f64> = img.pixels().iter().map(|p| f64::from(p[c])).collect();
         let (mean, err) = mean_and_error(&values);
         eprintln!("furnace channel {c}: {mean:.4} +- {err:.4}");
         // Every pixel is an independent unbiased estimate of 1.

@@ -7,7 +7,7 @@ use std::ops::ControlFlow;
 
 use twopass_brdf::Rgb;
 use twopass_scene::DiffuseRadiance;
-use twopass_trace::hybrid::{hybrid, hybrid_direct, radiosity_only};
+use twopass_trace::hybrid::{DirectLight, hybrid, radiosity_only};
 use twopass_trace::{
     Layer, Reference, ReferenceSettings, RenderProgress, RenderSettings, WhittedSettings, render,
 };
@@ -59,7 +59,12 @@ fn hybrid_equals_radiosity_alone_on_lambertian_scenes() {
     let b = render(
         &scene,
         &camera,
-        &hybrid(&scene, &double, WhittedSettings::default()),
+        &hybrid(
+            &scene,
+            &double,
+            DirectLight::FromSolution,
+            WhittedSettings::default(),
+        ),
         &settings(),
         &RenderProgress::new(),
     );
@@ -91,7 +96,12 @@ fn hybrid_with_a_real_solution_matches_radiosity_alone_and_the_reference() {
     let h = render(
         &scene,
         &camera,
-        &hybrid(&scene, &solution, WhittedSettings::default()),
+        &hybrid(
+            &scene,
+            &solution,
+            DirectLight::FromSolution,
+            WhittedSettings::default(),
+        ),
         &settings(),
         &p,
     );
@@ -101,7 +111,12 @@ fn hybrid_with_a_real_solution_matches_radiosity_alone_and_the_reference() {
     let hd = render(
         &scene,
         &camera,
-        &hybrid_direct(&scene, &solution, WhittedSettings::default()),
+        &hybrid(
+            &scene,
+            &solution,
+            DirectLight::PerPixel,
+            WhittedSettings::default(),
+        ),
         &settings(),
         &p,
     );
@@ -112,15 +127,15 @@ fn hybrid_with_a_real_solution_matches_radiosity_alone_and_the_reference() {
 }
 
 /// Relative RMS error of issue 7: sqrt(mean((x - r)^2 / (r^2 + 0.01))) over pixels and channels.
-fn relative_rmse(x: &twopass_trace::FilmImage, r: &twopass_trace::FilmImage) -> f64 {
+fn relative_rmse(x: &twopass_image::Image, r: &twopass_image::Image) -> f64 {
     let mut sum = 0.0;
-    for (a, b) in x.pixels.iter().zip(&r.pixels) {
+    for (a, b) in x.pixels().iter().zip(r.pixels()) {
         for c in 0..3 {
             let (a, b) = (f64::from(a[c]), f64::from(b[c]));
             sum += (a - b).powi(2) / (b * b + 0.01);
         }
     }
-    (sum / (3 * x.pixels.len()) as f64).sqrt()
+    (sum / (3 * x.pixels().len()) as f64).sqrt()
 }
 
 #[test]
@@ -168,7 +183,12 @@ fn hybrid_error_against_the_reference_shrinks_as_the_mesh_is_refined() {
         let h = render(
             &scene,
             &camera,
-            &hybrid(&scene, &solution, WhittedSettings::default()),
+            &hybrid(
+                &scene,
+                &solution,
+                DirectLight::FromSolution,
+                WhittedSettings::default(),
+            ),
             &spp(1024, 3),
             &p,
         )

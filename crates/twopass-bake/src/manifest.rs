@@ -131,25 +131,15 @@ pub struct EnergyRecord {
     pub worst_imbalance: f64,
 }
 
-/// The residual report (see `Residuals`).
+/// The residual report: how many vertices and patch pairs were sampled, then the solver's
+/// [`Residuals`] field by field (energy imbalance, row sums, reciprocity).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ResidualsRecord {
     /// Vertices and patch pairs sampled.
     pub samples: usize,
-    /// Largest relative energy imbalance.
-    pub energy_imbalance: f64,
-    /// Smallest sampled form-factor row sum.
-    pub row_sum_min: f64,
-    /// Mean sampled row sum.
-    pub row_sum_mean: f64,
-    /// Largest sampled row sum.
-    pub row_sum_max: f64,
-    /// Patch pairs with a non-zero form factor among those sampled.
-    pub reciprocity_pairs: usize,
-    /// Largest relative reciprocity difference.
-    pub reciprocity_spread: f64,
-    /// Area-weighted mean relative reciprocity difference.
-    pub reciprocity_mean: f64,
+    /// The figures themselves, as fields of this record in the JSON.
+    #[serde(flatten)]
+    pub residuals: Residuals,
 }
 
 /// The `.glb` colour mapping used.
@@ -361,13 +351,7 @@ impl Manifest {
             },
             residuals: ResidualsRecord {
                 samples,
-                energy_imbalance: residuals.energy_imbalance,
-                row_sum_min: residuals.row_sum_min,
-                row_sum_mean: residuals.row_sum_mean,
-                row_sum_max: residuals.row_sum_max,
-                reciprocity_pairs: residuals.reciprocity_pairs,
-                reciprocity_spread: residuals.reciprocity_spread,
-                reciprocity_mean: residuals.reciprocity_mean,
+                residuals: *residuals,
             },
             color: None,
             lightmap: None,

@@ -233,10 +233,17 @@ fn exr_and_png_read_back() {
 /// A floor under a light, each an OBJ with its own `vt` (light's in `light_vt`), in metres.
 fn obj_scene(light_vt: [[f32; 2]; 4]) -> (tempfile::TempDir, Scene) {
     let dir = tempfile::tempdir().unwrap();
-    let quad = |name: &str, v: [[f32; 3]; 4], vt: [[f32; 2]; 4]| {
+    // A horizontal square at height `y`, from `lo` to `hi` in x and z, facing up or down.
+    let quad = |name: &str, y: f32, [lo, hi]: [f32; 2], up: bool, vt: [[f32; 2]; 4]| {
+        let (a, b) = if up {
+            ([lo, hi], [hi, lo])
+        } else {
+            ([hi, lo], [lo, hi])
+        };
+        let corners = [[lo, lo], [a[0], a[1]], [hi, hi], [b[0], b[1]]];
         let mut text = String::new();
-        for p in v {
-            text += &format!("v {} {} {}\n", p[0], p[1], p[2]);
+        for [x, z] in corners {
+            text += &format!("v {x} {y} {z}\n");
         }
         for t in vt {
             text += &format!("vt {} {}\n", t[0], t[1]);
@@ -244,26 +251,9 @@ fn obj_scene(light_vt: [[f32; 2]; 4]) -> (tempfile::TempDir, Scene) {
         text += "f 1/1 2/2 3/3 4/4\n";
         std::fs::write(dir.path().join(name), text).unwrap();
     };
-    quad(
-        "floor.obj",
-        [
-            [0.0, 0.0, 0.0],
-            [0.0, 0.0, 1.0],
-            [1.0, 0.0, 1.0],
-            [1.0, 0.0, 0.0],
-        ],
-        [[0.0, 0.0], [0.0, 0.5], [0.5, 0.5], [0.5, 0.0]],
-    );
-    quad(
-        "light.obj",
-        [
-            [0.3, 0.9, 0.3],
-            [0.7, 0.9, 0.3],
-            [0.7, 0.9, 0.7],
-            [0.3, 0.9, 0.7],
-        ],
-        light_vt,
-    );
+    let floor_vt = [[0.0, 0.0], [0.0, 0.5], [0.5, 0.5], [0.5, 0.0]];
+    quad("floor.obj", 0.0, [0.0, 1.0], true, floor_vt);
+    quad("light.obj", 0.9, [0.3, 0.7], false, light_vt);
     let toml = "version = 1\n[camera]\nposition = [0.5, 0.5, -2]\nlook_at = [0.5, 0.5, 0]\n\
                 fov_y = 40\n[[material]]\nname = \"white\"\ntype = \"lambert\"\ndiffuse = 0.5\n\
                 [[object]]\nname = \"floor\"\nmaterial = \"white\"\n\

@@ -82,9 +82,6 @@ impl BlinnPhong {
 }
 
 impl Glossy for BlinnPhong {
-    fn rho(&self) -> Rgb {
-        self.rho
-    }
     fn eval_glossy(&self, wo: Vec3, wi: Vec3) -> Rgb {
         let Some(s2) = half_sin2(wo, wi) else {
             return Rgb::ZERO;

@@ -87,9 +87,6 @@ impl CookTorrance {
 }
 
 impl Glossy for CookTorrance {
-    fn rho(&self) -> Rgb {
-        self.rho
-    }
     fn eval_glossy(&self, wo: Vec3, wi: Vec3) -> Rgb {
         let Some(h) = half_vector(wo, wi) else {
             return Rgb::ZERO;

@@ -100,11 +100,16 @@ pub fn outgoing_albedo<B: Brdf + ?Sized>(brdf: &B, wo: Vec3, q: Quadrature) -> R
     integrate_dvec3(reflect(wo), q, |wi| (brdf.eval(wo, wi) * wi.z).as_dvec3()).as_vec3()
 }
 
-/// A BRDF made of a Lambertian part of reflectance rho plus one glossy lobe, sampled as a
-/// one-sample mixture of the cosine hemisphere and the lobe's own warp.
-pub(crate) trait Glossy {
+/// The Lambertian part of a diffuse-plus-glossy mixture; [`impl_brdf_via_glossy`] implements
+/// it from the model's `rho` field.
+pub(crate) trait Diffuse {
     /// Diffuse reflectance rho.
     fn rho(&self) -> Rgb;
+}
+
+/// A BRDF made of a Lambertian part of reflectance rho ([`Diffuse`]) plus one glossy lobe,
+/// sampled as a one-sample mixture of the cosine hemisphere and the lobe's own warp.
+pub(crate) trait Glossy: Diffuse {
     /// The glossy term alone, for directions both above the horizon.
     fn eval_glossy(&self, wo: Vec3, wi: Vec3) -> Rgb;
     /// A direction from the lobe's warp (may be below the horizon: rejected by the caller).
@@ -184,6 +189,11 @@ pub(crate) fn mix_sample<G: Glossy>(g: &G, wo: Vec3, u: Vec2) -> Option<BrdfSamp
 /// Implements [`Brdf`] for a [`Glossy`] model through the mixture helpers.
 macro_rules! impl_brdf_via_glossy {
     ($t:ty) => {
+        impl $crate::interface::Diffuse for $t {
+            fn rho(&self) -> $crate::Rgb {
+                self.rho
+            }
+        }
         impl $crate::interface::Brdf for $t {
             fn eval(&self, wo: glam::Vec3, wi: glam::Vec3) -> $crate::Rgb {
                 $crate::interface::mix_eval(self, wo, wi)

@@ -141,41 +141,49 @@ impl Material {
     /// A Phong material. The published form accepts any k_s in [0, 1]; the normalized form also
     /// requires diffuse + specular <= 1.
     pub fn phong(p: PhongParams) -> Result<Self, ParamError> {
-        check_diffuse(p.diffuse)?;
-        check_unit("specular", p.specular)?;
-        check_unit("ambient", p.ambient)?;
-        check_exponent(p.exponent)?;
-        if p.normalized {
-            check_sum(p.diffuse, p.specular)?;
-        }
-        Ok(Self {
-            diffuse: p.diffuse,
-            ambient: p.ambient,
-            lobe: nonzero(p.specular).then_some(Lobe::Phong {
-                specular: p.specular,
-                exponent: p.exponent,
-                normalized: p.normalized,
-            }),
-        })
+        let lobe = (p.specular, p.exponent, p.normalized);
+        Self::exponent_lobe(Form::Phong, p.diffuse, Some(p.ambient), lobe)
     }
 
     /// A Blinn-Phong material; the normalized form requires diffuse + specular <= 1.
     pub fn blinn_phong(p: BlinnPhongParams) -> Result<Self, ParamError> {
-        check_diffuse(p.diffuse)?;
-        check_unit("specular", p.specular)?;
-        check_exponent(p.exponent)?;
-        if p.normalized {
-            check_sum(p.diffuse, p.specular)?;
+        let lobe = (p.specular, p.exponent, p.normalized);
+        Self::exponent_lobe(Form::BlinnPhong, p.diffuse, None, lobe)
+    }
+
+    /// A material whose lobe has a Phong-style exponent, `form`, with (specular, exponent,
+    /// normalized); `ambient` is Phong's own term (the diffuse reflectance otherwise).
+    /// Validated in the order errors are reported: diffuse, specular, the ambient term, the
+    /// exponent, and for the normalized forms diffuse + specular <= 1.
+    fn exponent_lobe(
+        form: Form,
+        diffuse: Rgb,
+        ambient: Option<Rgb>,
+        (specular, exponent, normalized): (Rgb, f32, bool),
+    ) -> Result<Self, ParamError> {
+        check_diffuse(diffuse)?;
+        check_unit("specular", specular)?;
+        if let Some(ambient) = ambient {
+            check_unit("ambient", ambient)?;
         }
-        Ok(Self {
-            diffuse: p.diffuse,
-            ambient: p.diffuse,
-            lobe: nonzero(p.specular).then_some(Lobe::BlinnPhong {
-                specular: p.specular,
-                exponent: p.exponent,
-                normalized: p.normalized,
-            }),
-        })
+        check_exponent(exponent)?;
+        if normalized {
+            check_sum(diffuse, specular)?;
+        }
+        let lobe = match form {
+            Form::Phong => Lobe::Phong {
+                specular,
+                exponent,
+                normalized,
+            },
+            Form::BlinnPhong => Lobe::BlinnPhong {
+                specular,
+                exponent,
+                normalized,
+            },
+        };
+        let ambient = ambient.unwrap_or(diffuse);
+        Ok(Self::glossy(diffuse, ambient, specular, lobe))
     }
 
     /// A Cook-Torrance material; requires roughness > 0 and diffuse + specular <= 1.
@@ -191,16 +199,13 @@ impl Material {
             ));
         }
         let ior = ComplexIor::new(p.ior.n, p.ior.k)?;
-        Ok(Self {
-            diffuse: p.diffuse,
-            ambient: p.diffuse,
-            lobe: nonzero(p.specular).then_some(Lobe::CookTorrance {
-                specular: p.specular,
-                roughness: p.roughness,
-                ior,
-                fresnel: p.fresnel,
-            }),
-        })
+        let lobe = Lobe::CookTorrance {
+            specular: p.specular,
+            roughness: p.roughness,
+            ior,
+            fresnel: p.fresnel,
+        };
+        Ok(Self::glossy(p.diffuse, p.diffuse, p.specular, lobe))
     }
 
     /// A perfect mirror of per-channel `reflectance` in [0, 1].
@@ -219,6 +224,16 @@ impl Material {
     pub fn conductor(ior: ComplexIor) -> Result<Self, ParamError> {
         let ior = ComplexIor::new(ior.n, ior.k)?;
         Ok(Self::with_delta(Lobe::Conductor { ior }))
+    }
+
+    /// A diffuse part with a glossy `lobe` of reflectance `specular`; no lobe at all when
+    /// `specular` is zero in every channel.
+    fn glossy(diffuse: Rgb, ambient: Rgb, specular: Rgb, lobe: Lobe) -> Self {
+        Self {
+            diffuse,
+            ambient,
+            lobe: nonzero(specular).then_some(lobe),
+        }
     }
 
     fn with_delta(lobe: Lobe) -> Self {
@@ -255,6 +270,15 @@ impl Material {
     pub fn reflects_diffusely(&self) -> bool {
         nonzero(self.diffuse)
     }
+}
+
+/// The two lobes with a Phong-style exponent, as [`Material::exponent_lobe`] builds them.
+#[derive(Clone, Copy)]
+enum Form {
+    /// Around the mirror direction ([`Lobe::Phong`]).
+    Phong,
+    /// Around the normal, of the half vector ([`Lobe::BlinnPhong`]).
+    BlinnPhong,
 }
 
 fn nonzero(v: Rgb) -> bool {
@@ -381,6 +405,62 @@ impl Material {
         match self.model() {
             Some(m) if self.delta().is_none() => m.pdf(wo, wi),
             _ => 0.0,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A material with two bad parameters reports the first in the validators' order: diffuse,
+    /// specular, Phong's ambient term, the exponent, then the normalized sum.
+    #[test]
+    fn two_bad_parameters_report_the_first_in_order() {
+        let (rho, bad) = (Rgb::splat(0.5), Rgb::splat(2.0));
+        let phong = |specular, ambient, exponent, normalized| {
+            Material::phong(PhongParams {
+                diffuse: rho,
+                specular,
+                exponent,
+                ambient,
+                normalized,
+            })
+        };
+        let blinn = |specular, exponent, normalized| {
+            Material::blinn_phong(BlinnPhongParams {
+                diffuse: rho,
+                specular,
+                exponent,
+                normalized,
+            })
+        };
+        let sum = "such that diffuse + specular <= 1 on every channel";
+        let cases = [
+            (phong(bad, bad, 10.0, false), "specular", "in [0, 1]"),
+            (phong(rho, bad, -1.0, false), "ambient", "in [0, 1]"),
+            (
+                phong(Rgb::splat(0.9), rho, -1.0, true),
+                "exponent",
+                "in [0, 1e6]",
+            ),
+            (
+                phong(Rgb::splat(0.9), bad, 10.0, true),
+                "ambient",
+                "in [0, 1]",
+            ),
+            (phong(Rgb::splat(0.9), rho, 10.0, true), "specular", sum),
+            (blinn(bad, -1.0, false), "specular", "in [0, 1]"),
+            (
+                blinn(Rgb::splat(0.9), -1.0, true),
+                "exponent",
+                "in [0, 1e6]",
+            ),
+            (blinn(Rgb::splat(0.9), 10.0, true), "specular", sum),
+        ];
+        for (i, (result, parameter, expected)) in cases.into_iter().enumerate() {
+            let e = result.expect_err("two bad parameters");
+            assert_eq!((e.parameter, e.expected), (parameter, expected), "case {i}");
         }
     }
 }

@@ -13,12 +13,11 @@
 
 use std::f32::consts::TAU;
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 
-use crate::colour::mean;
-use crate::interface::{Glossy, impl_brdf_via_glossy};
+use crate::interface::impl_brdf_via_glossy;
 use crate::param::{check_diffuse, check_exponent, check_sum, check_unit};
-use crate::phong::{lobe, lobe_around_mirror_pdf, sample_lobe_around_mirror};
+use crate::phong::{MirrorLobe, lobe};
 use crate::{ParamError, Rgb};
 
 /// The normalized modified Phong BRDF.
@@ -45,21 +44,12 @@ impl ModifiedPhong {
     }
 }
 
-impl Glossy for ModifiedPhong {
-    fn rho(&self) -> Rgb {
-        self.rho
+impl MirrorLobe for ModifiedPhong {
+    fn ks_n(&self) -> (Rgb, f32) {
+        (self.ks, self.n)
     }
-    fn eval_glossy(&self, wo: Vec3, wi: Vec3) -> Rgb {
+    fn eval_lobe(&self, wo: Vec3, wi: Vec3) -> Rgb {
         self.ks * ((self.n + 2.0) / TAU * lobe(wo, wi, self.n))
-    }
-    fn sample_glossy(&self, wo: Vec3, u: Vec2) -> Option<Vec3> {
-        sample_lobe_around_mirror(wo, u, self.n)
-    }
-    fn pdf_glossy(&self, wo: Vec3, wi: Vec3) -> f32 {
-        lobe_around_mirror_pdf(wo, wi, self.n)
-    }
-    fn glossy_weight(&self, _wo: Vec3) -> f32 {
-        mean(self.ks)
     }
 }
 

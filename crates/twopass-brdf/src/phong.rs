@@ -49,6 +49,32 @@ pub(crate) fn lobe_around_mirror_pdf(wo: Vec3, wi: Vec3, n: f32) -> f32 {
     (n + 1.0) / std::f32::consts::TAU * lobe(wo, wi, n)
 }
 
+/// The glossy lobe of the Phong models (published and modified): k_s times a function of
+/// cos^n(alpha) around the mirror direction, sampled with [`sample_lobe_around_mirror`] and
+/// weighted by mean k_s in the mixture. Each model gives its k_s, n and lobe value; the
+/// sampling and the weight are theirs in common (the [`Glossy`] impl below).
+pub(crate) trait MirrorLobe {
+    /// (k_s per channel, exponent n).
+    fn ks_n(&self) -> (Rgb, f32);
+    /// The lobe's BRDF value for directions both above the horizon (1/sr).
+    fn eval_lobe(&self, wo: Vec3, wi: Vec3) -> Rgb;
+}
+
+impl<T: MirrorLobe + crate::interface::Diffuse> Glossy for T {
+    fn eval_glossy(&self, wo: Vec3, wi: Vec3) -> Rgb {
+        self.eval_lobe(wo, wi)
+    }
+    fn sample_glossy(&self, wo: Vec3, u: Vec2) -> Option<Vec3> {
+        sample_lobe_around_mirror(wo, u, self.ks_n().1)
+    }
+    fn pdf_glossy(&self, wo: Vec3, wi: Vec3) -> f32 {
+        lobe_around_mirror_pdf(wo, wi, self.ks_n().1)
+    }
+    fn glossy_weight(&self, _wo: Vec3) -> f32 {
+        mean(self.ks_n().0)
+    }
+}
+
 /// The published Phong BRDF k_d + k_s cos^n(alpha) / cos(theta_i).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Phong {
@@ -80,21 +106,12 @@ impl Phong {
     }
 }
 
-impl Glossy for Phong {
-    fn rho(&self) -> Rgb {
-        self.rho
+impl MirrorLobe for Phong {
+    fn ks_n(&self) -> (Rgb, f32) {
+        (self.ks, self.n)
     }
-    fn eval_glossy(&self, wo: Vec3, wi: Vec3) -> Rgb {
+    fn eval_lobe(&self, wo: Vec3, wi: Vec3) -> Rgb {
         self.specular(wo, wi)
-    }
-    fn sample_glossy(&self, wo: Vec3, u: Vec2) -> Option<Vec3> {
-        sample_lobe_around_mirror(wo, u, self.n)
-    }
-    fn pdf_glossy(&self, wo: Vec3, wi: Vec3) -> f32 {
-        lobe_around_mirror_pdf(wo, wi, self.n)
-    }
-    fn glossy_weight(&self, _wo: Vec3) -> f32 {
-        mean(self.ks)
     }
 }
 

@@ -212,6 +212,24 @@ impl Pcg64Mcg {
 mod tests {
     use super::*;
 
+    /// SplitMix64 seeded with 0: the reference implementation of Steele, Lea & Flood, as used
+    /// to seed xoshiro.
+    const SPLITMIX64_SEED_0: [u64; 3] = [
+        0xe220_a839_7b1d_cdaf,
+        0x6e78_9e6a_a1b9_65f4,
+        0x06c4_5d18_8009_454f,
+    ];
+
+    /// The PCG C test suite's pcg64f (pcg64_fast) for state 42, as rand_pcg pins it.
+    const PCG64_FAST_STATE_42: [u64; 6] = [
+        0x63b4_a3a8_13ce_700a,
+        0x3829_5420_0617_ab24,
+        0xa7fd_85ae_3fe9_50ce,
+        0xd715_286a_a288_7737,
+        0x60c9_2fee_2e59_f32c,
+        0x84c4_e96b_eff3_0017,
+    ];
+
     /// Asserts that a generator's first outputs are the `published` ones.
     #[track_caller]
     fn assert_stream<T: PartialEq + std::fmt::Debug>(next: impl FnMut() -> T, published: &[T]) {
@@ -221,16 +239,9 @@ mod tests {
 
     #[test]
     fn splitmix64_matches_the_published_sequence() {
-        // SplitMix64 seeded with 0 (the reference implementation of Steele, Lea & Flood, as
-        // used to seed xoshiro).
         let mut s = SplitMix64::new(0);
-        let published = [
-            0xe220_a839_7b1d_cdaf,
-            0x6e78_9e6a_a1b9_65f4,
-            0x06c4_5d18_8009_454f,
-        ];
-        assert_stream(|| s.next_u64(), &published);
-        assert_eq!(hash(0), published[0]);
+        assert_stream(|| s.next_u64(), &SPLITMIX64_SEED_0);
+        assert_eq!(hash(0), SPLITMIX64_SEED_0[0]);
     }
 
     #[test]
@@ -245,17 +256,8 @@ mod tests {
 
     #[test]
     fn pcg64_fast_matches_the_reference_implementation() {
-        // The PCG C test suite's pcg64f (pcg64_fast) for state 42, as rand_pcg pins it.
         let mut g = Pcg64Mcg::new(42);
-        let published = [
-            0x63b4_a3a8_13ce_700a,
-            0x3829_5420_0617_ab24,
-            0xa7fd_85ae_3fe9_50ce,
-            0xd715_286a_a288_7737,
-            0x60c9_2fee_2e59_f32c,
-            0x84c4_e96b_eff3_0017,
-        ];
-        assert_stream(|| g.next_u64(), &published);
+        assert_stream(|| g.next_u64(), &PCG64_FAST_STATE_42);
     }
 
     #[test]

@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use crate::rect::Rect;
+use twopass_image::{ImageError, Rect};
 
 /// Everything that can go wrong in this crate. Variants carry context fields (the file, the
 /// layer, the pixel, the sizes), not preformatted strings.
@@ -125,6 +125,34 @@ pub enum CompositeError {
     /// The embedded font could not be parsed (a build problem, not an input problem).
     #[error("embedded font: {0}")]
     Font(ab_glyph::InvalidFont),
+}
+
+/// The image crate's errors as this crate's variants of the same name (`NonFinite` without a
+/// path: no file was involved).
+impl From<ImageError> for CompositeError {
+    fn from(e: ImageError) -> Self {
+        match e {
+            ImageError::PixelCount { width, height, len } => {
+                CompositeError::PixelCount { width, height, len }
+            }
+            ImageError::Region {
+                rect,
+                width,
+                height,
+            } => CompositeError::Region {
+                rect,
+                width,
+                height,
+            },
+            ImageError::NonFinite { what, x, y, value } => CompositeError::NonFinite {
+                path: None,
+                layer: Some(what),
+                x,
+                y,
+                value,
+            },
+        }
+    }
 }
 
 impl From<WriteError> for CompositeError {

@@ -1,6 +1,7 @@
 //! twopass-composite: linear RGB images and named layers in; tone-mapped PNGs, multi-layer EXRs,
 //! comparison sheets and error metrics out. Depends on no renderer crate (ARCHITECTURE.md,
-//! "Architecture invariants"): a renderer's film converts with [`Image::from_pixels`].
+//! "Architecture invariants"): its [`Image`] is `twopass-image`'s, the type a renderer's layers
+//! already are, so nothing converts.
 //!
 //! Conventions: linear RGB (sRGB primaries), `f32`, pixel (0, 0) at the top left, sizes in
 //! pixels. EXRs are written linear; PNGs are tone mapped (exposure, curve, sRGB transfer) and
@@ -31,7 +32,6 @@ pub mod image;
 pub mod layer;
 pub mod metadata;
 pub mod metric;
-mod rect;
 pub mod sheet;
 mod text;
 pub mod tonemap;

@@ -65,7 +65,7 @@ pub fn compare_regions(
 ) -> Result<Vec<Metrics>> {
     check_pair(image, reference)?;
     for r in regions {
-        crate::image::check_region(*r, reference.width(), reference.height())?;
+        reference.check_region(*r)?;
         if r.area() == 0 {
             return Err(CompositeError::Empty {
                 what: format!("region {r:?}"),
@@ -118,14 +118,14 @@ pub fn compare_regions(
 
 /// Same size, non-empty, all finite.
 pub(crate) fn check_pair(image: &Image, reference: &Image) -> Result<()> {
-    reference.check_same_size(image, "image against reference")?;
+    crate::image::check_same_size(reference, image, "image against reference")?;
     if reference.pixels().is_empty() {
         return Err(CompositeError::Empty {
             what: "reference".into(),
         });
     }
     reference.check_finite("reference")?;
-    image.check_finite("image")
+    Ok(image.check_finite("image")?)
 }
 
 /// The normalised 1-D Gaussian taps `g(k) = exp(-k^2 / (2 sigma^2))`, k = -5..=5 (unnormalised;

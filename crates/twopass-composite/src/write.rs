@@ -269,7 +269,7 @@ fn assemble(path: &Path, prefix: &str, channels: &[Channel]) -> Result<Image> {
     let pixels = (0..r.3.len())
         .map(|i| Vec3::new(r.3[i], g.3[i], b.3[i]))
         .collect();
-    Image::from_pixels(w, h, pixels)
+    Ok(Image::from_pixels(w, h, pixels)?)
 }
 
 /// Reads an EXR's plain `R`, `G`, `B` channels as a linear image.

@@ -13,6 +13,7 @@ use twopass_composite::sheet::{
 };
 use twopass_composite::tonemap::ToneMap;
 use twopass_composite::write;
+use twopass_tests::{exr_text, file_names};
 
 fn ramp(w: u32, h: u32, k: f32) -> Image {
     Image::from_fn(w, h, |x, y| {
@@ -25,24 +26,19 @@ fn ramp(w: u32, h: u32, k: f32) -> Image {
     })
 }
 
-fn dir_entries(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    v.sort();
-    v
+/// A `width` x `height` layer set of [`ramp`]s, one per (name, scale), in order.
+fn ramps(width: u32, height: u32, layers: &[(&str, f32)]) -> Layers {
+    let mut set = Layers::new(width, height);
+    for &(name, k) in layers {
+        set = set.with(name, ramp(width, height, k)).unwrap();
+    }
+    set
 }
-
 #[test]
 fn multi_layer_exr_round_trip_is_bit_identical() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("cornell.exr");
-    let mut layers = Layers::new(7, 5)
-        .with("radiosity", ramp(7, 5, 1.0))
-        .unwrap()
-        .with("specular", ramp(7, 5, 0.25))
-        .unwrap();
+    let mut layers = ramps(7, 5, &[("radiosity", 1.0), ("specular", 0.25)]);
     layers
         .merge_into(FINAL, &["radiosity", "specular"])
         .unwrap();
@@ -85,7 +81,7 @@ fn multi_layer_exr_round_trip_is_bit_identical() {
         &write::read_exr(&single).unwrap(),
         layers.get("specular").unwrap()
     );
-    assert_eq!(dir_entries(dir.path()), ["cornell.exr", "one.exr"]);
+    assert_eq!(file_names(dir.path()), ["cornell.exr", "one.exr"]);
 }
 
 #[test]
@@ -122,9 +118,9 @@ fn non_finite_pixels_are_refused_and_nothing_is_left() {
         Err(CompositeError::NonFinite { .. })
     ));
     assert!(
-        dir_entries(dir.path()).is_empty(),
+        file_names(dir.path()).is_empty(),
         "{:?}",
-        dir_entries(dir.path())
+        file_names(dir.path())
     );
 
     // An existing file is left as it was by a refused write.
@@ -132,7 +128,7 @@ fn non_finite_pixels_are_refused_and_nothing_is_left() {
     let before = std::fs::read(&path).unwrap();
     assert!(write::write_exr(&path, &bad).is_err());
     assert_eq!(std::fs::read(&path).unwrap(), before);
-    assert_eq!(dir_entries(dir.path()), ["out.exr"]);
+    assert_eq!(file_names(dir.path()), ["out.exr"]);
 }
 
 #[test]
@@ -333,16 +329,13 @@ fn comparison_sheet_shares_exposure_and_scale() {
 
 #[test]
 fn render_exr_has_the_final_image_as_plain_rgb_and_its_metadata() {
-    use exr::meta::attribute::AttributeValue;
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("render.exr");
-    let mut layers = Layers::new(6, 4)
-        .with("ambient", ramp(6, 4, 0.0))
-        .unwrap()
-        .with("diffuse", ramp(6, 4, 1.0))
-        .unwrap()
-        .with("specular", ramp(6, 4, 0.5))
-        .unwrap();
+    let mut layers = ramps(
+        6,
+        4,
+        &[("ambient", 0.0), ("diffuse", 1.0), ("specular", 0.5)],
+    );
     layers
         .merge_into(write::IMAGE, &["diffuse", "specular"])
         .unwrap();
@@ -374,10 +367,7 @@ fn render_exr_has_the_final_image_as_plain_rgb_and_its_metadata() {
             channel(&format!("{pass}.{letter}"));
         }
     }
-    let attr = |name: &str| match layer.attributes.other.get(&exr::prelude::Text::from(name)) {
-        Some(AttributeValue::Text(t)) => t.to_string(),
-        other => panic!("{name}: {other:?}"),
-    };
+    let attr = |name: &str| exr_text(&layer.attributes, name);
     assert_eq!(attr("twopass:method"), "hybrid");
     assert_eq!(attr("twopass:spp"), "16");
     assert_eq!(attr("twopass:seed"), "42");
@@ -400,11 +390,7 @@ fn render_exr_has_the_final_image_as_plain_rgb_and_its_metadata() {
     );
 
     // Without a merged layer, the plain image is the sum of the passes.
-    let passes = Layers::new(6, 4)
-        .with("a", ramp(6, 4, 1.0))
-        .unwrap()
-        .with("b", ramp(6, 4, 0.25))
-        .unwrap();
+    let passes = ramps(6, 4, &[("a", 1.0), ("b", 0.25)]);
     let summed = dir.path().join("passes.exr");
     write::write_exr_layers(&summed, &passes).unwrap();
     let top = write::read_exr(&summed).unwrap();

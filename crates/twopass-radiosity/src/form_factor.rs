@@ -94,6 +94,13 @@ impl Default for VisibilityRays {
     }
 }
 
+/// `MIN,MAX`, as the command line writes it (`4,16`).
+impl std::fmt::Display for VisibilityRays {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{},{}", self.min, self.max)
+    }
+}
+
 /// A small counter-based hash (SplitMix64): random numbers from (seed, ids) that do not depend
 /// on thread scheduling; the workspace's one home of random streams.
 pub(crate) use twopass_brdf::random::hash;

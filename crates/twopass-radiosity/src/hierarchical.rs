@@ -47,8 +47,8 @@ use crate::element::{ElementMesh, barycentric_2d};
 use crate::form_factor::{self, hash};
 use crate::solution::Solution;
 use crate::solver::{
-    Energy, Finish, Method, Options, Residuals, SolveError, SolveProgress, check_common, luminance,
-    participating,
+    Bookkeeping, Finish, Method, Options, Residuals, SolveError, SolveProgress, check_common,
+    luminance, participating,
 };
 use crate::specular::{self, Deposit, Specular};
 
@@ -374,11 +374,10 @@ pub struct HierarchicalSolver<'s> {
     residual: DVec3,
     residual_fraction: f64,
     emitted: DVec3,
-    energy: Energy,
-    worst_imbalance: f64,
+    /// Rounds, time and power, kept as the other solver keeps them.
+    book: Bookkeeping,
     iterations: u64,
     rays: u64,
-    rounds: u32,
     linked: bool,
     /// Past the time budget: links still being decided get the first, coarse visibility
     /// estimate only (no confirmation, no finer count, no visibility per corner), so that the
@@ -405,9 +404,6 @@ pub struct HierarchicalSolver<'s> {
     spec_sent: Vec<Option<[DVec3; 2]>>,
     /// The mesh changed since the deposits were last splatted onto it.
     spec_stale: bool,
-    started: Instant,
-    meshing: Duration,
-    refining: Duration,
 }
 
 fn to_f32(v: DVec3) -> Vec3 {
@@ -536,11 +532,9 @@ impl<'s> HierarchicalSolver<'s> {
             residual: DVec3::ZERO,
             residual_fraction: 1.0,
             emitted: DVec3::ZERO,
-            energy: Energy::default(),
-            worst_imbalance: 0.0,
+            book: Bookkeeping::new(started, Duration::ZERO),
             iterations: 0,
             rays: 0,
-            rounds: 0,
             linked: false,
             hurry: false,
             refreshed: false,
@@ -556,9 +550,6 @@ impl<'s> HierarchicalSolver<'s> {
             spec_sent: Vec::new(),
             spec_stale: false,
             options,
-            started,
-            meshing: Duration::ZERO,
-            refining: Duration::ZERO,
         };
         s.grow_arrays();
         s.project();
@@ -573,9 +564,9 @@ impl<'s> HierarchicalSolver<'s> {
         s.eps = h.link_tolerance * luminance(s.emitted).max(f64::MIN_POSITIVE);
         // Before the first gather every node's exitance is its emission.
         s.push_pull();
-        s.energy.emitted = s.emitted;
-        s.energy.unshot = s.emitted;
-        s.meshing = started.elapsed();
+        s.book.energy.emitted = s.emitted;
+        s.book.energy.unshot = s.emitted;
+        s.book.meshing = started.elapsed();
         Ok(s)
     }
 
@@ -1338,7 +1329,7 @@ impl<'s> HierarchicalSolver<'s> {
         self.options
             .stop
             .time_budget
-            .is_some_and(|b| self.started.elapsed() >= b)
+            .is_some_and(|b| self.book.started.elapsed() >= b)
     }
 
     /// Refines candidate pairs into links until every link is accurate enough, the nodes
@@ -1450,7 +1441,7 @@ impl<'s> HierarchicalSolver<'s> {
         self.sort_links();
         // New leaves take their ancestors' irradiance (interpolated) until the next gather.
         self.push_pull();
-        self.refining += started.elapsed();
+        self.book.refining += started.elapsed();
         self.links.len().saturating_sub(before)
     }
 
@@ -1482,7 +1473,7 @@ impl<'s> HierarchicalSolver<'s> {
             self.links.extend(l);
         }
         self.sort_links();
-        self.refining += started.elapsed();
+        self.book.refining += started.elapsed();
         redone
     }
 
@@ -1616,13 +1607,13 @@ impl<'s> HierarchicalSolver<'s> {
             absorbed += irr * a * (DVec3::ONE - self.tri_rho[node.scene_triangle as usize]);
         }
         self.residual = after - before;
-        self.energy.absorbed = absorbed;
-        self.energy.escaped = before - arrived;
-        self.energy.unshot = self.residual;
-        self.energy.emitted = self.emitted;
+        self.book.energy.absorbed = absorbed;
+        self.book.energy.escaped = before - arrived;
+        self.book.energy.unshot = self.residual;
+        self.book.energy.emitted = self.emitted;
         self.residual_fraction =
             self.residual.abs().element_sum() / self.emitted.element_sum().max(f64::MIN_POSITIVE);
-        self.worst_imbalance = self.worst_imbalance.max(self.energy.imbalance());
+        self.book.note_imbalance();
         self.iterations += 1;
     }
 
@@ -1787,8 +1778,8 @@ impl<'s> HierarchicalSolver<'s> {
                 return Finish::Cancelled;
             }
             if self.residual_fraction <= target {
-                let refined = if self.rounds < MAX_ROUNDS {
-                    self.rounds += 1;
+                let refined = if self.book.rounds < MAX_ROUNDS {
+                    self.book.rounds += 1;
                     self.rerefine()
                 } else {
                     0
@@ -1826,8 +1817,6 @@ impl<'s> HierarchicalSolver<'s> {
     /// Where the solve stands.
     pub fn progress(&self) -> SolveProgress {
         SolveProgress {
-            method: Method::Hierarchical,
-            shots: 0,
             iterations: self.iterations,
             links: self.links.len(),
             clusters: self.clusters.nodes.len(),
@@ -1835,13 +1824,7 @@ impl<'s> HierarchicalSolver<'s> {
             rays: self.rays,
             elements: self.mesh.leaves().count(),
             vertices: self.mesh.vertices.len(),
-            patches: 0,
-            refinement_rounds: self.rounds,
-            elapsed: self.started.elapsed(),
-            meshing: self.meshing,
-            refining: self.refining,
-            energy: self.energy,
-            worst_imbalance: self.worst_imbalance,
+            ..self.book.progress(Method::Hierarchical)
         }
     }
 
@@ -2076,7 +2059,7 @@ impl<'s> HierarchicalSolver<'s> {
                 )
             })
             .collect();
-        Residuals::from_samples(self.worst_imbalance, &sums, pairs)
+        Residuals::from_samples(self.book.worst_imbalance, &sums, pairs)
     }
 
     /// The sum of the transport coefficients that reach `leaf` (its own links and its

@@ -4,7 +4,7 @@
 //! through mirrors and glass and deposits it where it lands.
 
 use std::ops::ControlFlow;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
@@ -15,7 +15,7 @@ use crate::element::ElementMesh;
 use crate::form_factor::{self, RECEIVER_INSET, hash};
 use crate::solution::Solution;
 use crate::solver::{
-    Adaptive, Energy, Finish, Options, Residuals, SolveError, SolveProgress, check_common,
+    Adaptive, Bookkeeping, Finish, Options, Residuals, SolveError, SolveProgress, check_common,
     luminance, participating,
 };
 use crate::specular::{self, Deposit, Specular, focused, power};
@@ -70,14 +70,10 @@ pub struct Progressive<'s> {
     /// Per patch: cached form factors (with visibility) to every vertex, once computed.
     cache: Vec<Option<Vec<f32>>>,
     cached_bytes: usize,
-    energy: Energy,
-    worst_imbalance: f64,
+    /// Rounds, time and power, kept as the other solver keeps them.
+    book: Bookkeeping,
     shots: u64,
     rays: u64,
-    rounds: u32,
-    started: Instant,
-    meshing: Duration,
-    refining: Duration,
 }
 
 fn rgb(v: Rgb) -> DVec3 {
@@ -198,14 +194,9 @@ impl<'s> Progressive<'s> {
             patch_leaves: Vec::new(),
             cache: Vec::new(),
             cached_bytes: 0,
-            energy: Energy::default(),
-            worst_imbalance: 0.0,
+            book: Bookkeeping::new(started, started.elapsed()),
             shots: 0,
             rays: 0,
-            rounds: 0,
-            started,
-            meshing: started.elapsed(),
-            refining: Duration::ZERO,
         };
         s.sync_vertices();
         let n = s.mesh.patches.len();
@@ -214,8 +205,8 @@ impl<'s> Progressive<'s> {
         s.shot_refl = vec![DVec3::ZERO; n];
         s.cache = vec![None; n];
         s.unshot_emit = (0..n).map(|p| s.patch_emission(p)).collect();
-        s.energy.emitted = (0..n).map(|p| s.unshot_emit[p] * s.patch_area(p)).sum();
-        s.energy.unshot = s.energy.emitted;
+        s.book.energy.emitted = (0..n).map(|p| s.unshot_emit[p] * s.patch_area(p)).sum();
+        s.book.energy.unshot = s.book.energy.emitted;
         s.rebuild_patch_leaves();
         s.resplat();
         Ok(s)
@@ -290,7 +281,7 @@ impl<'s> Progressive<'s> {
             })
             .collect();
         let key = hash(self.options.seed ^ hash(0x5bec_0000_0000_0000 ^ self.shots) ^ p as u64);
-        let emitted = luminance(self.energy.emitted);
+        let emitted = luminance(self.book.energy.emitted);
         let Some((mut deposits, rays)) =
             spec.shoot_changes(self.scene, &self.mesh, &changes, emitted, 0.0, key)
         else {
@@ -372,10 +363,10 @@ impl<'s> Progressive<'s> {
     /// rest as unshot exitance.
     fn receive(&mut self, q: usize, gained: DVec3) {
         let rho = self.patch_rho(q);
-        self.energy.absorbed += gained * (DVec3::ONE - rho);
+        self.book.energy.absorbed += gained * (DVec3::ONE - rho);
         let a = self.patch_area(q);
         self.unshot_refl[q] += gained * rho / a;
-        self.energy.unshot += gained * rho;
+        self.book.energy.unshot += gained * rho;
     }
 
     fn patch_rho(&self, p: usize) -> DVec3 {
@@ -470,6 +461,23 @@ impl<'s> Progressive<'s> {
     }
 
     /// The form factors of every vertex to patch `p`, from the cache when possible.
+    /// Each element (leaf) of patch `p`: the mean of the per-vertex `value` over its three
+    /// vertices, and its area (scene units squared).
+    fn element_means<'a, T>(
+        &'a self,
+        p: usize,
+        value: impl Fn(usize) -> T + 'a,
+    ) -> impl Iterator<Item = (T, f64)> + 'a
+    where
+        T: std::iter::Sum + std::ops::Div<f64, Output = T>,
+    {
+        self.patch_leaves[p].iter().map(move |&leaf| {
+            let node = &self.mesh.nodes[leaf as usize];
+            let sum: T = node.vertices.iter().map(|&v| value(v as usize)).sum();
+            (sum / 3.0, f64::from(node.area))
+        })
+    }
+
     fn patch_row(&mut self, p: usize) -> Vec<f32> {
         let n = self.mesh.vertices.len();
         let have = self.cache[p].as_ref().map_or(0, Vec::len);
@@ -517,16 +525,9 @@ impl<'s> Progressive<'s> {
         let mut arrived = DVec3::ZERO;
         for q in 0..self.mesh.patches.len() {
             let mut gained = DVec3::ZERO;
-            for &leaf in &self.patch_leaves[q] {
-                let node = &self.mesh.nodes[leaf as usize];
-                let h: f64 = node
-                    .vertices
-                    .iter()
-                    .map(|&v| f64::from(row[v as usize]))
-                    .sum::<f64>()
-                    / 3.0;
+            for (h, area) in self.element_means(q, |v| f64::from(row[v])) {
                 if h > 0.0 {
-                    gained += (de + dr) * h * f64::from(node.area);
+                    gained += (de + dr) * h * area;
                 }
             }
             if gained != DVec3::ZERO {
@@ -538,14 +539,14 @@ impl<'s> Progressive<'s> {
             arrived += self.shoot_specular(p);
         }
         let shot = (de + dr) * area;
-        self.energy.escaped += shot - arrived;
-        self.energy.unshot -= shot;
+        self.book.energy.escaped += shot - arrived;
+        self.book.energy.unshot -= shot;
         self.shot_emit[p] += de;
         self.shot_refl[p] += dr;
         self.unshot_emit[p] -= de;
         self.unshot_refl[p] -= dr;
         self.shots += 1;
-        self.worst_imbalance = self.worst_imbalance.max(self.energy.imbalance());
+        self.book.note_imbalance();
         true
     }
 
@@ -559,28 +560,25 @@ impl<'s> Progressive<'s> {
                     * self.patch_area(p)
             })
             .sum();
-        unshot / self.energy.emitted.element_sum().max(f64::MIN_POSITIVE)
+        unshot
+            / self
+                .book
+                .energy
+                .emitted
+                .element_sum()
+                .max(f64::MIN_POSITIVE)
     }
 
     /// Where the solve stands.
     pub fn progress(&self) -> SolveProgress {
         SolveProgress {
-            method: crate::solver::Method::Progressive,
             shots: self.shots,
-            iterations: 0,
-            links: 0,
-            clusters: 0,
             unshot_fraction: self.unshot_fraction(),
             rays: self.rays,
             elements: self.patch_leaves.iter().map(Vec::len).sum(),
             vertices: self.mesh.vertices.len(),
             patches: self.mesh.patches.len(),
-            refinement_rounds: self.rounds,
-            elapsed: self.started.elapsed(),
-            meshing: self.meshing,
-            refining: self.refining,
-            energy: self.energy,
-            worst_imbalance: self.worst_imbalance,
+            ..self.book.progress(crate::solver::Method::Progressive)
         }
     }
 
@@ -596,7 +594,7 @@ impl<'s> Progressive<'s> {
     pub fn refine(&mut self, adaptive: &Adaptive) -> usize {
         let started = Instant::now();
         let splits = self.refine_round(adaptive);
-        self.refining += started.elapsed();
+        self.book.refining += started.elapsed();
         splits
     }
 
@@ -655,24 +653,17 @@ impl<'s> Progressive<'s> {
         // Re-estimate each patch's reflected radiosity from its (finer) elements.
         for p in 0..self.mesh.patches.len() {
             let mut reflected = DVec3::ZERO;
-            for &leaf in &self.patch_leaves[p] {
-                let node = &self.mesh.nodes[leaf as usize];
-                let r: DVec3 = node
-                    .vertices
-                    .iter()
-                    .map(|&v| self.rho[v as usize] * self.received(v as usize))
-                    .sum::<DVec3>()
-                    / 3.0;
-                reflected += r * f64::from(node.area);
+            for (r, area) in self.element_means(p, |v| self.rho[v] * self.received(v)) {
+                reflected += r * area;
             }
             let reflected = reflected / self.patch_area(p);
             let new_unshot = reflected - self.shot_refl[p];
             let change = (new_unshot - self.unshot_refl[p]) * self.patch_area(p);
-            self.energy.unshot += change;
-            self.energy.remeshing -= change;
+            self.book.energy.unshot += change;
+            self.book.energy.remeshing -= change;
             self.unshot_refl[p] = new_unshot;
         }
-        self.rounds += 1;
+        self.book.rounds += 1;
         splits
     }
 
@@ -694,7 +685,7 @@ impl<'s> Progressive<'s> {
             // as long as the shots so far: none is started past half the time budget.
             if stop
                 .time_budget
-                .is_some_and(|b| self.started.elapsed() * 2 >= b)
+                .is_some_and(|b| self.book.started.elapsed() * 2 >= b)
             {
                 rounds_left = 0;
             }
@@ -713,7 +704,7 @@ impl<'s> Progressive<'s> {
             }
             if stop
                 .time_budget
-                .is_some_and(|b| self.started.elapsed() >= b)
+                .is_some_and(|b| self.book.started.elapsed() >= b)
             {
                 return Finish::TimeBudget;
             }
@@ -812,7 +803,7 @@ impl<'s> Progressive<'s> {
                 areas[q] * patch_ff(self, q, p),
             ));
         }
-        Residuals::from_samples(self.worst_imbalance, &sums, pairs)
+        Residuals::from_samples(self.book.worst_imbalance, &sums, pairs)
     }
 
     /// Form factors of the given vertices to patch `p`: from the cache where the row is

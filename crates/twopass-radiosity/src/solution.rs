@@ -116,23 +116,22 @@ impl Solution {
             }
         }
     }
+
+    /// The radiance (W/(m^2 sr)) of a Lambertian surface whose radiosity is the per-vertex
+    /// `part` plus the ambient term, interpolated at `barycentric` on `triangle`.
+    fn with_ambient(&self, part: &[Rgb], triangle: u32, barycentric: [f32; 3]) -> Rgb {
+        let radiosity = |v: usize| part[v] + self.ambient[v];
+        self.interpolate(radiosity, triangle, barycentric) * std::f32::consts::FRAC_1_PI
+    }
 }
 
 impl DiffuseRadiance for Solution {
     fn radiance(&self, triangle: u32, barycentric: [f32; 3]) -> Rgb {
-        self.interpolate(
-            |v| self.radiosity[v] + self.ambient[v],
-            triangle,
-            barycentric,
-        ) * std::f32::consts::FRAC_1_PI
+        self.with_ambient(&self.radiosity, triangle, barycentric)
     }
 
     fn indirect_radiance(&self, triangle: u32, barycentric: [f32; 3]) -> Rgb {
-        self.interpolate(
-            |v| self.indirect[v] + self.ambient[v],
-            triangle,
-            barycentric,
-        ) * std::f32::consts::FRAC_1_PI
+        self.with_ambient(&self.indirect, triangle, barycentric)
     }
 
     fn separates_focused_caustics(&self) -> bool {

@@ -4,7 +4,7 @@
 //! with clustering ([`HierarchicalSolver`]).
 
 use std::ops::ControlFlow;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use glam::DVec3;
 use twopass_scene::Scene;
@@ -202,6 +202,65 @@ impl Energy {
     }
 }
 
+/// What both solvers keep alike about a solve: its refinement rounds, its clock and its power
+/// bookkeeping, reported in [`SolveProgress`]. Crate-private; its fields are the solvers' own.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Bookkeeping {
+    /// Refinement rounds done (adaptive subdivision, or link refinement).
+    pub rounds: u32,
+    /// When the solver was created.
+    pub started: Instant,
+    /// Time spent building the mesh.
+    pub meshing: Duration,
+    /// Time spent refining.
+    pub refining: Duration,
+    /// Power bookkeeping, W per channel.
+    pub energy: Energy,
+    /// Largest relative energy imbalance seen after any step.
+    pub worst_imbalance: f64,
+}
+
+impl Bookkeeping {
+    /// Nothing done yet: the solver started at `started` and spent `meshing` building its mesh.
+    pub(crate) fn new(started: Instant, meshing: Duration) -> Self {
+        Self {
+            rounds: 0,
+            started,
+            meshing,
+            refining: Duration::ZERO,
+            energy: Energy::default(),
+            worst_imbalance: 0.0,
+        }
+    }
+
+    /// Notes the current energy imbalance in [`Bookkeeping::worst_imbalance`].
+    pub(crate) fn note_imbalance(&mut self) {
+        self.worst_imbalance = self.worst_imbalance.max(self.energy.imbalance());
+    }
+
+    /// A progress report of `method` with these figures; the solver sets its own counts.
+    pub(crate) fn progress(&self, method: Method) -> SolveProgress {
+        SolveProgress {
+            method,
+            shots: 0,
+            iterations: 0,
+            links: 0,
+            clusters: 0,
+            unshot_fraction: 0.0,
+            rays: 0,
+            elements: 0,
+            vertices: 0,
+            patches: 0,
+            refinement_rounds: self.rounds,
+            elapsed: self.started.elapsed(),
+            meshing: self.meshing,
+            refining: self.refining,
+            energy: self.energy,
+            worst_imbalance: self.worst_imbalance,
+        }
+    }
+}
+
 /// Where a solve stands.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SolveProgress {
@@ -240,8 +299,9 @@ pub struct SolveProgress {
     pub worst_imbalance: f64,
 }
 
-/// Consistency figures of a solve (see [`Solver::residuals`]).
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// Consistency figures of a solve (see [`Solver::residuals`]). Serializable (serde derives, no
+/// format here) so that the bake manifest records them field by field.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Residuals {
     /// Largest relative energy imbalance seen after any shot.
     pub energy_imbalance: f64,

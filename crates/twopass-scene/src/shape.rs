@@ -143,58 +143,29 @@ pub fn cuboid(min: Vec3, max: Vec3) -> Result<ShapeMesh, String> {
             "box `max` {max} must exceed `min` {min} on every axis"
         ));
     }
-    let c = |x: bool, y: bool, z: bool| {
+    let c = |[x, y, z]: [bool; 3]| {
         Vec3::new(
             if x { max.x } else { min.x },
             if y { max.y } else { min.y },
             if z { max.z } else { min.z },
         )
     };
-    // Each face counter-clockwise seen from outside.
-    let faces = [
-        [
-            c(true, false, false),
-            c(true, true, false),
-            c(true, true, true),
-            c(true, false, true),
-        ], // +x
-        [
-            c(false, false, false),
-            c(false, false, true),
-            c(false, true, true),
-            c(false, true, false),
-        ], // -x
-        [
-            c(false, true, false),
-            c(false, true, true),
-            c(true, true, true),
-            c(true, true, false),
-        ], // +y
-        [
-            c(false, false, false),
-            c(true, false, false),
-            c(true, false, true),
-            c(false, false, true),
-        ], // -y
-        [
-            c(false, false, true),
-            c(true, false, true),
-            c(true, true, true),
-            c(false, true, true),
-        ], // +z
-        [
-            c(false, false, false),
-            c(false, true, false),
-            c(true, true, false),
-            c(true, false, false),
-        ], // -z
-    ];
+    // Each face counter-clockwise seen from outside: on the face across `axis`, with u and v
+    // the next two axes in cyclic order, the + face turns from u to v, the - face from v to u.
+    let square = [[false, false], [true, false], [true, true], [false, true]];
     let mut mesh = ShapeMesh::default();
-    for f in faces {
-        let base = mesh.positions.len() as u32;
-        mesh.positions.extend_from_slice(&f);
-        mesh.triangles.push([base, base + 1, base + 2]);
-        mesh.triangles.push([base, base + 2, base + 3]);
+    for axis in 0..3 {
+        for positive in [true, false] {
+            let base = mesh.positions.len() as u32;
+            for [s, t] in square {
+                let (u, v) = if positive { (s, t) } else { (t, s) };
+                let mut at = [false; 3];
+                (at[axis], at[(axis + 1) % 3], at[(axis + 2) % 3]) = (positive, u, v);
+                mesh.positions.push(c(at));
+            }
+            mesh.triangles.push([base, base + 1, base + 2]);
+            mesh.triangles.push([base, base + 2, base + 3]);
+        }
     }
     Ok(mesh)
 }

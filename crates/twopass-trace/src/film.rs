@@ -1,10 +1,12 @@
-//! What a render produces: named linear RGB layers that sum to the image, as plain data for the
-//! compositor. Every value is a radiance in W/(m^2 sr) per channel (scene units for areas), the
-//! mean over a pixel's camera samples.
+//! What a render produces: named linear RGB layers that sum to the image, each a
+//! [`twopass_image::Image`], the compositor's image type too (no conversion between them).
+//! Every value is a radiance in W/(m^2 sr) per channel (scene units for areas), the mean over a
+//! pixel's camera samples.
 
 use std::ops::{Add, AddAssign, Mul};
 
 use twopass_brdf::Rgb;
+use twopass_image::Image;
 
 /// The named layers of a render. Each camera sample's radiance is split among them by what
 /// the light did at the first surface the camera ray met; their sum is the image.
@@ -126,77 +128,41 @@ impl Mul<f32> for Radiance {
     }
 }
 
-/// A linear RGB image, row-major from the top-left pixel; values in W/(m^2 sr) per channel.
-#[derive(Debug, Clone, PartialEq)]
-pub struct FilmImage {
-    /// Width, pixels.
-    pub width: u32,
-    /// Height, pixels.
-    pub height: u32,
-    /// `width * height` values, row by row from the top.
-    pub pixels: Vec<Rgb>,
-}
-
-impl FilmImage {
-    /// A black image.
-    pub fn new(width: u32, height: u32) -> Self {
-        Self {
-            width,
-            height,
-            pixels: vec![Rgb::ZERO; width as usize * height as usize],
-        }
-    }
-
-    /// The pixel in column `x`, row `y` (row 0 at the top).
-    pub fn get(&self, x: u32, y: u32) -> Rgb {
-        self.pixels[y as usize * self.width as usize + x as usize]
-    }
-
-    /// Mean over all pixels, per channel (computed in f64, in pixel order: deterministic).
-    pub fn mean(&self) -> Rgb {
-        let s = self
-            .pixels
-            .iter()
-            .fold(glam::DVec3::ZERO, |a, p| a + p.as_dvec3());
-        (s / self.pixels.len().max(1) as f64).as_vec3()
-    }
-}
-
-/// One [`FilmImage`] per [`Layer`], all the same size.
+/// One [`Image`] per [`Layer`], all the same size: radiance in W/(m^2 sr) per channel.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LayerImages {
     /// Indexed by [`Layer::index`].
-    pub images: [FilmImage; 6],
+    pub images: [Image; 6],
 }
 
 impl LayerImages {
     /// Six black images of the given size.
     pub fn new(width: u32, height: u32) -> Self {
         Self {
-            images: std::array::from_fn(|_| FilmImage::new(width, height)),
+            images: std::array::from_fn(|_| Image::new(width, height)),
         }
     }
 
     /// The image of one layer.
-    pub fn layer(&self, layer: Layer) -> &FilmImage {
+    pub fn layer(&self, layer: Layer) -> &Image {
         &self.images[layer.index()]
     }
 
     /// Width, pixels.
     pub fn width(&self) -> u32 {
-        self.images[0].width
+        self.images[0].width()
     }
 
     /// Height, pixels.
     pub fn height(&self) -> u32 {
-        self.images[0].height
+        self.images[0].height()
     }
 
     /// The sum of the layers, in [`Layer::ALL`] order per pixel: the rendered image.
-    pub fn composite(&self) -> FilmImage {
-        let mut out = FilmImage::new(self.width(), self.height());
+    pub fn composite(&self) -> Image {
+        let mut out = Image::new(self.width(), self.height());
         for img in &self.images {
-            for (o, p) in out.pixels.iter_mut().zip(&img.pixels) {
+            for (o, p) in out.pixels_mut().iter_mut().zip(img.pixels()) {
                 *o += *p;
             }
         }

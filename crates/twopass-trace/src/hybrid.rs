@@ -46,32 +46,31 @@ pub fn radiosity_only<'a>(scene: &Scene, solution: &'a dyn DiffuseRadiance) -> W
     )
 }
 
-/// The two-pass hybrid: the solution for all diffuse light, plus the glossy lobes against the
-/// emitters (shadow rays) and delta reflection and refraction paths.
+/// Where the two-pass hybrid takes direct diffuse light from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DirectLight {
+    /// From the solution, which holds all diffuse light: the hybrid (`hybrid`).
+    FromSolution,
+    /// From shadow rays at every shading point (Chen et al. 1991; sharp shadows without a
+    /// finer mesh), the solution's [`DiffuseRadiance::indirect_radiance`] for the rest: the
+    /// hybrid with per-pixel direct light (`hybrid-direct`).
+    PerPixel,
+}
+
+/// The two-pass hybrid: the solution's diffuse light (all of it, or its indirect part with
+/// `direct` light per pixel), plus the glossy lobes against the emitters (shadow rays) and
+/// delta reflection and refraction paths.
 pub fn hybrid<'a>(
     scene: &Scene,
     solution: &'a dyn DiffuseRadiance,
+    direct: DirectLight,
     settings: WhittedSettings,
 ) -> Whitted<'a> {
-    radiosity_based(
-        scene,
-        DiffuseSource::Radiosity(solution),
-        true,
-        settings,
-        "hybrid",
-    )
-}
-
-/// The hybrid with per-pixel direct light (Chen et al. 1991): direct diffuse light with shadow
-/// rays at every shading point (sharp shadows without a finer mesh), the solution's
-/// [`DiffuseRadiance::indirect_radiance`] for the rest, plus the hybrid's view-dependent terms.
-pub fn hybrid_direct<'a>(
-    scene: &Scene,
-    solution: &'a dyn DiffuseRadiance,
-    settings: WhittedSettings,
-) -> Whitted<'a> {
-    let source = DiffuseSource::RadiosityIndirect(solution);
-    radiosity_based(scene, source, true, settings, "hybrid-direct")
+    let (source, name) = match direct {
+        DirectLight::FromSolution => (DiffuseSource::Radiosity(solution), "hybrid"),
+        DirectLight::PerPixel => (DiffuseSource::RadiosityIndirect(solution), "hybrid-direct"),
+    };
+    radiosity_based(scene, source, true, settings, name)
 }
 
 /// The Whitted core lighting `scene` with diffuse light from `source`, with the view-dependent

@@ -30,6 +30,16 @@ impl Tally {
     }
 }
 
+/// What one camera sample carries through an integrator: its random stream and the count of
+/// the rays it traces.
+#[derive(Debug)]
+pub struct SampleState<'a> {
+    /// The sample's stream, keyed by (seed, pixel, sample).
+    pub sampler: &'a mut Sampler,
+    /// The rays traced for this sample so far.
+    pub tally: &'a mut Tally,
+}
+
 /// A light transport method: radiance arriving along a camera ray.
 ///
 /// Implementations are pure functions of their inputs and the sampler's stream: the render
@@ -40,14 +50,8 @@ pub trait Integrator: Sync {
     fn name(&self) -> &'static str;
 
     /// Radiance (W/(m^2 sr) per channel) arriving at the camera along `ray` (unit direction),
-    /// split into [`crate::Layer`]s; `tally` counts the rays it traces.
-    fn radiance(
-        &self,
-        scene: &Scene,
-        ray: &Ray,
-        sampler: &mut Sampler,
-        tally: &mut Tally,
-    ) -> Radiance;
+    /// split into [`crate::Layer`]s; the sample's tally counts the rays it traces.
+    fn radiance(&self, scene: &Scene, ray: &Ray, sample: SampleState<'_>) -> Radiance;
 
     /// The light tracing pass whose per-pixel result the render loop adds to this
     /// integrator's image (the caustics it leaves to light tracing), if any.

@@ -3,7 +3,7 @@
 //! - [`Whitted`]: Whitted-style ray tracing alone (shadow rays to the area emitters, the local
 //!   models of twopass-brdf, the Phong ambient term in place of interreflection, mirror
 //!   reflection and refraction followed recursively).
-//! - [`hybrid::radiosity_only`], [`hybrid::hybrid`], [`hybrid::hybrid_direct`]: the
+//! - [`hybrid::radiosity_only`], [`hybrid::hybrid`] (with [`hybrid::DirectLight`]): the
 //!   radiosity-based methods, reading a solution through
 //!   [`twopass_scene::DiffuseRadiance`] only.
 //! - [`Reference`]: a path tracer with next-event estimation, MIS and Russian roulette, the
@@ -39,10 +39,10 @@ pub mod render;
 pub mod sampler;
 pub mod whitted;
 
-pub use film::{FilmImage, Layer, LayerImages, Radiance};
+pub use film::{Layer, LayerImages, Radiance};
 pub use render::{RenderOutput, RenderProgress, RenderSettings, RenderStats, render};
 
-pub use integrator::{Integrator, Lights, Tally};
+pub use integrator::{Integrator, Lights, SampleState, Tally};
 pub use light_tracing::{CausticScope, LightImage, LightTracer, LightTracingSettings};
 pub use reference::{Caustics, Reference, ReferenceSettings};
 pub use sampler::Sampler;

@@ -191,7 +191,7 @@ impl LightTracer {
                 tally.add(t);
                 for (pixel, layer, value) in splats {
                     if value.is_finite() {
-                        layers.images[layer.index()].pixels[pixel as usize] += value;
+                        layers.images[layer.index()].pixels_mut()[pixel as usize] += value;
                     } else {
                         non_finite += 1;
                     }
@@ -204,7 +204,7 @@ impl LightTracer {
         }
         let scale = if paths > 0 { 1.0 / paths as f32 } else { 0.0 };
         for img in &mut layers.images {
-            for p in &mut img.pixels {
+            for p in img.pixels_mut() {
                 *p *= scale;
                 if !p.is_finite() {
                     *p = Rgb::ZERO;

@@ -33,7 +33,7 @@ use twopass_brdf::{BrdfSample, Material, Rgb, SampleKind};
 use twopass_scene::{Hit, Ray, Scene, SurfacePoint};
 
 use crate::film::{Layer, Radiance};
-use crate::integrator::{EmitterChoice, Integrator, Shading, Tally};
+use crate::integrator::{EmitterChoice, Integrator, SampleState, Shading, Tally};
 use crate::light_tracing::{CausticScope, LightTracer, LightTracingSettings};
 use crate::sampler::Sampler;
 
@@ -220,13 +220,8 @@ impl Integrator for Reference {
         self.light.as_ref()
     }
 
-    fn radiance(
-        &self,
-        scene: &Scene,
-        ray: &Ray,
-        sampler: &mut Sampler,
-        tally: &mut Tally,
-    ) -> Radiance {
+    fn radiance(&self, scene: &Scene, ray: &Ray, sample: SampleState<'_>) -> Radiance {
+        let SampleState { sampler, tally } = sample;
         let mut r = Radiance::ZERO;
         let mut beta = Rgb::ONE;
         let mut split: Option<Split> = None;

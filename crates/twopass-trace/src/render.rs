@@ -13,7 +13,7 @@ use twopass_brdf::Rgb;
 use twopass_scene::{Camera, Ray, Scene};
 
 use crate::film::{LayerImages, Radiance};
-use crate::integrator::{Integrator, Tally};
+use crate::integrator::{Integrator, SampleState, Tally};
 use crate::sampler::{Sampler, stratum};
 
 /// Sampling settings of a render.
@@ -183,7 +183,11 @@ pub fn render(
                         let pixel = Vec2::new(x as f32, y as f32) + offset;
                         let ray = Ray::new(camera.position, camera.direction(pixel));
                         let mut t = Tally::default();
-                        let l = integrator.radiance(scene, &ray, &mut sampler, &mut t);
+                        let sample = SampleState {
+                            sampler: &mut sampler,
+                            tally: &mut t,
+                        };
+                        let l = integrator.radiance(scene, &ray, sample);
                         tally.add(t);
                         if l.is_finite() {
                             sum += l;
@@ -228,7 +232,7 @@ pub fn render(
             let (x, y) = (t.x0 + i as u32 % t.w, t.y0 + i as u32 / t.w);
             let at = y as usize * width as usize + x as usize;
             for (img, v) in layers.images.iter_mut().zip(p.layers) {
-                img.pixels[at] = v;
+                img.pixels_mut()[at] = v;
             }
         }
     }
@@ -237,7 +241,7 @@ pub fn render(
         let paths = tracer.paths_for(camera, spp);
         let lit = tracer.trace(scene, camera, paths, settings.seed, progress, pixels);
         for (img, add) in layers.images.iter_mut().zip(&lit.layers.images) {
-            for (p, a) in img.pixels.iter_mut().zip(&add.pixels) {
+            for (p, a) in img.pixels_mut().iter_mut().zip(add.pixels()) {
                 *p += *a;
             }
         }
@@ -249,7 +253,7 @@ pub fn render(
         layers
             .images
             .iter()
-            .all(|i| i.pixels.iter().all(|p: &Rgb| p.is_finite()))
+            .all(|i| i.pixels().iter().all(|p: &Rgb| p.is_finite()))
     );
     RenderOutput {
         layers,

@@ -21,7 +21,9 @@ use twopass_scene::{Ray, Scene};
 
 use crate::diffuse::DiffuseSource;
 use crate::film::{Layer, Radiance};
-use crate::integrator::{Integrator, Lights, Shading, Tally, direct_light, trace_from};
+use crate::integrator::{
+    Integrator, Lights, SampleState, Shading, Tally, direct_light, trace_from,
+};
 use crate::light_tracing::LightTracer;
 use crate::sampler::Sampler;
 
@@ -186,13 +188,8 @@ impl Integrator for Whitted<'_> {
         self.caustics.as_ref()
     }
 
-    fn radiance(
-        &self,
-        scene: &Scene,
-        ray: &Ray,
-        sampler: &mut Sampler,
-        tally: &mut Tally,
-    ) -> Radiance {
+    fn radiance(&self, scene: &Scene, ray: &Ray, sample: SampleState<'_>) -> Radiance {
+        let SampleState { sampler, tally } = sample;
         tally.rays += 1;
         match scene.intersect(ray) {
             None => Radiance::ZERO,

@@ -307,7 +307,7 @@ fn print_summary(m: &Manifest, manifest_path: &Path) -> Result<(), CliError> {
         c.refinement_rounds,
         m.rays as f64
     );
-    let r = &m.residuals;
+    let r = &m.residuals.residuals;
     outln!(
         "  residual {:.2e}; energy imbalance {:.1e}; form-factor row sums {:.3}..{:.3} \
          (mean {:.3}); reciprocity spread {:.2e} (weighted {:.2e}, {} pairs)",

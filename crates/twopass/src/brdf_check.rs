@@ -19,7 +19,7 @@ use twopass_brdf::{
 
 use crate::context::Context;
 use crate::error::CliError;
-use crate::figure::{self, FONT};
+use crate::figure;
 
 /// Options of `twopass brdf-check`.
 #[derive(Debug, Args)]
@@ -339,28 +339,27 @@ fn plot_models() -> Result<Vec<(&'static str, &'static str, BrdfModel)>, CliErro
     ])
 }
 
+/// The polar plot's axes: the lobe's extent across and up, scaled to its peak.
+const LOBE_AXES: figure::Axes = figure::Axes {
+    x: "r sin(theta_o), r = f cos(theta_o) / peak  (mirror side left)",
+    y: "r cos(theta_o)",
+    desc_size: 15,
+    grid: 235,
+};
+
 /// A polar plot of f(wo, wi) cos(theta_o) in the plane of incidence (wi at azimuth 0, so the
 /// mirror direction is on the left), one curve per incidence angle, each scaled to its peak.
 fn plot_lobe(path: &Path, title: &str, model: &BrdfModel, angles: &[f32]) -> Result<(), CliError> {
     const W: u32 = 720;
     const H: u32 = 420; // about equal scales on both axes, so the unit circle looks round
     figure::png(path, W, H, |root| {
-        let mut chart = ChartBuilder::on(root)
-            .caption(title, (FONT, 22))
+        let mut chart = figure::titled(root, title)
             .margin(12)
             .x_label_area_size(44)
             .y_label_area_size(52)
             .build_cartesian_2d(-1.1f32..1.1f32, 0f32..1.1f32)
             .map_err(|e| e.to_string())?;
-        chart
-            .configure_mesh()
-            .x_desc("r sin(theta_o), r = f cos(theta_o) / peak  (mirror side left)")
-            .y_desc("r cos(theta_o)")
-            .label_style((FONT, 14))
-            .axis_desc_style((FONT, 15))
-            .light_line_style(RGBColor(235, 235, 235))
-            .draw()
-            .map_err(|e| e.to_string())?;
+        LOBE_AXES.draw(&mut chart)?;
         let circle: Vec<(f32, f32)> = (0..=180)
             .map(|i| {
                 let t = (i as f32 - 90.0).to_radians();

@@ -279,17 +279,19 @@ fn method_rows(images: &[Rendered], metrics: &[Metrics]) -> Vec<MethodRow> {
         .enumerate()
         .map(|(i, r)| {
             let metrics = i.checked_sub(1).map(|k| metrics[k]);
+            let stats = &r.stats;
+            let render_seconds = stats.elapsed.as_secs_f64();
             MethodRow {
                 method: r.method.name(),
                 width: r.image.width(),
                 height: r.image.height(),
-                spp: r.stats.samples_per_pixel,
+                spp: stats.samples_per_pixel,
                 radiosity_seconds: r.radiosity_seconds,
-                render_seconds: r.stats.elapsed.as_secs_f64(),
-                total_seconds: r.radiosity_seconds + r.stats.elapsed.as_secs_f64(),
-                rays: r.stats.rays,
-                shadow_rays: r.stats.shadow_rays,
-                non_finite_samples: r.stats.non_finite,
+                render_seconds,
+                total_seconds: r.radiosity_seconds + render_seconds,
+                rays: stats.rays,
+                shadow_rays: stats.shadow_rays,
+                non_finite_samples: stats.non_finite,
                 mae: metrics.map(|x| x.mae),
                 rmse: metrics.map(|x| x.rmse),
                 rel_mse: metrics.map(|x| x.rel_mse),

@@ -51,6 +51,13 @@ pub enum CliError {
     Usage(String),
 }
 
+/// An image check (a non-finite pixel, a region outside the image) as the compositor reports it.
+impl From<twopass_image::ImageError> for CliError {
+    fn from(e: twopass_image::ImageError) -> Self {
+        Self::Composite(e.into())
+    }
+}
+
 impl From<twopass_composite::WriteError> for CliError {
     fn from(e: twopass_composite::WriteError) -> Self {
         Self::Io {

@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Once;
 
 use plotters::coord::Shift;
+use plotters::coord::ranged1d::ValueFormatter;
 use plotters::prelude::*;
 
 use crate::error::CliError;
@@ -53,6 +54,54 @@ where
         .border_style(RGBColor(200, 200, 200))
         .draw()
         .map_err(|e| e.to_string())
+}
+
+/// A chart on `root` whose caption is `title` in the style of every figure's title (22-point).
+pub fn titled<'a, 'b, DB: DrawingBackend>(
+    root: &'a DrawingArea<DB, Shift>,
+    title: &str,
+) -> ChartBuilder<'a, 'b, DB> {
+    let mut chart = ChartBuilder::on(root);
+    chart.caption(title, (FONT, 22));
+    chart
+}
+
+/// How a plot's axes are drawn: their descriptions, the size of those descriptions (points)
+/// and the grey of the light grid lines (each figure keeps its own published values). Tick
+/// labels are 14-point for every plot.
+pub struct Axes<'a> {
+    /// Description of the x axis.
+    pub x: &'a str,
+    /// Description of the y axis.
+    pub y: &'a str,
+    /// Size of the descriptions, points.
+    pub desc_size: u32,
+    /// Grey level (0 to 255) of the light grid lines.
+    pub grid: u8,
+}
+
+impl Axes<'_> {
+    /// Draws the axes, ticks, labels and grid of `chart` in this style.
+    pub fn draw<'a, DB, X, Y>(
+        &self,
+        chart: &mut ChartContext<'a, DB, Cartesian2d<X, Y>>,
+    ) -> Result<(), String>
+    where
+        DB: DrawingBackend + 'a,
+        X: Ranged + ValueFormatter<X::ValueType>,
+        Y: Ranged + ValueFormatter<Y::ValueType>,
+    {
+        let grid = RGBColor(self.grid, self.grid, self.grid);
+        chart
+            .configure_mesh()
+            .x_desc(self.x)
+            .y_desc(self.y)
+            .label_style((FONT, 14))
+            .axis_desc_style((FONT, self.desc_size))
+            .light_line_style(grid)
+            .draw()
+            .map_err(|e| e.to_string())
+    }
 }
 
 /// Draws a `width` x `height` figure on white with `draw` and writes it to `path` as PNG.

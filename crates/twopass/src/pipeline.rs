@@ -9,15 +9,14 @@ use std::time::Duration;
 use clap::ValueEnum;
 use serde::{Deserialize, Serialize};
 use twopass_bake::Manifest;
-use twopass_composite::image::Image;
 use twopass_composite::layer::Layers;
 use twopass_radiosity::{Solution, Solver};
 use twopass_scene::{DiffuseRadiance, Scene};
-use twopass_trace::hybrid::{hybrid, hybrid_direct, radiosity_only};
+use twopass_trace::hybrid::{DirectLight, hybrid, radiosity_only};
 use twopass_trace::whitted::ambient_estimate;
 use twopass_trace::{
-    FilmImage, Integrator, Layer, LayerImages, Reference, ReferenceSettings, RenderOutput,
-    RenderProgress, RenderSettings, RenderStats, Whitted, WhittedSettings,
+    Integrator, Layer, LayerImages, Reference, ReferenceSettings, RenderOutput, RenderProgress,
+    RenderSettings, RenderStats, Whitted, WhittedSettings,
 };
 
 use crate::context::Context;
@@ -234,21 +233,12 @@ pub fn check_dropped(stats: &RenderStats, scene: &Path, ctx: &Context) -> Result
     Ok(())
 }
 
-/// The tracer's film image as the compositor's image (the pixels move, not copied): the one
-/// place the CLI crosses from the tracer's film to the compositor.
-pub fn to_image(film: FilmImage) -> Result<Image, CliError> {
-    Ok(Image::from_pixels(film.width, film.height, film.pixels)?)
-}
-
 /// The tracer's layers as named compositor layers, plus the final image as `image`.
 pub fn to_layers(images: &LayerImages) -> Result<Layers, CliError> {
     let mut layers = Vec::with_capacity(Layer::ALL.len() + 1);
-    layers.push(("image".to_owned(), to_image(images.composite())?));
+    layers.push(("image".to_owned(), images.composite()));
     for layer in Layer::ALL {
-        layers.push((
-            layer.name().to_owned(),
-            to_image(images.layer(layer).clone())?,
-        ));
+        layers.push((layer.name().to_owned(), images.layer(layer).clone()));
     }
     Ok(Layers::from_vec(layers)?)
 }
@@ -264,8 +254,15 @@ pub fn integrator<'a>(
     match method {
         RenderMethod::Whitted => Box::new(Whitted::new(scene, ambient_estimate(scene), whitted)),
         RenderMethod::Radiosity => Box::new(radiosity_only(scene, solution())),
-        RenderMethod::Hybrid => Box::new(hybrid(scene, solution(), whitted)),
-        RenderMethod::HybridDirect => Box::new(hybrid_direct(scene, solution(), whitted)),
+        RenderMethod::Hybrid => Box::new(hybrid(
+            scene,
+            solution(),
+            DirectLight::FromSolution,
+            whitted,
+        )),
+        RenderMethod::HybridDirect => {
+            Box::new(hybrid(scene, solution(), DirectLight::PerPixel, whitted))
+        }
         RenderMethod::Reference => Box::new(Reference::new(scene, ReferenceSettings::default())),
     }
 }

@@ -46,7 +46,7 @@ pub struct SolveArgs {
     pub solver: SolverChoice,
     /// Stop when the residual (unshot) power falls below this fraction of the emitted power:
     /// the convergence measure of both solvers.
-    #[arg(long, default_value_t = 1e-3, value_name = "FRACTION", value_parser = parse_fraction)]
+    #[arg(long, default_value_t = Stop::default().unshot_fraction, value_name = "FRACTION", value_parser = parse_fraction)]
     pub unshot: f64,
     /// Hierarchical solver: refine a link while its estimated transport error exceeds this
     /// fraction of the emitted power.
@@ -72,7 +72,7 @@ pub struct SolveArgs {
     pub no_adaptive: bool,
     /// Shadow rays per visibility estimate: a first estimate of MIN, up to MAX where the
     /// visibility is partial or the receiver is close.
-    #[arg(long, value_name = "MIN,MAX", value_parser = parse_rays, default_value = "4,16")]
+    #[arg(long, value_name = "MIN,MAX", value_parser = parse_rays, default_value_t = VisibilityRays::default())]
     pub visibility_rays: VisibilityRays,
     /// Cast the visibility rays of every receiver-shooter pair, also those nothing in the scene
     /// can come between (progressive refinement skips them by default: shaft culling).

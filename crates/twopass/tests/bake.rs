@@ -3,35 +3,21 @@
 
 mod common;
 
-use common::{repo, twopass};
+use common::{cli, repo, twopass};
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use twopass_bake as bake;
+use twopass_tests::file_names;
 
-fn file_names(dir: &Path) -> Vec<String> {
-    let mut names: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    names.sort();
-    names
-}
-
-const COARSE: [&str; 6] = [
-    "--element-size",
-    "60",
-    "--patch-size",
-    "150",
-    "--unshot",
-    "1e-2",
-];
+/// A coarse radiosity mesh solved loosely: seconds, not minutes.
+const COARSE: &str = "--element-size 60 --patch-size 150 --unshot 1e-2";
 
 #[test]
 fn cornell_bake_writes_every_file_and_a_truthful_manifest() {
     let out_dir = tempfile::tempdir().unwrap();
     let dir = out_dir.path().join("lighting");
-    let out = common::bake_box(&dir, &[&["--json"][..], &COARSE].concat());
+    let out = common::bake_box(&dir).words("--json").words(COARSE).run();
     common::assert_ok(&out);
     assert_eq!(
         file_names(&dir),
@@ -128,25 +114,10 @@ fn cornell_bake_writes_every_file_and_a_truthful_manifest() {
 #[test]
 fn format_selects_the_outputs_and_exposure_is_recorded() {
     let out_dir = tempfile::tempdir().unwrap();
-    let scene_path = repo("scenes/cornell-box.toml");
-    let out = twopass(&[
-        "bake",
-        scene_path.to_str().unwrap(),
-        "-o",
-        out_dir.path().to_str().unwrap(),
-        "--format",
-        "glb",
-        "--no-adaptive",
-        "--max-shots",
-        "40",
-        "--element-size",
-        "100",
-        "--visibility-rays",
-        "1,4",
-        "--exposure",
-        "0.5",
-        "--quiet",
-    ]);
+    let out = common::bake_box(out_dir.path())
+        .words("--format glb --no-adaptive --max-shots 40 --element-size 100")
+        .words("--visibility-rays 1,4 --exposure 0.5 --quiet")
+        .run();
     common::assert_ok(&out);
     assert!(out.stdout.is_empty() && out.stderr.is_empty(), "--quiet");
     assert_eq!(
@@ -180,19 +151,11 @@ fn a_scene_without_emitters_is_a_clear_error() {
     )
     .unwrap();
     let out_dir = dir.path().join("out");
-    let out = twopass(&[
-        "bake",
-        scene.to_str().unwrap(),
-        "-o",
-        out_dir.to_str().unwrap(),
-    ]);
+    let out = cli("bake").arg(&scene).output(&out_dir).run();
     assert_eq!(out.status.code(), Some(1));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("dark.toml") && err.contains("emits"), "{err}");
-    assert!(
-        !out_dir.exists(),
-        "nothing written before the solve can start"
-    );
+    common::assert_absent(&out_dir, "nothing written before the solve can start");
 }
 
 #[test]
@@ -200,16 +163,9 @@ fn an_unwritable_output_fails_without_partial_files() {
     let dir = tempfile::tempdir().unwrap();
     let blocker = dir.path().join("taken");
     std::fs::write(&blocker, b"a file, not a folder").unwrap();
-    let scene_path = repo("scenes/cornell-box.toml");
-    let out = twopass(&[
-        "bake",
-        scene_path.to_str().unwrap(),
-        "-o",
-        blocker.to_str().unwrap(),
-        "--max-shots",
-        "5",
-        "--no-adaptive",
-    ]);
+    let out = common::bake_box(&blocker)
+        .words("--max-shots 5 --no-adaptive")
+        .run();
     assert_eq!(out.status.code(), Some(1));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("taken"), "{err}");

@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::{repo, twopass};
+use common::{BOX, SPHERES, cli, repo, twopass};
 
 #[test]
 fn info_json_describes_the_cornell_box() {
@@ -74,29 +74,23 @@ fn usage_error_exits_2() {
     );
 }
 
+/// The JSON report of `twopass bench <kind> <scene> --json <flags>`, `scene` relative to the
+/// repository root.
+fn bench(kind: &str, scene: &str, flags: &str) -> serde_json::Value {
+    let line = cli("bench").words(kind).arg(repo(scene)).words("--json");
+    common::ok_json(&line.words(flags).run())
+}
+
 #[test]
 fn bench_rays_reports_every_query_kind() {
-    let scene = repo("scenes/cornell-box.toml");
-    let out = twopass(&[
-        "bench",
-        "rays",
-        scene.to_str().unwrap(),
-        "--json",
-        "--seconds",
-        "0.01",
-        "--rays",
-        "1000",
-        "--width",
-        "32",
-    ]);
-    let v = common::ok_json(&out);
+    let v = bench("rays", BOX, "--seconds 0.01 --rays 1000 --width 32");
     let rows = v["rows"].as_array().unwrap();
     let queries: Vec<&str> = rows.iter().map(|r| r["query"].as_str().unwrap()).collect();
     assert_eq!(queries, ["camera (coherent)", "incoherent", "occlusion"]);
     // One camera ray per pixel of the 32 x 32 image, then the --rays batch.
     let rays: Vec<u64> = rows.iter().map(|r| r["rays"].as_u64().unwrap()).collect();
     assert_eq!(rays, [32 * 32, 1000, 1000]);
-    let (loaded, _) = twopass_scene::load(&scene).unwrap();
+    let (loaded, _) = twopass_scene::load(repo(BOX)).unwrap();
     assert_eq!(
         v["triangles"].as_u64(),
         Some(loaded.mesh.triangles.len() as u64)
@@ -120,18 +114,7 @@ fn bench_rays_reports_every_query_kind() {
 
 #[test]
 fn bench_radiosity_reports_each_mesh_with_the_dense_check() {
-    let scene = repo("scenes/cornell-box.toml");
-    let out = twopass(&[
-        "bench",
-        "radiosity",
-        scene.to_str().unwrap(),
-        "--json",
-        "--elements",
-        "300,600",
-        "--unshot",
-        "1e-2",
-    ]);
-    let rows = common::ok_json(&out);
+    let rows = bench("radiosity", BOX, "--elements 300,600 --unshot 1e-2");
     let rows = rows.as_array().unwrap();
     assert_eq!(rows.len(), 2);
     let elements: Vec<u64> = rows
@@ -155,20 +138,7 @@ fn bench_radiosity_reports_each_mesh_with_the_dense_check() {
 
 #[test]
 fn bench_render_times_every_method_and_the_bake_frame_rate() {
-    let scene = repo("scenes/cornell-spheres.toml");
-    let out = twopass(&[
-        "bench",
-        "render",
-        scene.to_str().unwrap(),
-        "--json",
-        "--width",
-        "24",
-        "--spp",
-        "1",
-        "--frames",
-        "2",
-    ]);
-    let v = common::ok_json(&out);
+    let v = bench("render", SPHERES, "--width 24 --spp 1 --frames 2");
     let methods = common::row_methods(&v);
     assert_eq!(
         methods,
@@ -198,11 +168,13 @@ fn bench_render_times_every_method_and_the_bake_frame_rate() {
 fn render_exr_says_how_it_was_made() {
     // The EXR of `render` carries the final image as plain R, G, B and the render's method,
     // samples, seed and version in its header, read back here by the exr crate itself.
-    use exr::meta::attribute::AttributeValue;
     let dir = tempfile::tempdir().unwrap();
     let exr_path = dir.path().join("box.exr");
-    let exr = exr_path.to_str().unwrap();
-    let out = common::render_box("whitted", 16, 2, &["--seed", "7", "-o", exr, "--quiet"]);
+    let out = common::render_box("whitted", 16, 2)
+        .words("--seed 7 -o")
+        .arg(&exr_path)
+        .words("--quiet")
+        .run();
     assert!(
         out.status.success(),
         "{}",
@@ -219,10 +191,7 @@ fn render_exr_says_how_it_was_made() {
     for c in ["R", "G", "B", "image.R"] {
         assert!(names.iter().any(|n| n == c), "no channel {c} in {names:?}");
     }
-    let attr = |name: &str| match layer.attributes.other.get(&exr::prelude::Text::from(name)) {
-        Some(AttributeValue::Text(t)) => t.to_string(),
-        other => panic!("{name}: {other:?}"),
-    };
+    let attr = |name: &str| twopass_tests::exr_text(&layer.attributes, name);
     assert_eq!(attr("twopass:method"), "whitted");
     assert_eq!(attr("twopass:spp"), "2");
     assert_eq!(attr("twopass:seed"), "7");
@@ -235,28 +204,19 @@ fn render_says_when_the_specular_transfer_does_not_run() {
     let scene = repo("scenes/cornell-spheres.toml");
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("h.exr");
-    let args = |extra: &[&str]| {
-        let mut a = vec![
-            "render",
-            scene.to_str().unwrap(),
-            "--method",
-            "hybrid",
-            "--width",
-            "16",
-            "--spp",
-            "1",
-            "--json",
-            "-o",
-            out.to_str().unwrap(),
-        ];
-        a.extend_from_slice(extra);
-        let v = common::ok_json(&twopass(&a));
+    let args = |extra: &str| {
+        let a = cli("render")
+            .arg(&scene)
+            .words("--method hybrid --width 16 --spp 1 --json -o")
+            .arg(&out)
+            .words(extra);
+        let v = common::ok_json(&a.run());
         v["skipped"].to_string()
     };
     // By default the spheres get the transfer: nothing is skipped.
-    assert_eq!(args(&[]), "[]");
+    assert_eq!(args(""), "[]");
     // The hierarchical solver carries it too.
-    assert_eq!(args(&["--solver", "hierarchical"]), "[]");
-    let off = args(&["--specular-rays", "0"]);
+    assert_eq!(args("--solver hierarchical"), "[]");
+    let off = args("--specular-rays 0");
     assert!(off.contains("--specular-rays 0"), "{off}");
 }

@@ -2,37 +2,29 @@
 
 mod common;
 
-use common::{repo, twopass};
+use common::{BOX, SPHERES, cli, repo};
 
 use std::path::Path;
-use std::process::Output;
+
+use serde_json::Value;
 
 use twopass_composite::metric::compare;
 use twopass_composite::sheet::ComparisonOptions;
 use twopass_composite::tonemap::ToneMap;
 use twopass_composite::write::read_exr_layers;
 
-/// Runs `compare --quick --json` on `scene` into `dir` with [width, spp, reference spp].
-fn quick_compare(scene: &Path, dir: &Path, [width, spp, reference_spp]: [&str; 3]) -> Output {
-    let scene = scene.to_str().unwrap();
-    let small = [
-        "--width",
-        width,
-        "--spp",
-        spp,
-        "--reference-spp",
-        reference_spp,
-    ];
-    let output = ["--output", dir.to_str().unwrap(), "--quick", "--json"];
-    twopass(&[&["compare", scene][..], &small, &output].concat())
+/// The JSON report of `compare --quick` on `scene` (relative to the repository root) into
+/// `dir` with [width, spp, reference spp].
+fn quick_compare(scene: &str, dir: &Path, [width, spp, reference_spp]: [&str; 3]) -> Value {
+    let small = format!("--width {width} --spp {spp} --reference-spp {reference_spp}");
+    let line = cli("compare").arg(repo(scene)).words(&small);
+    common::ok_json(&line.output(dir).words("--quick --json").run())
 }
 
 #[test]
 fn report_matches_the_images_it_wrote() {
     let dir = tempfile::tempdir().unwrap();
-    let scene = repo("scenes/cornell-spheres.toml");
-    let out = quick_compare(&scene, dir.path(), ["24", "2", "16"]);
-    let report = common::ok_json(&out);
+    let report = quick_compare(SPHERES, dir.path(), ["24", "2", "16"]);
     let rows = report["rows"].as_array().unwrap();
     let methods = common::row_methods(&report);
     // The spheres call for every method; the reference comes first.
@@ -46,7 +38,7 @@ fn report_matches_the_images_it_wrote() {
             "hybrid-direct"
         ]
     );
-    let image = |row: &serde_json::Value| {
+    let image = |row: &Value| {
         let layers = read_exr_layers(Path::new(row["exr"].as_str().unwrap())).unwrap();
         layers.require("image").unwrap().clone()
     };
@@ -91,9 +83,7 @@ fn report_matches_the_images_it_wrote() {
 #[test]
 fn a_diffuse_scene_skips_the_hybrid_and_says_why() {
     let dir = tempfile::tempdir().unwrap();
-    let scene = repo("scenes/cornell-box.toml");
-    let out = quick_compare(&scene, dir.path(), ["16", "1", "4"]);
-    let report = common::ok_json(&out);
+    let report = quick_compare(BOX, dir.path(), ["16", "1", "4"]);
     let methods = common::row_methods(&report);
     assert!(!methods.contains(&"hybrid"));
     let skipped = report["skipped"][0].as_str().unwrap();

@@ -3,27 +3,16 @@
 
 mod common;
 
-use common::{repo, twopass};
+use common::{cli, repo};
 
 #[test]
 fn lightmap_bake_writes_its_files_into_the_manifest() {
     let out_dir = tempfile::tempdir().unwrap();
     let dir = out_dir.path();
-    let out = common::bake_box(
-        dir,
-        &[
-            "--format",
-            "glb,vertex-glb",
-            "--lightmap",
-            "--texel-size",
-            "10",
-            "--element-size",
-            "100",
-            "--unshot",
-            "1e-2",
-            "--json",
-        ],
-    );
+    let out = common::bake_box(dir)
+        .words("--format glb,vertex-glb --lightmap --texel-size 10")
+        .words("--element-size 100 --unshot 1e-2 --json")
+        .run();
     let manifest = common::ok_json(&out);
     let files = manifest["files"].as_array().unwrap();
     let mut names: Vec<&str> = files
@@ -65,14 +54,8 @@ fn lightmap_bake_writes_its_files_into_the_manifest() {
 #[test]
 fn texel_size_needs_lightmap() {
     let scene = repo("scenes/cornell-box.toml");
-    let out = twopass(&["bake", scene.to_str().unwrap(), "--texel-size", "5"]);
-    common::assert_exit(&out, 2);
-    let out = twopass(&[
-        "bake",
-        scene.to_str().unwrap(),
-        "--lightmap",
-        "--texel-size",
-        "-1",
-    ]);
-    common::assert_exit(&out, 2);
+    for words in ["--texel-size 5", "--lightmap --texel-size -1"] {
+        let out = cli("bake").arg(&scene).words(words).run();
+        common::assert_exit(&out, 2);
+    }
 }

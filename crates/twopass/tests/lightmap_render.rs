@@ -7,29 +7,23 @@ mod common;
 
 use std::path::Path;
 
-use common::{assert_ok, bake_cornell_lightmap, repo, twopass};
+use common::{BOX, SPHERES, assert_ok, bake_cornell_lightmap, cli, repo};
 use twopass_composite::metric::compare;
 use twopass_composite::tonemap::ToneMap;
 use twopass_composite::write::read_exr;
 
-fn render(scene: &str, bake: &Path, method: &str, out: &Path) -> std::process::Output {
-    twopass(&[
-        "render",
-        repo(scene).to_str().unwrap(),
-        "--method",
-        method,
-        "--bake",
-        bake.to_str().unwrap(),
-        "--width",
-        "128",
-        "--height",
-        "128",
-        "--spp",
-        "16",
-        "--output",
-        out.to_str().unwrap(),
-        "--quiet",
-    ])
+/// Renders `scene` (a path in the repository) with `method` and the bake file `bake` of `dir`
+/// into the file `out` of `dir`, 128 x 128 at 16 samples per pixel.
+fn render(dir: &Path, scene: &str, bake: &str, method: &str, out: &str) -> std::process::Output {
+    cli("render")
+        .arg(repo(scene))
+        .words("--method")
+        .arg(method)
+        .words("--bake")
+        .arg(dir.join(bake))
+        .words("--width 128 --height 128 --spp 16 --quiet")
+        .output(dir.join(out))
+        .run()
 }
 
 #[test]
@@ -37,23 +31,14 @@ fn a_lightmap_glb_renders_as_the_solution_it_was_baked_from() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
     bake_cornell_lightmap(dir);
-    let from_bake = dir.join("from-bake.exr");
-    let from_glb = dir.join("from-glb.exr");
-    let scene = "scenes/cornell-box.toml";
-    assert_ok(&render(
-        scene,
-        &dir.join("cornell-box.bake"),
-        "radiosity",
-        &from_bake,
-    ));
-    assert_ok(&render(
-        scene,
-        &dir.join("cornell-box.lightmap.glb"),
-        "radiosity",
-        &from_glb,
-    ));
-    let reference = read_exr(&from_bake).unwrap();
-    let image = read_exr(&from_glb).unwrap();
+    for (bake, out) in [
+        ("cornell-box.bake", "from-bake.exr"),
+        ("cornell-box.lightmap.glb", "from-glb.exr"),
+    ] {
+        assert_ok(&render(dir, BOX, bake, "radiosity", out));
+    }
+    let reference = read_exr(&dir.join("from-bake.exr")).unwrap();
+    let image = read_exr(&dir.join("from-glb.exr")).unwrap();
     let m = compare(&image, &reference, &ToneMap::default()).unwrap();
     // The lightmap holds the solution's radiance at 5 mm texel centres; bilinear sampling
     // between them differs from the element mesh's own interpolation only by that texel-scale
@@ -69,25 +54,25 @@ fn a_lightmap_of_another_scene_or_without_its_exr_is_refused() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
     bake_cornell_lightmap(dir);
-    let glb = dir.join("cornell-box.lightmap.glb");
-    let out_file = dir.join("x.exr");
-    let other = render("scenes/cornell-spheres.toml", &glb, "radiosity", &out_file);
-    let err = String::from_utf8_lossy(&other.stderr);
-    assert_eq!(other.status.code(), Some(1), "{err}");
+    let glb = "cornell-box.lightmap.glb";
+    // The standard error of a render that must be refused (exit code 1).
+    let refused = |scene: &str, method: &str| {
+        let out = render(dir, scene, glb, method, "x.exr");
+        let err = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert_eq!(out.status.code(), Some(1), "{err}");
+        err
+    };
+    let err = refused(SPHERES, "radiosity");
     assert!(
         err.contains("cornell-box.lightmap.glb") && err.contains("another scene"),
         "{err}"
     );
-    let direct = render("scenes/cornell-box.toml", &glb, "hybrid-direct", &out_file);
-    let err = String::from_utf8_lossy(&direct.stderr);
-    assert_eq!(direct.status.code(), Some(1), "{err}");
+    let err = refused(BOX, "hybrid-direct");
     assert!(err.contains("hybrid-direct"), "{err}");
     // The EXR removed: the manifest check names it, and without the manifest the reader does.
     std::fs::remove_file(dir.join("cornell-box.lightmap.exr")).unwrap();
     std::fs::remove_file(dir.join("cornell-box.manifest.json")).unwrap();
-    let missing = render("scenes/cornell-box.toml", &glb, "radiosity", &out_file);
-    let err = String::from_utf8_lossy(&missing.stderr);
-    assert_eq!(missing.status.code(), Some(1), "{err}");
+    let err = refused(BOX, "radiosity");
     assert!(err.contains("cornell-box.lightmap.exr"), "{err}");
-    assert!(!out_file.exists());
+    assert!(!dir.join("x.exr").exists());
 }

@@ -91,7 +91,7 @@ fn options_out_of_range_are_usage_errors() {
     ] {
         expect(&args, 2, &words);
     }
-    assert!(!out.exists(), "no render was written");
+    common::assert_absent(&out, "no render was written");
 }
 
 #[test]

@@ -5,20 +5,14 @@ mod common;
 
 use std::time::{Duration, SystemTime};
 
-use common::render_box;
+use common::{bake_box, render_box};
 use twopass_bake::Manifest;
 
-const COARSE: [&str; 6] = [
-    "--element-size",
-    "80",
-    "--patch-size",
-    "200",
-    "--unshot",
-    "5e-2",
-];
+/// A coarse radiosity mesh solved loosely: seconds, not minutes.
+const COARSE: &str = "--element-size 80 --patch-size 200 --unshot 5e-2";
 
 fn bake(dir: &std::path::Path, extra: &[&str]) -> std::process::Output {
-    common::bake_box(dir, &[&["-q"][..], &COARSE, extra].concat())
+    bake_box(dir).words("-q").words(COARSE).args(extra).run()
 }
 
 #[test]
@@ -49,17 +43,11 @@ fn the_manifest_seals_the_bake_set() {
     assert_eq!(out.status.code(), Some(0));
     let bake_file = dir.join("cornell-box.bake");
     std::fs::copy(other.join("cornell-box.bake"), &bake_file).unwrap();
-    let render = render_box(
-        "radiosity",
-        8,
-        1,
-        &[
-            "--bake",
-            bake_file.to_str().unwrap(),
-            "-o",
-            tmp.path().join("r.exr").to_str().unwrap(),
-        ],
-    );
+    let render = render_box("radiosity", 8, 1)
+        .words("--bake")
+        .arg(&bake_file)
+        .output(tmp.path().join("r.exr"))
+        .run();
     let stderr = String::from_utf8_lossy(&render.stderr);
     assert_eq!(render.status.code(), Some(1), "{stderr}");
     assert!(stderr.contains("does not match its manifest"), "{stderr}");
@@ -70,10 +58,8 @@ fn the_manifest_seals_the_bake_set() {
     std::fs::create_dir(&ply).unwrap(); // the .ply cannot be renamed into place now
     let out = bake(&dir, &[]);
     common::assert_exit(&out, 1);
-    assert!(
-        !manifest_path.exists(),
-        "the old manifest must not survive beside a partial new set"
-    );
+    let why = "the old manifest must not survive beside a partial new set";
+    common::assert_absent(&manifest_path, why);
 }
 
 #[test]
@@ -95,14 +81,9 @@ fn stale_temporaries_of_a_killed_run_are_removed() {
             .set_modified(hour_ago)
             .unwrap();
     }
-    let out = render_box(
-        "whitted",
-        8,
-        1,
-        &["-o", dir.join("x.exr").to_str().unwrap()],
-    );
+    let out = render_box("whitted", 8, 1).output(dir.join("x.exr")).run();
     common::assert_ok(&out);
-    assert!(!stale.exists(), "a leftover of a killed run is removed");
+    common::assert_absent(&stale, "a leftover of a killed run is removed");
     assert!(fresh.exists(), "a temporary file that may be live is kept");
     assert!(foreign.exists(), "other programs' files are not touched");
 }

@@ -2,20 +2,14 @@
 
 mod common;
 
-use common::{repo, twopass};
+use common::{cli, render_box, repo};
 
 use std::path::{Path, PathBuf};
 
 use twopass_composite::write::read_exr_layers;
 
-const COARSE: [&str; 6] = [
-    "--element-size",
-    "80",
-    "--patch-size",
-    "150",
-    "--unshot",
-    "1e-2",
-];
+/// A coarse radiosity mesh solved loosely: seconds, not minutes.
+const COARSE: &str = "--element-size 80 --patch-size 150 --unshot 1e-2";
 
 #[test]
 fn every_method_writes_layers_that_sum_to_the_image() {
@@ -28,21 +22,14 @@ fn every_method_writes_layers_that_sum_to_the_image() {
         "hybrid-direct",
         "reference",
     ] {
-        let mut args = vec![
-            "render",
-            scene.to_str().unwrap(),
-            "--method",
-            method,
-            "--width",
-            "24",
-            "--spp",
-            "2",
-            "--png",
-            "--json",
-        ];
-        args.extend(["--output", dir.path().to_str().unwrap()]);
-        args.extend(COARSE);
-        let out = twopass(&args);
+        let out = cli("render")
+            .arg(&scene)
+            .words("--method")
+            .arg(method)
+            .words("--width 24 --spp 2 --png --json --output")
+            .arg(dir.path())
+            .words(COARSE)
+            .run();
         assert_eq!(
             out.status.code(),
             Some(0),
@@ -91,34 +78,23 @@ fn every_method_writes_layers_that_sum_to_the_image() {
 fn a_bake_renders_the_same_as_a_fresh_solve_with_the_same_settings() {
     let dir = tempfile::tempdir().unwrap();
     let scene = repo("scenes/cornell-box.toml");
-    let bake = [&["--format", "bake", "--quiet"][..], &COARSE].concat();
-    common::assert_ok(&common::bake_box(dir.path(), &bake));
-    let d = dir.path().to_str().unwrap();
-    let render = |extra: &[&str], out: &str| {
-        let mut args = vec![
-            "render",
-            scene.to_str().unwrap(),
-            "--method",
-            "radiosity",
-            "--width",
-            "16",
-            "--spp",
-            "1",
-            "--quiet",
-        ];
-        args.extend(COARSE);
-        args.extend(extra);
-        args.extend(["--output", out]);
-        let o = twopass(&args);
-        common::assert_ok(&o);
-        read_exr_layers(Path::new(out)).unwrap()
+    let bake = common::bake_box(dir.path()).words("--format bake --quiet");
+    common::assert_ok(&bake.words(COARSE).run());
+    // Renders into `out`, with the bake file `bake` or a fresh solve.
+    let render = |bake: Option<&Path>, out: &Path| {
+        let mut c = cli("render")
+            .arg(&scene)
+            .words("--method radiosity --width 16 --spp 1 --quiet")
+            .words(COARSE);
+        if let Some(bake) = bake {
+            c = c.words("--bake").arg(bake);
+        }
+        common::assert_ok(&c.output(out).run());
+        read_exr_layers(out).unwrap()
     };
     let baked_file = dir.path().join("cornell-box.bake");
-    let from_bake = render(
-        &["--bake", baked_file.to_str().unwrap()],
-        &format!("{d}/a.exr"),
-    );
-    let fresh = render(&[], &format!("{d}/b.exr"));
+    let from_bake = render(Some(&baked_file), &dir.path().join("a.exr"));
+    let fresh = render(None, &dir.path().join("b.exr"));
     assert_eq!(
         from_bake.require("image").unwrap().pixels(),
         fresh.require("image").unwrap().pixels()
@@ -128,40 +104,20 @@ fn a_bake_renders_the_same_as_a_fresh_solve_with_the_same_settings() {
 #[test]
 fn render_refuses_what_makes_no_sense() {
     let scene = repo("scenes/cornell-box.toml");
-    let out = twopass(&[
-        "render",
-        scene.to_str().unwrap(),
-        "--method",
-        "whitted",
-        "--bake",
-        "x.bake",
-    ]);
+    let render = |words: &str| cli("render").arg(&scene).words(words).run();
+    let out = render("--method whitted --bake x.bake");
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("--bake"));
-    let out = twopass(&["render", scene.to_str().unwrap(), "--method", "phong"]);
+    let out = render("--method phong");
     assert_eq!(out.status.code(), Some(2));
-    let missing = twopass(&[
-        "render",
-        scene.to_str().unwrap(),
-        "--method",
-        "radiosity",
-        "--bake",
-        "/nonexistent/x.bake",
-        "--width",
-        "8",
-    ]);
+    let missing = render("--method radiosity --bake /nonexistent/x.bake --width 8");
     assert_eq!(missing.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&missing.stderr).contains("/nonexistent/x.bake"));
 }
 
 /// Runs a small Whitted render of the Cornell box with `--output out` and `extra` arguments.
 fn render_to(out: &Path, extra: &[&str]) -> std::process::Output {
-    common::render_box(
-        "whitted",
-        16,
-        1,
-        &[&["--output", out.to_str().unwrap()], extra].concat(),
-    )
+    render_box("whitted", 16, 1).output(out).args(extra).run()
 }
 
 #[test]

@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::{repo, twopass};
+use common::{cli, repo, twopass};
 
 use std::path::Path;
 
@@ -10,19 +10,11 @@ use serde_json::Value;
 
 fn sweep(out: &Path) -> Value {
     let scene = repo("scenes/cornell-box.toml");
-    let o = twopass(&[
-        "bench",
-        "tradeoff",
-        scene.to_str().unwrap(),
-        "--quick",
-        "--width",
-        "32",
-        "--reference-spp",
-        "64",
-        "--json",
-        "--output",
-        out.to_str().unwrap(),
-    ]);
+    let o = cli("bench tradeoff")
+        .arg(&scene)
+        .words("--quick --width 32 --reference-spp 64 --json")
+        .output(out)
+        .run();
     common::ok_json(&o)
 }
 
@@ -137,19 +129,13 @@ fn front_presets_and_cache_agree_with_the_measured_rows() {
     let presets_file = first["presets_file"].as_str().unwrap();
     let scene = repo("scenes/cornell-box.toml");
     let exr = dir.path().join("preset.exr");
-    let o = twopass(&[
-        "render",
-        scene.to_str().unwrap(),
-        "--preset",
-        "draft",
-        "--presets",
-        presets_file,
-        "--width",
-        "16",
-        "--json",
-        "--output",
-        exr.to_str().unwrap(),
-    ]);
+    let o = cli("render")
+        .arg(&scene)
+        .words("--preset draft --presets")
+        .arg(presets_file)
+        .words("--width 16 --json")
+        .output(&exr)
+        .run();
     let summary = common::ok_json(&o);
     assert_eq!(summary["method"], presets[0]["method"]);
     assert_eq!(summary["spp"], presets[0]["render"]["spp"]);
@@ -162,14 +148,13 @@ fn missing_presets_and_unknown_names_are_clear_errors() {
     let scene = repo("scenes/cornell-box.toml");
     // Exit code and stderr of `render --preset NAME --presets FILE`.
     let render = |name: &str, file: &Path| {
-        let o = twopass(&[
-            "render",
-            scene.to_str().unwrap(),
-            "--preset",
-            name,
-            "--presets",
-            file.to_str().unwrap(),
-        ]);
+        let o = cli("render")
+            .arg(&scene)
+            .words("--preset")
+            .arg(name)
+            .words("--presets")
+            .arg(file)
+            .run();
         (
             o.status.code(),
             String::from_utf8_lossy(&o.stderr).into_owned(),
@@ -196,14 +181,10 @@ fn missing_presets_and_unknown_names_are_clear_errors() {
     );
 
     // A preset conflicts with the settings it sets.
-    let o = twopass(&[
-        "render",
-        scene.to_str().unwrap(),
-        "--preset",
-        "draft",
-        "--spp",
-        "4",
-    ]);
+    let o = cli("render")
+        .arg(&scene)
+        .words("--preset draft --spp 4")
+        .run();
     assert_eq!(o.status.code(), Some(2));
 
     let o = twopass(&["bench", "tradeoff", "no/such/scene.toml", "--quick"]);

@@ -15,7 +15,7 @@ use std::process::Command;
 use std::sync::{Arc, Condvar, Mutex};
 use std::time::Duration;
 
-use common::{assert_ok, bake_cornell_lightmap, repo, twopass};
+use common::{assert_ok, bake_cornell_lightmap, cli, repo, twopass};
 
 /// Skips (with a note) or, in CI, fails when a tool the test needs is missing.
 fn missing(what: &str) -> bool {
@@ -186,13 +186,7 @@ fn the_page_in_headless_chromium_matches_the_radiosity_render() {
     bake_cornell_lightmap(&bake);
     let scene = repo("scenes/cornell-box.toml");
     let page = dir.join("page");
-    assert_ok(&twopass(&[
-        "view",
-        bake.to_str().unwrap(),
-        "--output",
-        page.to_str().unwrap(),
-        "--quiet",
-    ]));
+    assert_ok(&cli("view").arg(&bake).output(&page).words("--quiet").run());
     let extras = glb_extras(&page.join("cornell-box.lightmap.glb"));
     let exposure = extras["exposure"].as_f64().unwrap();
     let camera = &extras["camera"];
@@ -219,21 +213,15 @@ fn the_page_in_headless_chromium_matches_the_radiosity_render() {
     // twopass's own radiosity render of the scene's view at the scene's size, tone-mapped as
     // the page is: exposure (the bake's), clip, sRGB transfer, 8 bits.
     let render = dir.join("render.png");
-    assert_ok(&twopass(&[
-        "render",
-        scene.to_str().unwrap(),
-        "--method",
-        "radiosity",
-        "--bake",
-        bake.join("cornell-box.bake").to_str().unwrap(),
-        "--spp",
-        "4",
-        "--exposure",
-        &format!("{:.9}", exposure.log2()),
-        "--output",
-        render.to_str().unwrap(),
-        "--quiet",
-    ]));
+    let render_box = cli("render")
+        .arg(&scene)
+        .words("--method radiosity --bake")
+        .arg(bake.join("cornell-box.bake"))
+        .words("--spp 4 --exposure")
+        .arg(format!("{:.9}", exposure.log2()))
+        .output(&render)
+        .words("--quiet");
+    assert_ok(&render_box.run());
     let (a, aw, ah) = read_png_rgb(&shot);
     let (b, bw, bh) = read_png_rgb(&render);
     assert_eq!((aw, ah), (bw, bh), "screenshot and render sizes");

@@ -8,7 +8,7 @@ use twopass_brdf::interface::incident_albedo;
 use twopass_brdf::quadrature::Quadrature;
 use twopass_brdf::{Brdf, BrdfModel, ComplexIor, FresnelModel, Rgb};
 
-use crate::{blinn, cook, lambert, phong};
+use crate::{blinn, cook, dielectric, lambert, phong};
 
 fn directions() -> Vec<Vec3> {
     let mut v = Vec::new();
@@ -33,8 +33,8 @@ fn extreme_models() -> Vec<BrdfModel> {
         v.push(blinn(0.0, 1.0, n, true));
     }
     let iors = [
-        ComplexIor::dielectric(1.0).unwrap(),
-        ComplexIor::dielectric(0.5).unwrap(),
+        dielectric(1.0),
+        dielectric(0.5),
         ComplexIor::dielectric(1e3).unwrap(),
         ComplexIor::new(Rgb::splat(1.5), Rgb::splat(1e3)).unwrap(),
         ComplexIor::new(Rgb::splat(1e3), Rgb::splat(1e3)).unwrap(),

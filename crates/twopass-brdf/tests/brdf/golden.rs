@@ -8,7 +8,7 @@ use twopass_brdf::delta::DeltaLobe;
 use twopass_brdf::phong::PhongShading;
 use twopass_brdf::{Brdf, ComplexIor, FresnelModel, Material, PhongParams, Rgb, fresnel};
 
-use crate::{cook, dir_deg, phong};
+use crate::{conductor, cook, dielectric, dir_deg, phong};
 
 #[test]
 fn fresnel_normal_incidence_of_glass_is_four_percent() {
@@ -156,13 +156,7 @@ fn schlick_error_is_measured() {
 #[test]
 fn cook_torrance_closed_form_at_normal_incidence() {
     for m in [0.05f32, 0.3, 1.0] {
-        let ct = cook(
-            0.0,
-            0.8,
-            m,
-            ComplexIor::dielectric(1.5).unwrap(),
-            FresnelModel::Exact,
-        );
+        let ct = cook(0.0, 0.8, m, dielectric(1.5), FresnelModel::Exact);
         let f = ct.eval(Vec3::Z, Vec3::Z).x;
         // h = N: D = 1/(pi m^2), G = 1, F = 0.04, 4 cos cos = 4.
         let expect = 0.8 * 0.04 / (PI * m * m) / 4.0;
@@ -252,7 +246,7 @@ fn mirror_and_conductor_reflect_about_the_normal() {
     let r = m.delta().unwrap().reflection(wo).unwrap();
     assert!((r.wi - Vec3::new(-wo.x, -wo.y, wo.z)).length() < 1e-7);
     assert_eq!(r.weight, Rgb::new(0.9, 0.8, 0.7));
-    let ag = ComplexIor::conductor("silver").unwrap();
+    let ag = conductor("silver");
     let c = Material::conductor(ag).unwrap();
     let r = c.delta().unwrap().reflection(wo).unwrap();
     assert_eq!(r.weight, fresnel::complex_rgb(wo.z, &ag));

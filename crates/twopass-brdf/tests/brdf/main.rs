@@ -54,6 +54,16 @@ pub(crate) fn cook(rho: f32, s: f32, m: f32, ior: ComplexIor, fresnel: FresnelMo
     .unwrap()
 }
 
+/// The measured complex index of the metal `name` (see [`ComplexIor::conductor`]).
+pub(crate) fn conductor(name: &str) -> ComplexIor {
+    ComplexIor::conductor(name).unwrap()
+}
+
+/// The real index `eta` of a dielectric, as a complex index.
+pub(crate) fn dielectric(eta: f32) -> ComplexIor {
+    ComplexIor::dielectric(eta).unwrap()
+}
+
 /// An index whose Fresnel reflectance is 1 to within 4e-6 at every angle: isolates D and G.
 pub(crate) fn white_ior() -> ComplexIor {
     ComplexIor::new(Rgb::ONE, Rgb::splat(1e3)).unwrap()

@@ -7,9 +7,9 @@ use twopass_brdf::beckmann::Beckmann;
 use twopass_brdf::check::{self, CheckOptions, INCIDENCE_DEG, direction_at_deg};
 use twopass_brdf::interface::incident_albedo;
 use twopass_brdf::quadrature::{Quadrature, integrate_hemisphere};
-use twopass_brdf::{BrdfModel, ComplexIor, FresnelModel, blinn_phong};
+use twopass_brdf::{BrdfModel, FresnelModel, blinn_phong};
 
-use crate::{blinn, cook, lambert, phong, white_ior};
+use crate::{blinn, conductor, cook, dielectric, lambert, phong, white_ior};
 
 const ACCURACY: f32 = 1e-3;
 
@@ -106,11 +106,7 @@ fn plausible_models() -> Vec<(String, BrdfModel)> {
             ));
         }
     }
-    let iors = [
-        ComplexIor::dielectric(1.5).unwrap(),
-        ComplexIor::conductor("gold").unwrap(),
-        white_ior(),
-    ];
+    let iors = [dielectric(1.5), conductor("gold"), white_ior()];
     for ior in iors {
         for m in [1e-3f32, 0.05, 0.2, 0.5, 1.0, 2.0] {
             for f in [FresnelModel::Exact, FresnelModel::Schlick] {
@@ -212,13 +208,7 @@ fn published_phong_is_not_reciprocal_and_creates_energy() {
 #[test]
 fn albedo_seen_from_wo_matches_incident_albedo_for_reciprocal_models() {
     use twopass_brdf::Brdf;
-    let ct = cook(
-        0.2,
-        0.7,
-        0.3,
-        ComplexIor::conductor("copper").unwrap(),
-        FresnelModel::Exact,
-    );
+    let ct = cook(0.2, 0.7, 0.3, conductor("copper"), FresnelModel::Exact);
     for deg in [0.0f32, 45.0, 80.0] {
         let w = direction_at_deg(deg);
         let a = ct.albedo(w);

@@ -6,9 +6,9 @@ use statrs::distribution::{ChiSquared, ContinuousCDF};
 use twopass_brdf::check::{self, Chi2Options, Pcg32, chi2_test, chi2_test_brdf, direction_at_deg};
 use twopass_brdf::quadrature::Quadrature;
 use twopass_brdf::sample::*;
-use twopass_brdf::{Brdf, BrdfModel, ComplexIor, FresnelModel};
+use twopass_brdf::{Brdf, BrdfModel, FresnelModel};
 
-use crate::{blinn, chi2_dir, cook, dir_deg, lambert, phong};
+use crate::{blinn, chi2_dir, conductor, cook, dielectric, dir_deg, lambert, phong};
 
 #[test]
 fn chi2_survival_agrees_with_statrs() {
@@ -94,35 +94,17 @@ fn chi_square_every_sampled_lobe() {
         ),
         (
             "beckmann m 0.3",
-            cook(
-                0.0,
-                1.0,
-                0.3,
-                ComplexIor::conductor("gold").unwrap(),
-                FresnelModel::Exact,
-            ),
+            cook(0.0, 1.0, 0.3, conductor("gold"), FresnelModel::Exact),
             dir_deg(30.0, 0.0),
         ),
         (
             "beckmann m 0.1 mixture grazing",
-            cook(
-                0.3,
-                0.7,
-                0.1,
-                ComplexIor::dielectric(1.5).unwrap(),
-                FresnelModel::Schlick,
-            ),
+            cook(0.3, 0.7, 0.1, dielectric(1.5), FresnelModel::Schlick),
             dir_deg(75.0, 120.0),
         ),
         (
             "beckmann m 1.5",
-            cook(
-                0.0,
-                1.0,
-                1.5,
-                ComplexIor::dielectric(1.5).unwrap(),
-                FresnelModel::Exact,
-            ),
+            cook(0.0, 1.0, 1.5, dielectric(1.5), FresnelModel::Exact),
             dir_deg(10.0, 0.0),
         ),
     ];
@@ -186,13 +168,7 @@ fn pdf_integral_equals_the_acceptance_rate_at_oblique_incidence() {
     let models = [
         phong(0.2, 0.6, 5.0, true),
         blinn(0.0, 1.0, 8.0, true),
-        cook(
-            0.1,
-            0.9,
-            0.8,
-            ComplexIor::conductor("copper").unwrap(),
-            FresnelModel::Exact,
-        ),
+        cook(0.1, 0.9, 0.8, conductor("copper"), FresnelModel::Exact),
     ];
     for m in &models {
         let wo = direction_at_deg(70.0);
@@ -219,13 +195,7 @@ fn sample_weight_is_f_cos_over_pdf() {
         phong(0.3, 0.6, 30.0, true),
         phong(0.3, 0.6, 30.0, false),
         blinn(0.3, 0.6, 100.0, true),
-        cook(
-            0.3,
-            0.6,
-            0.2,
-            ComplexIor::conductor("aluminium").unwrap(),
-            FresnelModel::Exact,
-        ),
+        cook(0.3, 0.6, 0.2, conductor("aluminium"), FresnelModel::Exact),
     ];
     let mut rng = Pcg32::new(11, 2);
     for m in &models {
@@ -245,13 +215,7 @@ fn sample_weight_is_f_cos_over_pdf() {
 
 #[test]
 fn mean_sample_weight_is_the_albedo_seen_from_wo() {
-    let m = cook(
-        0.2,
-        0.7,
-        0.4,
-        ComplexIor::conductor("gold").unwrap(),
-        FresnelModel::Exact,
-    );
+    let m = cook(0.2, 0.7, 0.4, conductor("gold"), FresnelModel::Exact);
     let wo = direction_at_deg(40.0);
     let mut rng = Pcg32::new(5, 5);
     let n = 200_000;

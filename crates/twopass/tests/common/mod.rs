@@ -2,8 +2,15 @@
 // Each test file is its own crate and uses only some of these.
 #![allow(dead_code)]
 
+use std::ffi::{OsStr, OsString};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
+
+/// The Cornell box, relative to the repository root (see [`repo`]).
+pub const BOX: &str = "scenes/cornell-box.toml";
+
+/// The Cornell box with a mirror and a glass sphere, relative to the repository root.
+pub const SPHERES: &str = "scenes/cornell-spheres.toml";
 
 /// A path relative to the repository root.
 pub fn repo(rel: &str) -> PathBuf {
@@ -13,7 +20,7 @@ pub fn repo(rel: &str) -> PathBuf {
 }
 
 /// Runs `twopass` with `args` as CI would (no progress bars) and waits for it.
-pub fn twopass(args: &[&str]) -> Output {
+pub fn twopass<S: AsRef<OsStr>>(args: &[S]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_twopass"))
         .args(args)
         .env("CI", "1")
@@ -21,26 +28,57 @@ pub fn twopass(args: &[&str]) -> Output {
         .expect("the binary runs")
 }
 
-/// Runs `twopass render` of the Cornell box (`scenes/cornell-box.toml`) with `method`, `width`
-/// pixels across and `spp` samples per pixel, then the `extra` arguments (the output, ...).
-pub fn render_box(method: &str, width: u32, spp: u32, extra: &[&str]) -> Output {
-    let scene = repo("scenes/cornell-box.toml");
-    let (width, spp) = (width.to_string(), spp.to_string());
-    let args = ["render", scene.to_str().unwrap(), "--method", method];
-    twopass(&[&args[..], &["--width", &width, "--spp", &spp], extra].concat())
+/// A `twopass` command line, built in the order it is read: words (subcommands, flags and
+/// their values) and paths, run by [`twopass`].
+pub struct Cli(Vec<OsString>);
+
+/// The command line `twopass <words>`; see [`Cli::words`].
+pub fn cli(words: &str) -> Cli {
+    Cli(Vec::new()).words(words)
 }
 
-/// Runs `twopass bake` of the Cornell box (`scenes/cornell-box.toml`) with `--output dir`, then
-/// the `extra` arguments (formats, solver settings, ...).
-pub fn bake_box(dir: &Path, extra: &[&str]) -> Output {
-    let scene = repo("scenes/cornell-box.toml");
-    let args = [
-        "bake",
-        scene.to_str().unwrap(),
-        "--output",
-        dir.to_str().unwrap(),
-    ];
-    twopass(&[&args[..], extra].concat())
+impl Cli {
+    /// Appends `words` split at white space: flags and values, never a path (see [`Cli::path`]).
+    pub fn words(mut self, words: &str) -> Self {
+        self.0.extend(words.split_whitespace().map(OsString::from));
+        self
+    }
+
+    /// Appends one argument as it is: a path (which may hold spaces) or a computed value.
+    pub fn arg(mut self, arg: impl AsRef<OsStr>) -> Self {
+        self.0.push(arg.as_ref().to_owned());
+        self
+    }
+
+    /// Appends `--output path`.
+    pub fn output(self, path: impl AsRef<OsStr>) -> Self {
+        self.words("--output").arg(path)
+    }
+
+    /// Appends each of `args` as it is.
+    pub fn args<S: AsRef<OsStr>>(mut self, args: &[S]) -> Self {
+        self.0.extend(args.iter().map(|a| a.as_ref().to_owned()));
+        self
+    }
+
+    /// Runs the command line and waits for it.
+    pub fn run(&self) -> Output {
+        twopass(&self.0)
+    }
+}
+
+/// `twopass render` of the Cornell box (`scenes/cornell-box.toml`) with `method`, `width`
+/// pixels across and `spp` samples per pixel; the caller adds the rest (the output, ...).
+pub fn render_box(method: &str, width: u32, spp: u32) -> Cli {
+    cli("render")
+        .arg(repo(BOX))
+        .words(&format!("--method {method} --width {width} --spp {spp}"))
+}
+
+/// `twopass bake` of the Cornell box (`scenes/cornell-box.toml`) with `--output dir`; the caller
+/// adds the rest (formats, solver settings, ...).
+pub fn bake_box(dir: &Path) -> Cli {
+    cli("bake").arg(repo(BOX)).output(dir)
 }
 
 /// Asserts that `out` exited with `code`, showing its stderr when it did not.
@@ -52,6 +90,12 @@ pub fn assert_exit(out: &Output, code: i32) {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+}
+
+/// Asserts that nothing exists at `path`, naming it and `why` it must not when it does.
+#[track_caller]
+pub fn assert_absent(path: &Path, why: &str) {
+    assert!(!path.exists(), "{} exists: {why}", path.display());
 }
 
 /// Asserts that `out` is a successful run (exit code 0), showing its stderr when it is not.
@@ -80,13 +124,6 @@ pub fn row_methods(report: &serde_json::Value) -> Vec<&str> {
 /// Bakes the Cornell box with a 5 mm lightmap into `dir` (the `.bake` and the lightmap files
 /// of one solve).
 pub fn bake_cornell_lightmap(dir: &Path) {
-    let lightmap = [
-        "--format",
-        "bake",
-        "--lightmap",
-        "--texel-size",
-        "5",
-        "--quiet",
-    ];
-    assert_ok(&bake_box(dir, &lightmap));
+    let lightmap = "--format bake --lightmap --texel-size 5 --quiet";
+    assert_ok(&bake_box(dir).words(lightmap).run());
 }

@@ -36,7 +36,7 @@ use twopass_trace::RenderStats;
 use crate::bench::memory::{mib, peak_memory, reset_peak_memory};
 use crate::context::Context;
 use crate::error::CliError;
-use crate::pipeline::{RenderMethod, integrator, load_lit, methods, render_settings, to_image};
+use crate::pipeline::{RenderMethod, integrator, load_lit, methods, render_settings};
 use crate::preset::{Preset, PresetFile};
 use sweep::{RunSpec, SolveSpec, Sweep, plan_runs};
 
@@ -402,7 +402,7 @@ fn measure_runs(
             &twopass_trace::RenderProgress::new(),
         );
         let render_peak = peak_memory();
-        let image = to_image(out.layers.composite())?;
+        let image = out.layers.composite();
         image.check_finite(run.method.name())?;
         let metrics = compare(&image, &converged.image, &display)?;
         rows.push(row(run, solve, &out.stats, &metrics, render_peak));

@@ -15,6 +15,14 @@ use crate::preset::Preset;
 const W: u32 = 960;
 const H: u32 = 640;
 
+/// Time against error, both on log scales.
+const AXES: figure::Axes = figure::Axes {
+    x: "wall-clock time, radiosity solve included (s)",
+    y: "relative RMSE vs converged reference (%)",
+    desc_size: 16,
+    grid: 236,
+};
+
 /// A method's colour (the same in every plot).
 fn colour(method: &str) -> RGBColor {
     match method {
@@ -54,22 +62,13 @@ pub fn plot(
     let (x0, x1) = (t0 / 1.6, t1 * 1.6);
     let (y0, y1) = (100.0 * e0 / 1.4, 100.0 * e1 * 1.4);
     figure::png(path, W, H, |root| {
-        let mut chart = ChartBuilder::on(root)
-            .caption(title, (FONT, 22))
+        let mut chart = figure::titled(root, title)
             .margin(14)
             .x_label_area_size(48)
             .y_label_area_size(64)
             .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
             .map_err(|e| e.to_string())?;
-        chart
-            .configure_mesh()
-            .x_desc("wall-clock time, radiosity solve included (s)")
-            .y_desc("relative RMSE vs converged reference (%)")
-            .label_style((FONT, 14))
-            .axis_desc_style((FONT, 16))
-            .light_line_style(RGBColor(236, 236, 236))
-            .draw()
-            .map_err(|e| e.to_string())?;
+        AXES.draw(&mut chart)?;
 
         // The reference's own noise: no error below it can be told apart.
         let floor = 100.0 * noise_floor;

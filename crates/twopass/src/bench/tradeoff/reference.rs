@@ -26,7 +26,7 @@ use twopass_trace::{Reference, ReferenceSettings, RenderSettings};
 
 use crate::context::Context;
 use crate::error::CliError;
-use crate::pipeline::{render_with_bar, to_image};
+use crate::pipeline::render_with_bar;
 
 /// Seeds of the two halves are the sweep's seed mixed with this, so no sweep run shares a
 /// sample sequence with the reference (shared samples would hide part of the error).
@@ -185,7 +185,7 @@ pub fn converged(
             &format!("reference {}/2", half + 1),
             ctx,
         )?;
-        halves.push(to_image(out.layers.composite())?);
+        halves.push(out.layers.composite());
     }
     let render_seconds = started.elapsed().as_secs_f64();
     let mean = Image::from_fn(key.width, key.height, |x, y| {

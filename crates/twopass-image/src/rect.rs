@@ -1,4 +1,5 @@
-//! Rectangles of pixels: plain data that images, sheets and errors share.
+//! Rectangles of pixels: plain data that images, sheets and errors share. Coordinates and sizes
+//! are in pixels.
 
 /// An axis-aligned rectangle of pixels: columns `x .. x + width`, rows `y .. y + height`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
