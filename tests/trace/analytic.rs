@@ -63,6 +63,7 @@ fn settings(spp: u32) -> RenderSettings {
         seed: 11,
         jitter: false,
         tile_size: 8,
+        adaptive: None,
     }
 }
 

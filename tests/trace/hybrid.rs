@@ -127,7 +127,7 @@ fn hybrid_with_a_real_solution_matches_radiosity_alone_and_the_reference() {
 }
 
 /// Relative RMS error of issue 7: sqrt(mean((x - r)^2 / (r^2 + 0.01))) over pixels and channels.
-fn relative_rmse(x: &twopass_image::Image, r: &twopass_image::Image) -> f64 {
+pub(super) fn relative_rmse(x: &twopass_image::Image, r: &twopass_image::Image) -> f64 {
     let mut sum = 0.0;
     for (a, b) in x.pixels().iter().zip(r.pixels()) {
         for c in 0..3 {

@@ -1,6 +1,7 @@
 //! Validation of twopass-trace: closed forms, the furnace, mirror and glass against exact
 //! optics, spawned rays, the hybrid invariant, determinism and non-finite samples.
 
+mod adaptive;
 mod analytic;
 mod caustics;
 mod common;

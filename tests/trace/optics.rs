@@ -22,6 +22,7 @@ fn centres() -> RenderSettings {
         seed: 1,
         jitter: false,
         tile_size: 8,
+        adaptive: None,
     }
 }
 

@@ -40,7 +40,9 @@ pub mod sampler;
 pub mod whitted;
 
 pub use film::{Layer, LayerImages, Radiance};
-pub use render::{RenderOutput, RenderProgress, RenderSettings, RenderStats, render};
+pub use render::{
+    AdaptiveSampling, RenderOutput, RenderProgress, RenderSettings, RenderStats, render,
+};
 
 pub use integrator::{Integrator, Lights, SampleState, Tally};
 pub use light_tracing::{CausticScope, LightImage, LightTracer, LightTracingSettings};

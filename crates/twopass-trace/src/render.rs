@@ -10,14 +10,15 @@ use std::time::{Duration, Instant};
 use glam::Vec2;
 use rayon::prelude::*;
 use twopass_brdf::Rgb;
+use twopass_brdf::colour::luminance;
 use twopass_scene::{Camera, Ray, Scene};
 
-use crate::film::{LayerImages, Radiance};
+use crate::film::{Layer, LayerImages, Radiance};
 use crate::integrator::{Integrator, SampleState, Tally};
 use crate::sampler::{Sampler, stratum};
 
 /// Sampling settings of a render.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RenderSettings {
     /// Camera samples per pixel (at least 1). The first floor(sqrt(n))^2 are stratified on a
     /// square grid over the pixel, the rest uniform over it.
@@ -29,6 +30,8 @@ pub struct RenderSettings {
     pub jitter: bool,
     /// Tile edge, pixels (at least 1): the unit of parallel work and of progress.
     pub tile_size: u32,
+    /// Adaptive anti-aliasing, or `None` for `samples_per_pixel` in every pixel.
+    pub adaptive: Option<AdaptiveSampling>,
 }
 
 impl Default for RenderSettings {
@@ -38,8 +41,40 @@ impl Default for RenderSettings {
             seed: 0,
             jitter: true,
             tile_size: 16,
+            adaptive: None,
         }
     }
+}
+
+/// Adaptive anti-aliasing: images of the radiosity-based methods are smooth but at edges, so
+/// every pixel first takes `base` samples, and only a pixel whose samples disagree, or whose
+/// mean disagrees with a neighbour's, is rendered again with the full
+/// [`RenderSettings::samples_per_pixel`] (its first estimate is then dropped, so each pixel's
+/// value is a mean of one stratified set). Disagreement is a luminance contrast
+/// `(max - min) / (max + min)`, free of the image's scale. Deterministic: a pixel's
+/// refinement depends on the first pass of the whole image only.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AdaptiveSampling {
+    /// Samples per pixel of the first pass (at least 1; a square number is stratified).
+    pub base: u32,
+    /// Contrast in [0, 1] above which a pixel is refined: between the luminances of its own
+    /// first-pass samples, or between its mean and any of its four neighbours' means.
+    pub contrast: f32,
+}
+
+impl Default for AdaptiveSampling {
+    fn default() -> Self {
+        Self {
+            base: 4,
+            contrast: 0.05,
+        }
+    }
+}
+
+/// Contrast `(max - min) / (max + min)` of two luminances (0 when both are 0).
+fn contrast(lo: f32, hi: f32) -> f32 {
+    let sum = hi + lo;
+    if sum > 0.0 { (hi - lo) / sum } else { 0.0 }
 }
 
 /// Progress of a render, readable from any thread while it runs (for a progress bar).
@@ -94,8 +129,11 @@ pub struct RenderStats {
     pub height: u32,
     /// Camera samples per pixel.
     pub samples_per_pixel: u32,
-    /// Camera samples taken.
+    /// Camera samples taken (with adaptive sampling, the first pass's and the refined
+    /// pixels').
     pub samples: u64,
+    /// Pixels adaptive sampling rendered again with the full samples per pixel (0 without).
+    pub refined_pixels: u64,
     /// Samples with a NaN or infinite value in any layer: counted, left out of their pixel's
     /// mean (which is over the finite samples only), never written.
     pub non_finite: u64,
@@ -130,8 +168,136 @@ struct TileResult {
     y0: u32,
     w: u32,
     pixels: Vec<Radiance>,
+    /// Per pixel, the contrast of its samples' luminances.
+    spread: Vec<f32>,
     tally: Tally,
     non_finite: u64,
+    samples: u64,
+}
+
+/// What every pixel estimate of one render shares.
+struct Pass<'a> {
+    scene: &'a Scene,
+    camera: &'a Camera,
+    integrator: &'a dyn Integrator,
+    settings: &'a RenderSettings,
+}
+
+impl Pass<'_> {
+    /// The mean of `n` camera samples of pixel (`x`, `y`) (stratified on the largest square
+    /// grid that fits, the rest uniform), and the contrast of their luminances. Non-finite
+    /// samples are counted in `non_finite` and left out.
+    fn pixel(
+        &self,
+        x: u32,
+        y: u32,
+        n: u32,
+        tally: &mut Tally,
+        non_finite: &mut u64,
+    ) -> (Radiance, f32) {
+        let index = u64::from(y) * u64::from(self.camera.width) + u64::from(x);
+        let k = n.isqrt();
+        let mut sum = Radiance::ZERO;
+        let mut finite = 0u32;
+        let (mut lo, mut hi) = (f32::INFINITY, 0.0f32);
+        for s in 0..n {
+            let mut sampler = Sampler::new(self.settings.seed, index, u64::from(s));
+            let u = if self.settings.jitter {
+                sampler.next_2d()
+            } else {
+                Vec2::splat(0.5)
+            };
+            let offset = if s < k * k { stratum(s, k, u) } else { u };
+            let pixel = Vec2::new(x as f32, y as f32) + offset;
+            let ray = Ray::new(self.camera.position, self.camera.direction(pixel));
+            let mut t = Tally::default();
+            let sample = SampleState {
+                sampler: &mut sampler,
+                tally: &mut t,
+            };
+            let l = self.integrator.radiance(self.scene, &ray, sample);
+            tally.add(t);
+            if l.is_finite() {
+                sum += l;
+                finite += 1;
+                let y = luminance(l.total()).max(0.0);
+                lo = lo.min(y);
+                hi = hi.max(y);
+            } else {
+                *non_finite += 1;
+            }
+        }
+        let mean = if finite > 0 {
+            sum * (1.0 / finite as f32)
+        } else {
+            Radiance::ZERO
+        };
+        // A finite sum of finite samples can still overflow to infinity.
+        if mean.is_finite() {
+            (mean, if finite > 1 { contrast(lo, hi) } else { 0.0 })
+        } else {
+            *non_finite += u64::from(finite);
+            (Radiance::ZERO, 0.0)
+        }
+    }
+
+    /// Renders the pixels of tile (`x0`, `y0`) for which `want(x, y)` holds with `n` samples
+    /// each (the others are left zero).
+    fn tile(&self, (x0, y0): (u32, u32), n: u32, want: impl Fn(u32, u32) -> bool) -> TileResult {
+        let tile = self.settings.tile_size.max(1);
+        let (w, h) = (
+            tile.min(self.camera.width - x0),
+            tile.min(self.camera.height - y0),
+        );
+        let mut pixels = Vec::with_capacity((w * h) as usize);
+        let mut spread = Vec::with_capacity((w * h) as usize);
+        let mut tally = Tally::default();
+        let mut non_finite = 0;
+        let mut samples = 0;
+        for y in y0..y0 + h {
+            for x in x0..x0 + w {
+                let (p, c) = if want(x, y) {
+                    samples += u64::from(n);
+                    self.pixel(x, y, n, &mut tally, &mut non_finite)
+                } else {
+                    (Radiance::ZERO, 0.0)
+                };
+                pixels.push(p);
+                spread.push(c);
+            }
+        }
+        TileResult {
+            x0,
+            y0,
+            w,
+            pixels,
+            spread,
+            tally,
+            non_finite,
+            samples,
+        }
+    }
+}
+
+/// Which pixels adaptive sampling refines: those whose own samples' contrast, or whose
+/// mean's contrast with a 4-neighbour's mean, exceeds `threshold`; row-major.
+fn refine_mask(first: &[Radiance], spread: &[f32], width: usize, threshold: f32) -> Vec<bool> {
+    let lum: Vec<f32> = first
+        .iter()
+        .map(|p| luminance(p.total()).max(0.0))
+        .collect();
+    let height = lum.len() / width.max(1);
+    (0..lum.len())
+        .map(|i| {
+            let (x, y) = (i % width, i / width);
+            let differs = |j: usize| contrast(lum[i].min(lum[j]), lum[i].max(lum[j])) > threshold;
+            spread[i] > threshold
+                || (x > 0 && differs(i - 1))
+                || (x + 1 < width && differs(i + 1))
+                || (y > 0 && differs(i - width))
+                || (y + 1 < height && differs(i + width))
+        })
+        .collect()
 }
 
 /// Renders `scene` as seen by `camera` (its resolution sets the image size) with `integrator`.
@@ -146,95 +312,84 @@ pub fn render(
     let start = Instant::now();
     let (width, height) = (camera.width, camera.height);
     let spp = settings.samples_per_pixel.max(1);
-    let k = spp.isqrt();
     let tile = settings.tile_size.max(1);
     let pixels = u64::from(width) * u64::from(height);
     let light = integrator.light_tracer();
+    let adaptive = settings
+        .adaptive
+        .map(|a| AdaptiveSampling {
+            base: a.base.clamp(1, spp),
+            ..a
+        })
+        .filter(|a| a.base < spp);
+    let passes = 1 + u64::from(light.is_some()) + u64::from(adaptive.is_some());
     progress.done.store(0, Ordering::Relaxed);
-    progress.total.store(
-        if light.is_some() { 2 * pixels } else { pixels },
-        Ordering::Relaxed,
-    );
+    progress.total.store(passes * pixels, Ordering::Relaxed);
 
     let tiles: Vec<(u32, u32)> = (0..height.div_ceil(tile))
         .flat_map(|ty| (0..width.div_ceil(tile)).map(move |tx| (tx * tile, ty * tile)))
         .collect();
-
-    let results: Vec<TileResult> = tiles
-        .par_iter()
-        .map(|&(x0, y0)| {
-            let (w, h) = (tile.min(width - x0), tile.min(height - y0));
-            let mut pixels = Vec::with_capacity((w * h) as usize);
-            let mut tally = Tally::default();
-            let mut non_finite = 0;
-            for y in y0..y0 + h {
-                for x in x0..x0 + w {
-                    let index = u64::from(y) * u64::from(width) + u64::from(x);
-                    let mut sum = Radiance::ZERO;
-                    let mut finite = 0u32;
-                    for s in 0..spp {
-                        let mut sampler = Sampler::new(settings.seed, index, u64::from(s));
-                        let u = if settings.jitter {
-                            sampler.next_2d()
-                        } else {
-                            Vec2::splat(0.5)
-                        };
-                        let offset = if s < k * k { stratum(s, k, u) } else { u };
-                        let pixel = Vec2::new(x as f32, y as f32) + offset;
-                        let ray = Ray::new(camera.position, camera.direction(pixel));
-                        let mut t = Tally::default();
-                        let sample = SampleState {
-                            sampler: &mut sampler,
-                            tally: &mut t,
-                        };
-                        let l = integrator.radiance(scene, &ray, sample);
-                        tally.add(t);
-                        if l.is_finite() {
-                            sum += l;
-                            finite += 1;
-                        } else {
-                            non_finite += 1;
-                        }
-                    }
-                    let mean = if finite > 0 {
-                        sum * (1.0 / finite as f32)
-                    } else {
-                        Radiance::ZERO
-                    };
-                    // A finite sum of finite samples can still overflow to infinity.
-                    pixels.push(if mean.is_finite() {
-                        mean
-                    } else {
-                        non_finite += u64::from(finite);
-                        Radiance::ZERO
-                    });
-                }
-            }
-            progress.done.fetch_add(u64::from(w * h), Ordering::Relaxed);
-            TileResult {
-                x0,
-                y0,
-                w,
-                pixels,
-                tally,
-                non_finite,
-            }
-        })
-        .collect();
+    let pass = Pass {
+        scene,
+        camera,
+        integrator,
+        settings,
+    };
+    let run = |n: u32, want: &(dyn Fn(u32, u32) -> bool + Sync)| -> Vec<TileResult> {
+        tiles
+            .par_iter()
+            .map(|&origin| {
+                let r = pass.tile(origin, n, want);
+                progress.add_done(r.pixels.len() as u64);
+                r
+            })
+            .collect()
+    };
 
     let mut layers = LayerImages::new(width, height);
     let mut tally = Tally::default();
     let mut non_finite = 0;
-    for t in &results {
-        tally.add(t.tally);
-        non_finite += t.non_finite;
-        for (i, p) in t.pixels.iter().enumerate() {
-            let (x, y) = (t.x0 + i as u32 % t.w, t.y0 + i as u32 / t.w);
-            let at = y as usize * width as usize + x as usize;
-            for (img, v) in layers.images.iter_mut().zip(p.layers) {
-                img.pixels_mut()[at] = v;
+    let mut samples = 0;
+    let mut spread = vec![0.0f32; pixels as usize];
+    let mut gather = |results: Vec<TileResult>,
+                      layers: &mut LayerImages,
+                      spread: &mut [f32],
+                      keep: &dyn Fn(usize) -> bool| {
+        for t in &results {
+            tally.add(t.tally);
+            non_finite += t.non_finite;
+            samples += t.samples;
+            for (i, p) in t.pixels.iter().enumerate() {
+                let (x, y) = (t.x0 + i as u32 % t.w, t.y0 + i as u32 / t.w);
+                let at = y as usize * width as usize + x as usize;
+                if !keep(at) {
+                    continue;
+                }
+                spread[at] = t.spread[i];
+                for (img, v) in layers.images.iter_mut().zip(p.layers) {
+                    img.pixels_mut()[at] = v;
+                }
             }
         }
+    };
+    let first = run(adaptive.map_or(spp, |a| a.base), &|_, _| true);
+    gather(first, &mut layers, &mut spread, &|_| true);
+    let mut refined_pixels = 0;
+    if let Some(a) = adaptive {
+        let means: Vec<Radiance> = (0..pixels as usize)
+            .map(|i| {
+                let mut r = Radiance::ZERO;
+                for (layer, img) in Layer::ALL.iter().zip(&layers.images) {
+                    r.add(*layer, img.pixels()[i]);
+                }
+                r
+            })
+            .collect();
+        let refine = refine_mask(&means, &spread, width as usize, a.contrast);
+        refined_pixels = refine.iter().filter(|&&r| r).count() as u64;
+        let at = |x: u32, y: u32| y as usize * width as usize + x as usize;
+        let second = run(spp, &|x, y| refine[at(x, y)]);
+        gather(second, &mut layers, &mut spread, &|i| refine[i]);
     }
     let mut light_paths = 0;
     if let Some(tracer) = light {
@@ -262,7 +417,8 @@ pub fn render(
             width,
             height,
             samples_per_pixel: spp,
-            samples: u64::from(width) * u64::from(height) * u64::from(spp),
+            samples,
+            refined_pixels,
             non_finite,
             rays: tally.rays,
             shadow_rays: tally.shadow_rays,

@@ -326,6 +326,7 @@ mod tests {
             height: 10,
             samples_per_pixel: 1,
             samples,
+            refined_pixels: 0,
             non_finite,
             rays: 0,
             shadow_rays: 0,

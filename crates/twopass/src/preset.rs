@@ -8,16 +8,17 @@
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
-use twopass_trace::WhittedSettings;
+use twopass_trace::{AdaptiveSampling, RenderSettings, WhittedSettings};
 
 use crate::error::CliError;
 use crate::pipeline::{MAX_DEPTH, RenderMethod};
 use crate::solve::{MAX_VISIBILITY_RAYS, SolveArgs};
 
 /// The arguments a preset sets, which conflict with `--preset`.
-pub const PRESET_SETS: [&str; 11] = [
+pub const PRESET_SETS: [&str; 12] = [
     "method",
     "spp",
+    "adaptive",
     "depth",
     "shadow_grid",
     "unshot",
@@ -39,9 +40,25 @@ pub struct RenderKnobs {
     pub depth: u32,
     /// Shadow rays per emitter and hit as an N x N grid (Whitted and the hybrids).
     pub shadow_grid: u32,
+    /// Adaptive anti-aliasing: samples per pixel of a first pass everywhere, `spp` only where
+    /// a pixel's samples or its neighbours disagree ([`twopass_trace::AdaptiveSampling`]);
+    /// absent for `spp` everywhere.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub adaptive: Option<u32>,
 }
 
 impl RenderKnobs {
+    /// The render loop's settings these knobs ask for, with the run's `seed`.
+    pub fn settings(&self, seed: u64) -> RenderSettings {
+        RenderSettings {
+            adaptive: self.adaptive.map(|base| AdaptiveSampling {
+                base,
+                ..AdaptiveSampling::default()
+            }),
+            ..crate::pipeline::render_settings(self.spp, seed)
+        }
+    }
+
     /// The Whitted-family settings these knobs ask for.
     pub fn whitted(&self) -> WhittedSettings {
         WhittedSettings {

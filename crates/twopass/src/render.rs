@@ -22,8 +22,7 @@ use crate::args::checked;
 use crate::context::Context;
 use crate::error::CliError;
 use crate::pipeline::{
-    MAX_DEPTH, RenderMethod, integrator, is_glb, radiosity, render_settings, render_with_bar,
-    to_layers,
+    MAX_DEPTH, RenderMethod, integrator, is_glb, radiosity, render_with_bar, to_layers,
 };
 use crate::plan::plan;
 use crate::preset::{PRESET_SETS, RadiosityKnobs, RenderKnobs};
@@ -46,6 +45,11 @@ pub struct RenderArgs {
     /// Samples per pixel (stratified).
     #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
     pub spp: u32,
+    /// Adaptive anti-aliasing: BASE samples per pixel everywhere first, then `--spp` only in
+    /// pixels whose samples, or whose neighbours, differ by a luminance contrast of more than
+    /// 5 % (edges, shadow boundaries, noise); the others keep their BASE-sample mean.
+    #[arg(long, value_name = "BASE", value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+    pub adaptive: Option<u32>,
     /// Recursion depth of mirror and refraction paths (Whitted and the hybrids).
     /// At most 64: the recursion holds a stack frame per bounce, and a path trapped by total
     /// internal reflection keeps its full weight, so only the depth ends it.
@@ -80,6 +84,8 @@ struct Summary {
     width: u32,
     height: u32,
     spp: u32,
+    /// Pixels adaptive anti-aliasing rendered with `spp` (the others with its first pass).
+    refined_pixels: u64,
     radiosity: Option<&'static str>,
     radiosity_seconds: f64,
     render_seconds: f64,
@@ -114,6 +120,7 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
             spp: args.spp,
             depth: args.depth,
             shadow_grid: args.shadow_grid,
+            adaptive: args.adaptive,
         },
         |p| p.render,
     );
@@ -183,7 +190,7 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
         solution.as_ref().map(|s| s.0.as_dyn()),
         knobs.whitted(),
     );
-    let settings = render_settings(knobs.spp, ctx.seed);
+    let settings = knobs.settings(ctx.seed);
     let out = render_with_bar(
         &scene,
         &camera,
@@ -220,6 +227,7 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
         width: camera.width,
         height: camera.height,
         spp: knobs.spp,
+        refined_pixels: s.refined_pixels,
         radiosity: solution.as_ref().map(|s| s.1),
         radiosity_seconds,
         render_seconds: s.elapsed.as_secs_f64(),
@@ -242,8 +250,14 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
                 summary.radiosity_seconds
             );
         }
+        let adaptive = knobs.adaptive.map_or(String::new(), |base| {
+            format!(
+                " (adaptive: {base} spp everywhere, {} pixels refined)",
+                summary.refined_pixels
+            )
+        });
         outln!(
-            "{} {} x {} at {} spp in {:.2} s ({:.2} Mrays/s, {} non-finite samples dropped)",
+            "{} {} x {} at {} spp{adaptive} in {:.2} s ({:.2} Mrays/s, {} non-finite samples dropped)",
             summary.method.name(),
             summary.width,
             summary.height,

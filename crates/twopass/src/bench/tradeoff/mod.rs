@@ -36,7 +36,7 @@ use twopass_trace::RenderStats;
 use crate::bench::memory::{mib, peak_memory, reset_peak_memory};
 use crate::context::Context;
 use crate::error::CliError;
-use crate::pipeline::{RenderMethod, integrator, load_lit, methods, render_settings};
+use crate::pipeline::{RenderMethod, integrator, load_lit, methods};
 use crate::preset::{Preset, PresetFile};
 use sweep::{RunSpec, SolveSpec, Sweep, plan_runs};
 
@@ -98,6 +98,8 @@ struct SweepRow {
     /// The knob this run varies from the base setting.
     knob: &'static str,
     spp: u32,
+    /// First-pass samples per pixel of adaptive anti-aliasing (empty: `spp` everywhere).
+    adaptive_aa: Option<u32>,
     depth: u32,
     shadow_grid: u32,
     /// Radiosity settings (empty for Whitted and the path tracer).
@@ -390,7 +392,7 @@ fn measure_runs(
             solve.map(|s| &s.1.solution as &dyn twopass_scene::DiffuseRadiance),
             run.render.whitted(),
         );
-        let settings = render_settings(run.render.spp, ctx.seed);
+        let settings = run.render.settings(ctx.seed);
         reset_peak_memory();
         bar.set_message(run.method.name());
         // One bar for the whole sweep: a second bar per render would fight it for the line.
@@ -430,6 +432,7 @@ fn row(
         method: run.method.name(),
         knob: run.knob,
         spp: run.render.spp,
+        adaptive_aa: run.render.adaptive,
         depth: run.render.depth,
         shadow_grid: run.render.shadow_grid,
         element_size: k.map(|k| k.element_size),
@@ -604,12 +607,15 @@ fn print_report(r: &TradeoffReport) -> Result<(), CliError> {
     }
     for p in &r.presets {
         outln!(
-            "preset {:<8} target {:>5.2} %{}: {} at {} spp, grid {}, depth {}{} -> {:.2} % in {:.3} s",
+            "preset {:<8} target {:>5.2} %{}: {} at {} spp{}, grid {}, depth {}{} -> {:.2} % in {:.3} s",
             p.name,
             100.0 * p.target_rel_rmse,
             if p.reached { "" } else { " (not reached)" },
             p.method.name(),
             p.render.spp,
+            p.render
+                .adaptive
+                .map_or_else(String::new, |b| format!(" (adaptive from {b})")),
             p.render.shadow_grid,
             p.render.depth,
             p.radiosity.map_or_else(String::new, |k| format!(

@@ -24,6 +24,10 @@ pub(super) struct Sweep {
     pub(super) depths: Vec<u32>,
     /// Samples per pixel crossed with the element sizes for the radiosity-based methods.
     pub(super) radiosity_spps: Vec<u32>,
+    /// First-pass samples per pixel of adaptive anti-aliasing, tried beside every
+    /// radiosity-based setting of more samples per pixel than this (element size x samples
+    /// per pixel, and the hybrids' samples x shadow grid); `None` for no adaptive runs.
+    pub(super) adaptive_base: Option<u32>,
     pub(super) reference_spps: Vec<u32>,
 }
 
@@ -36,6 +40,7 @@ impl Sweep {
                 spp: 4,
                 depth: 8,
                 shadow_grid: 2,
+                adaptive: None,
             },
             base_divisor: 24.0,
             base_unshot: 1e-3,
@@ -47,6 +52,7 @@ impl Sweep {
             shadow_grids: vec![1, 2, 4],
             depths: vec![1, 2, 4, 8],
             radiosity_spps: vec![1, 4, 16, 64],
+            adaptive_base: Some(4),
             reference_spps: vec![1, 4, 16, 64, 256, 1024, 2048],
         }
     }
@@ -59,6 +65,7 @@ impl Sweep {
                 spp: 1,
                 depth: 2,
                 shadow_grid: 1,
+                adaptive: None,
             },
             base_divisor: 8.0,
             base_unshot: 1e-2,
@@ -70,6 +77,7 @@ impl Sweep {
             shadow_grids: vec![1],
             depths: vec![2],
             radiosity_spps: vec![1],
+            adaptive_base: None,
             reference_spps: vec![1, 4],
         }
     }
@@ -183,6 +191,13 @@ pub(super) fn plan_runs(
                     for &spp in &sweep.radiosity_spps {
                         let render = RenderKnobs { spp, ..base_render };
                         push("element-size-spp", render, Some(i));
+                        if let Some(adaptive) = sweep.adaptive_base.filter(|&b| b < spp) {
+                            let render = RenderKnobs {
+                                adaptive: Some(adaptive),
+                                ..render
+                            };
+                            push("element-size-spp-adaptive", render, Some(i));
+                        }
                     }
                 }
             }
@@ -202,6 +217,14 @@ pub(super) fn plan_runs(
                     ..base_render
                 };
                 push("spp-shadow-grid", render, solve);
+                let adaptive = sweep.adaptive_base.filter(|&b| b < spp);
+                if let (Some(adaptive), true) = (adaptive, method.needs_radiosity()) {
+                    let render = RenderKnobs {
+                        adaptive: Some(adaptive),
+                        ..render
+                    };
+                    push("spp-shadow-grid-adaptive", render, solve);
+                }
             }
         }
         for &depth in &sweep.depths {
