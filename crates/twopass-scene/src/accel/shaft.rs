@@ -11,7 +11,7 @@
 //! [`SHAFT_TOLERANCE`] of the coordinates' size, above the offsets the shadow rays themselves
 //! leave their surfaces by.
 
-use glam::{DVec3, Vec3, Vec4};
+use glam::{Vec3, Vec4};
 
 use super::packet::TriPacket;
 use super::wide::WideNode;
@@ -24,9 +24,11 @@ pub const SHAFT_TOLERANCE: f32 = 2e-6;
 
 /// The tetrahedron spanned by an apex and a base triangle, set up for box and triangle tests.
 pub(super) struct Shaft {
-    /// Outward face planes `(n, d)`, moved out by the tolerance: `n . p + d > 0` is outside.
-    /// A face of a flat tetrahedron has no plane and culls nothing.
-    planes: Vec<(Vec3, f32)>,
+    /// Outward face planes `(n, d)`, moved out by the tolerance: `n . p + d > 0` is outside;
+    /// the first `count` are used. A face of a flat tetrahedron has no plane and culls
+    /// nothing.
+    planes: [(Vec3, f32); 5],
+    count: usize,
     /// Bounds of the four corners, grown by the tolerance.
     lo: Vec3,
     hi: Vec3,
@@ -46,32 +48,34 @@ impl Shaft {
             .map(|c| c.abs().max_element())
             .fold(0.0f32, f32::max);
         let eps = SHAFT_TOLERANCE * scale;
-        let c = corners.map(|p| p.as_dvec3());
-        let mut planes = Vec::with_capacity(4);
-        // Face opposite corner `o`, through the other three.
+        let mut planes = [(Vec3::ZERO, 0.0); 5];
+        let mut count = 0;
+        let mut push = |plane: (Vec3, f32)| {
+            planes[count] = plane;
+            count += 1;
+        };
+        // Face opposite corner `o`, through the other three. In f32: a plane's rounding
+        // (a few ulps of the coordinates) is far inside the tolerance it is moved out by.
         for o in 0..4 {
-            let [p, q, r] = [(o + 1) % 4, (o + 2) % 4, (o + 3) % 4].map(|i| c[i]);
-            let mut n: DVec3 = (q - p).cross(r - p);
+            let [p, q, r] = [(o + 1) % 4, (o + 2) % 4, (o + 3) % 4].map(|i| corners[i]);
+            let n = (q - p).cross(r - p);
             let len = n.length();
             if !(len.is_finite() && len > 0.0) {
                 continue;
             }
-            n /= len;
-            let side = n.dot(c[o] - p);
-            if side.abs() <= f64::from(eps) {
+            let side = n.dot(corners[o] - p);
+            if side.abs() <= eps * len {
                 // The opposite corner is (nearly) in this face's plane: flat tetrahedron.
                 continue;
             }
-            if side > 0.0 {
-                n = -n;
-            }
-            planes.push((n.as_vec3(), (-n.dot(p)) as f32 - eps));
+            let n = if side > 0.0 { -n / len } else { n / len };
+            push((n, -n.dot(p) - eps));
         }
         if let Some(n) = apex_normal {
-            let front = |p: Vec3| f64::from(n.dot(p - apex)) > f64::from(eps);
+            let front = |p: Vec3| n.dot(p - apex) > eps;
             if base.iter().all(|&p| front(p)) {
                 // Outside: behind the plane or less than the tolerance in front of it.
-                planes.push((-n, n.dot(apex) + eps));
+                push((-n, n.dot(apex) + eps));
             }
         }
         let (lo, hi) = corners.iter().fold(
@@ -80,6 +84,7 @@ impl Shaft {
         );
         Self {
             planes,
+            count,
             lo: lo - eps,
             hi: hi + eps,
             corners,
@@ -102,7 +107,7 @@ impl Shaft {
                 & max(1).cmpge(Vec4::splat(lo.y))
                 & min(2).cmple(Vec4::splat(hi.z))
                 & max(2).cmpge(Vec4::splat(lo.z));
-            for &(n, d) in &self.planes {
+            for &(n, d) in &self.planes[..self.count] {
                 // The box corner least far along `n`: outside the plane, the box is too.
                 let pick = |axis: usize| if n[axis] >= 0.0 { min(axis) } else { max(axis) };
                 let dist = pick(0) * n.x + pick(1) * n.y + pick(2) * n.z + Vec4::splat(d);
@@ -131,7 +136,7 @@ impl Shaft {
             keep &= (min.cmple(Vec4::splat(hi[axis])) & max.cmpge(Vec4::splat(lo[axis]))).bitmask();
         }
         // All three corners outside one face plane.
-        for &(n, d) in &self.planes {
+        for &(n, d) in &self.planes[..self.count] {
             let dist = |q: [Vec4; 3]| q[0] * n.x + q[1] * n.y + q[2] * n.z + Vec4::splat(d);
             let out = dist(a).cmpgt(zero) & dist(b).cmpgt(zero) & dist(c).cmpgt(zero);
             keep &= !out.bitmask();
