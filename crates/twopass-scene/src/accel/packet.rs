@@ -111,6 +111,16 @@ impl PacketRay {
         }
         let neg = e[0].cmplt(zero) | e[1].cmplt(zero) | e[2].cmplt(zero);
         let pos = e[0].cmpgt(zero) | e[1].cmpgt(zero) | e[2].cmpgt(zero);
+        if lanes & !(neg & pos).bitmask() == 0 {
+            // Every enabled lane is missed on the edge functions alone (most leaf tests): no
+            // division, no distance.
+            return PacketHits {
+                t: zero,
+                e,
+                inv_det: zero,
+                mask: 0,
+            };
+        }
         let det = e[0] + e[1] + e[2];
         let pz = pz.map(|z| z * sz);
         let t_scaled = e[0] * pz[0] + e[1] * pz[1] + e[2] * pz[2];
