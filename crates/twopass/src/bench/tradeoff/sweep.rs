@@ -16,6 +16,9 @@ pub(super) struct Sweep {
     pub(super) base_unshot: f64,
     pub(super) base_visibility: (u32, u32),
     pub(super) element_divisors: Vec<f32>,
+    /// A cheaper visibility estimate (first, most rays) crossed with every element size: on
+    /// coarse meshes the discretization error hides what fewer shadow rays cost.
+    pub(super) cheap_visibility: Option<(u32, u32)>,
     pub(super) unshots: Vec<f64>,
     pub(super) visibility: Vec<(u32, u32)>,
     /// Samples per pixel crossed with shadow grids for Whitted and the hybrids.
@@ -46,6 +49,7 @@ impl Sweep {
             base_unshot: 1e-3,
             base_visibility: (4, 16),
             element_divisors: vec![8.0, 12.0, 16.0, 24.0, 32.0, 48.0],
+            cheap_visibility: Some((1, 1)),
             unshots: vec![1e-1, 1e-2, 1e-3, 1e-4],
             visibility: vec![(1, 1), (4, 16), (16, 64)],
             spps: vec![1, 4, 16],
@@ -71,6 +75,7 @@ impl Sweep {
             base_unshot: 1e-2,
             base_visibility: (1, 4),
             element_divisors: vec![4.0, 8.0],
+            cheap_visibility: None,
             unshots: vec![1e-1, 1e-2],
             visibility: vec![(1, 4)],
             spps: vec![1, 2],
@@ -145,6 +150,14 @@ pub(super) fn plan_runs(
             knobs(sweep.base_divisor, sweep.base_unshot, v, true),
         );
     }
+    if let Some(v) = sweep.cheap_visibility {
+        for &d in &sweep.element_divisors {
+            add(
+                "element-size-visibility",
+                knobs(d, sweep.base_unshot, v, true),
+            );
+        }
+    }
     add(
         "adaptive",
         knobs(
@@ -187,7 +200,13 @@ pub(super) fn plan_runs(
                 push(s.knob, base_render, Some(i));
             }
             for (i, s) in solves.iter().enumerate() {
-                if matches!(s.knob, "base" | "element-size") {
+                let k = &s.knobs;
+                let visibility = (k.visibility_min, k.visibility_max);
+                let crossed = k.unshot == sweep.base_unshot
+                    && k.adaptive
+                    && (visibility == sweep.base_visibility
+                        || Some(visibility) == sweep.cheap_visibility);
+                if crossed {
                     for &spp in &sweep.radiosity_spps {
                         let render = RenderKnobs { spp, ..base_render };
                         push("element-size-spp", render, Some(i));
