@@ -36,6 +36,22 @@ fn lambert(name: &str, rho: f64) -> String {
     format!("[[material]]\nname = \"{name}\"\ntype = \"lambert\"\ndiffuse = {rho}\n")
 }
 
+/// Options of a fixed mesh (no adaptive subdivision) of shooting patches of `patch` and
+/// receiving elements of `element` (longest edges, scene units), solved down to an unshot
+/// fraction of `unshot`.
+fn fixed_mesh(patch: f32, element: f32, unshot: f64) -> Options {
+    Options {
+        patch_size: Some(patch),
+        element_size: Some(element),
+        adaptive: None,
+        stop: Stop {
+            unshot_fraction: unshot,
+            ..Stop::default()
+        },
+        ..Options::default()
+    }
+}
+
 /// Runs progressive refinement to its stop criteria and checks the energy balance.
 pub(crate) fn run(solver: &mut Progressive<'_>) {
     solver.run(|_| ControlFlow::Continue(()));
@@ -198,17 +214,7 @@ fn closed_cube_rows_sum_to_one() {
 fn furnace_converges_to_e_over_one_minus_rho() {
     for rho in [0.0, 0.5, 0.9, 0.99] {
         let s = cube(rho, 1.0);
-        let options = Options {
-            patch_size: Some(1.0),
-            element_size: Some(0.5),
-            adaptive: None,
-            stop: Stop {
-                unshot_fraction: 1e-6,
-                ..Stop::default()
-            },
-            ..Options::default()
-        };
-        let mut solver = Progressive::new(&s, options).unwrap();
+        let mut solver = Progressive::new(&s, fixed_mesh(1.0, 0.5, 1e-6)).unwrap();
         run(&mut solver);
         let expected = std::f64::consts::PI / (1.0 - rho); // E = pi L_e with L_e = 1
         for (v, b) in solver.vertex_radiosity().iter().enumerate() {
@@ -231,17 +237,7 @@ fn furnace_converges_to_e_over_one_minus_rho() {
 #[test]
 fn ambient_term_makes_partial_solutions_plausible() {
     let s = cube(0.9, 1.0);
-    let options = Options {
-        patch_size: Some(1.0),
-        element_size: Some(0.5),
-        adaptive: None,
-        stop: Stop {
-            unshot_fraction: 0.3,
-            ..Stop::default()
-        },
-        ..Options::default()
-    };
-    let mut solver = Progressive::new(&s, options).unwrap();
+    let mut solver = Progressive::new(&s, fixed_mesh(1.0, 0.5, 0.3)).unwrap();
     run(&mut solver);
     let expected = std::f32::consts::PI / 0.1;
     let sol = solver.solution();
@@ -598,52 +594,24 @@ fn cancelled_solves_give_usable_intermediate_solutions() {
 #[test]
 fn shaft_culling_changes_nothing_but_the_rays_cast() {
     let m = lambert("w", 0.7);
-    let objects = [
-        quad(
-            "floor",
-            "w",
-            [0.0, 0.0, 0.0],
-            [0.0, 0.0, 1.0],
-            [1.0, 0.0, 0.0],
-            None,
-        ),
-        quad(
-            "light",
-            "w",
-            [0.3, 1.0, 0.3],
-            [0.4, 0.0, 0.0],
-            [0.0, 0.0, 0.4],
-            Some(1.0),
-        ),
-        quad(
-            "blocker",
-            "w",
-            [0.4, 0.5, 0.4],
-            [0.2, 0.0, 0.0],
-            [0.0, 0.0, 0.2],
-            None,
-        ),
-        quad(
-            "wall",
-            "w",
-            [0.0, 0.1, 1.2],
-            [0.0, 0.8, 0.0],
-            [1.0, 0.0, 0.0],
-            None,
-        ),
-    ]
-    .concat();
+    let names = ["floor", "light", "blocker", "wall"];
+    // (origin, edge u, edge v) of each; the light emits.
+    let geometry = [
+        ([0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]),
+        ([0.3, 1.0, 0.3], [0.4, 0.0, 0.0], [0.0, 0.0, 0.4]),
+        ([0.4, 0.5, 0.4], [0.2, 0.0, 0.0], [0.0, 0.0, 0.2]),
+        ([0.0, 0.1, 1.2], [0.0, 0.8, 0.0], [1.0, 0.0, 0.0]),
+    ];
+    let objects: String = names
+        .iter()
+        .zip(geometry)
+        .map(|(&name, (o, u, v))| quad(name, "w", o, u, v, (name == "light").then_some(1.0)))
+        .collect();
     let s = scene(&objects, &m);
     let solve = |shaft_culling: bool| {
         let options = Options {
-            patch_size: Some(0.25),
-            element_size: Some(0.1),
             shaft_culling,
-            stop: Stop {
-                unshot_fraction: 1e-4,
-                ..Stop::default()
-            },
-            ..Options::default()
+            ..fixed_mesh(0.25, 0.1, 1e-4)
         };
         let mut solver = Progressive::new(&s, options).unwrap();
         run(&mut solver);
