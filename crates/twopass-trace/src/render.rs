@@ -13,7 +13,7 @@ use twopass_brdf::Rgb;
 use twopass_brdf::colour::luminance;
 use twopass_scene::{Camera, Ray, Scene};
 
-use crate::film::{Layer, LayerImages, Radiance};
+use crate::film::{LayerImages, Radiance};
 use crate::integrator::{Integrator, SampleState, Tally};
 use crate::sampler::{Sampler, stratum};
 
@@ -279,13 +279,11 @@ impl Pass<'_> {
     }
 }
 
-/// Which pixels adaptive sampling refines: those whose own samples' contrast, or whose
-/// mean's contrast with a 4-neighbour's mean, exceeds `threshold`; row-major.
-fn refine_mask(first: &[Radiance], spread: &[f32], width: usize, threshold: f32) -> Vec<bool> {
-    let lum: Vec<f32> = first
-        .iter()
-        .map(|p| luminance(p.total()).max(0.0))
-        .collect();
+/// Which pixels adaptive sampling refines, given the first pass's image `first`: those whose
+/// own samples' contrast, or whose mean's contrast with a 4-neighbour's mean, exceeds
+/// `threshold`; row-major.
+fn refine_mask(first: &[Rgb], spread: &[f32], width: usize, threshold: f32) -> Vec<bool> {
+    let lum: Vec<f32> = first.iter().map(|p| luminance(*p).max(0.0)).collect();
     let height = lum.len() / width.max(1);
     (0..lum.len())
         .map(|i| {
@@ -376,16 +374,8 @@ pub fn render(
     gather(first, &mut layers, &mut spread, &|_| true);
     let mut refined_pixels = 0;
     if let Some(a) = adaptive {
-        let means: Vec<Radiance> = (0..pixels as usize)
-            .map(|i| {
-                let mut r = Radiance::ZERO;
-                for (layer, img) in Layer::ALL.iter().zip(&layers.images) {
-                    r.add(*layer, img.pixels()[i]);
-                }
-                r
-            })
-            .collect();
-        let refine = refine_mask(&means, &spread, width as usize, a.contrast);
+        let first_image = layers.composite();
+        let refine = refine_mask(first_image.pixels(), &spread, width as usize, a.contrast);
         refined_pixels = refine.iter().filter(|&&r| r).count() as u64;
         let at = |x: u32, y: u32| y as usize * width as usize + x as usize;
         let second = run(spp, &|x, y| refine[at(x, y)]);
