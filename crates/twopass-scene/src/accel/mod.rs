@@ -125,19 +125,12 @@ impl Accel {
                 }
                 let first = (n.primitive_base_idx + u32::from(meta & 0x1f)) as usize;
                 let count = (meta >> 5).count_ones() as usize;
-                let slots = first..first + count;
-                let tris: Vec<[Vec3A; 3]> = cwbvh.primitive_indices[slots.clone()]
-                    .iter()
-                    .map(|&i| corners[i as usize])
-                    .collect();
+                let leaf = &cwbvh.primitive_indices[first..first + count];
+                let tris: Vec<[Vec3A; 3]> = leaf.iter().map(|&i| corners[i as usize]).collect();
                 packet_of_slot[first] = packets.len() as u32;
                 packets.push(TriPacket::new(&tris));
-                ids.extend((0..4).map(|lane| {
-                    cwbvh.primitive_indices[slots.clone()]
-                        .get(lane)
-                        .copied()
-                        .unwrap_or(u32::MAX)
-                }));
+                // Unused lanes name no triangle (they are never enabled).
+                ids.extend((0..4).map(|lane| leaf.get(lane).copied().unwrap_or(u32::MAX)));
             }
         }
         let bvh = WideBvh::new(&cwbvh, |slot| packet_of_slot[slot as usize]);

@@ -112,7 +112,7 @@ impl WideNode {
     /// The children hit by `ray` within `[0, t_max]` (bit `c` for child `c`) and each child's
     /// entry distance.
     #[inline(always)]
-    fn intersect(&self, ray: &NodeRay, t_max: f32) -> (u32, [Vec4; 2]) {
+    fn intersect(&self, ray: &NodeRay, t_max: f32) -> (u32, [f32; 8]) {
         let b = &self.bounds;
         let t_max = Vec4::splat(t_max);
         let mut mask = 0u32;
@@ -134,7 +134,10 @@ impl WideNode {
             mask |= t_near.cmple(t_far).bitmask() << (4 * half);
             *near = t_near;
         }
-        (mask, near)
+        let mut entry = [0.0; 8];
+        near[0].write_to_slice(&mut entry[..4]);
+        near[1].write_to_slice(&mut entry[4..]);
+        (mask, entry)
     }
 }
 
@@ -178,7 +181,8 @@ impl WideBvh {
     /// Visits the leaves `ray` reaches within `t_max`, calling `leaf(packet, lanes, t_max)`;
     /// the call may shorten `t_max` (a closer hit), and returns `true` to stop the walk. With
     /// `ordered`, inner children are visited nearest first and a pushed child is skipped once
-    /// `t_max` is below its entry distance (closest hit); without, in slot order (any hit).
+    /// `t_max` is below its entry distance (closest hit); without, in obvhs's octant order
+    /// (any hit: no distances to sort or compare).
     #[inline(always)]
     pub(super) fn walk(
         &self,
@@ -242,12 +246,6 @@ impl WideBvh {
         loop {
             let n = &self.nodes[node as usize];
             let (hit, near) = n.intersect(ray, *t_max);
-            let near: [f32; 8] = {
-                let mut a = [0.0; 8];
-                near[0].write_to_slice(&mut a[..4]);
-                near[1].write_to_slice(&mut a[4..]);
-                a
-            };
             let mut leaves = hit & u32::from(n.leaf);
             while leaves != 0 {
                 let c = leaves.trailing_zeros() as usize;
