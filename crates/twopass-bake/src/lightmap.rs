@@ -35,6 +35,7 @@ use glam::{Vec2, Vec3};
 use gltf_json as json;
 use rayon::prelude::*;
 use serde::Serialize;
+use smart_default::SmartDefault;
 use twopass_brdf::Rgb;
 use twopass_composite::tonemap::{quantize, srgb_encode};
 use twopass_composite::{Image, Rgb8Image};
@@ -52,22 +53,15 @@ pub const COPLANAR_COS: f32 = 0.9999;
 pub const MAX_LIGHTMAP_SIDE: u32 = 8192;
 
 /// How to lay out and fill a lightmap.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(SmartDefault, Debug, Clone, Copy, PartialEq)]
 pub struct LightmapSettings {
     /// Edge of one texel on the surface, scene units (finite, > 0).
+    #[default(1.0)]
     pub texel_size: f32,
     /// Border around every chart, texels, filled by dilation (at least 1; 2 keeps bilinear
     /// filtering and the first mip level inside the chart).
+    #[default(2)]
     pub padding: u32,
-}
-
-impl Default for LightmapSettings {
-    fn default() -> Self {
-        Self {
-            texel_size: 1.0,
-            padding: 2,
-        }
-    }
 }
 
 /// A baked lightmap and the user-mesh glTF that shows it.

@@ -6,6 +6,8 @@
 //! row of false-colour differences against the reference) with one exposure and one error
 //! scale, and returns the metrics it printed.
 
+use smart_default::SmartDefault;
+
 use crate::error::Result;
 use crate::false_colour::{ErrorKind, ErrorMap, Palette, Scale};
 use crate::image::{Image, Rect, Rgb8Image};
@@ -308,38 +310,29 @@ pub struct Entry<'a> {
 }
 
 /// Choices for [`comparison`].
-#[derive(Clone, Debug, PartialEq)]
+#[derive(SmartDefault, Clone, Debug, PartialEq)]
 pub struct ComparisonOptions {
     /// The tone map of every render panel; `None` means [`ToneMap::auto_default`] on the
     /// reference, with `curve`.
     pub tone_map: Option<ToneMap>,
     /// The curve used with the automatic exposure.
+    #[default(Curve::Clip)]
     pub curve: Curve,
     /// The error shown in the difference row.
+    #[default(ErrorKind::Relative)]
     pub error: ErrorKind,
     /// Its colour map.
+    #[default(Palette::Viridis)]
     pub palette: Palette,
     /// The colour scale runs from 0 to this percentile of the largest error map (see
     /// [`Scale::shared`]); `None` for a fixed scale in `scale_max`.
+    #[default(Some(0.99))]
     pub scale_percentile: Option<f32>,
     /// Top of a fixed colour scale, used when `scale_percentile` is `None`.
+    #[default(1.0)]
     pub scale_max: f32,
     /// Sheet title.
     pub title: Option<String>,
-}
-
-impl Default for ComparisonOptions {
-    fn default() -> Self {
-        Self {
-            tone_map: None,
-            curve: Curve::Clip,
-            error: ErrorKind::Relative,
-            palette: Palette::Viridis,
-            scale_percentile: Some(0.99),
-            scale_max: 1.0,
-            title: None,
-        }
-    }
 }
 
 /// A drawn comparison sheet and the numbers behind it.

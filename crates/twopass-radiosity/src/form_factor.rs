@@ -5,6 +5,7 @@
 use std::f64::consts::PI;
 
 use glam::{DVec3, Vec2, Vec3};
+use smart_default::SmartDefault;
 use twopass_scene::{Scene, SurfacePoint};
 
 /// Relative distance (height over distance) under which a point counts as lying in a plane:
@@ -80,18 +81,14 @@ pub fn point_to_polygon(x: DVec3, n: DVec3, poly: &[DVec3], shooter_normal: Opti
 }
 
 /// How many shadow rays a visibility estimate may use.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(SmartDefault, Debug, Clone, Copy, PartialEq, Eq)]
 pub struct VisibilityRays {
     /// Rays of the first, coarse estimate (rounded to a square number), at least 1.
+    #[default(4)]
     pub min: u32,
     /// Rays when the coarse estimate is partial or the receiver is close (square), >= `min`.
+    #[default(16)]
     pub max: u32,
-}
-
-impl Default for VisibilityRays {
-    fn default() -> Self {
-        Self { min: 4, max: 16 }
-    }
 }
 
 /// `MIN,MAX`, as the command line writes it (`4,16`).

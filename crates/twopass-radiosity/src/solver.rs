@@ -7,6 +7,7 @@ use std::ops::ControlFlow;
 use std::time::{Duration, Instant};
 
 use glam::DVec3;
+use smart_default::SmartDefault;
 use twopass_scene::Scene;
 
 use crate::element::ElementMesh;
@@ -17,12 +18,13 @@ use crate::solution::Solution;
 use crate::specular::SpecularTransfer;
 
 /// When the solver stops. The first criterion met ends the solve.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(SmartDefault, Debug, Clone, Copy, PartialEq)]
 pub struct Stop {
     /// The convergence measure both solvers stop on: the residual power (light received and
     /// reflected but not yet passed on: the unshot power of progressive refinement, the change
     /// of the last gather iteration of the hierarchical solver) as a fraction of the emitted
     /// power (sums over channels), default 1e-3.
+    #[default(1e-3)]
     pub unshot_fraction: f64,
     /// Most shots (progressive) or gather iterations (hierarchical) in all, if set.
     pub max_shots: Option<u64>,
@@ -30,98 +32,67 @@ pub struct Stop {
     pub time_budget: Option<Duration>,
 }
 
-impl Default for Stop {
-    fn default() -> Self {
-        Self {
-            unshot_fraction: 1e-3,
-            max_shots: None,
-            time_budget: None,
-        }
-    }
-}
-
 /// Adaptive subdivision of elements where the radiosity changes fast.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(SmartDefault, Debug, Clone, Copy, PartialEq)]
 pub struct Adaptive {
     /// Split an element when its vertices' luminances differ by more than this fraction of
     /// the scene's mean luminance.
+    #[default(0.2)]
     pub threshold: f32,
     /// Never split an element whose longest edge is shorter than twice this (scene units);
     /// `None`: an eighth of the element size.
     pub min_element_size: Option<f32>,
     /// Refinement rounds, each followed by shooting down to `at_unshot_fraction`.
+    #[default(3)]
     pub rounds: u32,
     /// Unshot fraction at which each round looks at the solution.
+    #[default(1e-2)]
     pub at_unshot_fraction: f64,
-}
-
-impl Default for Adaptive {
-    fn default() -> Self {
-        Self {
-            threshold: 0.2,
-            min_element_size: None,
-            rounds: 3,
-            at_unshot_fraction: 1e-2,
-        }
-    }
 }
 
 /// Everything the solver can be told. Defaults suit the Cornell box; sizes default to
 /// fractions of the scene's bounding-box diagonal.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(SmartDefault, Debug, Clone, PartialEq)]
 pub struct Options {
     /// Longest patch edge (shooters), scene units; default diagonal / 8.
     pub patch_size: Option<f32>,
     /// Longest element edge (receivers) before adaptive subdivision; default diagonal / 24.
     pub element_size: Option<f32>,
     /// Adaptive subdivision, or `None` for a fixed mesh.
+    #[default(Some(Adaptive::default()))]
     pub adaptive: Option<Adaptive>,
     /// Shadow rays per visibility estimate.
     pub visibility: VisibilityRays,
     /// Measure visibility with shadow rays; `false` treats every pair as unoccluded (exact only
     /// for scenes where no surface hides another, such as one convex room).
+    #[default(true)]
     pub occlusion: bool,
     /// Skip the shadow rays between a receiver and a shooter that nothing in the scene can
     /// come between (shaft culling, progressive refinement): their visibility is 1. Off, every
     /// pair casts its rays, as a check and to measure what culling saves.
+    #[default(true)]
     pub shaft_culling: bool,
     /// Stop criteria.
     pub stop: Stop,
     /// Seed of the visibility sampling.
     pub seed: u64,
     /// Memory allowed for cached vertex-to-patch form factors, bytes (default 1 GiB).
+    #[default(1 << 30)]
     pub cache_bytes: usize,
     /// Which solver runs.
+    #[default(Method::Auto)]
     pub method: Method,
     /// Settings of the hierarchical solver.
     pub hierarchical: Hierarchical,
     /// Memory the solve may take, bytes (default 16 GiB): a mesh or link structure estimated
     /// to need more is refused before it is built ([`SolveError::TooLarge`]), and the
     /// hierarchical solver stops refining links when it reaches it.
+    #[default(16 << 30)]
     pub memory_limit: u64,
     /// Light carried through mirrors and glass onto diffuse surfaces (both solvers), or `None`
     /// to treat specular objects as absorbers. It runs only where [`crate::specular::decide`] says the scene needs it.
+    #[default(Some(SpecularTransfer::default()))]
     pub specular: Option<SpecularTransfer>,
-}
-
-impl Default for Options {
-    fn default() -> Self {
-        Self {
-            patch_size: None,
-            element_size: None,
-            adaptive: Some(Adaptive::default()),
-            visibility: VisibilityRays::default(),
-            occlusion: true,
-            shaft_culling: true,
-            stop: Stop::default(),
-            seed: 0,
-            cache_bytes: 1 << 30,
-            method: Method::Auto,
-            hierarchical: Hierarchical::default(),
-            memory_limit: 16 << 30,
-            specular: Some(SpecularTransfer::default()),
-        }
-    }
 }
 
 /// Why a solve cannot start.
@@ -474,23 +445,15 @@ pub(crate) fn participating(scene: &Scene) -> Vec<bool> {
 }
 
 /// Settings of the hierarchical solver.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(SmartDefault, Debug, Clone, Copy, PartialEq)]
 pub struct Hierarchical {
     /// A link is refined while its estimated transport error, in power, exceeds this fraction
     /// of the emitted power (luminance), default 2e-5: the BF refinement oracle.
+    #[default(2e-5)]
     pub link_tolerance: f64,
     /// Elements are not split below this longest edge, scene units; default the scene's
     /// diagonal / 200.
     pub min_element_size: Option<f32>,
-}
-
-impl Default for Hierarchical {
-    fn default() -> Self {
-        Self {
-            link_tolerance: 2e-5,
-            min_element_size: None,
-        }
-    }
 }
 
 /// A radiosity solve of a scene by the method [`Options::method`] names: one interface for

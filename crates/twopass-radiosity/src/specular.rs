@@ -25,6 +25,7 @@
 
 use glam::{DVec3, Vec2, Vec3};
 use rayon::prelude::*;
+use smart_default::SmartDefault;
 use twopass_brdf::frame::Frame;
 use twopass_brdf::random::{SplitMix64, hash, unit_f32, unit_f64};
 
@@ -35,15 +36,17 @@ use twopass_scene::{Scene, SpecularTargets, SurfacePoint};
 use crate::element::ElementMesh;
 
 /// Settings of the specular transfer ([`crate::Options::specular`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(SmartDefault, Debug, Clone, Copy, PartialEq, Eq)]
 pub struct SpecularTransfer {
     /// Rays a shot of the whole emitted power casts toward the specular objects (progressive
     /// refinement; the hierarchical solver spreads as many over the leaves whose exitance grew
     /// since it last shot, in proportion to that growth); a shot of a
     /// fraction of it casts that fraction (at least [`SpecularTransfer::MIN_RAYS`]), so every
     /// ray carries about the same power. Rounded up to a square number per shot.
+    #[default(1 << 20)]
     pub rays: u32,
     /// Most delta bounces a ray follows (reflections and refractions) before it is dropped.
+    #[default(16)]
     pub max_depth: u32,
 }
 
@@ -52,15 +55,6 @@ impl SpecularTransfer {
     pub const MIN_RAYS: u32 = 16;
     /// Most rays one shot may cast (a 2048 x 2048 grid).
     pub const MAX_RAYS: u32 = 1 << 22;
-}
-
-impl Default for SpecularTransfer {
-    fn default() -> Self {
-        Self {
-            rays: 1 << 20,
-            max_depth: 16,
-        }
-    }
 }
 
 /// Probe rays cast from the specular surfaces by [`decide`].

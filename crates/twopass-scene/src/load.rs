@@ -383,30 +383,31 @@ impl Loader {
         };
         let built = match desc {
             MaterialDesc::Lambert { diffuse, .. } => Material::lambert(rgb(*diffuse)),
+            // Bound by their symbols in the text: rho, k_s, k_a, n.
             MaterialDesc::Phong {
-                diffuse,
-                specular,
-                exponent,
-                ambient,
+                diffuse: rho,
+                specular: ks,
+                ambient: ka,
+                exponent: n,
                 normalized,
                 ..
             } => Material::phong(PhongParams {
-                diffuse: rgb(*diffuse),
-                specular: rgb(*specular),
-                exponent: *exponent,
-                ambient: ambient.map_or(rgb(*diffuse), rgb),
+                ambient: ka.map_or(rgb(*rho), rgb),
+                diffuse: rgb(*rho),
+                specular: rgb(*ks),
+                exponent: *n,
                 normalized: *normalized,
             }),
             MaterialDesc::BlinnPhong {
-                diffuse,
-                specular,
-                exponent,
+                diffuse: rho,
+                specular: ks,
+                exponent: n,
                 normalized,
                 ..
             } => Material::blinn_phong(BlinnPhongParams {
-                diffuse: rgb(*diffuse),
-                specular: rgb(*specular),
-                exponent: *exponent,
+                diffuse: rgb(*rho),
+                specular: rgb(*ks),
+                exponent: *n,
                 normalized: *normalized,
             }),
             MaterialDesc::CookTorrance {

@@ -29,6 +29,7 @@
 //! easily. A scene without a delta surface has no such path and renders exactly as before.
 
 use glam::Vec3;
+use smart_default::SmartDefault;
 use twopass_brdf::{BrdfSample, Material, Rgb, SampleKind};
 use twopass_scene::{Hit, Ray, Scene, SurfacePoint};
 
@@ -38,14 +39,17 @@ use crate::light_tracing::{CausticScope, LightTracer, LightTracingSettings};
 use crate::sampler::Sampler;
 
 /// Path length settings of the reference path tracer.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(SmartDefault, Debug, Clone, Copy, PartialEq, Eq)]
 pub struct ReferenceSettings {
     /// Longest path, in surface vertices (the camera hit is vertex 1).
+    #[default(64)]
     pub max_depth: u32,
     /// Path length (vertices) from which Russian roulette may end a path; survival probability
     /// is the largest channel of the throughput, capped at 1.
+    #[default(3)]
     pub roulette_depth: u32,
     /// Which strategy counts the caustic paths E (D|G) ... S+ L.
+    #[default(Caustics::LightTracing)]
     pub caustics: Caustics,
 }
 
@@ -57,16 +61,6 @@ pub enum Caustics {
     PathTracing,
     /// A light tracing pass that the render loop adds (see the module documentation).
     LightTracing,
-}
-
-impl Default for ReferenceSettings {
-    fn default() -> Self {
-        Self {
-            max_depth: 64,
-            roulette_depth: 3,
-            caustics: Caustics::LightTracing,
-        }
-    }
 }
 
 /// The reference path tracer for one scene (it precomputes the emitter choice).

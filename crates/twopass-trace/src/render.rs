@@ -9,6 +9,7 @@ use std::time::{Duration, Instant};
 
 use glam::Vec2;
 use rayon::prelude::*;
+use smart_default::SmartDefault;
 use twopass_brdf::Rgb;
 use twopass_brdf::colour::luminance;
 use twopass_scene::{Camera, Ray, Scene};
@@ -18,32 +19,23 @@ use crate::integrator::{Integrator, SampleState, Tally};
 use crate::sampler::{Sampler, stratum};
 
 /// Sampling settings of a render.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(SmartDefault, Debug, Clone, Copy, PartialEq)]
 pub struct RenderSettings {
     /// Camera samples per pixel (at least 1). The first floor(sqrt(n))^2 are stratified on a
     /// square grid over the pixel, the rest uniform over it.
+    #[default(16)]
     pub samples_per_pixel: u32,
     /// Seed of every random stream.
     pub seed: u64,
     /// Jitter the camera samples within their strata (`false`: stratum centres, and the pixel
     /// centre for the unstratified rest: regular supersampling, exactly reproducible geometry).
+    #[default(true)]
     pub jitter: bool,
     /// Tile edge, pixels (at least 1): the unit of parallel work and of progress.
+    #[default(16)]
     pub tile_size: u32,
     /// Adaptive anti-aliasing, or `None` for `samples_per_pixel` in every pixel.
     pub adaptive: Option<AdaptiveSampling>,
-}
-
-impl Default for RenderSettings {
-    fn default() -> Self {
-        Self {
-            samples_per_pixel: 16,
-            seed: 0,
-            jitter: true,
-            tile_size: 16,
-            adaptive: None,
-        }
-    }
 }
 
 /// Adaptive anti-aliasing: images of the radiosity-based methods are smooth but at edges, so
@@ -53,22 +45,15 @@ impl Default for RenderSettings {
 /// value is a mean of one stratified set). Disagreement is a luminance contrast
 /// `(max - min) / (max + min)`, free of the image's scale. Deterministic: a pixel's
 /// refinement depends on the first pass of the whole image only.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(SmartDefault, Debug, Clone, Copy, PartialEq)]
 pub struct AdaptiveSampling {
     /// Samples per pixel of the first pass (at least 1; a square number is stratified).
+    #[default(4)]
     pub base: u32,
     /// Contrast in [0, 1] above which a pixel is refined: between the luminances of its own
     /// first-pass samples, or between its mean and any of its four neighbours' means.
+    #[default(0.05)]
     pub contrast: f32,
-}
-
-impl Default for AdaptiveSampling {
-    fn default() -> Self {
-        Self {
-            base: 4,
-            contrast: 0.05,
-        }
-    }
 }
 
 /// Contrast `(max - min) / (max + min)` of two luminances (0 when both are 0).

@@ -16,6 +16,7 @@
 //! | `shadow_grid` | samples per axis | 4 | shadow rays per emitter per shading point: grid^2 |
 //! | `caustic_paths` | light paths per camera sample | 1 | the hybrids' per-pixel focused caustics ([`crate::hybrid`]); 0: off |
 
+use smart_default::SmartDefault;
 use twopass_brdf::Rgb;
 use twopass_scene::{Ray, Scene};
 
@@ -28,31 +29,24 @@ use crate::light_tracing::LightTracer;
 use crate::sampler::Sampler;
 
 /// Recursion and shadow-ray settings of the Whitted-family tracers.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(SmartDefault, Debug, Clone, Copy, PartialEq)]
 pub struct WhittedSettings {
     /// Largest number of delta bounces (reflection or refraction) after the camera hit.
+    #[default(8)]
     pub max_depth: u32,
     /// Smallest throughput (largest channel of the product of delta weights, dimensionless)
     /// for which a reflection or refraction ray is still traced.
+    #[default(1e-3)]
     pub min_throughput: f32,
     /// Shadow rays per emitter and shading point along each axis of the stratification grid
     /// (`shadow_grid`^2 rays; at least 1).
+    #[default(4)]
     pub shadow_grid: u32,
     /// Light paths per camera sample of the hybrids' per-pixel focused caustics (light through
     /// glass, [`crate::light_tracing::CausticScope::Focused`]); 0 turns them off. Used only when
     /// the scene has a refracting surface and the solution separates that light.
+    #[default(1.0)]
     pub caustic_paths: f32,
-}
-
-impl Default for WhittedSettings {
-    fn default() -> Self {
-        Self {
-            max_depth: 8,
-            min_throughput: 1e-3,
-            shadow_grid: 4,
-            caustic_paths: 1.0,
-        }
-    }
 }
 
 /// A Whitted-family ray tracer: camera rays, local models against emitters, delta lobes

@@ -295,48 +295,24 @@ fn plot_models() -> Result<Vec<(&'static str, &'static str, BrdfModel)>, CliErro
     let e = |e: ParamError| CliError::Input(format!("built-in plot parameters: {e}"));
     let gold =
         ComplexIor::conductor("gold").ok_or(CliError::Input("no gold in the table".into()))?;
-    Ok(vec![
-        (
-            "lambert.png",
-            "Lambert, rho 0.8",
-            material_model(Material::lambert(Rgb::splat(0.8)).map_err(e)?).map_err(e)?,
-        ),
-        (
-            "phong.png",
-            "Phong as published, rho 0.2, ks 0.8, n 10",
-            phong(0.2, 0.8, 10.0, false).map_err(e)?,
-        ),
-        (
-            "modified_phong.png",
-            "Modified Phong, rho 0.2, ks 0.8, n 10",
-            phong(0.2, 0.8, 10.0, true).map_err(e)?,
-        ),
-        (
-            "blinn_phong.png",
-            "Blinn-Phong classic, rho 0.2, ks 0.8, n' 40",
-            blinn(0.2, 0.8, 40.0, false).map_err(e)?,
-        ),
-        (
-            "blinn_phong_normalized.png",
-            "Blinn-Phong normalized, rho 0.2, ks 0.8, n' 40",
-            blinn(0.2, 0.8, 40.0, true).map_err(e)?,
-        ),
-        (
-            "cook_torrance_gold.png",
-            "Cook-Torrance, gold, m 0.2",
-            cook(0.2, gold, FresnelModel::Exact).map_err(e)?,
-        ),
-        (
-            "cook_torrance_glass.png",
-            "Cook-Torrance, glass 1.5, m 0.5",
-            cook(
-                0.5,
-                ComplexIor::dielectric(1.5).map_err(e)?,
-                FresnelModel::Exact,
-            )
-            .map_err(e)?,
-        ),
-    ])
+    let glass = ComplexIor::dielectric(1.5).map_err(e)?;
+    let lambert = Material::lambert(Rgb::splat(0.8)).and_then(material_model);
+    use FresnelModel::Exact;
+    // One row per plot: file, title, model.
+    #[rustfmt::skip]
+    let models = [
+        ("lambert.png", "Lambert, rho 0.8", lambert),
+        ("phong.png", "Phong as published, rho 0.2, ks 0.8, n 10", phong(0.2, 0.8, 10.0, false)),
+        ("modified_phong.png", "Modified Phong, rho 0.2, ks 0.8, n 10", phong(0.2, 0.8, 10.0, true)),
+        ("blinn_phong.png", "Blinn-Phong classic, rho 0.2, ks 0.8, n' 40", blinn(0.2, 0.8, 40.0, false)),
+        ("blinn_phong_normalized.png", "Blinn-Phong normalized, rho 0.2, ks 0.8, n' 40", blinn(0.2, 0.8, 40.0, true)),
+        ("cook_torrance_gold.png", "Cook-Torrance, gold, m 0.2", cook(0.2, gold, Exact)),
+        ("cook_torrance_glass.png", "Cook-Torrance, glass 1.5, m 0.5", cook(0.5, glass, Exact)),
+    ];
+    models
+        .into_iter()
+        .map(|(file, title, model)| Ok((file, title, model.map_err(e)?)))
+        .collect()
 }
 
 /// The polar plot's axes: the lobe's extent across and up, scaled to its peak.

@@ -70,47 +70,22 @@ fn run(name: &str, model: &BrdfModel, wo: Vec3, tests: usize) {
 /// Every sampled lobe, each with 1e6 samples; the family shares one Sidak correction.
 #[test]
 fn chi_square_every_sampled_lobe() {
-    let cases: Vec<(&str, BrdfModel, Vec3)> = vec![
-        ("cosine hemisphere", lambert(0.7), dir_deg(50.0, 0.0)),
-        (
-            "phong lobe",
-            phong(0.0, 1.0, 20.0, false),
-            dir_deg(30.0, 40.0),
-        ),
-        (
-            "modified phong mixture",
-            phong(0.4, 0.5, 60.0, true),
-            dir_deg(60.0, 0.0),
-        ),
-        (
-            "blinn-phong half-vector lobe",
-            blinn(0.0, 1.0, 80.0, true),
-            dir_deg(45.0, 0.0),
-        ),
-        (
-            "blinn-phong classic grazing",
-            blinn(0.2, 0.6, 10.0, false),
-            dir_deg(80.0, 0.0),
-        ),
-        (
-            "beckmann m 0.3",
-            cook(0.0, 1.0, 0.3, conductor("gold"), FresnelModel::Exact),
-            dir_deg(30.0, 0.0),
-        ),
-        (
-            "beckmann m 0.1 mixture grazing",
-            cook(0.3, 0.7, 0.1, dielectric(1.5), FresnelModel::Schlick),
-            dir_deg(75.0, 120.0),
-        ),
-        (
-            "beckmann m 1.5",
-            cook(0.0, 1.0, 1.5, dielectric(1.5), FresnelModel::Exact),
-            dir_deg(10.0, 0.0),
-        ),
+    use FresnelModel::{Exact, Schlick};
+    // One row per lobe: name, model, incidence (polar, azimuth; degrees).
+    #[rustfmt::skip]
+    let cases: [(&str, BrdfModel, (f32, f32)); 8] = [
+        ("cosine hemisphere", lambert(0.7), (50.0, 0.0)),
+        ("phong lobe", phong(0.0, 1.0, 20.0, false), (30.0, 40.0)),
+        ("modified phong mixture", phong(0.4, 0.5, 60.0, true), (60.0, 0.0)),
+        ("blinn-phong half-vector lobe", blinn(0.0, 1.0, 80.0, true), (45.0, 0.0)),
+        ("blinn-phong classic grazing", blinn(0.2, 0.6, 10.0, false), (80.0, 0.0)),
+        ("beckmann m 0.3", cook(0.0, 1.0, 0.3, conductor("gold"), Exact), (30.0, 0.0)),
+        ("beckmann m 0.1 mixture grazing", cook(0.3, 0.7, 0.1, dielectric(1.5), Schlick), (75.0, 120.0)),
+        ("beckmann m 1.5", cook(0.0, 1.0, 1.5, dielectric(1.5), Exact), (10.0, 0.0)),
     ];
     let n = cases.len();
-    for (name, model, wo) in &cases {
-        run(name, model, *wo, n);
+    for (name, model, (theta, phi)) in &cases {
+        run(name, model, dir_deg(*theta, *phi), n);
     }
 }
 
