@@ -40,6 +40,7 @@ use std::time::{Duration, Instant};
 
 use glam::{DMat3, DVec2, DVec3, Vec2, Vec3, Vec4};
 use rayon::prelude::*;
+use twopass_brdf::colour::luminance_f64;
 use twopass_scene::{Scene, SurfacePoint};
 
 use crate::cluster::{Clusters, Kind, NodeRef};
@@ -48,7 +49,7 @@ use crate::form_factor::{self, hash};
 use crate::solution::Solution;
 use crate::solver::{
     Bookkeeping, Finish, Method, Options, Residuals, SolveError, SolveProgress, check_common,
-    luminance, participating,
+    participating,
 };
 use crate::specular::{self, Deposit, Specular};
 
@@ -504,7 +505,7 @@ impl<'s> HierarchicalSolver<'s> {
                     * PI
             })
             .collect();
-        let rho_lum: Vec<f64> = tri_rho.iter().map(|&r| luminance(r)).collect();
+        let rho_lum: Vec<f64> = tri_rho.iter().map(|&r| luminance_f64(r)).collect();
         let clusters = Clusters::build(&mesh, &rho_lum).ok_or(SolveError::NothingTakesPart)?;
         let spare = options.memory_limit - base;
         let mut s = Self {
@@ -561,7 +562,7 @@ impl<'s> HierarchicalSolver<'s> {
                 s.tri_emission[node.scene_triangle as usize] * f64::from(node.area)
             })
             .sum();
-        s.eps = h.link_tolerance * luminance(s.emitted).max(f64::MIN_POSITIVE);
+        s.eps = h.link_tolerance * luminance_f64(s.emitted).max(f64::MIN_POSITIVE);
         // Before the first gather every node's exitance is its emission.
         s.push_pull();
         s.book.energy.emitted = s.emitted;
@@ -717,7 +718,7 @@ impl<'s> HierarchicalSolver<'s> {
                 (n, [e - sent[0], r - sent[1]])
             })
             .collect();
-        let emitted = luminance(self.emitted).max(f64::MIN_POSITIVE);
+        let emitted = luminance_f64(self.emitted).max(f64::MIN_POSITIVE);
         let key = hash(self.options.seed ^ hash(0x5bec_4e00_0000_0000 ^ self.iterations));
         let threshold = 0.1 * self.options.stop.unshot_fraction * emitted;
         let Some((mut deposits, cast)) =
@@ -799,7 +800,7 @@ impl<'s> HierarchicalSolver<'s> {
         // Form-factor error at the source's mean exitance, plus the source's own departure
         // from uniform exitance carried at the link's mean form factor.
         self.rho_lum(l.receiver)
-            * (luminance(e[0] + e[1]) * f64::from(l.error)
+            * (luminance_f64(e[0] + e[1]) * f64::from(l.error)
                 + s * mean_k * self.ends(l.receiver).area)
     }
 
@@ -831,7 +832,7 @@ impl<'s> HierarchicalSolver<'s> {
         match r.kind() {
             Kind::Cluster(c) => self.clusters.nodes[c as usize].rho_max,
             Kind::Surface(n) => {
-                luminance(self.tri_rho[self.mesh.nodes[n as usize].scene_triangle as usize])
+                luminance_f64(self.tri_rho[self.mesh.nodes[n as usize].scene_triangle as usize])
             }
         }
     }
@@ -926,7 +927,7 @@ impl<'s> HierarchicalSolver<'s> {
         let cos2 = (to.normal.as_dvec3().dot(d) * -from.normal.as_dvec3().dot(d)).max(0.0) / l2;
         let g = cos2 / l2.max(near2);
         let [e, r] = self.exitance[leaf as usize];
-        [g, g * luminance(e + r).max(0.0)]
+        [g, g * luminance_f64(e + r).max(0.0)]
     }
 
     /// The visible fraction between two nodes from about `count` stratified shadow rays
@@ -1545,7 +1546,7 @@ impl<'s> HierarchicalSolver<'s> {
                             .map(|(j, w)| self.dirs[j] * w)
                             .sum::<DVec3>()
                             .normalize_or(self.dirs[toward.parts().next().map_or(0, |p| p.0)]);
-                        let y = luminance(be + br) * k;
+                        let y = luminance_f64(be + br) * k;
                         for (j, w) in toward.parts() {
                             flux[0][j] += be * k * w;
                             flux[1][j] += br * k * w;
@@ -1718,7 +1719,7 @@ impl<'s> HierarchicalSolver<'s> {
                 let mean = |o: usize| (here[o][0] + here[o][1] + here[o][2]) / 3.0 + here[o][3];
                 let b = [self.tri_emission[t], self.tri_rho[t] * (mean(0) + mean(1))];
                 self.corners_in[n as usize] = here;
-                let y = luminance(b[0] + b[1]);
+                let y = luminance_f64(b[0] + b[1]);
                 ([b[0] * area, b[1] * area], (y, y))
             }
             Some(children) => {

@@ -9,6 +9,7 @@ use std::time::Instant;
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use twopass_brdf::Rgb;
+use twopass_brdf::colour::luminance_f64;
 use twopass_scene::{Scene, SurfacePoint};
 
 use crate::element::ElementMesh;
@@ -16,7 +17,7 @@ use crate::form_factor::{self, RECEIVER_INSET, hash};
 use crate::solution::Solution;
 use crate::solver::{
     Adaptive, Bookkeeping, Finish, Options, Residuals, SolveError, SolveProgress, check_common,
-    luminance, participating,
+    participating,
 };
 use crate::specular::{self, Deposit, Specular, focused, power};
 
@@ -281,7 +282,7 @@ impl<'s> Progressive<'s> {
             })
             .collect();
         let key = hash(self.options.seed ^ hash(0x5bec_0000_0000_0000 ^ self.shots) ^ p as u64);
-        let emitted = luminance(self.book.energy.emitted);
+        let emitted = luminance_f64(self.book.energy.emitted);
         let Some((mut deposits, rays)) =
             spec.shoot_changes(self.scene, &self.mesh, &changes, emitted, 0.0, key)
         else {
@@ -599,7 +600,7 @@ impl<'s> Progressive<'s> {
     }
 
     fn refine_round(&mut self, adaptive: &Adaptive) -> usize {
-        let lum = luminance;
+        let lum = luminance_f64;
         let (mut total, mut area) = (0.0, 0.0);
         let leaves: Vec<u32> = self.mesh.leaves().collect();
         for &l in &leaves {

@@ -394,11 +394,6 @@ impl Method {
     }
 }
 
-/// Luminance (Rec. 709 weights) of a linear RGB triple.
-pub(crate) fn luminance(c: DVec3) -> f64 {
-    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
-}
-
 /// Checks the options both solvers share.
 pub(crate) fn check_common(options: &Options) -> Result<(), SolveError> {
     if options.stop.unshot_fraction.is_nan() || options.stop.unshot_fraction < 0.0 {

@@ -26,10 +26,10 @@
 use glam::{DVec3, Vec2, Vec3};
 use rayon::prelude::*;
 use smart_default::SmartDefault;
+use twopass_brdf::colour::luminance_f64;
 use twopass_brdf::frame::Frame;
 use twopass_brdf::random::{SplitMix64, hash, unit_f32, unit_f64};
 
-use crate::solver::luminance;
 use twopass_scene::targets::specular_objects;
 use twopass_scene::{Scene, SpecularTargets, SurfacePoint};
 
@@ -239,7 +239,7 @@ impl Specular {
         key: u64,
     ) -> Option<(Vec<Deposit>, u64)> {
         let power = |n: u32, d: &[DVec3; 2]| {
-            luminance((d[0] + d[1]).abs()) * f64::from(mesh.nodes[n as usize].area)
+            luminance_f64((d[0] + d[1]).abs()) * f64::from(mesh.nodes[n as usize].area)
         };
         let total: f64 = changes.iter().map(|(n, d)| power(*n, d)).sum();
         if total.is_nan() || total <= threshold || total <= 0.0 {
