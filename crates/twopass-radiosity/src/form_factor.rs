@@ -41,7 +41,15 @@ pub fn point_to_polygon(x: DVec3, n: DVec3, poly: &[DVec3], shooter_normal: Opti
     // Clip against the receiver's tangent plane (Sutherland-Hodgman, one plane). Heights within
     // a hair of the plane count as on it: a polygon lying in the receiver's plane subtends no
     // projected solid angle, but rounding would otherwise leave it a full 2 pi of winding.
-    let mut clipped: Vec<DVec3> = Vec::with_capacity(poly.len() + 2);
+    // One plane adds at most one vertex per edge; a triangle or quad clips on the stack.
+    let mut stack = [DVec3::ZERO; 8];
+    let mut heap = Vec::new();
+    let buffer: &mut [DVec3] = if 2 * poly.len() <= stack.len() {
+        &mut stack
+    } else {
+        heap.resize(2 * poly.len(), DVec3::ZERO);
+        &mut heap
+    };
     let h = |p: DVec3| {
         let d = (p - x).dot(n);
         if d.abs() <= PLANE_TOLERANCE * (p - x).length() {
@@ -50,17 +58,23 @@ pub fn point_to_polygon(x: DVec3, n: DVec3, poly: &[DVec3], shooter_normal: Opti
             d
         }
     };
+    let mut len = 0;
+    let mut hb = h(poly[0]);
     for k in 0..poly.len() {
         let (a, b) = (poly[k], poly[(k + 1) % poly.len()]);
-        let (ha, hb) = (h(a), h(b));
+        let ha = hb;
+        hb = h(b);
         if ha > 0.0 {
-            clipped.push(a);
+            buffer[len] = a;
+            len += 1;
         }
         if (ha > 0.0) != (hb > 0.0) && ha != hb {
             let t = ha / (ha - hb);
-            clipped.push(a + (b - a) * t);
+            buffer[len] = a + (b - a) * t;
+            len += 1;
         }
     }
+    let clipped = &buffer[..len];
     if clipped.len() < 3 {
         return 0.0;
     }

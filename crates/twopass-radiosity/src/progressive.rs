@@ -29,6 +29,10 @@ pub const MAX_ELEMENTS: usize = 4_000_000;
 /// and receiving points, the edge map and the patch lists.
 const BYTES_PER_ELEMENT: f64 = 400.0;
 
+/// Most form factors [`Progressive::patch_rows`] computes in one parallel pass (16 MiB of
+/// rows in flight beside the cache).
+const ROW_BATCH: usize = 1 << 22;
+
 /// A progressive-refinement radiosity solve over a scene. Deterministic: the same options and
 /// seed give the same solution bit for bit on any number of threads.
 pub struct Progressive<'s> {
@@ -66,8 +70,11 @@ pub struct Progressive<'s> {
     unshot_refl: Vec<DVec3>,
     shot_emit: Vec<DVec3>,
     shot_refl: Vec<DVec3>,
-    /// Per patch: its elements (leaves).
-    patch_leaves: Vec<Vec<u32>>,
+    /// Per patch: its elements (leaves), flat, with what every shot reads of them.
+    elements: PatchElements,
+    /// Per patch: diffuse reflectance and area (scene units squared); patches never change.
+    patch_rho: Vec<DVec3>,
+    patch_area: Vec<f64>,
     /// Per patch: cached form factors (with visibility) to every vertex, once computed.
     cache: Vec<Option<Vec<f32>>>,
     cached_bytes: usize,
@@ -75,6 +82,61 @@ pub struct Progressive<'s> {
     book: Bookkeeping,
     shots: u64,
     rays: u64,
+}
+
+/// Every patch's elements (leaves) in one flat list, patch by patch in the mesh's leaf order:
+/// patch `p` owns entries `start[p]..start[p + 1]`. Each shot reads every element, so their
+/// vertices and areas sit here side by side rather than in the mesh's nodes.
+#[derive(Default)]
+struct PatchElements {
+    start: Vec<usize>,
+    leaf: Vec<u32>,
+    vertices: Vec<[u32; 3]>,
+    /// Scene units squared.
+    area: Vec<f64>,
+}
+
+impl PatchElements {
+    /// Groups the mesh's leaves by patch (a stable counting sort: within a patch, the order of
+    /// [`ElementMesh::leaves`]).
+    fn new(mesh: &ElementMesh) -> Self {
+        let leaves: Vec<u32> = mesh.leaves().collect();
+        let mut start = vec![0usize; mesh.patches.len() + 1];
+        for &l in &leaves {
+            start[mesh.nodes[l as usize].patch as usize + 1] += 1;
+        }
+        for p in 0..mesh.patches.len() {
+            start[p + 1] += start[p];
+        }
+        let mut next = start.clone();
+        let mut leaf = vec![0u32; leaves.len()];
+        for &l in &leaves {
+            let p = mesh.nodes[l as usize].patch as usize;
+            leaf[next[p]] = l;
+            next[p] += 1;
+        }
+        let vertices = leaf.iter().map(|&l| mesh.nodes[l as usize].vertices).collect();
+        let area = leaf
+            .iter()
+            .map(|&l| f64::from(mesh.nodes[l as usize].area))
+            .collect();
+        Self {
+            start,
+            leaf,
+            vertices,
+            area,
+        }
+    }
+
+    /// Entries of patch `p`.
+    fn range(&self, p: usize) -> std::ops::Range<usize> {
+        self.start[p]..self.start[p + 1]
+    }
+
+    /// The leaves of patch `p`.
+    fn leaves(&self, p: usize) -> &[u32] {
+        &self.leaf[self.range(p)]
+    }
 }
 
 fn rgb(v: Rgb) -> DVec3 {
@@ -192,7 +254,9 @@ impl<'s> Progressive<'s> {
             unshot_refl: Vec::new(),
             shot_emit: Vec::new(),
             shot_refl: Vec::new(),
-            patch_leaves: Vec::new(),
+            elements: PatchElements::default(),
+            patch_rho: Vec::new(),
+            patch_area: Vec::new(),
             cache: Vec::new(),
             cached_bytes: 0,
             book: Bookkeeping::new(started, started.elapsed()),
@@ -201,6 +265,15 @@ impl<'s> Progressive<'s> {
         };
         s.sync_vertices();
         let n = s.mesh.patches.len();
+        s.patch_area = (0..n)
+            .map(|p| f64::from(s.mesh.nodes[s.mesh.patches[p] as usize].area))
+            .collect();
+        s.patch_rho = (0..n)
+            .map(|p| {
+                let o = &scene.objects[s.object_of_patch(p) as usize];
+                rgb(scene.materials[o.material as usize].material.diffuse_albedo())
+            })
+            .collect();
         s.unshot_refl = vec![DVec3::ZERO; n];
         s.shot_emit = vec![DVec3::ZERO; n];
         s.shot_refl = vec![DVec3::ZERO; n];
@@ -271,7 +344,9 @@ impl<'s> Progressive<'s> {
         let mean = |node: &crate::element::Node, f: &dyn Fn(usize) -> DVec3| {
             node.vertices.iter().map(|&v| f(v as usize)).sum::<DVec3>() / 3.0
         };
-        let changes: Vec<(u32, [DVec3; 2])> = self.patch_leaves[p]
+        let changes: Vec<(u32, [DVec3; 2])> = self
+            .elements
+            .leaves(p)
             .iter()
             .map(|&leaf| {
                 let node = &self.mesh.nodes[leaf as usize];
@@ -371,14 +446,11 @@ impl<'s> Progressive<'s> {
     }
 
     fn patch_rho(&self, p: usize) -> DVec3 {
-        let o = &self.scene.objects[self.object_of_patch(p) as usize];
-        rgb(self.scene.materials[o.material as usize]
-            .material
-            .diffuse_albedo())
+        self.patch_rho[p]
     }
 
     fn patch_area(&self, p: usize) -> f64 {
-        f64::from(self.mesh.nodes[self.mesh.patches[p] as usize].area)
+        self.patch_area[p]
     }
 
     /// Extends the per-vertex arrays to new vertices (reflectance, emission; zero received).
@@ -401,11 +473,7 @@ impl<'s> Progressive<'s> {
     }
 
     fn rebuild_patch_leaves(&mut self) {
-        self.patch_leaves = vec![Vec::new(); self.mesh.patches.len()];
-        for leaf in self.mesh.leaves() {
-            let p = self.mesh.nodes[leaf as usize].patch as usize;
-            self.patch_leaves[p].push(leaf);
-        }
+        self.elements = PatchElements::new(&self.mesh);
     }
 
     /// Form factors (with visibility) from every vertex in `vertices` to patch `p`, and the
@@ -472,21 +540,65 @@ impl<'s> Progressive<'s> {
     where
         T: std::iter::Sum + std::ops::Div<f64, Output = T>,
     {
-        self.patch_leaves[p].iter().map(move |&leaf| {
-            let node = &self.mesh.nodes[leaf as usize];
-            let sum: T = node.vertices.iter().map(|&v| value(v as usize)).sum();
-            (sum / 3.0, f64::from(node.area))
+        self.elements.range(p).map(move |i| {
+            let sum: T = self.elements.vertices[i]
+                .iter()
+                .map(|&v| value(v as usize))
+                .sum();
+            (sum / 3.0, self.elements.area[i])
         })
     }
 
+    /// The form factors of every vertex to patch `p`: the cached row, extended to the
+    /// vertices it lacks.
     fn patch_row(&mut self, p: usize) -> Vec<f32> {
         let n = self.mesh.vertices.len();
-        let have = self.cache[p].as_ref().map_or(0, Vec::len);
+        let have = self.cached_len(p);
         if have == n {
             return self.cache[p].clone().expect("cached row");
         }
-        let (fresh, rays) = self.form_factors(p, &(have..n).collect::<Vec<_>>());
+        let fresh = self.form_factors(p, &(have..n).collect::<Vec<_>>());
+        self.extend_row(p, fresh)
+    }
+
+    /// How many vertices the cached row of patch `p` covers (from vertex 0).
+    fn cached_len(&self, p: usize) -> usize {
+        self.cache[p].as_ref().map_or(0, Vec::len)
+    }
+
+    /// The rows of `patches` (as [`Progressive::patch_row`] gives them, in that order), with
+    /// what they lack computed in parallel over patches and vertices at once: after a
+    /// refinement every patch shot so far lacks the new vertices, and one small parallel
+    /// pass per patch would cost more in starting and joining than in form factors. Rows go
+    /// to `each` one by one, computed in batches of at most [`ROW_BATCH`] values.
+    fn patch_rows(&mut self, patches: &[usize], mut each: impl FnMut(&mut Self, usize, &[f32])) {
+        let n = self.mesh.vertices.len();
+        let mut rest = patches;
+        while !rest.is_empty() {
+            let (mut take, mut values) = (0, 0);
+            while take < rest.len() && (take == 0 || values + n <= ROW_BATCH) {
+                values += n - self.cached_len(rest[take]);
+                take += 1;
+            }
+            let (batch, tail) = rest.split_at(take);
+            rest = tail;
+            let fresh: Vec<(Vec<f32>, u64)> = batch
+                .par_iter()
+                .map(|&p| self.form_factors(p, &(self.cached_len(p)..n).collect::<Vec<_>>()))
+                .collect();
+            for (&p, fresh) in batch.iter().zip(fresh) {
+                let row = self.extend_row(p, fresh);
+                each(self, p, &row);
+            }
+        }
+    }
+
+    /// Appends `fresh` (the form factors of the vertices after the cached ones, and the rays
+    /// they cast) to the row of patch `p`, caches the row while the cache has room, and
+    /// returns it.
+    fn extend_row(&mut self, p: usize, (fresh, rays): (Vec<f32>, u64)) -> Vec<f32> {
         self.rays += rays;
+        let have = self.cached_len(p);
         let mut row = self.cache[p].take().unwrap_or_default();
         row.extend_from_slice(&fresh);
         let bytes = fresh.len() * 4;
@@ -576,7 +688,7 @@ impl<'s> Progressive<'s> {
             shots: self.shots,
             unshot_fraction: self.unshot_fraction(),
             rays: self.rays,
-            elements: self.patch_leaves.iter().map(Vec::len).sum(),
+            elements: self.elements.leaf.len(),
             vertices: self.mesh.vertices.len(),
             patches: self.mesh.patches.len(),
             ..self.book.progress(crate::solver::Method::Progressive)
@@ -638,17 +750,16 @@ impl<'s> Progressive<'s> {
         let old = self.rho.len();
         self.sync_vertices();
         // New vertices gather everything shot so far.
-        for p in 0..self.mesh.patches.len() {
-            let (se, sr) = (self.shot_emit[p], self.shot_refl[p]);
-            if se == DVec3::ZERO && sr == DVec3::ZERO {
-                continue;
-            }
-            let row = self.patch_row(p);
+        let shot: Vec<usize> = (0..self.mesh.patches.len())
+            .filter(|&p| self.shot_emit[p] != DVec3::ZERO || self.shot_refl[p] != DVec3::ZERO)
+            .collect();
+        self.patch_rows(&shot, |s, p, row| {
+            let (se, sr) = (s.shot_emit[p], s.shot_refl[p]);
             for (v, &f) in row.iter().enumerate().skip(old) {
-                self.received_emit[v] += se * f64::from(f);
-                self.received_refl[v] += sr * f64::from(f);
+                s.received_emit[v] += se * f64::from(f);
+                s.received_refl[v] += sr * f64::from(f);
             }
-        }
+        });
         self.rebuild_patch_leaves();
         self.resplat();
         // Re-estimate each patch's reflected radiosity from its (finer) elements.
@@ -845,7 +956,7 @@ impl<'s> Progressive<'s> {
             .map(|p| {
                 let mut w: Vec<(u32, f64)> = Vec::new();
                 let a = self.patch_area(p);
-                for &leaf in &self.patch_leaves[p] {
+                for &leaf in self.elements.leaves(p) {
                     let node = &self.mesh.nodes[leaf as usize];
                     for &v in &node.vertices {
                         let x = f64::from(node.area) / (3.0 * a);

@@ -107,14 +107,23 @@ fn main() -> ExitCode {
     }
 }
 
+/// Stack of each worker thread, bytes: the command runs on one of them (see [`run`]), so it
+/// gets what the main thread would (8 MiB) and more.
+const WORKER_STACK_BYTES: usize = 16 << 20;
+
 fn run(cli: Cli) -> Result<(), CliError> {
+    let mut pool = rayon::ThreadPoolBuilder::new().stack_size(WORKER_STACK_BYTES);
     if let Some(n) = cli.ctx.threads {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(n as usize)
-            .build_global()
-            .map_err(|e| CliError::Input(format!("cannot start {n} threads: {e}")))?;
+        pool = pool.num_threads(n as usize);
     }
-    match &cli.command {
+    pool.build_global().map_err(|e| {
+        let n = cli.ctx.threads.map_or_else(|| "the".to_owned(), |n| n.to_string());
+        CliError::Input(format!("cannot start {n} worker threads: {e}"))
+    })?;
+    // The command itself runs on a worker: its parallel loops (one per radiosity shot, one per
+    // render) then start by splitting work with the other workers instead of waking the pool
+    // from outside and sleeping until it is done, which cost tens of microseconds a loop.
+    rayon::scope(|_| match &cli.command {
         Command::Info(args) => info::run(args, &cli.ctx),
         Command::BrdfCheck(args) => brdf_check::run(args, &cli.ctx),
         Command::Render(args) => render::run(args, &cli.ctx),
@@ -122,5 +131,5 @@ fn run(cli: Cli) -> Result<(), CliError> {
         Command::Bake(args) => bake::run(args, &cli.ctx),
         Command::Bench(cmd) => bench::run(cmd, &cli.ctx),
         Command::View(args) => view::run(args, &cli.ctx),
-    }
+    })
 }
