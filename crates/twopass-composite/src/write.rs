@@ -137,9 +137,10 @@ fn encode_exr(
         ex::AnyChannels::sort(channels),
     );
     let mut buf = Cursor::new(Vec::new());
+    // Blocks compress on all cores (exr's own short-lived pool): ZIP is most of the time a
+    // render's EXR takes to write.
     ex::Image::from_layer(layer)
         .write()
-        .non_parallel()
         .to_buffered(&mut buf)
         .map_err(|source| CompositeError::Exr {
             path: path.to_path_buf(),

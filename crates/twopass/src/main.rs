@@ -117,7 +117,10 @@ fn run(cli: Cli) -> Result<(), CliError> {
         pool = pool.num_threads(n as usize);
     }
     pool.build_global().map_err(|e| {
-        let n = cli.ctx.threads.map_or_else(|| "the".to_owned(), |n| n.to_string());
+        let n = cli
+            .ctx
+            .threads
+            .map_or_else(|| "the".to_owned(), |n| n.to_string());
         CliError::Input(format!("cannot start {n} worker threads: {e}"))
     })?;
     // The command itself runs on a worker: its parallel loops (one per radiosity shot, one per

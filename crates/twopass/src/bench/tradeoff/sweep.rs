@@ -19,6 +19,10 @@ pub(super) struct Sweep {
     /// A cheaper visibility estimate (first, most rays) crossed with every element size: on
     /// coarse meshes the discretization error hides what fewer shadow rays cost.
     pub(super) cheap_visibility: Option<(u32, u32)>,
+    /// A looser stop (unshot fraction) crossed with every element size, at both visibilities:
+    /// the last shots may cost more time than the error they remove (the ambient term stands
+    /// in for what is left unshot).
+    pub(super) loose_unshot: Option<f64>,
     pub(super) unshots: Vec<f64>,
     pub(super) visibility: Vec<(u32, u32)>,
     /// Samples per pixel crossed with shadow grids for Whitted and the hybrids.
@@ -50,6 +54,7 @@ impl Sweep {
             base_visibility: (4, 16),
             element_divisors: vec![8.0, 12.0, 16.0, 24.0, 32.0, 48.0],
             cheap_visibility: Some((1, 1)),
+            loose_unshot: Some(1e-2),
             unshots: vec![1e-1, 1e-2, 1e-3, 1e-4],
             visibility: vec![(1, 1), (4, 16), (16, 64)],
             spps: vec![1, 4, 16],
@@ -76,6 +81,7 @@ impl Sweep {
             base_visibility: (1, 4),
             element_divisors: vec![4.0, 8.0],
             cheap_visibility: None,
+            loose_unshot: None,
             unshots: vec![1e-1, 1e-2],
             visibility: vec![(1, 4)],
             spps: vec![1, 2],
@@ -150,12 +156,29 @@ pub(super) fn plan_runs(
             knobs(sweep.base_divisor, sweep.base_unshot, v, true),
         );
     }
-    if let Some(v) = sweep.cheap_visibility {
-        for &d in &sweep.element_divisors {
-            add(
-                "element-size-visibility",
-                knobs(d, sweep.base_unshot, v, true),
-            );
+    // Every element size at the cheaper visibility and the looser stop too.
+    let crossings = [
+        (
+            "element-size-visibility",
+            sweep.cheap_visibility,
+            Some(sweep.base_unshot),
+        ),
+        (
+            "element-size-unshot",
+            Some(sweep.base_visibility),
+            sweep.loose_unshot,
+        ),
+        (
+            "element-size-visibility-unshot",
+            sweep.cheap_visibility,
+            sweep.loose_unshot,
+        ),
+    ];
+    for (knob, visibility, unshot) in crossings {
+        if let (Some(v), Some(u)) = (visibility, unshot) {
+            for &d in &sweep.element_divisors {
+                add(knob, knobs(d, u, v, true));
+            }
         }
     }
     add(
@@ -202,10 +225,10 @@ pub(super) fn plan_runs(
             for (i, s) in solves.iter().enumerate() {
                 let k = &s.knobs;
                 let visibility = (k.visibility_min, k.visibility_max);
-                let crossed = k.unshot == sweep.base_unshot
-                    && k.adaptive
+                let crossed = k.adaptive
                     && (visibility == sweep.base_visibility
-                        || Some(visibility) == sweep.cheap_visibility);
+                        || Some(visibility) == sweep.cheap_visibility)
+                    && (k.unshot == sweep.base_unshot || Some(k.unshot) == sweep.loose_unshot);
                 if crossed {
                     for &spp in &sweep.radiosity_spps {
                         let render = RenderKnobs { spp, ..base_render };
