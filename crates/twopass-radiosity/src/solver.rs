@@ -475,6 +475,11 @@ impl<'s> Solver<'s> {
     /// Runs to the stop criteria; `observer` sees the progress after every shot (progressive)
     /// or gather iteration (hierarchical) and may stop the solve early by returning `Break`.
     /// The solution is usable whenever this returns.
+    ///
+    /// Each shot runs a parallel loop on rayon's global pool. Called from a thread outside the
+    /// pool, every loop is handed over and waited for (tens of microseconds each, thousands of
+    /// shots); call it from inside the pool (`rayon::scope(|_| solver.run(..))`, as the CLI
+    /// does) to avoid that.
     pub fn run(&mut self, mut observer: impl FnMut(&SolveProgress) -> ControlFlow<()>) -> Finish {
         match self {
             Self::Progressive(p) => p.run(|s| observer(&s.progress())),
