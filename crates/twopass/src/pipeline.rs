@@ -186,16 +186,22 @@ pub fn render_with_bar(
 ) -> Result<RenderOutput, CliError> {
     let progress = RenderProgress::new();
     let bar = ctx.progress(1000, label);
-    let done = std::sync::atomic::AtomicBool::new(false);
+    // The bar is redrawn every 100 ms until the render ends, which drops `stop`: the drawing
+    // thread wakes at once then, rather than finishing a sleep the render would wait out.
+    let (stop, stopped) = std::sync::mpsc::channel::<()>();
     let out = std::thread::scope(|s| {
-        s.spawn(|| {
-            while !done.load(std::sync::atomic::Ordering::Relaxed) {
+        let (bar, progress) = (&bar, &progress);
+        s.spawn(move || {
+            loop {
                 bar.set_position((progress.fraction() * 1000.0) as u64);
-                std::thread::sleep(Duration::from_millis(100));
+                match stopped.recv_timeout(Duration::from_millis(100)) {
+                    Err(std::sync::mpsc::RecvTimeoutError::Timeout) => continue,
+                    _ => break,
+                }
             }
         });
-        let out = twopass_trace::render(scene, camera, integrator, settings, &progress);
-        done.store(true, std::sync::atomic::Ordering::Relaxed);
+        let out = twopass_trace::render(scene, camera, integrator, settings, progress);
+        drop(stop);
         out
     });
     bar.finish_and_clear();
