@@ -491,6 +491,83 @@ impl ElementMesh {
     }
 }
 
+/// The element trees laid out for point location, which a finished solution does once per
+/// camera sample: each level of the descent reads one 32-byte [`Split`] instead of two mesh
+/// nodes. Finds exactly the leaf [`ElementMesh::locate`] finds (the same arithmetic on the
+/// same values), for the mesh it was built from.
+#[derive(Debug, Clone, Default)]
+pub struct Locator {
+    /// Root node of each scene triangle, or `u32::MAX` when it does not take part.
+    roots: Vec<u32>,
+    /// Per node: how its point set splits.
+    splits: Vec<Split>,
+}
+
+/// How an inner node splits: its halves `(a, m, c)` and `(m, b, c)` are divided by the
+/// segment from `m` along `d = c - m`; a point on `a`'s side (`side_a`, the sign that
+/// matters) is in the first. A leaf has `children` `[u32::MAX; 2]`.
+#[derive(Debug, Clone, Copy)]
+#[repr(C, align(32))]
+struct Split {
+    children: [u32; 2],
+    m: Vec2,
+    d: Vec2,
+    side_a: f32,
+}
+
+impl Locator {
+    /// The locator of `mesh` as it is now (rebuild after a refinement).
+    pub fn new(mesh: &ElementMesh) -> Self {
+        let splits = mesh
+            .nodes
+            .iter()
+            .map(|node| match node.children {
+                None => Split {
+                    children: [u32::MAX; 2],
+                    m: Vec2::ZERO,
+                    d: Vec2::ZERO,
+                    side_a: 0.0,
+                },
+                Some([c0, c1]) => {
+                    let [a, m, c] = mesh.nodes[c0 as usize].uv;
+                    let d = c - m;
+                    Split {
+                        children: [c0, c1],
+                        m,
+                        d,
+                        side_a: d.perp_dot(a - m),
+                    }
+                }
+            })
+            .collect();
+        Self {
+            roots: mesh.roots.clone(),
+            splits,
+        }
+    }
+
+    /// [`ElementMesh::locate`] on `mesh`, the mesh this was built from.
+    pub fn locate(&self, mesh: &ElementMesh, t: u32, b1: f32, b2: f32) -> Option<(u32, [f32; 3])> {
+        let mut n = *self.roots.get(t as usize)?;
+        if n == u32::MAX {
+            return None;
+        }
+        let p = Vec2::new(b1, b2);
+        loop {
+            let s = &self.splits[n as usize];
+            if s.children[0] == u32::MAX {
+                return Some((n, barycentric_2d(mesh.nodes[n as usize].uv, p)));
+            }
+            let side = s.d.perp_dot(p - s.m);
+            n = if side * s.side_a >= 0.0 {
+                s.children[0]
+            } else {
+                s.children[1]
+            };
+        }
+    }
+}
+
 /// Barycentric weights of `p` in the 2-D triangle `t`.
 pub(crate) fn barycentric_2d(t: [Vec2; 3], p: Vec2) -> [f32; 3] {
     let (a, b, c) = (t[0].as_dvec2(), t[1].as_dvec2(), t[2].as_dvec2());
@@ -567,6 +644,35 @@ mod tests {
             mesh.leaves()
                 .all(|n| mesh.nodes[n as usize].patch != u32::MAX)
         );
+    }
+
+    #[test]
+    fn locator_finds_what_the_mesh_finds() {
+        let scene = quad_scene();
+        let mut mesh = ElementMesh::new(&scene, &[true]);
+        mesh.refine_to(0.05);
+        // Refine unevenly too, so that trees of many depths are walked.
+        let leaves: Vec<u32> = mesh.leaves().step_by(7).collect();
+        for l in leaves {
+            mesh.refine(l);
+        }
+        let locator = Locator::new(&mesh);
+        let mut hits = std::collections::HashSet::new();
+        for t in 0..2 {
+            for i in 0..400u32 {
+                for j in 0..(400 - i) {
+                    let (b1, b2) = (i as f32 / 400.0, j as f32 / 400.0);
+                    let found = locator.locate(&mesh, t, b1, b2);
+                    assert_eq!(found, mesh.locate(t, b1, b2), "{t}: ({b1}, {b2})");
+                    hits.insert(found.unwrap().0);
+                }
+            }
+        }
+        // The grids on the quad's two triangles reach most elements: most of the trees are
+        // walked.
+        let leaves = mesh.leaves().count();
+        assert!(hits.len() * 2 > leaves, "{} of {leaves}", hits.len());
+        assert_eq!(locator.locate(&mesh, 99, 0.1, 0.1), None);
     }
 
     #[test]

@@ -4,13 +4,15 @@
 use twopass_brdf::Rgb;
 use twopass_scene::DiffuseRadiance;
 
-use crate::element::ElementMesh;
+use crate::element::{ElementMesh, Locator};
 
 /// Per-vertex radiosity (W/m^2 per RGB channel, areas in scene units) over the element mesh,
 /// split into emission, direct and indirect parts, plus the ambient term of a partial solve.
 #[derive(Debug, Clone)]
 pub struct Solution {
     mesh: ElementMesh,
+    /// The mesh laid out for the per-sample lookup.
+    locator: Locator,
     /// Emission + all reflected light (without the ambient term).
     radiosity: Vec<Rgb>,
     /// Light reflected once from the emitters (seen directly: what shadow rays find).
@@ -40,6 +42,7 @@ impl Solution {
             "one value per vertex"
         );
         Self {
+            locator: Locator::new(&mesh),
             mesh,
             radiosity,
             direct,
@@ -103,7 +106,7 @@ impl Solution {
     }
 
     fn interpolate(&self, values: impl Fn(usize) -> Rgb, triangle: u32, b: [f32; 3]) -> Rgb {
-        match self.mesh.locate(triangle, b[1], b[2]) {
+        match self.locator.locate(&self.mesh, triangle, b[1], b[2]) {
             None => Rgb::ZERO,
             Some((leaf, w)) => {
                 let v = self.mesh.nodes[leaf as usize].vertices;
