@@ -633,41 +633,21 @@ impl<'s> Progressive<'s> {
         let (de, dr) = (self.unshot_emit[p], self.unshot_refl[p]);
         let row = self.patch_row(p);
         let area = self.patch_area(p);
-        // The vertices' irradiance and the power arriving at each patch's elements (area times
-        // the mean irradiance of their vertices) are independent: one thread each.
-        let (received_emit, received_refl) = (&mut self.received_emit, &mut self.received_refl);
-        let elements = &self.elements;
-        let patches = self.mesh.patches.len();
-        let ((), gains) = rayon::join(
-            || {
-                for (v, &f) in row.iter().enumerate() {
-                    if f > 0.0 {
-                        received_emit[v] += de * f64::from(f);
-                        received_refl[v] += dr * f64::from(f);
-                    }
-                }
-            },
-            || -> Vec<DVec3> {
-                (0..patches)
-                    .map(|q| {
-                        let mut gained = DVec3::ZERO;
-                        for i in elements.range(q) {
-                            let sum: f64 = elements.vertices[i]
-                                .iter()
-                                .map(|&v| f64::from(row[v as usize]))
-                                .sum();
-                            let h = sum / 3.0;
-                            if h > 0.0 {
-                                gained += (de + dr) * h * elements.area[i];
-                            }
-                        }
-                        gained
-                    })
-                    .collect()
-            },
-        );
+        for (v, &f) in row.iter().enumerate() {
+            if f > 0.0 {
+                self.received_emit[v] += de * f64::from(f);
+                self.received_refl[v] += dr * f64::from(f);
+            }
+        }
+        // Power arriving at each element: area times the mean irradiance of its vertices.
         let mut arrived = DVec3::ZERO;
-        for (q, gained) in gains.into_iter().enumerate() {
+        for q in 0..self.mesh.patches.len() {
+            let mut gained = DVec3::ZERO;
+            for (h, area) in self.element_means(q, |v| f64::from(row[v])) {
+                if h > 0.0 {
+                    gained += (de + dr) * h * area;
+                }
+            }
             if gained != DVec3::ZERO {
                 arrived += gained;
                 self.receive(q, gained);
