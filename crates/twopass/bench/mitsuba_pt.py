@@ -9,8 +9,9 @@ the file's camera (vertical field of view 2 atan(film height / 2 / focal length)
 filter (each sample counts in its own pixel only, as in twopass), the `independent` sampler, and
 the `path` integrator with twopass's path length settings: at most 64 segments (`max_depth` 64),
 Russian roulette after the third bounce (`rr_depth` 3). Both are unidirectional path tracers with
-next-event estimation and MIS (power heuristic in twopass, balance heuristic in Mitsuba); twopass
-survives roulette with max(throughput) capped at 1, Mitsuba caps it at 0.95.
+next-event estimation and MIS with the power heuristic; twopass survives roulette with
+max(throughput) capped at 1, Mitsuba caps it at 0.95. Mitsuba's wheel ships Embree 3, which both
+its CPU variants trace rays with; twopass uses its own BVH.
 
 It first checks the conversion: Mitsuba's image at `--check-spp` samples against twopass's
 converged reference image (`--reference`, an EXR): the mean per channel must agree within
