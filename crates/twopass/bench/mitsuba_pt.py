@@ -27,7 +27,8 @@ samples of equal quality.
 
 What is not measured: twopass's time includes its thread pool's tiling and the film; Mitsuba's
 includes its block-based film and the development of the image into a tensor. Mitsuba's thread
-count is set with `dr.set_thread_count`. With `--llvm` the `llvm_ad_rgb` variant (wavefront:
+count is set with `dr.set_thread_count`. The machine's load average is printed: with other work on
+the cores, figures on several threads measure what the engines got, not how they scale. With `--llvm` the `llvm_ad_rgb` variant (wavefront:
 the whole image's samples as SIMD arrays, JIT compiled) is timed too, in each round, in a child
 process that loads the scene, renders once to compile (cached on disk after the first run) and
 times a second render; its figures are wavefront against twopass's one-path-at-a-time, not the
@@ -191,6 +192,7 @@ def main():
     if np.any(np.abs(rel) > args.tolerance):
         raise SystemExit("the Mitsuba scene does not match the reference: fix the conversion")
 
+    load_before = os.getloadavg()[0]
     results = {}
     with tempfile.TemporaryDirectory(prefix="twopass-pt-") as tmp:
         out = os.path.join(tmp, "tp.exr")
@@ -216,7 +218,9 @@ def main():
             results[t] = row
 
     print(f"scene {args.scene}, {args.width} x {height}, {args.spp} spp, {args.rounds} "
-          f"alternating rounds; Mitsuba {mts.mi.__version__} scene load {mts.load_seconds:.2f} s")
+          f"alternating rounds; Mitsuba {mts.mi.__version__} scene load {mts.load_seconds:.2f} s; "
+          f"machine load average {load_before:.2f} before, {os.getloadavg()[0]:.2f} after "
+          f"({os.cpu_count()} cores)")
     print(f"{'thr':>3} {'twopass Msamples/s':>19} {'Mitsuba scalar':>16} {'ratio tp/mts':>13} "
           f"{'relRMSE tp':>12} {'relRMSE mts':>12}")
     summary = []
