@@ -27,12 +27,15 @@ samples of equal quality.
 
 What is not measured: twopass's time includes its thread pool's tiling and the film; Mitsuba's
 includes its block-based film and the development of the image into a tensor. Mitsuba's thread
-count is set with `dr.set_thread_count`. The machine's load average is printed: with other work on
-the cores, figures on several threads measure what the engines got, not how they scale. With `--llvm` the `llvm_ad_rgb` variant (wavefront:
-the whole image's samples as SIMD arrays, JIT compiled) is timed too, in each round, in a child
-process that loads the scene, renders once to compile (cached on disk after the first run) and
-times a second render; its figures are wavefront against twopass's one-path-at-a-time, not the
-same algorithm shape. Both Mitsuba variants render in RGB, like twopass.
+count is set with `dr.set_thread_count`. The machine's load average is printed: with other work
+on the cores, figures on several threads measure what the engines got, not how they scale.
+
+With `--llvm` the `llvm_ad_rgb` variant (wavefront: the whole image's samples as SIMD arrays, JIT
+compiled) is timed too, in each round, in a child process that loads the scene, renders once to
+compile (cached on disk after the first run) and times a second render; its figures are wavefront
+against twopass's one path at a time, not the same algorithm shape. Dr.Jit 1.5 needs a libLLVM
+newer than 15 (LLVM 15 aborts on `fminimum`): `--libllvm` points it at one (e.g. Debian's
+`libllvm19`). Both Mitsuba variants render in RGB, like twopass.
 
 Not part of the test suite (Mitsuba is not a dependency of twopass). Usage, from the repository:
 
