@@ -170,7 +170,7 @@ def main():
     p.add_argument("--check-spp", type=int, default=1024, help="spp of Mitsuba's check image")
     p.add_argument("--tolerance", type=float, default=0.01, help="allowed relative mean error")
     p.add_argument("--rounds", type=int, default=3, help="alternating rounds per thread count")
-    p.add_argument("--threads", default=f"1,{os.cpu_count()}", help="thread counts, comma-separated")
+    p.add_argument("--threads", default=f"1,{os.cpu_count()}", help="thread counts, e.g. 1,2")
     p.add_argument("--llvm", action="store_true", help="also time the llvm_ad_rgb variant")
     p.add_argument("--libllvm", help="libLLVM for Dr.Jit (DRJIT_LIBLLVM_PATH), e.g. "
                    "/usr/lib/x86_64-linux-gnu/libLLVM-19.so: Dr.Jit 1.5 needs LLVM newer than 15")
