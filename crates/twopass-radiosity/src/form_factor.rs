@@ -150,7 +150,9 @@ pub fn shaft_clear(scene: &Scene, from: &SurfacePoint, shooter: [DVec3; 3]) -> b
 /// The visible fraction of shooter triangle `shooter` (corners, scene triangle `shooter_tri`)
 /// from receiver `from`, by stratified shadow rays. Samples behind the receiver's plane do not
 /// count. Starts with `rays.min` rays and goes to `rays.max` when they disagree or when the
-/// receiver is closer than twice the shooter's size. Deterministic for a `seed`. Returns the
+/// receiver is closer than twice the shooter's size; when the finer grid nests the coarser
+/// (4 and 16 rays: 2 x 2 and 4 x 4), the coarse samples are kept as samples of the fine grid,
+/// and only the fine strata without one get a ray. Deterministic for a `seed`. Returns the
 /// fraction and the number of shadow rays cast.
 pub fn visibility(
     scene: &Scene,
@@ -170,51 +172,88 @@ pub fn visibility(
         .max((shooter[2] - shooter[1]).length());
     let centroid = (shooter[0] + shooter[1] + shooter[2]) / 3.0;
     let near = (centroid - x).length() < 2.0 * size;
-    let estimate = |count: u32, salt: u64| {
-        let k = (f64::from(count).sqrt().round() as u32).max(1);
-        let (mut seen, mut total) = (0u32, 0u32);
-        for i in 0..k {
-            for j in 0..k {
-                let h = hash(seed ^ salt ^ (u64::from(i) << 32 | u64::from(j)));
-                let (p, w) = stratified_point(shooter, i, j, k, h);
-                if (p - x).dot(receiver_normal.as_dvec3()) <= 0.0 {
-                    continue;
-                }
+    // One shadow ray to a point of stratum (i, j) of the shooter's k x k grid, jittered by `h`:
+    // `None` when the point is behind the receiver's plane (it does not count), else whether
+    // the segment is unblocked.
+    let sample = |i: u32, j: u32, k: u32, h: u64| -> Option<bool> {
+        let (p, w) = stratified_point(shooter, i, j, k, h);
+        if (p - x).dot(receiver_normal.as_dvec3()) <= 0.0 {
+            return None;
+        }
+        // The sample's barycentrics on the scene triangle, from the corners' (the map is
+        // affine), instead of solving for them per ray.
+        let b = [0, 1, 2]
+            .map(|c| (corners[0][c] * w[0] + corners[1][c] * w[1] + corners[2][c] * w[2]) as f32);
+        let target = scene.mesh.surface_point(shooter_tri, b);
+        Some(!scene.occluded_between(from, &target))
+    };
+    let side = |count: u32| (f64::from(count).sqrt().round() as u32).max(1);
+    let (k1, k2) = (side(rays.min), side(rays.max.max(rays.min)));
+    // When the fine grid splits every coarse stratum into r x r whole ones, each coarse sample
+    // is drawn in one of its fine strata chosen at random (so it is still uniform over the
+    // coarse stratum), and the fine estimate keeps it: that stratum gets no second ray.
+    let r = k2 / k1;
+    let nested = k2 % k1 == 0 && r > 1 && (k1 * k1) as usize <= FIRST_PASS_MAX;
+    let mut first = [(0u32, None::<bool>); FIRST_PASS_MAX];
+    let (mut seen, mut total) = (0u32, 0u32);
+    for i in 0..k1 {
+        for j in 0..k1 {
+            let h = hash(seed ^ (u64::from(i) << 32 | u64::from(j)));
+            let result = if nested {
+                let sub = (hash(h ^ 0x5eed) % u64::from(r * r)) as u32;
+                let result = sample(i * r + sub / r, j * r + sub % r, k2, h);
+                first[(i * k1 + j) as usize] = (sub, result);
+                result
+            } else {
+                sample(i, j, k1, h)
+            };
+            if let Some(open) = result {
                 total += 1;
-                // The sample's barycentrics on the scene triangle, from the corners' (the
-                // map is affine), instead of solving for them per ray.
-                let b = [0, 1, 2].map(|c| {
-                    (corners[0][c] * w[0] + corners[1][c] * w[1] + corners[2][c] * w[2]) as f32
-                });
-                let target = scene.mesh.surface_point(shooter_tri, b);
-                if !scene.occluded_between(from, &target) {
-                    seen += 1;
+                seen += u32::from(open);
+            }
+        }
+    }
+    let mut cast = u64::from(total);
+    if k2 == k1 || (total > 0 && !near && (seen == 0 || seen == total)) {
+        if total > 0 {
+            return (f64::from(seen) / f64::from(total), cast);
+        }
+    } else {
+        let mut new = 0u32;
+        (seen, total) = (0, 0);
+        for i in 0..k2 {
+            for j in 0..k2 {
+                let kept = nested
+                    .then(|| first[((i / r) * k1 + j / r) as usize])
+                    .filter(|&(sub, _)| sub == (i % r) * r + j % r);
+                let result = match kept {
+                    Some((_, result)) => result,
+                    None => {
+                        let h = hash(seed ^ 0x5151_5151 ^ (u64::from(i) << 32 | u64::from(j)));
+                        let result = sample(i, j, k2, h);
+                        new += u32::from(result.is_some());
+                        result
+                    }
+                };
+                if let Some(open) = result {
+                    total += 1;
+                    seen += u32::from(open);
                 }
             }
         }
-        (seen, total)
-    };
-    let (seen, total) = estimate(rays.min, 0);
-    let cast = u64::from(total);
-    if total > 0 && !near && (seen == 0 || seen == total) {
-        return (f64::from(seen) / f64::from(total), cast);
+        cast += u64::from(new);
+        if total > 0 {
+            return (f64::from(seen) / f64::from(total), cast);
+        }
     }
-    let (seen, total) = estimate(rays.max.max(rays.min), 0x5151_5151);
-    let cast = cast + u64::from(total);
-    if total == 0 {
-        // Only a sliver is above the receiver's horizon: one ray to the shooter's centroid.
-        let target = scene.mesh.surface_point_at(shooter_tri, centroid.as_vec3());
-        return (
-            if scene.occluded_between(from, &target) {
-                0.0
-            } else {
-                1.0
-            },
-            cast + 1,
-        );
-    }
-    (f64::from(seen) / f64::from(total), cast)
+    // Only a sliver is above the receiver's horizon: one ray to the shooter's centroid.
+    let target = scene.mesh.surface_point_at(shooter_tri, centroid.as_vec3());
+    let open = !scene.occluded_between(from, &target);
+    (f64::from(u8::from(open)), cast + 1)
 }
+
+/// Most coarse strata whose samples [`visibility`] keeps for its fine estimate (an 8 x 8 grid).
+const FIRST_PASS_MAX: usize = 64;
 
 #[cfg(test)]
 mod tests {
