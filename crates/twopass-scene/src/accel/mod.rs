@@ -1,12 +1,13 @@
-//! Ray queries over an obvhs CWBVH: closest hit and any hit (occlusion), with a watertight
+//! Ray queries over an 8-wide BVH: closest hit and any hit (occlusion), with a watertight
 //! ray-triangle test (Woop, Benthin & Wald 2013, as in pbrt-v4) and conservative error bounds,
 //! so rays through shared edges and vertices never slip between triangles and spawned rays can
 //! be offset safely (see [`SurfacePoint::spawn_origin`]).
 //!
 //! One job per module: [`ray`] (rays, surface points, origin offsetting), [`triangle`] (the
-//! watertight test), [`packet`] (four triangles per test), [`wide`] (decoded CWBVH nodes and the
-//! node test); this file is the API: building, closest hit, any hit and the brute-force oracle.
+//! watertight test), [`packet`] (four triangles per test), [`collapse`] (the 8-wide tree from
+//! obvhs's binary one), [`wide`] (the nodes, the node test and the traversal); this file is the API: building, closest hit, any hit and the brute-force oracle.
 
+mod collapse;
 mod packet;
 mod ray;
 mod shaft;
@@ -16,8 +17,12 @@ mod wide;
 use std::time::{Duration, Instant};
 
 use glam::{Vec3, Vec3A};
-use obvhs::{Boundable, BvhBuildParams, aabb::Aabb, cwbvh::builder::build_cwbvh};
+use obvhs::{
+    Boundable, BvhBuildParams, aabb::Aabb, bvh2::reinsertion::ReinsertionOptimizer,
+    ploc::PlocBuilder,
+};
 
+use collapse::collapse;
 use packet::{PacketRay, TriPacket};
 pub(crate) use ray::SHADOW_EPSILON;
 pub use ray::{Ray, SurfacePoint};
@@ -56,13 +61,14 @@ pub struct TriangleHit {
     pub corners: [Vec3; 3],
 }
 
-/// An 8-wide BVH over the scene's triangles (built by obvhs as a CWBVH, decoded) with the
-/// queries every pass uses.
+/// An 8-wide BVH over the scene's triangles (a binary tree built by obvhs's PLOC builder,
+/// collapsed into 8-wide nodes with leaves of up to four triangles) with the queries every
+/// pass uses.
 pub struct Accel {
     /// The decoded tree.
     bvh: WideBvh,
-    /// One packet per leaf: the leaf's triangles (at most three, obvhs's CWBVH leaf size) in
-    /// its first lanes.
+    /// One packet per leaf: the leaf's triangles (at most four) in its first lanes, in the
+    /// order the traversal meets the leaves (depth first).
     packets: Vec<TriPacket>,
     /// Packet lane -> scene triangle index: `ids[4 * packet + lane]`.
     ids: Vec<u32>,
@@ -87,7 +93,10 @@ impl Accel {
         Self::build_with(positions, triangles, BvhBuildParams::medium_build())
     }
 
-    /// Builds the BVH with explicit obvhs build parameters.
+    /// Builds the BVH with explicit obvhs build parameters. Those of the binary tree apply
+    /// (PLOC search distance and depth threshold, sort precision, reinsertion ratio); the leaf
+    /// sizes and collapse costs do not (the 8-wide collapse chooses leaves of up to four
+    /// triangles by its own costs).
     pub fn build_with(positions: &[Vec3], triangles: &[[u32; 3]], params: BvhBuildParams) -> Self {
         let start = Instant::now();
         let corners: Vec<[Vec3A; 3]> = triangles
@@ -113,27 +122,27 @@ impl Accel {
                 },
             })
             .collect();
-        let cwbvh = build_cwbvh(&boxes, params, &mut Duration::default());
-        // Every leaf gets its own packet, so a leaf is one four-lane test.
-        let mut packet_of_slot = vec![u32::MAX; cwbvh.primitive_indices.len()];
         let mut packets = Vec::new();
         let mut ids = Vec::new();
-        for n in &cwbvh.nodes {
-            for (c, &meta) in n.child_meta.iter().enumerate() {
-                if n.imask & (1 << c) != 0 || meta == 0 {
-                    continue;
-                }
-                let first = (n.primitive_base_idx + u32::from(meta & 0x1f)) as usize;
-                let count = (meta >> 5).count_ones() as usize;
-                let leaf = &cwbvh.primitive_indices[first..first + count];
+        let bvh = if boxes.is_empty() {
+            WideBvh::new(Vec::new())
+        } else {
+            let mut bvh2 = PlocBuilder::with_capacity(boxes.len()).build(
+                params.ploc_search_distance,
+                &boxes,
+                (0..boxes.len() as u32).collect(),
+                params.sort_precision,
+                params.search_depth_threshold,
+            );
+            ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
+            collapse(&bvh2, |leaf| {
                 let tris: Vec<[Vec3A; 3]> = leaf.iter().map(|&i| corners[i as usize]).collect();
-                packet_of_slot[first] = packets.len() as u32;
                 packets.push(TriPacket::new(&tris));
                 // Unused lanes name no triangle (they are never enabled).
                 ids.extend((0..4).map(|lane| leaf.get(lane).copied().unwrap_or(u32::MAX)));
-            }
-        }
-        let bvh = WideBvh::new(&cwbvh, |slot| packet_of_slot[slot as usize]);
+                (packets.len() - 1) as u32
+            })
+        };
         Self {
             bvh,
             packets,
