@@ -243,7 +243,7 @@ mod tests {
         node: usize,
         seen: &mut [u32],
     ) -> (Vec3A, Vec3A) {
-        let n = &accel.bvh.nodes[node];
+        let n = &accel.bvh.nodes.as_slice()[node];
         assert_eq!(n.inner & n.leaf, 0, "a child both inner and leaf");
         let mut all = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
         for c in 0..8 {
@@ -255,7 +255,7 @@ mod tests {
                     "lanes {lanes:b}"
                 );
                 assert!(lanes.count_ones() <= LEAF_SIZE);
-                let v = &accel.packets[p].v;
+                let v = &accel.packets.as_slice()[p].v;
                 let mut b = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
                 for (lane, &id) in accel.ids[4 * p..4 * p + 4].iter().enumerate() {
                     if lanes & (1 << lane) == 0 {

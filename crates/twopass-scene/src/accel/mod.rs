@@ -5,12 +5,15 @@
 //!
 //! One job per module: [`ray`] (rays, surface points, origin offsetting), [`triangle`] (the
 //! watertight test), [`packet`] (four triangles per test), [`collapse`] (the 8-wide tree from
-//! obvhs's binary one), [`wide`] (the nodes, the node test and the traversal); this file is the API: building, closest hit, any hit and the brute-force oracle.
+//! obvhs's binary one), [`wide`] (the nodes, the node test and the traversal), [`table`] (the
+//! nodes' and packets' memory, in huge pages); this file is the API: building, closest hit, any
+//! hit and the brute-force oracle.
 
 mod collapse;
 mod packet;
 mod ray;
 mod shaft;
+mod table;
 mod triangle;
 mod wide;
 
@@ -28,6 +31,7 @@ pub(crate) use ray::SHADOW_EPSILON;
 pub use ray::{Ray, SurfacePoint};
 pub use shaft::SHAFT_TOLERANCE;
 use shaft::Shaft;
+use table::PacketTable;
 pub(crate) use triangle::triangle_normal;
 use triangle::{AxisTriangle, ShearedRay};
 use wide::{NodeRay, WideBvh};
@@ -69,7 +73,7 @@ pub struct Accel {
     bvh: WideBvh,
     /// One packet per leaf: the leaf's triangles (at most four) in its first lanes, in the
     /// order the traversal meets the leaves (depth first).
-    packets: Vec<TriPacket>,
+    packets: PacketTable,
     /// Packet lane -> scene triangle index: `ids[4 * packet + lane]`.
     ids: Vec<u32>,
     build_time: Duration,
@@ -78,8 +82,8 @@ pub struct Accel {
 impl std::fmt::Debug for Accel {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Accel")
-            .field("packets", &self.packets.len())
-            .field("nodes", &self.bvh.nodes.len())
+            .field("packets", &self.packets.as_slice().len())
+            .field("nodes", &self.bvh.nodes.as_slice().len())
             .field("build_time", &self.build_time)
             .finish()
     }
@@ -145,7 +149,7 @@ impl Accel {
         };
         Self {
             bvh,
-            packets,
+            packets: PacketTable::of(packets),
             ids,
             build_time: start.elapsed(),
         }
@@ -158,7 +162,7 @@ impl Accel {
 
     /// Number of BVH nodes (8-wide).
     pub fn node_count(&self) -> usize {
-        self.bvh.nodes.len()
+        self.bvh.nodes.as_slice().len()
     }
 
     /// The closest hit with `0 < t < t_max`, if any.
@@ -174,7 +178,7 @@ impl Accel {
             true,
             #[inline(always)]
             |p, lanes, t_max| {
-                let hits = sheared.intersect(&self.packets[p], lanes, *t_max);
+                let hits = sheared.intersect(&self.packets.as_slice()[p], lanes, *t_max);
                 if hits.mask != 0 {
                     let lane = hits.nearest();
                     *t_max = hits.t[lane];
@@ -184,7 +188,7 @@ impl Accel {
             },
         );
         let (p, lane, barycentric) = best?;
-        let v = &self.packets[p].v;
+        let v = &self.packets.as_slice()[p].v;
         Some(TriangleHit {
             triangle: self.ids[4 * p + lane],
             t: t_max,
@@ -205,7 +209,10 @@ impl Accel {
             false,
             #[inline(always)]
             |p, lanes, t_max| {
-                hit = sheared.intersect(&self.packets[p], lanes, *t_max).mask != 0;
+                hit = sheared
+                    .intersect(&self.packets.as_slice()[p], lanes, *t_max)
+                    .mask
+                    != 0;
                 hit
             },
         );
@@ -223,9 +230,10 @@ impl Accel {
     /// [`SHAFT_TOLERANCE`].
     pub fn shaft_clear(&self, apex: Vec3, apex_normal: Option<Vec3>, base: [Vec3; 3]) -> bool {
         let shaft = Shaft::new(apex, apex_normal, base);
+        let packets = self.packets.as_slice();
         !self.bvh.any_leaf(
             |node| shaft.overlap(node),
-            |p, lanes| shaft.may_block(&self.packets[p], lanes),
+            |p, lanes| shaft.may_block(&packets[p], lanes),
         )
     }
 

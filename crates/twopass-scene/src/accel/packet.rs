@@ -9,7 +9,8 @@ use super::triangle::ShearedRay;
 /// Up to four triangles (one BVH leaf) stored for a one-ray, four-triangle watertight
 /// test: `v[axis][vertex]` holds that coordinate of that vertex for the four triangles (lanes).
 /// Lanes past the leaf's triangles are zero and never enabled.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
 pub(super) struct TriPacket {
     pub(super) v: [[Vec4; 3]; 3],
 }

@@ -1,8 +1,11 @@
-//! 8-wide BVH nodes (f32 child boxes, built by [`super::collapse`]), the eight-box slab test, and the traversal: ordered front to back with distance culling for
-//! closest hits, early exit for occlusion.
+//! 8-wide BVH nodes (f32 child boxes, built by [`super::collapse`]), the eight-box slab test,
+//! and the traversal: ordered front to back with distance culling for closest hits, early exit
+//! for occlusion.
 
 use glam::{Vec3, Vec4};
 use obvhs::faststack::FastStack;
+
+use super::table::NodeTable;
 
 /// Largest inverse direction component: finite, so the slab test never forms 0 * inf.
 pub(super) const MAX_INVERSE: f32 = 1e20;
@@ -38,7 +41,7 @@ const XOR_PERMUTE: [[u8; 256]; 8] = {
 
 /// One 8-wide node: its children's boxes (the binary tree's boxes, exact unions of the padded
 /// triangle boxes) and what each child is: an inner node, a leaf (one triangle packet), or empty.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C, align(64))]
 pub(super) struct WideNode {
     /// `bounds[4 * axis + 2 * side + half]`: lane `j` is child `4 * half + j`; side 0 is the
@@ -52,6 +55,9 @@ pub(super) struct WideNode {
     pub(super) inner: u8,
     /// Bit `c` set when child `c` is a leaf.
     pub(super) leaf: u8,
+    /// Up to the 256 bytes (four cache lines) the alignment makes a node anyway, spelled out so
+    /// that a node has no padding bytes (it can be copied as plain bytes).
+    _unused: [u8; 26],
 }
 
 impl WideNode {
@@ -75,6 +81,7 @@ impl WideNode {
         lanes: 0,
         inner: 0,
         leaf: 0,
+        _unused: [0; 26],
     };
 
     /// Sets the children's boxes: `min[axis][c]` and `max[axis][c]` bound child `c` (an empty
@@ -123,7 +130,7 @@ impl WideNode {
 
 /// The decoded tree: node 0 is the root.
 pub(super) struct WideBvh {
-    pub(super) nodes: Vec<WideNode>,
+    pub(super) nodes: NodeTable,
     /// The most entries the traversal stack can hold at once: over every path from the root,
     /// the sum of the inner children pushed beside the one descended into.
     stack_need: usize,
@@ -149,7 +156,7 @@ impl WideBvh {
         }
         Self {
             stack_need: need.first().copied().unwrap_or(0),
-            nodes,
+            nodes: NodeTable::of(nodes),
         }
     }
 
@@ -166,7 +173,7 @@ impl WideBvh {
         ordered: bool,
         mut leaf: impl FnMut(usize, u32, &mut f32) -> bool,
     ) {
-        if self.nodes.is_empty() {
+        if self.nodes.as_slice().is_empty() {
             return;
         }
         obvhs::fast_stack!((u32, f32), (INLINE_STACK), self.stack_need, stack, {
@@ -182,13 +189,14 @@ impl WideBvh {
         overlap: impl Fn(&WideNode) -> u32,
         mut leaf: impl FnMut(usize, u32) -> bool,
     ) -> bool {
-        if self.nodes.is_empty() {
+        if self.nodes.as_slice().is_empty() {
             return false;
         }
+        let nodes = self.nodes.as_slice();
         obvhs::fast_stack!(u32, (INLINE_STACK), self.stack_need + 1, stack, {
             stack.push(0);
             while let Some(node) = stack.pop() {
-                let n = &self.nodes[node as usize];
+                let n = &nodes[node as usize];
                 let kept = overlap(n);
                 let mut leaves = kept & u32::from(n.leaf);
                 while leaves != 0 {
@@ -219,7 +227,7 @@ impl WideBvh {
     ) {
         let mut node = 0u32;
         loop {
-            let n = &self.nodes[node as usize];
+            let n = &self.nodes.as_slice()[node as usize];
             let (hit, near) = n.intersect(ray, *t_max);
             let mut leaves = hit & u32::from(n.leaf);
             while leaves != 0 {
