@@ -4,10 +4,10 @@
 //! be offset safely (see [`SurfacePoint::spawn_origin`]).
 //!
 //! One job per module: [`ray`] (rays, surface points, origin offsetting), [`triangle`] (the
-//! watertight test), [`packet`] (four triangles per test), [`collapse`] (the 8-wide tree from
-//! obvhs's binary one), [`wide`] (the nodes, the node test and the traversal), [`table`] (the
-//! nodes' and packets' memory, in huge pages); this file is the API: building, closest hit, any
-//! hit and the brute-force oracle.
+//! watertight test), [`packet`] (four triangles per test), [`collapse`](mod@collapse) (the
+//! 8-wide tree from obvhs's binary one), [`wide`] (the nodes, the node test and the
+//! traversal), [`table`] (the nodes' and packets' memory, in huge pages); this file is the API:
+//! building, closest hit, any hit and the brute-force oracle.
 
 mod collapse;
 mod packet;

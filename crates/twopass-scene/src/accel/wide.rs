@@ -1,6 +1,6 @@
-//! 8-wide BVH nodes (f32 child boxes, built by [`super::collapse`]), the eight-box slab test,
-//! and the traversal: ordered front to back with distance culling for closest hits, early exit
-//! for occlusion.
+//! 8-wide BVH nodes (f32 child boxes, built by [`collapse`](mod@super::collapse)), the
+//! eight-box slab test, and the traversal: ordered front to back with distance culling for
+//! closest hits, early exit for occlusion.
 
 use glam::{Vec3, Vec4};
 use obvhs::faststack::FastStack;
