@@ -255,9 +255,10 @@ mod tests {
                     "lanes {lanes:b}"
                 );
                 assert!(lanes.count_ones() <= LEAF_SIZE);
-                let v = &accel.packets.as_slice()[p].v;
+                let packet = &accel.packets.as_slice()[p];
+                let v = &packet.v;
                 let mut b = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
-                for (lane, &id) in accel.ids[4 * p..4 * p + 4].iter().enumerate() {
+                for (lane, &id) in packet.ids.iter().enumerate() {
                     if lanes & (1 << lane) == 0 {
                         assert_eq!(id, u32::MAX);
                         continue;

@@ -74,8 +74,6 @@ pub struct Accel {
     /// One packet per leaf: the leaf's triangles (at most four) in its first lanes, in the
     /// order the traversal meets the leaves (depth first).
     packets: PacketTable,
-    /// Packet lane -> scene triangle index: `ids[4 * packet + lane]`.
-    ids: Vec<u32>,
     build_time: Duration,
 }
 
@@ -127,7 +125,6 @@ impl Accel {
             })
             .collect();
         let mut packets = Vec::new();
-        let mut ids = Vec::new();
         let bvh = if boxes.is_empty() {
             WideBvh::new(Vec::new())
         } else {
@@ -141,16 +138,13 @@ impl Accel {
             ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
             collapse(&bvh2, |leaf| {
                 let tris: Vec<[Vec3A; 3]> = leaf.iter().map(|&i| corners[i as usize]).collect();
-                packets.push(TriPacket::new(&tris));
-                // Unused lanes name no triangle (they are never enabled).
-                ids.extend((0..4).map(|lane| leaf.get(lane).copied().unwrap_or(u32::MAX)));
+                packets.push(TriPacket::new(&tris, leaf));
                 (packets.len() - 1) as u32
             })
         };
         Self {
             bvh,
             packets: PacketTable::of(packets),
-            ids,
             build_time: start.elapsed(),
         }
     }
@@ -188,9 +182,10 @@ impl Accel {
             },
         );
         let (p, lane, barycentric) = best?;
-        let v = &self.packets.as_slice()[p].v;
+        let packet = &self.packets.as_slice()[p];
+        let v = &packet.v;
         Some(TriangleHit {
-            triangle: self.ids[4 * p + lane],
+            triangle: packet.ids[lane],
             t: t_max,
             barycentric,
             corners: [0, 1, 2].map(|i| Vec3::new(v[0][i][lane], v[1][i][lane], v[2][i][lane])),
