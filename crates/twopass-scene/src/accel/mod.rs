@@ -1,28 +1,37 @@
-//! Ray queries over an obvhs CWBVH: closest hit and any hit (occlusion), with a watertight
+//! Ray queries over an 8-wide BVH: closest hit and any hit (occlusion), with a watertight
 //! ray-triangle test (Woop, Benthin & Wald 2013, as in pbrt-v4) and conservative error bounds,
 //! so rays through shared edges and vertices never slip between triangles and spawned rays can
 //! be offset safely (see [`SurfacePoint::spawn_origin`]).
 //!
 //! One job per module: [`ray`] (rays, surface points, origin offsetting), [`triangle`] (the
-//! watertight test), [`packet`] (four triangles per test), [`wide`] (decoded CWBVH nodes and the
-//! node test); this file is the API: building, closest hit, any hit and the brute-force oracle.
+//! watertight test), [`packet`] (four triangles per test), [`collapse`](mod@collapse) (the
+//! 8-wide tree from obvhs's binary one), [`wide`] (the nodes, the node test and the
+//! traversal), [`table`] (the nodes' and packets' memory, in huge pages); this file is the API:
+//! building, closest hit, any hit and the brute-force oracle.
 
+mod collapse;
 mod packet;
 mod ray;
 mod shaft;
+mod table;
 mod triangle;
 mod wide;
 
 use std::time::{Duration, Instant};
 
 use glam::{Vec3, Vec3A};
-use obvhs::{Boundable, BvhBuildParams, aabb::Aabb, cwbvh::builder::build_cwbvh};
+use obvhs::{
+    Boundable, BvhBuildParams, aabb::Aabb, bvh2::reinsertion::ReinsertionOptimizer,
+    ploc::PlocBuilder,
+};
 
+use collapse::collapse;
 use packet::{PacketRay, TriPacket};
 pub(crate) use ray::SHADOW_EPSILON;
 pub use ray::{Ray, SurfacePoint};
 pub use shaft::SHAFT_TOLERANCE;
 use shaft::Shaft;
+use table::PacketTable;
 pub(crate) use triangle::triangle_normal;
 use triangle::{AxisTriangle, ShearedRay};
 use wide::{NodeRay, WideBvh};
@@ -56,24 +65,23 @@ pub struct TriangleHit {
     pub corners: [Vec3; 3],
 }
 
-/// An 8-wide BVH over the scene's triangles (built by obvhs as a CWBVH, decoded) with the
-/// queries every pass uses.
+/// An 8-wide BVH over the scene's triangles (a binary tree built by obvhs's PLOC builder,
+/// collapsed into 8-wide nodes with leaves of up to four triangles) with the queries every
+/// pass uses.
 pub struct Accel {
     /// The decoded tree.
     bvh: WideBvh,
-    /// One packet per leaf: the leaf's triangles (at most three, obvhs's CWBVH leaf size) in
-    /// its first lanes.
-    packets: Vec<TriPacket>,
-    /// Packet lane -> scene triangle index: `ids[4 * packet + lane]`.
-    ids: Vec<u32>,
+    /// One packet per leaf: the leaf's triangles (at most four) in its first lanes, in the
+    /// order the traversal meets the leaves (depth first).
+    packets: PacketTable,
     build_time: Duration,
 }
 
 impl std::fmt::Debug for Accel {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Accel")
-            .field("packets", &self.packets.len())
-            .field("nodes", &self.bvh.nodes.len())
+            .field("packets", &self.packets.as_slice().len())
+            .field("nodes", &self.bvh.nodes.as_slice().len())
             .field("build_time", &self.build_time)
             .finish()
     }
@@ -87,7 +95,10 @@ impl Accel {
         Self::build_with(positions, triangles, BvhBuildParams::medium_build())
     }
 
-    /// Builds the BVH with explicit obvhs build parameters.
+    /// Builds the BVH with explicit obvhs build parameters. Those of the binary tree apply
+    /// (PLOC search distance and depth threshold, sort precision, reinsertion ratio); the leaf
+    /// sizes and collapse costs do not (the 8-wide collapse chooses leaves of up to four
+    /// triangles by its own costs).
     pub fn build_with(positions: &[Vec3], triangles: &[[u32; 3]], params: BvhBuildParams) -> Self {
         let start = Instant::now();
         let corners: Vec<[Vec3A; 3]> = triangles
@@ -113,31 +124,27 @@ impl Accel {
                 },
             })
             .collect();
-        let cwbvh = build_cwbvh(&boxes, params, &mut Duration::default());
-        // Every leaf gets its own packet, so a leaf is one four-lane test.
-        let mut packet_of_slot = vec![u32::MAX; cwbvh.primitive_indices.len()];
         let mut packets = Vec::new();
-        let mut ids = Vec::new();
-        for n in &cwbvh.nodes {
-            for (c, &meta) in n.child_meta.iter().enumerate() {
-                if n.imask & (1 << c) != 0 || meta == 0 {
-                    continue;
-                }
-                let first = (n.primitive_base_idx + u32::from(meta & 0x1f)) as usize;
-                let count = (meta >> 5).count_ones() as usize;
-                let leaf = &cwbvh.primitive_indices[first..first + count];
+        let bvh = if boxes.is_empty() {
+            WideBvh::new(Vec::new())
+        } else {
+            let mut bvh2 = PlocBuilder::with_capacity(boxes.len()).build(
+                params.ploc_search_distance,
+                &boxes,
+                (0..boxes.len() as u32).collect(),
+                params.sort_precision,
+                params.search_depth_threshold,
+            );
+            ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
+            collapse(&bvh2, |leaf| {
                 let tris: Vec<[Vec3A; 3]> = leaf.iter().map(|&i| corners[i as usize]).collect();
-                packet_of_slot[first] = packets.len() as u32;
-                packets.push(TriPacket::new(&tris));
-                // Unused lanes name no triangle (they are never enabled).
-                ids.extend((0..4).map(|lane| leaf.get(lane).copied().unwrap_or(u32::MAX)));
-            }
-        }
-        let bvh = WideBvh::new(&cwbvh, |slot| packet_of_slot[slot as usize]);
+                packets.push(TriPacket::new(&tris, leaf));
+                (packets.len() - 1) as u32
+            })
+        };
         Self {
             bvh,
-            packets,
-            ids,
+            packets: PacketTable::of(packets),
             build_time: start.elapsed(),
         }
     }
@@ -149,7 +156,7 @@ impl Accel {
 
     /// Number of BVH nodes (8-wide).
     pub fn node_count(&self) -> usize {
-        self.bvh.nodes.len()
+        self.bvh.nodes.as_slice().len()
     }
 
     /// The closest hit with `0 < t < t_max`, if any.
@@ -165,7 +172,7 @@ impl Accel {
             true,
             #[inline(always)]
             |p, lanes, t_max| {
-                let hits = sheared.intersect(&self.packets[p], lanes, *t_max);
+                let hits = sheared.intersect(&self.packets.as_slice()[p], lanes, *t_max);
                 if hits.mask != 0 {
                     let lane = hits.nearest();
                     *t_max = hits.t[lane];
@@ -175,9 +182,10 @@ impl Accel {
             },
         );
         let (p, lane, barycentric) = best?;
-        let v = &self.packets[p].v;
+        let packet = &self.packets.as_slice()[p];
+        let v = &packet.v;
         Some(TriangleHit {
-            triangle: self.ids[4 * p + lane],
+            triangle: packet.ids[lane],
             t: t_max,
             barycentric,
             corners: [0, 1, 2].map(|i| Vec3::new(v[0][i][lane], v[1][i][lane], v[2][i][lane])),
@@ -196,7 +204,10 @@ impl Accel {
             false,
             #[inline(always)]
             |p, lanes, t_max| {
-                hit = sheared.intersect(&self.packets[p], lanes, *t_max).mask != 0;
+                hit = sheared
+                    .intersect(&self.packets.as_slice()[p], lanes, *t_max)
+                    .mask
+                    != 0;
                 hit
             },
         );
@@ -214,9 +225,10 @@ impl Accel {
     /// [`SHAFT_TOLERANCE`].
     pub fn shaft_clear(&self, apex: Vec3, apex_normal: Option<Vec3>, base: [Vec3; 3]) -> bool {
         let shaft = Shaft::new(apex, apex_normal, base);
+        let packets = self.packets.as_slice();
         !self.bvh.any_leaf(
             |node| shaft.overlap(node),
-            |p, lanes| shaft.may_block(&self.packets[p], lanes),
+            |p, lanes| shaft.may_block(&packets[p], lanes),
         )
     }
 

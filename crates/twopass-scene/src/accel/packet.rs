@@ -7,15 +7,21 @@ use super::ray::gamma;
 use super::triangle::ShearedRay;
 
 /// Up to four triangles (one BVH leaf) stored for a one-ray, four-triangle watertight
-/// test: `v[axis][vertex]` holds that coordinate of that vertex for the four triangles (lanes).
-/// Lanes past the leaf's triangles are zero and never enabled.
-#[derive(Clone, Copy, Debug)]
+/// test: `v[axis][vertex]` holds that coordinate of that vertex for the four triangles (lanes),
+/// `ids[lane]` the scene index of the triangle. Lanes past the leaf's triangles are zero, name
+/// no triangle (`u32::MAX`) and are never enabled.
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
 pub(super) struct TriPacket {
     pub(super) v: [[Vec4; 3]; 3],
+    /// Scene triangle indices, beside the vertices: a hit's index is read from (or next to)
+    /// the cache lines its test just loaded, not from a table of its own.
+    pub(super) ids: [u32; 4],
 }
 
 impl TriPacket {
-    pub(super) fn new(tris: &[[Vec3A; 3]]) -> Self {
+    /// The packet of triangles `ids` with corners `tris` (at most four).
+    pub(super) fn new(tris: &[[Vec3A; 3]], ids: &[u32]) -> Self {
         let mut v = [[[0.0f32; 4]; 3]; 3];
         for (lane, t) in tris.iter().enumerate() {
             for (vertex, p) in t.iter().enumerate() {
@@ -26,6 +32,7 @@ impl TriPacket {
         }
         Self {
             v: v.map(|a| a.map(Vec4::from_array)),
+            ids: [0, 1, 2, 3].map(|lane| ids.get(lane).copied().unwrap_or(u32::MAX)),
         }
     }
 }

@@ -1,10 +1,11 @@
-//! 8-wide BVH nodes decoded from obvhs's compressed CWBVH (f32 boxes once at build time), the
+//! 8-wide BVH nodes (f32 child boxes, built by [`collapse`](mod@super::collapse)), the
 //! eight-box slab test, and the traversal: ordered front to back with distance culling for
 //! closest hits, early exit for occlusion.
 
 use glam::{Vec3, Vec4};
-use obvhs::cwbvh::{CwBvh, node::CwBvhNode};
 use obvhs::faststack::FastStack;
+
+use super::table::NodeTable;
 
 /// Largest inverse direction component: finite, so the slab test never forms 0 * inf.
 pub(super) const MAX_INVERSE: f32 = 1e20;
@@ -13,7 +14,7 @@ pub(super) const MAX_INVERSE: f32 = 1e20;
 /// at build time, [`WideBvh::stack_need`]) traverses with a heap stack of the exact size.
 const INLINE_STACK: usize = 64;
 
-/// `XOR_PERMUTE[o][m]` moves bit `c` of `m` to bit `c ^ o`. obvhs's builder places a node's
+/// `XOR_PERMUTE[o][m]` moves bit `c` of `m` to bit `c ^ o`. The builder places a node's
 /// children in slots such that, for a ray whose octant is `o` (bit 2 set for x >= 0, bit 1
 /// for y, bit 0 for z), descending `slot ^ o` is roughly front to back.
 const XOR_PERMUTE: [[u8; 256]; 8] = {
@@ -38,10 +39,9 @@ const XOR_PERMUTE: [[u8; 256]; 8] = {
     table
 };
 
-/// One 8-wide node: its children's boxes decoded from obvhs's 8-bit quantized planes to f32
-/// once at build time (rounded outward, so every decoded box contains the quantized one), and
-/// what each child is: an inner node, a leaf (one triangle packet), or empty.
-#[derive(Clone, Copy, Debug)]
+/// One 8-wide node: its children's boxes (the binary tree's boxes, exact unions of the padded
+/// triangle boxes) and what each child is: an inner node, a leaf (one triangle packet), or empty.
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C, align(64))]
 pub(super) struct WideNode {
     /// `bounds[4 * axis + 2 * side + half]`: lane `j` is child `4 * half + j`; side 0 is the
@@ -55,58 +55,45 @@ pub(super) struct WideNode {
     pub(super) inner: u8,
     /// Bit `c` set when child `c` is a leaf.
     pub(super) leaf: u8,
+    /// Up to the 256 bytes (four cache lines) the alignment makes a node anyway, spelled out so
+    /// that a node has no padding bytes (it can be copied as plain bytes).
+    _unused: [u8; 26],
 }
 
 impl WideNode {
-    /// Decodes obvhs node `n`; `packet_of(slot)` is the packet that holds the leaf starting at
-    /// primitive slot `slot` (every leaf has its own packet).
-    fn decode(n: &CwBvhNode, packet_of: impl Fn(u32) -> u32) -> Self {
-        let ext = n.compute_extent();
-        let mut bounds = [Vec4::ZERO; 12];
-        let planes = [
-            (&n.child_min_x, &n.child_max_x),
-            (&n.child_min_y, &n.child_max_y),
-            (&n.child_min_z, &n.child_max_z),
-        ];
-        for (axis, (lo, hi)) in planes.into_iter().enumerate() {
-            let mut min = [f32::INFINITY; 8];
-            let mut max = [f32::NEG_INFINITY; 8];
-            for c in 0..8 {
-                if n.child_meta[c] != 0 {
-                    // q * 2^e is exact; the sum rounds once, then one more ulp outward.
-                    min[c] = (n.p[axis] + f32::from(lo[c]) * ext[axis]).next_down();
-                    max[c] = (n.p[axis] + f32::from(hi[c]) * ext[axis]).next_up();
-                }
-            }
+    /// A node with no children.
+    pub(super) const EMPTY: Self = Self {
+        bounds: [
+            Vec4::INFINITY,
+            Vec4::INFINITY,
+            Vec4::NEG_INFINITY,
+            Vec4::NEG_INFINITY,
+            Vec4::INFINITY,
+            Vec4::INFINITY,
+            Vec4::NEG_INFINITY,
+            Vec4::NEG_INFINITY,
+            Vec4::INFINITY,
+            Vec4::INFINITY,
+            Vec4::NEG_INFINITY,
+            Vec4::NEG_INFINITY,
+        ],
+        child: [0; 8],
+        lanes: 0,
+        inner: 0,
+        leaf: 0,
+        _unused: [0; 26],
+    };
+
+    /// Sets the children's boxes: `min[axis][c]` and `max[axis][c]` bound child `c` (an empty
+    /// child's box is min +inf, max -inf).
+    pub(super) fn set_bounds(&mut self, min: &[[f32; 8]; 3], max: &[[f32; 8]; 3]) {
+        for axis in 0..3 {
             for half in 0..2 {
                 let r = 4 * half..4 * half + 4;
-                bounds[4 * axis + half] = Vec4::from_slice(&min[r.clone()]);
-                bounds[4 * axis + 2 + half] = Vec4::from_slice(&max[r]);
+                self.bounds[4 * axis + half] = Vec4::from_slice(&min[axis][r.clone()]);
+                self.bounds[4 * axis + 2 + half] = Vec4::from_slice(&max[axis][r]);
             }
         }
-        let mut node = Self {
-            bounds,
-            child: [0; 8],
-            lanes: 0,
-            inner: n.imask,
-            leaf: 0,
-        };
-        for (c, &meta) in n.child_meta.iter().enumerate() {
-            if n.imask & (1 << c) != 0 {
-                // Inner children are stored from `child_base_idx` in slot order.
-                let before = (u32::from(n.imask) & ((1 << c) - 1)).count_ones();
-                node.child[c] = n.child_base_idx + before;
-            } else if meta != 0 {
-                // A leaf: its primitives are slots `offset..offset + count` after the base,
-                // the count in unary in the top three bits.
-                let offset = u32::from(meta & 0x1f);
-                let count = (meta >> 5).count_ones();
-                node.child[c] = packet_of(n.primitive_base_idx + offset);
-                node.lanes |= ((1 << count) - 1) << (4 * c);
-                node.leaf |= 1 << c;
-            }
-        }
-        node
     }
 
     /// The children hit by `ray` within `[0, t_max]` (bit `c` for child `c`) and each child's
@@ -143,21 +130,16 @@ impl WideNode {
 
 /// The decoded tree: node 0 is the root.
 pub(super) struct WideBvh {
-    pub(super) nodes: Vec<WideNode>,
+    pub(super) nodes: NodeTable,
     /// The most entries the traversal stack can hold at once: over every path from the root,
     /// the sum of the inner children pushed beside the one descended into.
     stack_need: usize,
 }
 
 impl WideBvh {
-    /// Decodes obvhs's tree; `packet_of` as in [`WideNode::decode`].
-    pub(super) fn new(bvh: &CwBvh, packet_of: impl Fn(u32) -> u32) -> Self {
-        let nodes: Vec<WideNode> = bvh
-            .nodes
-            .iter()
-            .map(|n| WideNode::decode(n, &packet_of))
-            .collect();
-        // Children come after their parents in obvhs's order, so one backward sweep sees every
+    /// The tree of `nodes`: the root first, every node before its children.
+    pub(super) fn new(nodes: Vec<WideNode>) -> Self {
+        // Children come after their parents, so one backward sweep sees every
         // child's need before its parent's.
         let mut need = vec![0usize; nodes.len()];
         for (i, n) in nodes.iter().enumerate().rev() {
@@ -165,7 +147,7 @@ impl WideBvh {
             let deepest = inner
                 .map(|c| {
                     let child = n.child[c] as usize;
-                    assert!(child > i, "CWBVH child stored before its parent");
+                    assert!(child > i, "child stored before its parent");
                     need[child]
                 })
                 .max()
@@ -174,14 +156,14 @@ impl WideBvh {
         }
         Self {
             stack_need: need.first().copied().unwrap_or(0),
-            nodes,
+            nodes: NodeTable::of(nodes),
         }
     }
 
     /// Visits the leaves `ray` reaches within `t_max`, calling `leaf(packet, lanes, t_max)`;
     /// the call may shorten `t_max` (a closer hit), and returns `true` to stop the walk. With
     /// `ordered`, inner children are visited nearest first and a pushed child is skipped once
-    /// `t_max` is below its entry distance (closest hit); without, in obvhs's octant order
+    /// `t_max` is below its entry distance (closest hit); without, in the builder's octant order
     /// (any hit: no distances to sort or compare).
     #[inline(always)]
     pub(super) fn walk(
@@ -191,7 +173,7 @@ impl WideBvh {
         ordered: bool,
         mut leaf: impl FnMut(usize, u32, &mut f32) -> bool,
     ) {
-        if self.nodes.is_empty() {
+        if self.nodes.as_slice().is_empty() {
             return;
         }
         obvhs::fast_stack!((u32, f32), (INLINE_STACK), self.stack_need, stack, {
@@ -207,13 +189,14 @@ impl WideBvh {
         overlap: impl Fn(&WideNode) -> u32,
         mut leaf: impl FnMut(usize, u32) -> bool,
     ) -> bool {
-        if self.nodes.is_empty() {
+        if self.nodes.as_slice().is_empty() {
             return false;
         }
+        let nodes = self.nodes.as_slice();
         obvhs::fast_stack!(u32, (INLINE_STACK), self.stack_need + 1, stack, {
             stack.push(0);
             while let Some(node) = stack.pop() {
-                let n = &self.nodes[node as usize];
+                let n = &nodes[node as usize];
                 let kept = overlap(n);
                 let mut leaves = kept & u32::from(n.leaf);
                 while leaves != 0 {
@@ -244,7 +227,7 @@ impl WideBvh {
     ) {
         let mut node = 0u32;
         loop {
-            let n = &self.nodes[node as usize];
+            let n = &self.nodes.as_slice()[node as usize];
             let (hit, near) = n.intersect(ray, *t_max);
             let mut leaves = hit & u32::from(n.leaf);
             while leaves != 0 {
@@ -259,7 +242,7 @@ impl WideBvh {
                 0 => None,
                 1 => Some(n.child[inner.trailing_zeros() as usize]),
                 _ if !ordered => {
-                    // obvhs's order: descending `slot ^ octant`; push the rest so that the
+                    // The builder's order: descending `slot ^ octant`; push the rest so that the
                     // next in that order is popped first.
                     let o = ray.octant;
                     let mut order = u32::from(XOR_PERMUTE[o][inner as usize]);
@@ -320,7 +303,7 @@ pub(super) struct NodeRay {
     pub(super) inv: [Vec4; 3],
     /// 0 when the ray enters through the box minimum on this axis, 2 through the maximum.
     pub(super) near: [usize; 3],
-    /// The direction's octant as obvhs orders children by: bit 2 set for x >= 0, bit 1 for
+    /// The direction's octant as the builder orders children by: bit 2 set for x >= 0, bit 1 for
     /// y, bit 0 for z.
     pub(super) octant: usize,
 }
@@ -348,59 +331,6 @@ impl NodeRay {
             octant: usize::from(inv[0] >= 0.0) << 2
                 | usize::from(inv[1] >= 0.0) << 1
                 | usize::from(inv[2] >= 0.0),
-        }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use std::time::Duration;
-
-    use glam::{Vec3, Vec3A};
-    use obvhs::{BvhBuildParams, aabb::Aabb, cwbvh::builder::build_cwbvh};
-
-    use super::WideNode;
-    use crate::accel::Padded;
-
-    #[test]
-    fn decoded_boxes_contain_the_quantized_ones() {
-        let positions: Vec<Vec3> = (0..300)
-            .map(|i| {
-                let f = i as f32;
-                Vec3::new((f * 0.37).sin() * 10.0, (f * 0.11).cos() * 7.0, f * 0.05)
-            })
-            .collect();
-        let tris: Vec<[u32; 3]> = (0..298).map(|i| [i, i + 1, i + 2]).collect();
-        let corners: Vec<Padded> = tris
-            .iter()
-            .map(|t| {
-                let v = t.map(|i| Vec3A::from(positions[i as usize]));
-                Padded {
-                    aabb: Aabb {
-                        min: v[0].min(v[1]).min(v[2]),
-                        max: v[0].max(v[1]).max(v[2]),
-                    },
-                }
-            })
-            .collect();
-        let bvh = build_cwbvh(
-            &corners,
-            BvhBuildParams::medium_build(),
-            &mut Duration::default(),
-        );
-        for n in &bvh.nodes {
-            let w = WideNode::decode(n, |_| 0);
-            for c in 0..8 {
-                if n.child_meta[c] == 0 {
-                    continue;
-                }
-                let q = n.child_aabb(c);
-                let (half, lane) = (c / 4, c % 4);
-                for axis in 0..3 {
-                    assert!(w.bounds[4 * axis + half][lane] <= q.min[axis]);
-                    assert!(w.bounds[4 * axis + 2 + half][lane] >= q.max[axis]);
-                }
-            }
         }
     }
 }
