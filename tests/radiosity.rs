@@ -638,29 +638,18 @@ fn shaft_culling_changes_nothing_but_the_rays_cast() {
 fn visibility_keeps_its_coarse_samples_and_stays_unbiased() {
     use twopass_radiosity::VisibilityRays;
     use twopass_radiosity::form_factor::visibility;
-    let light = "[[object]]\nname = \"light\"\nmaterial = \"w\"\nemission = 1\nshape = { type = \"polygon\", vertices = [[-1, -1, 1], [0, 1, 1], [1, -1, 1]] }\n";
-    let s = scene(
-        &format!(
-            "{}{}{light}",
-            quad(
-                "floor",
-                "w",
-                [-0.5, -0.5, 0.0],
-                [1.0, 0.0, 0.0],
-                [0.0, 1.0, 0.0],
-                None
-            ),
-            quad(
-                "blocker",
-                "w",
-                [-3.0, -3.0, 0.5],
-                [3.0, 0.0, 0.0],
-                [0.0, 6.0, 0.0],
-                None
-            ),
-        ),
-        &lambert("w", 0.5),
-    );
+    // A receiving floor at z = 0 and a light triangle of half-width `r` at height `z`, facing
+    // down, symmetric about x = 0; `extra` objects between them.
+    let room = |z: f64, r: f64, extra: &str| {
+        let floor = "[[object]]\nname = \"floor\"\nmaterial = \"w\"\nshape = { type = \"quad\", origin = [-0.5, -0.5, 0], edge_u = [1, 0, 0], edge_v = [0, 1, 0] }\n";
+        let light = format!(
+            "[[object]]\nname = \"light\"\nmaterial = \"w\"\nemission = 1\nshape = {{ type = \"polygon\", vertices = [[{}, {}, {z}], [0, {r}, {z}], [{r}, {}, {z}]] }}\n",
+            -r, -r, -r
+        );
+        scene(&format!("{floor}{extra}{light}"), &lambert("w", 0.5))
+    };
+    let blocker = "[[object]]\nname = \"blocker\"\nmaterial = \"w\"\nshape = { type = \"quad\", origin = [-3, -3, 0.5], edge_u = [3, 0, 0], edge_v = [0, 6, 0] }\n";
+    let s = room(1.0, 1.0, blocker);
     assert_eq!(s.mesh.triangles.len(), 5);
     let shooter = s.mesh.corners(4).map(|c| c.as_dvec3());
     let from = s.mesh.surface_point_at(0, glam::Vec3::ZERO);
@@ -678,14 +667,9 @@ fn visibility_keeps_its_coarse_samples_and_stays_unbiased() {
     // few strata: its standard deviation is below 0.1, the mean's below 0.002.
     assert!((mean - 0.5).abs() < 0.01, "mean visibility {mean}");
     // Far from a small shooter, four open rays settle it.
-    let far = scene(
-        "[[object]]\nname = \"light\"\nmaterial = \"w\"\nemission = 1\nshape = { type = \"polygon\", vertices = [[-0.1, -0.1, 10], [0, 0.1, 10], [0.1, -0.1, 10]] }\n[[object]]\nname = \"floor\"\nmaterial = \"w\"\nshape = { type = \"quad\", origin = [-0.5, -0.5, 0], edge_u = [1, 0, 0], edge_v = [0, 1, 0] }\n",
-        &lambert("w", 0.5),
-    );
-    let shooter = far.mesh.corners(0).map(|c| c.as_dvec3());
-    let from = far.mesh.surface_point_at(1, glam::Vec3::ZERO);
-    assert_eq!(
-        visibility(&far, &from, glam::Vec3::Z, shooter, 0, rays, 7),
-        (1.0, 4)
-    );
+    let far = room(10.0, 0.1, "");
+    let shooter = far.mesh.corners(2).map(|c| c.as_dvec3());
+    let from = far.mesh.surface_point_at(0, glam::Vec3::ZERO);
+    let settled = visibility(&far, &from, glam::Vec3::Z, shooter, 2, rays, 7);
+    assert_eq!(settled, (1.0, 4));
 }
