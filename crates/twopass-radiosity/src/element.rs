@@ -492,7 +492,7 @@ impl ElementMesh {
 }
 
 /// The element trees laid out for point location, which a finished solution does once per
-/// camera sample: each level of the descent reads one 32-byte [`Split`] instead of two mesh
+/// camera sample: each level of the descent reads one 32-byte split record instead of two mesh
 /// nodes. Finds exactly the leaf [`ElementMesh::locate`] finds (the same arithmetic on the
 /// same values), for the mesh it was built from.
 #[derive(Debug, Clone, Default)]
