@@ -286,7 +286,7 @@ impl<'s> Progressive<'s> {
         s.unshot_emit = (0..n).map(|p| s.patch_emission(p)).collect();
         s.book.energy.emitted = (0..n).map(|p| s.unshot_emit[p] * s.patch_area(p)).sum();
         s.book.energy.unshot = s.book.energy.emitted;
-        s.rebuild_patch_leaves();
+        s.rebuild_patch_elements();
         s.resplat();
         Ok(s)
     }
@@ -477,7 +477,7 @@ impl<'s> Progressive<'s> {
         }
     }
 
-    fn rebuild_patch_leaves(&mut self) {
+    fn rebuild_patch_elements(&mut self) {
         self.elements = PatchElements::new(&self.mesh);
     }
 
@@ -765,7 +765,7 @@ impl<'s> Progressive<'s> {
                 s.received_refl[v] += sr * f64::from(f);
             }
         });
-        self.rebuild_patch_leaves();
+        self.rebuild_patch_elements();
         self.resplat();
         // Re-estimate each patch's reflected radiosity from its (finer) elements.
         for p in 0..self.mesh.patches.len() {
