@@ -296,6 +296,72 @@ fn shaft_clear_never_hides_a_blocker() {
     }
 }
 
+/// Whenever the shaft test between two triangles says nothing can come between them, no
+/// segment between them is blocked: 64 shadow rays per cleared pair between points strictly
+/// inside both, on the Cornell scenes and a generated room. Each triangle is a random part of a
+/// scene triangle, as patches are. The test must also clear a fair share of the pairs and keep
+/// others.
+#[test]
+fn shaft_clear_between_never_hides_a_blocker() {
+    let mut scenes: Vec<Scene> = ["cornell-box.toml", "cornell-spheres.toml"]
+        .iter()
+        .map(|n| load(scene_path(n)).unwrap().0)
+        .collect();
+    scenes.push(workload::synthetic_scene(10_000, 5).unwrap().0);
+    for (k, scene) in scenes.iter().enumerate() {
+        let mut r = rng(70 + k as u64);
+        let n = scene.mesh.triangles.len() as u32;
+        let (mut clear, mut pairs) = (0, 0);
+        for _ in 0..3000 {
+            let (s, t) = (r.below(n), r.below(n));
+            let part = |t: u32, r: &mut Pcg64Mcg| {
+                [0, 1, 2].map(|_| interior_point(scene, t, r).position)
+            };
+            let (a, b) = (part(s, &mut r), part(t, &mut r));
+            let (na, nb) = (
+                scene.mesh.geometric_normals[s as usize],
+                scene.mesh.geometric_normals[t as usize],
+            );
+            let centre = |p: [Vec3; 3]| (p[0] + p[1] + p[2]) / 3.0;
+            if s == t || (centre(b) - centre(a)).dot(na) <= 0.0 {
+                continue;
+            }
+            pairs += 1;
+            if !scene.accel().shaft_clear_between(a, na, b, nb) {
+                continue;
+            }
+            clear += 1;
+            for _ in 0..64 {
+                let mut point = |p: [Vec3; 3], t: u32| {
+                    let (u, v) = (r.next_f32(), r.next_f32());
+                    let (u, v) = if u + v > 1.0 {
+                        (1.0 - u, 1.0 - v)
+                    } else {
+                        (u, v)
+                    };
+                    scene
+                        .mesh
+                        .surface_point_at(t, p[0] + (p[1] - p[0]) * u + (p[2] - p[0]) * v)
+                };
+                let (from, to) = (point(a, s), point(b, t));
+                assert!(
+                    !scene.occluded_between(&from, &to),
+                    "scene {k}: triangles {s} {a:?} and {t} {b:?} said clear, but the segment \
+                     from {:?} to {:?} is blocked",
+                    from.position,
+                    to.position
+                );
+            }
+        }
+        let share = clear as f64 / pairs as f64;
+        println!("scene {k}: {clear} of {pairs} pairs cleared");
+        assert!(
+            (0.05..0.95).contains(&share),
+            "scene {k}: {clear} of {pairs} pairs cleared"
+        );
+    }
+}
+
 /// Two unit squares facing each other one unit apart: clear; a small square between them on
 /// the axis blocks the shaft from the centre; moved well to the side, it does not; lying in
 /// the receiver's own plane (beside it), it cannot block.

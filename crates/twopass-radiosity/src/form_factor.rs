@@ -147,6 +147,25 @@ pub fn shaft_clear(scene: &Scene, from: &SurfacePoint, shooter: [DVec3; 3]) -> b
     )
 }
 
+/// Whether nothing in the scene can block any segment between receiver patch `receiver` and
+/// shooter patch `shooter` (each its corners and its scene triangle's unit geometric normal):
+/// shaft culling with the convex hull of the two, [`twopass_scene::Accel::shaft_clear_between`].
+/// Every point of the receiver then sees the whole shooter, and its [`visibility`] is 1
+/// without a ray; a vertex's own test, [`shaft_clear`], covers part of this hull, so a pair
+/// this clears it would clear too.
+pub fn patches_clear(
+    scene: &Scene,
+    (receiver, receiver_normal): ([DVec3; 3], Vec3),
+    (shooter, shooter_normal): ([DVec3; 3], Vec3),
+) -> bool {
+    scene.accel().shaft_clear_between(
+        receiver.map(|c| c.as_vec3()),
+        receiver_normal,
+        shooter.map(|c| c.as_vec3()),
+        shooter_normal,
+    )
+}
+
 /// The visible fraction of shooter triangle `shooter` (corners, scene triangle `shooter_tri`)
 /// from receiver `from`, by stratified shadow rays. Samples behind the receiver's plane do not
 /// count. Starts with `rays.min` rays and goes to `rays.max` when they disagree or when the

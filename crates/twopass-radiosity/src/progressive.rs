@@ -3,6 +3,7 @@
 //! plus the specular transfer of [`crate::specular`]: each shot also traces the shooter's light
 //! through mirrors and glass and deposits it where it lands.
 
+use std::sync::atomic::{AtomicU8, Ordering};
 use std::ops::ControlFlow;
 use std::time::Instant;
 
@@ -32,6 +33,14 @@ const BYTES_PER_ELEMENT: f64 = 400.0;
 /// Most form factors [`Progressive::patch_rows`] computes in one parallel pass (16 MiB of
 /// rows in flight beside the cache).
 const ROW_BATCH: usize = 1 << 22;
+
+/// Most patches for which [`Progressive`] keeps every pair's shaft test (one byte per pair:
+/// 16 MiB at this many); above it, each row tests its pairs afresh.
+const PAIR_CACHE_MAX_PATCHES: usize = 4096;
+/// States of a pair of patches in [`Progressive`]'s shaft cache.
+const PAIR_UNKNOWN: u8 = 0;
+const PAIR_CLEAR: u8 = 1;
+const PAIR_BLOCKED: u8 = 2;
 
 /// A progressive-refinement radiosity solve over a scene. Deterministic: the same options and
 /// seed give the same solution bit for bit on any number of threads.
@@ -77,6 +86,11 @@ pub struct Progressive<'s> {
     patch_area: Vec<f64>,
     /// Per patch: cached form factors (with visibility) to every vertex, once computed.
     cache: Vec<Option<Vec<f32>>>,
+    /// Per pair of patches `(q, p)` at `q * n + p`, with shaft culling and at most
+    /// [`PAIR_CACHE_MAX_PATCHES`] patches: whether the shaft between them is clear
+    /// ([`PAIR_UNKNOWN`], [`PAIR_CLEAR`], [`PAIR_BLOCKED`]); patches never change, and every
+    /// refinement asks again for the new vertices. Empty otherwise.
+    pair_clear: Vec<AtomicU8>,
     cached_bytes: usize,
     /// Rounds, time and power, kept as the other solver keeps them.
     book: Bookkeeping,
@@ -94,6 +108,10 @@ struct PatchElements {
     vertices: Vec<[u32; 3]>,
     /// Scene units squared.
     area: Vec<f64>,
+    /// Per mesh vertex: a patch on the vertex's own scene triangle whose elements use it (so
+    /// the vertex lies on that patch), `u32::MAX` for none. Shaft culling between patches
+    /// clears a vertex through it.
+    vertex_patch: Vec<u32>,
 }
 
 impl PatchElements {
@@ -123,11 +141,23 @@ impl PatchElements {
             .iter()
             .map(|&l| f64::from(mesh.nodes[l as usize].area))
             .collect();
+        let mut vertex_patch = vec![u32::MAX; mesh.vertices.len()];
+        for (p, &node) in mesh.patches.iter().enumerate() {
+            let triangle = mesh.nodes[node as usize].scene_triangle;
+            for &l in &leaf[start[p]..start[p + 1]] {
+                for v in mesh.nodes[l as usize].vertices {
+                    if mesh.vertices[v as usize].triangle == triangle {
+                        vertex_patch[v as usize] = p as u32;
+                    }
+                }
+            }
+        }
         Self {
             start,
             leaf,
             vertices,
             area,
+            vertex_patch,
         }
     }
 
@@ -261,6 +291,7 @@ impl<'s> Progressive<'s> {
             patch_rho: Vec::new(),
             patch_area: Vec::new(),
             cache: Vec::new(),
+            pair_clear: Vec::new(),
             cached_bytes: 0,
             book: Bookkeeping::new(started, started.elapsed()),
             shots: 0,
@@ -283,6 +314,9 @@ impl<'s> Progressive<'s> {
         s.shot_emit = vec![DVec3::ZERO; n];
         s.shot_refl = vec![DVec3::ZERO; n];
         s.cache = vec![None; n];
+        if s.options.shaft_culling && s.options.occlusion && n <= PAIR_CACHE_MAX_PATCHES {
+            s.pair_clear = (0..n * n).map(|_| AtomicU8::new(PAIR_UNKNOWN)).collect();
+        }
         s.unshot_emit = (0..n).map(|p| s.patch_emission(p)).collect();
         s.book.energy.emitted = (0..n).map(|p| s.unshot_emit[p] * s.patch_area(p)).sum();
         s.book.energy.unshot = s.book.energy.emitted;
@@ -489,6 +523,7 @@ impl<'s> Progressive<'s> {
         let shooter = self.mesh.corners(self.mesh.patches[p]);
         let shooter_tri = node.scene_triangle;
         let ns = self.scene.mesh.geometric_normals[shooter_tri as usize].as_dvec3();
+        let clear = self.clear_patches(p, vertices);
         let results: Vec<(f32, u64)> = vertices
             .par_iter()
             .with_min_len(64)
@@ -514,7 +549,12 @@ impl<'s> Progressive<'s> {
                 }
                 let from = &self.receivers[v];
                 let seed = hash(self.options.seed ^ hash((v as u64) << 32 | p as u64));
-                if self.options.shaft_culling && form_factor::shaft_clear(self.scene, from, shooter)
+                let patch_clear = self.elements.vertex_patch.get(v).is_some_and(|&q| {
+                    clear.get(q as usize).copied().unwrap_or(false)
+                });
+                if patch_clear
+                    || self.options.shaft_culling
+                        && form_factor::shaft_clear(self.scene, from, shooter)
                 {
                     return (f as f32, 0);
                 }
@@ -532,6 +572,65 @@ impl<'s> Progressive<'s> {
             .collect();
         let rays = results.iter().map(|r| r.1).sum();
         (results.into_iter().map(|r| r.0).collect(), rays)
+    }
+
+    /// With shaft culling: per patch, whether nothing can come between it and shooter patch
+    /// `p` ([`form_factor::patches_clear`]), tested only for the patches `vertices` lie on
+    /// (`false` for the others); empty without shaft culling. A vertex on a clear patch needs
+    /// neither its own shaft test nor shadow rays: its segments to `p` lie in the hull.
+    fn clear_patches(&self, p: usize, vertices: &[usize]) -> Vec<bool> {
+        if !(self.options.shaft_culling && self.options.occlusion) {
+            return Vec::new();
+        }
+        let n = self.mesh.patches.len();
+        let mut wanted = vec![false; n];
+        for &v in vertices {
+            if let Some(&q) = self.elements.vertex_patch.get(v) {
+                if (q as usize) < n && q as usize != p {
+                    wanted[q as usize] = true;
+                }
+            }
+        }
+        let patch = |q: usize| {
+            let node = self.mesh.patches[q];
+            let tri = self.mesh.nodes[node as usize].scene_triangle;
+            (
+                self.mesh.corners(node),
+                self.scene.mesh.geometric_normals[tri as usize],
+            )
+        };
+        let shooter = patch(p);
+        let cached = !self.pair_clear.is_empty();
+        wanted
+            .par_iter()
+            .enumerate()
+            .with_min_len(16)
+            .map(|(q, &w)| {
+                if !w {
+                    return false;
+                }
+                if cached {
+                    match self.pair_clear[q * n + p].load(Ordering::Relaxed) {
+                        PAIR_CLEAR => return true,
+                        PAIR_BLOCKED => return false,
+                        _ => {}
+                    }
+                }
+                // The lower index first, whichever row asks: the rounding then never
+                // depends on which of the two rows (computed in parallel) asks first.
+                let clear = if q < p {
+                    form_factor::patches_clear(self.scene, patch(q), shooter)
+                } else {
+                    form_factor::patches_clear(self.scene, shooter, patch(q))
+                };
+                if cached {
+                    let state = if clear { PAIR_CLEAR } else { PAIR_BLOCKED };
+                    self.pair_clear[q * n + p].store(state, Ordering::Relaxed);
+                    self.pair_clear[p * n + q].store(state, Ordering::Relaxed);
+                }
+                clear
+            })
+            .collect()
     }
 
     /// The form factors of every vertex to patch `p`, from the cache when possible.

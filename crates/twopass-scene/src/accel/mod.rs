@@ -232,6 +232,25 @@ impl Accel {
         )
     }
 
+    /// Whether every segment between a point of triangle `a` and a point of triangle `b`
+    /// (unit geometric normals `na`, `nb`) is certainly unblocked: no scene triangle reaches
+    /// into the convex hull of the two (shaft culling between patches). Triangles in the plane
+    /// of `a` or `b` do not count when the other lies wholly in front of that plane, nor do
+    /// those behind it, as in [`Accel::shaft_clear`]; that test with any point of `a` as the
+    /// apex covers a part of this hull, so a pair this test clears needs no per-point test.
+    /// `false` when the two triangles lie in one plane (the hull is flat). Conservative up to
+    /// [`SHAFT_TOLERANCE`].
+    pub fn shaft_clear_between(&self, a: [Vec3; 3], na: Vec3, b: [Vec3; 3], nb: Vec3) -> bool {
+        let Some(shaft) = Shaft::hull(a, na, b, nb) else {
+            return false;
+        };
+        let packets = self.packets.as_slice();
+        !self.bvh.any_leaf(
+            |node| shaft.overlap(node),
+            |p, lanes| shaft.may_block(&packets[p], lanes),
+        )
+    }
+
     /// Reference answer by testing every triangle, O(n): the oracle for BVH tests.
     pub fn closest_brute_force(
         positions: &[Vec3],
