@@ -314,9 +314,8 @@ fn shaft_clear_between_never_hides_a_blocker() {
         let (mut clear, mut pairs) = (0, 0);
         for _ in 0..3000 {
             let (s, t) = (r.below(n), r.below(n));
-            let part = |t: u32, r: &mut Pcg64Mcg| {
-                [0, 1, 2].map(|_| interior_point(scene, t, r).position)
-            };
+            let part =
+                |t: u32, r: &mut Pcg64Mcg| [0, 1, 2].map(|_| interior_point(scene, t, r).position);
             let (a, b) = (part(s, &mut r), part(t, &mut r));
             let (na, nb) = (
                 scene.mesh.geometric_normals[s as usize],

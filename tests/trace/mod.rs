@@ -3,6 +3,7 @@
 
 mod adaptive;
 mod analytic;
+mod budget;
 mod caustics;
 mod common;
 mod determinism;

@@ -3,8 +3,8 @@
 //! plus the specular transfer of [`crate::specular`]: each shot also traces the shooter's light
 //! through mirrors and glass and deposits it where it lands.
 
-use std::sync::atomic::{AtomicU8, Ordering};
 use std::ops::ControlFlow;
+use std::sync::atomic::{AtomicU8, Ordering};
 use std::time::Instant;
 
 use glam::{DVec3, Vec3};
@@ -549,9 +549,11 @@ impl<'s> Progressive<'s> {
                 }
                 let from = &self.receivers[v];
                 let seed = hash(self.options.seed ^ hash((v as u64) << 32 | p as u64));
-                let patch_clear = self.elements.vertex_patch.get(v).is_some_and(|&q| {
-                    clear.get(q as usize).copied().unwrap_or(false)
-                });
+                let patch_clear = self
+                    .elements
+                    .vertex_patch
+                    .get(v)
+                    .is_some_and(|&q| clear.get(q as usize).copied().unwrap_or(false));
                 if patch_clear
                     || self.options.shaft_culling
                         && form_factor::shaft_clear(self.scene, from, shooter)
@@ -585,10 +587,11 @@ impl<'s> Progressive<'s> {
         let n = self.mesh.patches.len();
         let mut wanted = vec![false; n];
         for &v in vertices {
-            if let Some(&q) = self.elements.vertex_patch.get(v) {
-                if (q as usize) < n && q as usize != p {
-                    wanted[q as usize] = true;
-                }
+            if let Some(&q) = self.elements.vertex_patch.get(v)
+                && (q as usize) < n
+                && q as usize != p
+            {
+                wanted[q as usize] = true;
             }
         }
         let patch = |q: usize| {

@@ -41,7 +41,8 @@ pub mod whitted;
 
 pub use film::{Layer, LayerImages, Radiance};
 pub use render::{
-    AdaptiveSampling, RenderOutput, RenderProgress, RenderSettings, RenderStats, render,
+    AdaptiveSampling, BUDGET_FLOOR, BUDGET_SMOOTHING, RenderOutput, RenderProgress, RenderSettings,
+    RenderStats, SampleBudget, render, render_budgeted,
 };
 
 pub use integrator::{Integrator, Lights, SampleState, Tally};

@@ -145,10 +145,14 @@ impl LightTracer {
 
     /// Light paths a render of `spp` samples per pixel at `camera`'s size traces.
     pub fn paths_for(&self, camera: &Camera, spp: u32) -> u64 {
-        let n = f64::from(self.settings.paths_per_sample)
-            * f64::from(spp.max(1))
-            * f64::from(camera.width)
-            * f64::from(camera.height);
+        self.paths_for_samples(
+            u64::from(spp.max(1)) * u64::from(camera.width) * u64::from(camera.height),
+        )
+    }
+
+    /// Light paths a render of `samples` camera samples in all traces.
+    pub fn paths_for_samples(&self, samples: u64) -> u64 {
+        let n = f64::from(self.settings.paths_per_sample) * samples as f64;
         n.ceil().max(0.0) as u64
     }
 

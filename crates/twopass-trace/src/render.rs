@@ -14,6 +14,8 @@ use twopass_brdf::Rgb;
 use twopass_brdf::colour::luminance;
 use twopass_scene::{Camera, Ray, Scene};
 
+use twopass_image::Image;
+
 use crate::film::{LayerImages, Radiance};
 use crate::integrator::{Integrator, SampleState, Tally};
 use crate::sampler::{Sampler, stratum};
@@ -54,6 +56,122 @@ pub struct AdaptiveSampling {
     /// first-pass samples, or between its mean and any of its four neighbours' means.
     #[default(0.05)]
     pub contrast: f32,
+}
+
+/// Camera samples per pixel chosen pixel by pixel, for [`render_budgeted`]: a converged
+/// reference spends its samples where its own noise is, instead of the same number everywhere.
+/// Each pixel's estimate stays the unbiased mean of its own samples; only how many it gets
+/// differs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SampleBudget {
+    width: u32,
+    height: u32,
+    /// Row-major, at least 1 each.
+    samples: Vec<u32>,
+}
+
+/// Half width (pixels) of the box filter [`SampleBudget::from_pilots`] smooths the pilots'
+/// noise with: a pixel's own squared difference is one draw of its variance, its 5 x 5
+/// neighbourhood's mean a steadier one.
+pub const BUDGET_SMOOTHING: usize = 2;
+
+/// The least share of the mean samples per pixel [`SampleBudget::from_pilots`] gives any pixel
+/// (before rounding): a pixel whose pilots happened to agree still gets a quarter of the mean.
+pub const BUDGET_FLOOR: f64 = 0.25;
+
+impl SampleBudget {
+    /// `spp` samples in every pixel of a `width` x `height` image.
+    pub fn uniform(width: u32, height: u32, spp: u32) -> Self {
+        Self {
+            width,
+            height,
+            samples: vec![spp.max(1); width as usize * height as usize],
+        }
+    }
+
+    /// About `spp` samples per pixel on average, each pixel's share proportional to the noise
+    /// of the two independent pilot renders `a` and `b` there: the standard deviation of a
+    /// pixel's sample, weighted as the relative error measures it, estimated by
+    /// `sum_c (a - b)^2 / (m^2 + 0.01)` with `m` the pilots' mean (the metric's
+    /// `REL_EPSILON`), smoothed over [`BUDGET_SMOOTHING`] pixels and square-rooted, floored at
+    /// [`BUDGET_FLOOR`] of its mean. For a fixed total, samples proportional to the standard
+    /// deviation minimise the summed variance (`sum sigma_i^2 / n_i` with `sum n_i` fixed).
+    /// Every pixel gets at least one sample. `None` when the pilots differ in size from each
+    /// other or are empty; a non-finite pixel counts as no noise.
+    pub fn from_pilots(a: &Image, b: &Image, spp: u32) -> Option<Self> {
+        let (width, height) = a.size();
+        if b.size() != (width, height) || width == 0 || height == 0 {
+            return None;
+        }
+        let (w, h) = (width as usize, height as usize);
+        let var: Vec<f64> = a
+            .pixels()
+            .iter()
+            .zip(b.pixels())
+            .map(|(p, q)| {
+                let (p, q) = (p.as_dvec3(), q.as_dvec3());
+                let m = 0.5 * (p + q);
+                let d = p - q;
+                let v = (d * d / (m * m + 0.01)).element_sum();
+                if v.is_finite() { v } else { 0.0 }
+            })
+            .collect();
+        let r = BUDGET_SMOOTHING;
+        let var = &var;
+        let sigma: Vec<f64> = (0..w * h)
+            .map(|i| {
+                let (x, y) = (i % w, i / w);
+                let (xs, ys) = (
+                    x.saturating_sub(r)..(x + r + 1).min(w),
+                    y.saturating_sub(r)..(y + r + 1).min(h),
+                );
+                let n = (xs.len() * ys.len()) as f64;
+                let sum: f64 = ys
+                    .flat_map(|y| xs.clone().map(move |x| var[y * w + x]))
+                    .sum();
+                (sum / n).sqrt()
+            })
+            .collect();
+        let mean = sigma.iter().sum::<f64>() / sigma.len() as f64;
+        let weights: Vec<f64> = if mean > 0.0 && mean.is_finite() {
+            sigma.iter().map(|&s| s.max(BUDGET_FLOOR * mean)).collect()
+        } else {
+            vec![1.0; sigma.len()]
+        };
+        let total = weights.iter().sum::<f64>();
+        let scale = f64::from(spp.max(1)) * weights.len() as f64 / total;
+        let samples = weights
+            .iter()
+            .map(|&wt| (wt * scale).round().clamp(1.0, f64::from(u32::MAX)) as u32)
+            .collect();
+        Some(Self {
+            width,
+            height,
+            samples,
+        })
+    }
+
+    /// Image size, pixels.
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// Samples of pixel (`x`, `y`).
+    pub fn samples(&self, x: u32, y: u32) -> u32 {
+        self.samples[y as usize * self.width as usize + x as usize]
+    }
+
+    /// Samples of the whole image.
+    pub fn total(&self) -> u64 {
+        self.samples.iter().map(|&n| u64::from(n)).sum()
+    }
+
+    /// Fewest and most samples of any pixel.
+    pub fn range(&self) -> (u32, u32) {
+        self.samples
+            .iter()
+            .fold((u32::MAX, 0), |(lo, hi), &n| (lo.min(n), hi.max(n)))
+    }
 }
 
 /// Contrast `(max - min) / (max + min)` of two luminances (0 when both are 0).
@@ -226,9 +344,9 @@ impl Pass<'_> {
         }
     }
 
-    /// Renders the pixels of tile (`x0`, `y0`) for which `want(x, y)` holds with `n` samples
-    /// each (the others are left zero).
-    fn tile(&self, (x0, y0): (u32, u32), n: u32, want: impl Fn(u32, u32) -> bool) -> TileResult {
+    /// Renders the pixels of tile (`x0`, `y0`) with `n(x, y)` samples each (those with 0 are
+    /// left zero).
+    fn tile(&self, (x0, y0): (u32, u32), n: impl Fn(u32, u32) -> u32) -> TileResult {
         let tile = self.settings.tile_size.max(1);
         let (w, h) = (
             tile.min(self.camera.width - x0),
@@ -241,7 +359,8 @@ impl Pass<'_> {
         let mut samples = 0;
         for y in y0..y0 + h {
             for x in x0..x0 + w {
-                let (p, c) = if want(x, y) {
+                let n = n(x, y);
+                let (p, c) = if n > 0 {
                     samples += u64::from(n);
                     self.pixel(x, y, n, &mut tally, &mut non_finite)
                 } else {
@@ -292,9 +411,43 @@ pub fn render(
     settings: &RenderSettings,
     progress: &RenderProgress,
 ) -> RenderOutput {
+    render_with(scene, camera, integrator, settings, None, progress)
+}
+
+/// [`render`] with each pixel's camera samples from `budget` (whose size must be the
+/// camera's) instead of [`RenderSettings::samples_per_pixel`]; adaptive sampling does not
+/// apply. A pixel given `n` samples gets exactly the estimate [`render`] gives it at `n`
+/// samples per pixel; the light tracing pass, if any, traces as many light paths as the
+/// budget has samples. `None` when the sizes differ.
+pub fn render_budgeted(
+    scene: &Scene,
+    camera: &Camera,
+    integrator: &dyn Integrator,
+    settings: &RenderSettings,
+    budget: &SampleBudget,
+    progress: &RenderProgress,
+) -> Option<RenderOutput> {
+    (budget.size() == (camera.width, camera.height))
+        .then(|| render_with(scene, camera, integrator, settings, Some(budget), progress))
+}
+
+fn render_with(
+    scene: &Scene,
+    camera: &Camera,
+    integrator: &dyn Integrator,
+    settings: &RenderSettings,
+    budget: Option<&SampleBudget>,
+    progress: &RenderProgress,
+) -> RenderOutput {
     let start = Instant::now();
     let (width, height) = (camera.width, camera.height);
-    let spp = settings.samples_per_pixel.max(1);
+    let spp = match budget {
+        Some(b) => b
+            .total()
+            .div_ceil(u64::from(width) * u64::from(height))
+            .max(1) as u32,
+        None => settings.samples_per_pixel.max(1),
+    };
     let tile = settings.tile_size.max(1);
     let pixels = u64::from(width) * u64::from(height);
     let light = integrator.light_tracer();
@@ -304,7 +457,7 @@ pub fn render(
             base: a.base.clamp(1, spp),
             ..a
         })
-        .filter(|a| a.base < spp);
+        .filter(|a| a.base < spp && budget.is_none());
     let passes = 1 + u64::from(light.is_some()) + u64::from(adaptive.is_some());
     progress.done.store(0, Ordering::Relaxed);
     progress.total.store(passes * pixels, Ordering::Relaxed);
@@ -318,11 +471,11 @@ pub fn render(
         integrator,
         settings,
     };
-    let run = |n: u32, want: &(dyn Fn(u32, u32) -> bool + Sync)| -> Vec<TileResult> {
+    let run = |n: &(dyn Fn(u32, u32) -> u32 + Sync)| -> Vec<TileResult> {
         tiles
             .par_iter()
             .map(|&origin| {
-                let r = pass.tile(origin, n, want);
+                let r = pass.tile(origin, n);
                 progress.add_done(r.pixels.len() as u64);
                 r
             })
@@ -355,7 +508,11 @@ pub fn render(
             }
         }
     };
-    let first = run(adaptive.map_or(spp, |a| a.base), &|_, _| true);
+    let first = match (budget, adaptive) {
+        (Some(b), _) => run(&|x, y| b.samples(x, y)),
+        (None, Some(a)) => run(&|_, _| a.base),
+        (None, None) => run(&|_, _| spp),
+    };
     gather(first, &mut layers, &mut spread, &|_| true);
     let mut refined_pixels = 0;
     if let Some(a) = adaptive {
@@ -363,12 +520,15 @@ pub fn render(
         let refine = refine_mask(first_image.pixels(), &spread, width as usize, a.contrast);
         refined_pixels = refine.iter().filter(|&&r| r).count() as u64;
         let at = |x: u32, y: u32| y as usize * width as usize + x as usize;
-        let second = run(spp, &|x, y| refine[at(x, y)]);
+        let second = run(&|x, y| if refine[at(x, y)] { spp } else { 0 });
         gather(second, &mut layers, &mut spread, &|i| refine[i]);
     }
     let mut light_paths = 0;
     if let Some(tracer) = light {
-        let paths = tracer.paths_for(camera, spp);
+        let paths = match budget {
+            Some(b) => tracer.paths_for_samples(b.total()),
+            None => tracer.paths_for(camera, spp),
+        };
         let lit = tracer.trace(scene, camera, paths, settings.seed, progress, pixels);
         for (img, add) in layers.images.iter_mut().zip(&lit.layers.images) {
             for (p, a) in img.pixels_mut().iter_mut().zip(add.pixels()) {

@@ -16,7 +16,7 @@ use twopass_trace::hybrid::{DirectLight, hybrid, radiosity_only};
 use twopass_trace::whitted::ambient_estimate;
 use twopass_trace::{
     Integrator, Layer, LayerImages, Reference, ReferenceSettings, RenderOutput, RenderProgress,
-    RenderSettings, RenderStats, Whitted, WhittedSettings,
+    RenderSettings, RenderStats, SampleBudget, Whitted, WhittedSettings,
 };
 
 use crate::context::Context;
@@ -184,6 +184,49 @@ pub fn render_with_bar(
     label: &str,
     ctx: &Context,
 ) -> Result<RenderOutput, CliError> {
+    render_maybe_budgeted(scene, camera, integrator, settings, None, label, ctx)
+}
+
+/// [`render_with_bar`] with each pixel's samples from `budget`
+/// ([`twopass_trace::render_budgeted`]), whose size must be the camera's.
+pub fn render_budgeted_with_bar(
+    scene: &Scene,
+    camera: &twopass_scene::Camera,
+    integrator: &dyn Integrator,
+    settings: &RenderSettings,
+    budget: &SampleBudget,
+    label: &str,
+    ctx: &Context,
+) -> Result<RenderOutput, CliError> {
+    if budget.size() != (camera.width, camera.height) {
+        return Err(CliError::Input(format!(
+            "{}: a sample budget of {:?} pixels for a {} x {} camera",
+            scene.path.display(),
+            budget.size(),
+            camera.width,
+            camera.height
+        )));
+    }
+    render_maybe_budgeted(
+        scene,
+        camera,
+        integrator,
+        settings,
+        Some(budget),
+        label,
+        ctx,
+    )
+}
+
+fn render_maybe_budgeted(
+    scene: &Scene,
+    camera: &twopass_scene::Camera,
+    integrator: &dyn Integrator,
+    settings: &RenderSettings,
+    budget: Option<&SampleBudget>,
+    label: &str,
+    ctx: &Context,
+) -> Result<RenderOutput, CliError> {
     let progress = RenderProgress::new();
     let bar = ctx.progress(1000, label);
     // The bar is redrawn every 100 ms until the render ends, which drops `stop`: the drawing
@@ -200,7 +243,13 @@ pub fn render_with_bar(
                 }
             }
         });
-        let out = twopass_trace::render(scene, camera, integrator, settings, progress);
+        let out = match budget {
+            Some(b) => {
+                twopass_trace::render_budgeted(scene, camera, integrator, settings, b, progress)
+                    .expect("the budget's size was checked")
+            }
+            None => twopass_trace::render(scene, camera, integrator, settings, progress),
+        };
         drop(stop);
         out
     });

@@ -152,9 +152,9 @@ impl Shaft<22, 6> {
                         continue;
                     };
                     let d = -outward.dot(p) - eps;
-                    let same = planes[..count]
-                        .iter()
-                        .any(|&(m, e): &(Vec3, f32)| m.dot(outward) > 1.0 - 1e-6 && (e - d).abs() <= eps);
+                    let same = planes[..count].iter().any(|&(m, e): &(Vec3, f32)| {
+                        m.dot(outward) > 1.0 - 1e-6 && (e - d).abs() <= eps
+                    });
                     if !same {
                         planes[count] = (outward, d);
                         count += 1;
