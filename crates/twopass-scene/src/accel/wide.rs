@@ -96,6 +96,17 @@ impl WideNode {
         }
     }
 
+    /// One word of each of the node's four cache lines, combined: reading them starts loading
+    /// the whole node (a safe stand-in for prefetch instructions; the workspace forbids
+    /// `unsafe`).
+    #[inline(always)]
+    fn line_words(&self) -> u32 {
+        self.bounds[0].x.to_bits()
+            ^ self.bounds[4].x.to_bits()
+            ^ self.bounds[8].x.to_bits()
+            ^ self.child[0]
+    }
+
     /// The children hit by `ray` within `[0, t_max]` (bit `c` for child `c`) and each child's
     /// entry distance.
     #[inline(always)]
@@ -164,20 +175,23 @@ impl WideBvh {
     /// the call may shorten `t_max` (a closer hit), and returns `true` to stop the walk. With
     /// `ordered`, inner children are visited nearest first and a pushed child is skipped once
     /// `t_max` is below its entry distance (closest hit); without, in the builder's octant order
-    /// (any hit: no distances to sort or compare).
+    /// (any hit: no distances to sort or compare). Where a node has several leaves to visit,
+    /// `touch(packet)` is called for each first, to start loading their packets; several inner
+    /// children to visit are read ahead likewise.
     #[inline(always)]
     pub(super) fn walk(
         &self,
         ray: &NodeRay,
         t_max: &mut f32,
         ordered: bool,
+        touch: &impl Fn(usize),
         mut leaf: impl FnMut(usize, u32, &mut f32) -> bool,
     ) {
         if self.nodes.as_slice().is_empty() {
             return;
         }
         obvhs::fast_stack!((u32, f32), (INLINE_STACK), self.stack_need, stack, {
-            self.walk_with(&mut stack, ray, t_max, ordered, &mut leaf)
+            self.walk_with(&mut stack, ray, t_max, ordered, touch, &mut leaf)
         });
     }
 
@@ -223,6 +237,7 @@ impl WideBvh {
         ray: &NodeRay,
         t_max: &mut f32,
         ordered: bool,
+        touch: &impl Fn(usize),
         leaf: &mut impl FnMut(usize, u32, &mut f32) -> bool,
     ) {
         let mut node = 0u32;
@@ -230,6 +245,29 @@ impl WideBvh {
             let n = &self.nodes.as_slice()[node as usize];
             let (hit, near) = n.intersect(ray, *t_max);
             let mut leaves = hit & u32::from(n.leaf);
+            // Start loading what this node leads to before working on any of it, so that the
+            // cache misses overlap: all leaves' packets when there are two or more to test, all
+            // inner children when there are two or more to visit (those pushed are often popped
+            // soon after). One leaf or child is read right away anyway.
+            if leaves.count_ones() > 1 {
+                let mut rest = leaves;
+                while rest != 0 {
+                    touch(n.child[rest.trailing_zeros() as usize] as usize);
+                    rest &= rest - 1;
+                }
+            }
+            let inner_hit = hit & u32::from(n.inner);
+            if inner_hit.count_ones() > 1 {
+                let mut rest = inner_hit;
+                let mut words = 0;
+                while rest != 0 {
+                    words ^= self.nodes.as_slice()
+                        [n.child[rest.trailing_zeros() as usize] as usize]
+                        .line_words();
+                    rest &= rest - 1;
+                }
+                std::hint::black_box(words);
+            }
             while leaves != 0 {
                 let c = leaves.trailing_zeros() as usize;
                 leaves &= leaves - 1;
@@ -237,7 +275,7 @@ impl WideBvh {
                     return;
                 }
             }
-            let mut inner = hit & u32::from(n.inner);
+            let mut inner = inner_hit;
             let next = match inner.count_ones() {
                 0 => None,
                 1 => Some(n.child[inner.trailing_zeros() as usize]),
