@@ -37,6 +37,11 @@ const ROW_BATCH: usize = 1 << 22;
 /// Most patches for which [`Progressive`] keeps every pair's shaft test (one byte per pair:
 /// 16 MiB at this many); above it, each row tests its pairs afresh.
 const PAIR_CACHE_MAX_PATCHES: usize = 4096;
+/// Fewest vertices of a row that must lie on a patch for [`Progressive`] to test the shaft
+/// between that patch and the shooter: a hull test costs several vertex tests (the coarse
+/// preview mesh of the Cornell box has 2.3 vertices per patch and was slower with every
+/// pair tested), and a pair tested once is kept.
+const HULL_MIN_VERTICES: u32 = 6;
 /// States of a pair of patches in [`Progressive`]'s shaft cache.
 const PAIR_UNKNOWN: u8 = 0;
 const PAIR_CLEAR: u8 = 1;
@@ -577,23 +582,32 @@ impl<'s> Progressive<'s> {
     }
 
     /// With shaft culling: per patch, whether nothing can come between it and shooter patch
-    /// `p` ([`form_factor::patches_clear`]), tested only for the patches `vertices` lie on
-    /// (`false` for the others); empty without shaft culling. A vertex on a clear patch needs
+    /// `p` ([`form_factor::patches_clear`]), tested only for the patches at least
+    /// [`HULL_MIN_VERTICES`] of `vertices` lie on, or known already (`false` for the others);
+    /// empty without shaft culling. A vertex on a clear patch needs
     /// neither its own shaft test nor shadow rays: its segments to `p` lie in the hull.
     fn clear_patches(&self, p: usize, vertices: &[usize]) -> Vec<bool> {
         if !(self.options.shaft_culling && self.options.occlusion) {
             return Vec::new();
         }
         let n = self.mesh.patches.len();
-        let mut wanted = vec![false; n];
+        let mut on = vec![0u32; n];
         for &v in vertices {
             if let Some(&q) = self.elements.vertex_patch.get(v)
                 && (q as usize) < n
                 && q as usize != p
             {
-                wanted[q as usize] = true;
+                on[q as usize] += 1;
             }
         }
+        let known = |q: usize| {
+            self.pair_clear
+                .get(q * n + p)
+                .is_some_and(|s| s.load(Ordering::Relaxed) != PAIR_UNKNOWN)
+        };
+        let wanted: Vec<bool> = (0..n)
+            .map(|q| on[q] >= HULL_MIN_VERTICES || (on[q] > 0 && known(q)))
+            .collect();
         let patch = |q: usize| {
             let node = self.mesh.patches[q];
             let tri = self.mesh.nodes[node as usize].scene_triangle;
