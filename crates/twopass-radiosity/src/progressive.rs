@@ -583,7 +583,7 @@ impl<'s> Progressive<'s> {
 
     /// With shaft culling: per patch, whether nothing can come between it and shooter patch
     /// `p` ([`form_factor::patches_clear`]), tested only for the patches at least
-    /// [`HULL_MIN_VERTICES`] of `vertices` lie on, or known already (`false` for the others);
+    /// [`HULL_MIN_VERTICES`] of `vertices` lie on (`false` for the others);
     /// empty without shaft culling. A vertex on a clear patch needs
     /// neither its own shaft test nor shadow rays: its segments to `p` lie in the hull.
     fn clear_patches(&self, p: usize, vertices: &[usize]) -> Vec<bool> {
@@ -600,14 +600,10 @@ impl<'s> Progressive<'s> {
                 on[q as usize] += 1;
             }
         }
-        let known = |q: usize| {
-            self.pair_clear
-                .get(q * n + p)
-                .is_some_and(|s| s.load(Ordering::Relaxed) != PAIR_UNKNOWN)
-        };
-        let wanted: Vec<bool> = (0..n)
-            .map(|q| on[q] >= HULL_MIN_VERTICES || (on[q] > 0 && known(q)))
-            .collect();
+        // Only the row's own vertices decide which pairs are tested, never what other rows
+        // (computed in parallel) have put in the cache: a vertex must take the same path,
+        // hull or its own test, on any thread count.
+        let wanted: Vec<bool> = on.iter().map(|&c| c >= HULL_MIN_VERTICES).collect();
         let patch = |q: usize| {
             let node = self.mesh.patches[q];
             let tri = self.mesh.nodes[node as usize].scene_triangle;
