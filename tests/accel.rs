@@ -238,18 +238,45 @@ fn interior_point(scene: &Scene, t: u32, r: &mut Pcg64Mcg) -> twopass_scene::Sur
     scene.mesh.surface_point(t, [1.0 - b1 - b2, b1, b2])
 }
 
+/// The scenes the shaft tests run on: the two Cornell scenes and a generated room.
+fn shaft_scenes() -> Vec<Scene> {
+    let mut scenes: Vec<Scene> = ["cornell-box.toml", "cornell-spheres.toml"]
+        .iter()
+        .map(|n| load(scene_path(n)).unwrap().0)
+        .collect();
+    scenes.push(workload::synthetic_scene(10_000, 5).unwrap().0);
+    scenes
+}
+
+/// A shaft test must clear a fair share of the pairs and keep others (it is neither "never
+/// clear" nor "always clear").
+fn fair_share(scene: usize, clear: u32, pairs: u32) {
+    let share = f64::from(clear) / f64::from(pairs);
+    println!("scene {scene}: {clear} of {pairs} pairs cleared");
+    assert!(
+        (0.05..0.95).contains(&share),
+        "scene {scene}: {clear} of {pairs} pairs cleared"
+    );
+}
+
+/// A uniform point of triangle `p`.
+fn point_in_triangle(p: [Vec3; 3], r: &mut Pcg64Mcg) -> Vec3 {
+    let (u, v) = (r.next_f32(), r.next_f32());
+    let (u, v) = if u + v > 1.0 {
+        (1.0 - u, 1.0 - v)
+    } else {
+        (u, v)
+    };
+    p[0] + (p[1] - p[0]) * u + (p[2] - p[0]) * v
+}
+
 /// Whenever the shaft test says nothing can come between a point and a triangle, no segment
 /// between them is blocked: 64 shadow rays per cleared pair, on the Cornell scenes and a
 /// generated room, from points and to triangles strictly inside scene triangles. The test must
 /// also clear a fair share of the pairs and keep others (it is not "never clear").
 #[test]
 fn shaft_clear_never_hides_a_blocker() {
-    let mut scenes: Vec<Scene> = ["cornell-box.toml", "cornell-spheres.toml"]
-        .iter()
-        .map(|n| load(scene_path(n)).unwrap().0)
-        .collect();
-    scenes.push(workload::synthetic_scene(10_000, 5).unwrap().0);
-    for (k, scene) in scenes.iter().enumerate() {
+    for (k, scene) in shaft_scenes().iter().enumerate() {
         let mut r = rng(40 + k as u64);
         let n = scene.mesh.triangles.len() as u32;
         let (mut clear, mut pairs) = (0, 0);
@@ -270,13 +297,7 @@ fn shaft_clear_never_hides_a_blocker() {
             }
             clear += 1;
             for _ in 0..64 {
-                let (u, v) = (r.next_f32(), r.next_f32());
-                let (u, v) = if u + v > 1.0 {
-                    (1.0 - u, 1.0 - v)
-                } else {
-                    (u, v)
-                };
-                let p = base[0] + (base[1] - base[0]) * u + (base[2] - base[0]) * v;
+                let p = point_in_triangle(base, &mut r);
                 let to = scene.mesh.surface_point_at(t, p);
                 assert!(
                     !scene.occluded_between(&from, &to),
@@ -287,12 +308,7 @@ fn shaft_clear_never_hides_a_blocker() {
                 );
             }
         }
-        let share = clear as f64 / pairs as f64;
-        println!("scene {k}: {clear} of {pairs} pairs cleared");
-        assert!(
-            (0.05..0.95).contains(&share),
-            "scene {k}: {clear} of {pairs} pairs cleared"
-        );
+        fair_share(k, clear, pairs);
     }
 }
 
@@ -303,12 +319,7 @@ fn shaft_clear_never_hides_a_blocker() {
 /// others.
 #[test]
 fn shaft_clear_between_never_hides_a_blocker() {
-    let mut scenes: Vec<Scene> = ["cornell-box.toml", "cornell-spheres.toml"]
-        .iter()
-        .map(|n| load(scene_path(n)).unwrap().0)
-        .collect();
-    scenes.push(workload::synthetic_scene(10_000, 5).unwrap().0);
-    for (k, scene) in scenes.iter().enumerate() {
+    for (k, scene) in shaft_scenes().iter().enumerate() {
         let mut r = rng(70 + k as u64);
         let n = scene.mesh.triangles.len() as u32;
         let (mut clear, mut pairs) = (0, 0);
@@ -332,15 +343,7 @@ fn shaft_clear_between_never_hides_a_blocker() {
             clear += 1;
             for _ in 0..64 {
                 let mut point = |p: [Vec3; 3], t: u32| {
-                    let (u, v) = (r.next_f32(), r.next_f32());
-                    let (u, v) = if u + v > 1.0 {
-                        (1.0 - u, 1.0 - v)
-                    } else {
-                        (u, v)
-                    };
-                    scene
-                        .mesh
-                        .surface_point_at(t, p[0] + (p[1] - p[0]) * u + (p[2] - p[0]) * v)
+                    scene.mesh.surface_point_at(t, point_in_triangle(p, &mut r))
                 };
                 let (from, to) = (point(a, s), point(b, t));
                 assert!(
@@ -352,12 +355,7 @@ fn shaft_clear_between_never_hides_a_blocker() {
                 );
             }
         }
-        let share = clear as f64 / pairs as f64;
-        println!("scene {k}: {clear} of {pairs} pairs cleared");
-        assert!(
-            (0.05..0.95).contains(&share),
-            "scene {k}: {clear} of {pairs} pairs cleared"
-        );
+        fair_share(k, clear, pairs);
     }
 }
 

@@ -103,15 +103,7 @@ impl Shaft<5, 4> {
                 push(in_front(apex, n, eps));
             }
         }
-        let (lo, hi) = bounds(&corners, eps);
-        Self {
-            planes,
-            count,
-            lo,
-            hi,
-            corners,
-            eps,
-        }
+        Self::from_parts(planes, count, corners, eps)
     }
 }
 
@@ -171,19 +163,30 @@ impl Shaft<22, 6> {
                 count += 1;
             }
         }
+        Some(Self::from_parts(planes, count, corners, eps))
+    }
+}
+
+impl<const PLANES: usize, const CORNERS: usize> Shaft<PLANES, CORNERS> {
+    /// The shaft of the first `count` of `planes` and `corners`, with the corners' bounds, all
+    /// grown by the tolerance `eps`.
+    fn from_parts(
+        planes: [(Vec3, f32); PLANES],
+        count: usize,
+        corners: [Vec3; CORNERS],
+        eps: f32,
+    ) -> Self {
         let (lo, hi) = bounds(&corners, eps);
-        Some(Self {
+        Self {
             planes,
             count,
             lo,
             hi,
             corners,
             eps,
-        })
+        }
     }
-}
 
-impl<const PLANES: usize, const CORNERS: usize> Shaft<PLANES, CORNERS> {
     /// The children of `node` whose boxes may reach into the shaft (bit `c` for child `c`).
     #[inline(always)]
     pub(super) fn overlap(&self, node: &WideNode) -> u32 {
