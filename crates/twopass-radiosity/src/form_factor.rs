@@ -151,8 +151,9 @@ pub fn shaft_clear(scene: &Scene, from: &SurfacePoint, shooter: [DVec3; 3]) -> b
 /// shooter patch `shooter` (each its corners and its scene triangle's unit geometric normal):
 /// shaft culling with the convex hull of the two, [`twopass_scene::Accel::shaft_clear_between`].
 /// Every point of the receiver then sees the whole shooter, and its [`visibility`] is 1
-/// without a ray; a vertex's own test, [`shaft_clear`], covers part of this hull, so a pair
-/// this clears it would clear too.
+/// without a ray or its own test, [`shaft_clear`], whose tetrahedron lies inside this hull.
+/// The hull clears some pairs that test cannot: a vertex on a crease lies in the plane of the
+/// wall it meets, and its tetrahedron to that wall is flat.
 pub fn patches_clear(
     scene: &Scene,
     (receiver, receiver_normal): ([DVec3; 3], Vec3),
