@@ -359,6 +359,99 @@ fn shaft_clear_between_never_hides_a_blocker() {
     }
 }
 
+/// When the shaft between two triangles lists few blockers, testing segments inside it against
+/// those alone gives the whole tree's answer (32 segments per such pair, between points
+/// strictly inside both, on the Cornell scenes and a generated room), and a point-to-triangle
+/// shaft inside it that they clear hides no blocker (4 per pair, 8 rays each). At least 20
+/// segments must be blocked and 20 open, so that the lists are seen to hold the blockers, and
+/// a fair share of the pairs must list few blockers, so that the lists are used at all.
+#[test]
+fn shaft_blockers_answer_as_the_whole_tree() {
+    use twopass_scene::ShaftContents;
+    for (k, scene) in shaft_scenes().iter().enumerate() {
+        let mut r = rng(90 + k as u64);
+        let n = scene.mesh.triangles.len() as u32;
+        let (mut few, mut pairs, mut blocked, mut segments) = (0, 0, 0, 0);
+        let mut tetra_clear = 0;
+        for _ in 0..3000 {
+            let (s, t) = (r.below(n), r.below(n));
+            let part =
+                |t: u32, r: &mut Pcg64Mcg| [0, 1, 2].map(|_| interior_point(scene, t, r).position);
+            let (a, b) = (part(s, &mut r), part(t, &mut r));
+            let (na, nb) = (
+                scene.mesh.geometric_normals[s as usize],
+                scene.mesh.geometric_normals[t as usize],
+            );
+            let centre = |p: [Vec3; 3]| (p[0] + p[1] + p[2]) / 3.0;
+            if s == t || (centre(b) - centre(a)).dot(na) <= 0.0 {
+                continue;
+            }
+            pairs += 1;
+            let ShaftContents::Few(blockers) = scene.accel().shaft_between(a, na, b, nb, 8) else {
+                continue;
+            };
+            few += 1;
+            assert!(blockers.triangles() > 0);
+            for _ in 0..32 {
+                let mut point = |p: [Vec3; 3], t: u32| {
+                    scene.mesh.surface_point_at(t, point_in_triangle(p, &mut r))
+                };
+                let (from, to) = (point(a, s), point(b, t));
+                let whole = scene.occluded_between(&from, &to);
+                segments += 1;
+                blocked += u32::from(whole);
+                assert_eq!(
+                    scene.occluded_between_among(&from, &to, &blockers),
+                    whole,
+                    "scene {k}: triangles {s} {a:?} and {t} {b:?}: the segment from {:?} to {:?}",
+                    from.position,
+                    to.position
+                );
+            }
+            // A point's tetrahedron to `b` tested against the list: clear whenever the whole
+            // tree's test is (the list holds a subset of its candidates), and clear only when
+            // no segment in it is blocked. It may clear more: a sliver tetrahedron's planes,
+            // moved out by the tolerance, reach far past its corners, where the hull's do not.
+            for _ in 0..4 {
+                let from = scene.mesh.surface_point_at(s, point_in_triangle(a, &mut r));
+                let among = scene
+                    .accel()
+                    .shaft_clear_among(&blockers, from.position, Some(na), b);
+                if scene.accel().shaft_clear(from.position, Some(na), b) {
+                    assert!(
+                        among,
+                        "scene {k}: the tree clears the shaft from {:?}",
+                        from.position
+                    );
+                }
+                if among {
+                    tetra_clear += 1;
+                    for _ in 0..8 {
+                        let to = scene.mesh.surface_point_at(t, point_in_triangle(b, &mut r));
+                        assert!(
+                            !scene.occluded_between(&from, &to),
+                            "scene {k}: the shaft from {:?} to triangle {t} {b:?} was cleared \
+                             by its blockers, but the segment to {:?} is blocked",
+                            from.position,
+                            to.position
+                        );
+                    }
+                }
+            }
+        }
+        println!(
+            "scene {k}: {few} of {pairs} pairs list few blockers; {blocked} of {segments} \
+             segments blocked; {tetra_clear} of {} point shafts cleared by the lists",
+            4 * few
+        );
+        fair_share(k, few, pairs);
+        assert!(
+            blocked >= 20 && segments - blocked >= 20,
+            "scene {k}: {blocked} of {segments} segments blocked: too few of one kind to tell"
+        );
+    }
+}
+
 /// Two unit squares facing each other one unit apart: clear; a small square between them on
 /// the axis blocks the shaft from the centre; moved well to the side, it does not; lying in
 /// the receiver's own plane (beside it), it cannot block.

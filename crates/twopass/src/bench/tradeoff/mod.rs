@@ -38,7 +38,7 @@ use crate::bench::memory::{mib, peak_memory, reset_peak_memory};
 use crate::context::Context;
 use crate::error::CliError;
 use crate::pipeline::{RenderMethod, integrator, load_lit, methods};
-use crate::preset::{Preset, PresetFile};
+use crate::preset::{Preset, PresetFile, RenderKnobs};
 use sweep::{RunSpec, SolveSpec, Sweep, plan_runs};
 
 /// Arguments of `twopass bench tradeoff`.
@@ -227,11 +227,21 @@ pub fn run(args: &TradeoffArgs, ctx: &Context) -> Result<(), CliError> {
     let bar = ctx.progress((solves.len() + runs.len()) as u64, "tradeoff");
     let solved = solve_all(&scene, &solves, args, ctx, &bar)?;
 
+    let mut runs = runs;
     let mut rows = measure_runs(
         &scene,
         &camera,
         &runs,
         (&solves, &solved),
+        &converged,
+        ctx,
+        &bar,
+    )?;
+    extend_path_tracer(
+        &scene,
+        &camera,
+        (&mut runs, &mut rows),
+        (&sweep, &args.targets),
         &converged,
         ctx,
         &bar,
@@ -412,6 +422,57 @@ fn measure_runs(
         bar.inc(1);
     }
     Ok(rows)
+}
+
+/// Doubles the path tracer's samples per pixel past the sweep's last setting until it reaches
+/// the smallest target, so that its time to reach every target is a measured crossing rather
+/// than a bound; at most to half the reference's samples (beyond that the reference's own
+/// noise dominates what the comparison can tell). Nothing when the path tracer is not swept.
+fn extend_path_tracer(
+    scene: &twopass_scene::Scene,
+    camera: &twopass_scene::Camera,
+    (runs, rows): (&mut Vec<RunSpec>, &mut Vec<SweepRow>),
+    (sweep, targets): (&Sweep, &[f64]),
+    converged: &reference::Converged,
+    ctx: &Context,
+    bar: &indicatif::ProgressBar,
+) -> Result<(), CliError> {
+    let smallest = targets.iter().copied().fold(f64::INFINITY, f64::min);
+    let path_tracer = RenderMethod::Reference.name();
+    loop {
+        let reached = rows
+            .iter()
+            .any(|r| r.method == path_tracer && r.rel_rmse <= smallest);
+        let Some(last) = runs
+            .iter()
+            .filter(|r| r.method == RenderMethod::Reference)
+            .max_by_key(|r| r.render.spp)
+        else {
+            return Ok(());
+        };
+        let spp = last.render.spp.saturating_mul(2);
+        if reached || spp > sweep.reference_spp / 2 {
+            return Ok(());
+        }
+        let run = RunSpec {
+            method: RenderMethod::Reference,
+            knob: "spp-extended",
+            render: RenderKnobs { spp, ..last.render },
+            solve: None,
+        };
+        bar.inc_length(1);
+        let row = measure_runs(
+            scene,
+            camera,
+            std::slice::from_ref(&run),
+            (&[], &[]),
+            converged,
+            ctx,
+            bar,
+        )?;
+        rows.extend(row);
+        runs.push(run);
+    }
 }
 
 fn row(
