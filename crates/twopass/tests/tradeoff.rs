@@ -12,7 +12,7 @@ fn sweep(out: &Path) -> Value {
     let scene = repo("scenes/cornell-box.toml");
     let o = cli("bench tradeoff")
         .arg(&scene)
-        .words("--quick --width 32 --reference-spp 64 --json")
+        .words("--quick --width 32 --reference-spp 64 --targets 0.3,0.2,0.12 --json")
         .output(out)
         .run();
     common::ok_json(&o)
@@ -101,6 +101,37 @@ fn front_presets_and_cache_agree_with_the_measured_rows() {
     );
     assert!(!first["reference"]["cached"].as_bool().unwrap());
 
+    // Past the sweep's own runs (1 and 4 spp, far above 12 %), the path tracer renders on
+    // until it reaches the smallest target, each run at the samples its last one predicts
+    // (error^2 = noise^2 + c / spp, 15 % to spare), never past the reference's 64 spp.
+    let path_tracer: Vec<&Value> = rows.iter().filter(|r| r["method"] == "reference").collect();
+    let extended: Vec<&Value> = path_tracer
+        .iter()
+        .copied()
+        .filter(|r| r["knob"] == "spp-extended")
+        .collect();
+    assert!(!extended.is_empty(), "the path tracer was not extended");
+    for pair in path_tracer.windows(2).skip(1) {
+        let (spp, error) = (f(&pair[0]["spp"]), f(&pair[0]["rel_rmse"]));
+        let predicted = spp * (error * error - noise * noise) / (0.12f64.powi(2) - noise * noise);
+        assert_eq!(
+            f(&pair[1]["spp"]),
+            (predicted * 1.15).ceil().min(64.0),
+            "{pair:?}"
+        );
+    }
+    let last = path_tracer.last().unwrap();
+    assert!(
+        f(&last["rel_rmse"]) <= 0.12 || f(&last["spp"]) == 64.0,
+        "the path tracer stopped short: {last}"
+    );
+    assert!(
+        path_tracer[..path_tracer.len() - 1]
+            .iter()
+            .all(|r| f(&r["rel_rmse"]) > 0.12),
+        "the path tracer rendered past the target"
+    );
+
     // Outputs exist; the plot is a PNG.
     let png = std::fs::read(first["plot"].as_str().unwrap()).unwrap();
     assert_eq!(&png[1..4], b"PNG");
@@ -186,6 +217,13 @@ fn missing_presets_and_unknown_names_are_clear_errors() {
         .words("--preset draft --spp 4")
         .run();
     assert_eq!(o.status.code(), Some(2));
+
+    let o = cli("bench tradeoff")
+        .arg(&scene)
+        .words("--quick --targets 0.1,0.05")
+        .run();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--targets"));
 
     let o = twopass(&["bench", "tradeoff", "no/such/scene.toml", "--quick"]);
     assert_eq!(o.status.code(), Some(1));

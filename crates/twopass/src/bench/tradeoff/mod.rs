@@ -56,8 +56,9 @@ pub struct TradeoffArgs {
     /// Directory of the cached converged references [default: OUTPUT/cache].
     #[arg(long, value_name = "DIR")]
     pub cache: Option<PathBuf>,
-    /// Relative RMSE targets of the presets draft, preview and final, in that order.
-    #[arg(long, value_delimiter = ',', num_args = 3, default_values_t = [0.10, 0.026, 0.014], value_parser = parse_target)]
+    /// Relative RMSE targets of the presets draft, preview and final, in that order, comma
+    /// separated (`0.10,0.026,0.014`).
+    #[arg(long, value_delimiter = ',', default_values_t = [0.10, 0.026, 0.014], value_parser = parse_target)]
     pub targets: Vec<f64>,
     /// Methods to sweep, comma separated [default: every method the scene calls for].
     #[arg(long, value_enum, value_delimiter = ',')]
@@ -175,6 +176,13 @@ struct TradeoffReport {
 
 /// Runs the sweep and writes the CSV, JSON, plot and presets.
 pub fn run(args: &TradeoffArgs, ctx: &Context) -> Result<(), CliError> {
+    if args.targets.len() != PRESET_NAMES.len() {
+        return Err(CliError::Usage(format!(
+            "--targets: {} values given; one per preset ({}) is needed",
+            args.targets.len(),
+            PRESET_NAMES.join(", ")
+        )));
+    }
     let scene = load_lit(&args.scene, ctx)?;
     let mut sweep = if args.quick {
         Sweep::quick()
@@ -504,33 +512,6 @@ fn next_path_tracer_spp(
     Some(predicted.ceil().min(f64::from(max)) as u32)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::next_path_tracer_spp;
-
-    #[test]
-    fn the_next_path_tracer_run_is_the_one_its_last_predicts() {
-        // error^2 = 0.005^2 + 0.1 / spp: 1.118 % at 1000 spp; 1 % needs 1333.3 spp, and 15 %
-        // more is 1533.3.
-        let noise = 0.005_f64;
-        let error = (noise * noise + 0.1 / 1000.0).sqrt();
-        assert_eq!(
-            next_path_tracer_spp((1000, error), noise, 0.01, 8192),
-            Some(1534)
-        );
-        assert_eq!(
-            next_path_tracer_spp((1000, error), noise, 0.01, 1200),
-            Some(1200)
-        );
-        // At the cap, or a target under the reference's own noise: no further run.
-        assert_eq!(next_path_tracer_spp((1200, error), noise, 0.01, 1200), None);
-        assert_eq!(
-            next_path_tracer_spp((1000, error), noise, 0.004, 8192),
-            None
-        );
-    }
-}
-
 fn row(
     run: &RunSpec,
     solve: Option<(&SolveSpec, &Solved)>,
@@ -751,4 +732,31 @@ fn print_report(r: &TradeoffReport) -> Result<(), CliError> {
         r.presets_file.display()
     );
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::next_path_tracer_spp;
+
+    #[test]
+    fn the_next_path_tracer_run_is_the_one_its_last_predicts() {
+        // error^2 = 0.005^2 + 0.1 / spp: 1.118 % at 1000 spp; 1 % needs 1333.3 spp, and 15 %
+        // more is 1533.3.
+        let noise = 0.005_f64;
+        let error = (noise * noise + 0.1 / 1000.0).sqrt();
+        assert_eq!(
+            next_path_tracer_spp((1000, error), noise, 0.01, 8192),
+            Some(1534)
+        );
+        assert_eq!(
+            next_path_tracer_spp((1000, error), noise, 0.01, 1200),
+            Some(1200)
+        );
+        // At the cap, or a target under the reference's own noise: no further run.
+        assert_eq!(next_path_tracer_spp((1200, error), noise, 0.01, 1200), None);
+        assert_eq!(
+            next_path_tracer_spp((1000, error), noise, 0.004, 8192),
+            None
+        );
+    }
 }
