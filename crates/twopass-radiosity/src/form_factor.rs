@@ -6,7 +6,7 @@ use std::f64::consts::PI;
 
 use glam::{DVec3, Vec2, Vec3};
 use smart_default::SmartDefault;
-use twopass_scene::{Blockers, Scene, ShaftContents, SurfacePoint};
+use twopass_scene::{Scene, SurfacePoint};
 
 /// Relative distance (height over distance) under which a point counts as lying in a plane:
 /// about 20 f32 ulps, the rounding of vertices computed in f32.
@@ -147,44 +147,23 @@ pub fn shaft_clear(scene: &Scene, from: &SurfacePoint, shooter: [DVec3; 3]) -> b
     )
 }
 
-/// What may block the segments between receiver patch `receiver` and shooter patch `shooter`
-/// (each its corners and its scene triangle's unit geometric normal): shaft culling with the
-/// convex hull of the two, [`twopass_scene::Accel::shaft_between`], listing the blockers
-/// when they fill at most `max_packets` leaf packets. When it is
-/// [`ShaftContents::Clear`], every point of the receiver sees the whole shooter, and its
-/// [`visibility`] is 1 without a ray or its own test, [`shaft_clear`], whose tetrahedron lies
-/// inside this hull. The hull clears some pairs that test cannot: a vertex on a crease lies in
-/// the plane of the wall it meets, and its tetrahedron to that wall is flat. With
-/// [`ShaftContents::Few`], a point of the receiver tests only those blockers
-/// ([`shaft_clear_among`], [`visibility_among`]).
-pub fn patches_shaft(
+/// Whether nothing in the scene can block any segment between receiver patch `receiver` and
+/// shooter patch `shooter` (each its corners and its scene triangle's unit geometric normal):
+/// shaft culling with the convex hull of the two, [`twopass_scene::Accel::shaft_clear_between`].
+/// Every point of the receiver then sees the whole shooter, and its [`visibility`] is 1
+/// without a ray or its own test, [`shaft_clear`], whose tetrahedron lies inside this hull.
+/// The hull clears some pairs that test cannot: a vertex on a crease lies in the plane of the
+/// wall it meets, and its tetrahedron to that wall is flat.
+pub fn patches_clear(
     scene: &Scene,
     (receiver, receiver_normal): ([DVec3; 3], Vec3),
     (shooter, shooter_normal): ([DVec3; 3], Vec3),
-    max_packets: usize,
-) -> ShaftContents {
-    scene.accel().shaft_between(
+) -> bool {
+    scene.accel().shaft_clear_between(
         receiver.map(|c| c.as_vec3()),
         receiver_normal,
         shooter.map(|c| c.as_vec3()),
         shooter_normal,
-        max_packets,
-    )
-}
-
-/// [`shaft_clear`] for a receiver on a patch whose shaft to the shooter holds only `blockers`
-/// ([`patches_shaft`]): only they are tested, with the same answer.
-pub fn shaft_clear_among(
-    scene: &Scene,
-    from: &SurfacePoint,
-    shooter: [DVec3; 3],
-    blockers: &Blockers,
-) -> bool {
-    scene.accel().shaft_clear_among(
-        blockers,
-        from.position,
-        Some(from.normal),
-        shooter.map(|c| c.as_vec3()),
     )
 }
 
@@ -203,49 +182,6 @@ pub fn visibility(
     shooter_tri: u32,
     rays: VisibilityRays,
     seed: u64,
-) -> (f64, u64) {
-    let occluded = |a: &SurfacePoint, b: &SurfacePoint| scene.occluded_between(a, b);
-    visibility_by(
-        scene,
-        (from, receiver_normal),
-        (shooter, shooter_tri),
-        rays,
-        seed,
-        occluded,
-    )
-}
-
-/// [`visibility`] for a receiver on a patch whose shaft to the shooter holds only `blockers`
-/// ([`patches_shaft`]): the same rays, each tested against them alone, with the same answer.
-pub fn visibility_among(
-    scene: &Scene,
-    (from, receiver_normal): (&SurfacePoint, Vec3),
-    (shooter, shooter_tri): ([DVec3; 3], u32),
-    rays: VisibilityRays,
-    seed: u64,
-    blockers: &Blockers,
-) -> (f64, u64) {
-    let occluded =
-        |a: &SurfacePoint, b: &SurfacePoint| scene.occluded_between_among(a, b, blockers);
-    visibility_by(
-        scene,
-        (from, receiver_normal),
-        (shooter, shooter_tri),
-        rays,
-        seed,
-        occluded,
-    )
-}
-
-/// [`visibility`] with shadow rays answered by `occluded`.
-#[inline(always)]
-fn visibility_by(
-    scene: &Scene,
-    (from, receiver_normal): (&SurfacePoint, Vec3),
-    (shooter, shooter_tri): ([DVec3; 3], u32),
-    rays: VisibilityRays,
-    seed: u64,
-    occluded: impl Fn(&SurfacePoint, &SurfacePoint) -> bool,
 ) -> (f64, u64) {
     let x = from.position.as_dvec3();
     // Barycentrics of the shooter's corners on its scene triangle.
@@ -269,7 +205,7 @@ fn visibility_by(
         let b = [0, 1, 2]
             .map(|c| (corners[0][c] * w[0] + corners[1][c] * w[1] + corners[2][c] * w[2]) as f32);
         let target = scene.mesh.surface_point(shooter_tri, b);
-        Some(!occluded(from, &target))
+        Some(!scene.occluded_between(from, &target))
     };
     let side = |count: u32| (f64::from(count).sqrt().round() as u32).max(1);
     let (k1, k2) = (side(rays.min), side(rays.max.max(rays.min)));
@@ -332,7 +268,7 @@ fn visibility_by(
     }
     // Only a sliver is above the receiver's horizon: one ray to the shooter's centroid.
     let target = scene.mesh.surface_point_at(shooter_tri, centroid.as_vec3());
-    let open = !occluded(from, &target);
+    let open = !scene.occluded_between(from, &target);
     (f64::from(u8::from(open)), cast + 1)
 }
 

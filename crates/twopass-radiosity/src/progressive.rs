@@ -3,9 +3,7 @@
 //! plus the specular transfer of [`crate::specular`]: each shot also traces the shooter's light
 //! through mirrors and glass and deposits it where it lands.
 
-use std::collections::HashMap;
 use std::ops::ControlFlow;
-use std::sync::Mutex;
 use std::sync::atomic::{AtomicU8, Ordering};
 use std::time::Instant;
 
@@ -13,7 +11,7 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use twopass_brdf::Rgb;
 use twopass_brdf::colour::luminance_f64;
-use twopass_scene::{Blockers, Scene, ShaftContents, SurfacePoint};
+use twopass_scene::{Scene, SurfacePoint};
 
 use crate::element::ElementMesh;
 use crate::form_factor::{self, RECEIVER_INSET, hash};
@@ -36,11 +34,6 @@ const BYTES_PER_ELEMENT: f64 = 400.0;
 /// rows in flight beside the cache).
 const ROW_BATCH: usize = 1 << 22;
 
-/// Fewest vertices a thread takes at once when a shot is spread over the vertices (a patch
-/// stands for about 16 of them): below a few thousand, starting threads costs more than the
-/// sums.
-const SHOT_CHUNK: usize = 2048;
-
 /// Most patches for which [`Progressive`] keeps every pair's shaft test (one byte per pair:
 /// 16 MiB at this many); above it, each row tests its pairs afresh.
 const PAIR_CACHE_MAX_PATCHES: usize = 4096;
@@ -49,45 +42,10 @@ const PAIR_CACHE_MAX_PATCHES: usize = 4096;
 /// preview mesh of the Cornell box has 2.3 vertices per patch and was slower with every
 /// pair tested), and a pair tested once is kept.
 const HULL_MIN_VERTICES: u32 = 6;
-/// Most leaf packets (of four triangles) a shaft between two patches may hold for the
-/// vertices on the receiving patch to test only them ([`PairShaft::Few`]) rather than walk
-/// the whole tree: testing a packet costs about as much as visiting a tree node.
-const FEW_BLOCKER_PACKETS: usize = 8;
-/// States of a pair of patches in [`Progressive`]'s shaft cache: not tested yet, nothing in
-/// the shaft, few blockers (found again when asked: they are not kept), too many to list.
+/// States of a pair of patches in [`Progressive`]'s shaft cache.
 const PAIR_UNKNOWN: u8 = 0;
 const PAIR_CLEAR: u8 = 1;
-const PAIR_FEW: u8 = 2;
-const PAIR_MANY: u8 = 3;
-
-/// Most bytes [`Progressive`] spends keeping the blockers of pairs of patches.
-const PAIR_BLOCKERS_MAX_BYTES: usize = 64 << 20;
-
-/// The kept blockers of pairs of patches, and about how many bytes they take.
-#[derive(Default)]
-struct PairBlockers {
-    map: HashMap<u64, Blockers>,
-    bytes: usize,
-}
-
-/// The key of the unordered pair of patches `p`, `q`.
-fn pair_key(p: usize, q: usize) -> u64 {
-    let (lo, hi) = if p < q { (p, q) } else { (q, p) };
-    (lo as u64) << 32 | hi as u64
-}
-
-/// What a row knows of the shaft between a receiving patch and the shooter.
-#[derive(Clone, Debug, Default)]
-enum PairShaft {
-    /// Not tested (too few of the row's vertices on the patch) or too many blockers: each
-    /// vertex tests its own shaft and casts its rays through the whole tree.
-    #[default]
-    Unknown,
-    /// Nothing can block: no vertex on the patch needs a test or a ray.
-    Clear,
-    /// Only these triangles can block: the vertices on the patch test only them.
-    Few(Blockers),
-}
+const PAIR_BLOCKED: u8 = 2;
 
 /// A progressive-refinement radiosity solve over a scene. Deterministic: the same options and
 /// seed give the same solution bit for bit on any number of threads.
@@ -135,12 +93,9 @@ pub struct Progressive<'s> {
     cache: Vec<Option<Vec<f32>>>,
     /// Per pair of patches `(q, p)` at `q * n + p`, with shaft culling and at most
     /// [`PAIR_CACHE_MAX_PATCHES`] patches: whether the shaft between them is clear
-    /// ([`PAIR_UNKNOWN`], [`PAIR_CLEAR`], [`PAIR_FEW`], [`PAIR_MANY`]); patches never change, and every
+    /// ([`PAIR_UNKNOWN`], [`PAIR_CLEAR`], [`PAIR_BLOCKED`]); patches never change, and every
     /// refinement asks again for the new vertices. Empty otherwise.
     pair_clear: Vec<AtomicU8>,
-    /// The blockers of the pairs in state [`PAIR_FEW`], keyed by [`pair_key`], while they take
-    /// at most [`PAIR_BLOCKERS_MAX_BYTES`] (a pair not kept is found again when asked).
-    pair_blockers: Mutex<PairBlockers>,
     cached_bytes: usize,
     /// Rounds, time and power, kept as the other solver keeps them.
     book: Bookkeeping,
@@ -342,7 +297,6 @@ impl<'s> Progressive<'s> {
             patch_area: Vec::new(),
             cache: Vec::new(),
             pair_clear: Vec::new(),
-            pair_blockers: Mutex::default(),
             cached_bytes: 0,
             book: Bookkeeping::new(started, started.elapsed()),
             shots: 0,
@@ -574,7 +528,7 @@ impl<'s> Progressive<'s> {
         let shooter = self.mesh.corners(self.mesh.patches[p]);
         let shooter_tri = node.scene_triangle;
         let ns = self.scene.mesh.geometric_normals[shooter_tri as usize].as_dvec3();
-        let shafts = self.patch_shafts(p, vertices);
+        let clear = self.clear_patches(p, vertices);
         let results: Vec<(f32, u64)> = vertices
             .par_iter()
             .with_min_len(64)
@@ -600,43 +554,26 @@ impl<'s> Progressive<'s> {
                 }
                 let from = &self.receivers[v];
                 let seed = hash(self.options.seed ^ hash((v as u64) << 32 | p as u64));
-                let pair = self
+                let patch_clear = self
                     .elements
                     .vertex_patch
                     .get(v)
-                    .and_then(|&q| shafts.get(q as usize));
-                let (vis, rays) = match pair {
-                    Some(PairShaft::Clear) => return (f as f32, 0),
-                    Some(PairShaft::Few(blockers)) => {
-                        if form_factor::shaft_clear_among(self.scene, from, shooter, blockers) {
-                            return (f as f32, 0);
-                        }
-                        form_factor::visibility_among(
-                            self.scene,
-                            (from, vert.normal),
-                            (shooter, shooter_tri),
-                            self.options.visibility,
-                            seed,
-                            blockers,
-                        )
-                    }
-                    _ => {
-                        if self.options.shaft_culling
-                            && form_factor::shaft_clear(self.scene, from, shooter)
-                        {
-                            return (f as f32, 0);
-                        }
-                        form_factor::visibility(
-                            self.scene,
-                            from,
-                            vert.normal,
-                            shooter,
-                            shooter_tri,
-                            self.options.visibility,
-                            seed,
-                        )
-                    }
-                };
+                    .is_some_and(|&q| clear.get(q as usize).copied().unwrap_or(false));
+                if patch_clear
+                    || self.options.shaft_culling
+                        && form_factor::shaft_clear(self.scene, from, shooter)
+                {
+                    return (f as f32, 0);
+                }
+                let (vis, rays) = form_factor::visibility(
+                    self.scene,
+                    from,
+                    vert.normal,
+                    shooter,
+                    shooter_tri,
+                    self.options.visibility,
+                    seed,
+                );
                 ((f * vis) as f32, rays)
             })
             .collect();
@@ -644,13 +581,12 @@ impl<'s> Progressive<'s> {
         (results.into_iter().map(|r| r.0).collect(), rays)
     }
 
-    /// With shaft culling: per patch, what may come between it and shooter patch `p`
-    /// ([`form_factor::patches_shaft`]), tested only for the patches at least
-    /// [`HULL_MIN_VERTICES`] of `vertices` lie on ([`PairShaft::Unknown`] for the others);
-    /// empty without shaft culling. A vertex on a clear patch needs neither its own shaft test
-    /// nor shadow rays: its segments to `p` lie in the hull; one on a patch with few blockers
-    /// tests only those.
-    fn patch_shafts(&self, p: usize, vertices: &[usize]) -> Vec<PairShaft> {
+    /// With shaft culling: per patch, whether nothing can come between it and shooter patch
+    /// `p` ([`form_factor::patches_clear`]), tested only for the patches at least
+    /// [`HULL_MIN_VERTICES`] of `vertices` lie on (`false` for the others);
+    /// empty without shaft culling. A vertex on a clear patch needs
+    /// neither its own shaft test nor shadow rays: its segments to `p` lie in the hull.
+    fn clear_patches(&self, p: usize, vertices: &[usize]) -> Vec<bool> {
         if !(self.options.shaft_culling && self.options.occlusion) {
             return Vec::new();
         }
@@ -666,8 +602,7 @@ impl<'s> Progressive<'s> {
         }
         // Only the row's own vertices decide which pairs are tested, never what other rows
         // (computed in parallel) have put in the cache: a vertex must take the same path,
-        // hull or its own test, on any thread count. The cache only saves finding again what
-        // a pair's test gives.
+        // hull or its own test, on any thread count.
         let wanted: Vec<bool> = on.iter().map(|&c| c >= HULL_MIN_VERTICES).collect();
         let patch = |q: usize| {
             let node = self.mesh.patches[q];
@@ -685,46 +620,28 @@ impl<'s> Progressive<'s> {
             .with_min_len(16)
             .map(|(q, &w)| {
                 if !w {
-                    return PairShaft::Unknown;
+                    return false;
                 }
                 if cached {
                     match self.pair_clear[q * n + p].load(Ordering::Relaxed) {
-                        PAIR_CLEAR => return PairShaft::Clear,
-                        PAIR_MANY => return PairShaft::Unknown,
-                        PAIR_FEW => {
-                            let kept = self.pair_blockers.lock().expect("pair blockers");
-                            if let Some(b) = kept.map.get(&pair_key(p, q)) {
-                                return PairShaft::Few(b.clone());
-                            }
-                        }
+                        PAIR_CLEAR => return true,
+                        PAIR_BLOCKED => return false,
                         _ => {}
                     }
                 }
                 // The lower index first, whichever row asks: the rounding then never
                 // depends on which of the two rows (computed in parallel) asks first.
-                let contents = if q < p {
-                    form_factor::patches_shaft(self.scene, patch(q), shooter, FEW_BLOCKER_PACKETS)
+                let clear = if q < p {
+                    form_factor::patches_clear(self.scene, patch(q), shooter)
                 } else {
-                    form_factor::patches_shaft(self.scene, shooter, patch(q), FEW_BLOCKER_PACKETS)
+                    form_factor::patches_clear(self.scene, shooter, patch(q))
                 };
-                let (state, pair) = match contents {
-                    ShaftContents::Clear => (PAIR_CLEAR, PairShaft::Clear),
-                    ShaftContents::Few(b) => (PAIR_FEW, PairShaft::Few(b)),
-                    ShaftContents::Many => (PAIR_MANY, PairShaft::Unknown),
-                };
-                if let (true, PairShaft::Few(b)) = (cached, &pair) {
-                    let mut kept = self.pair_blockers.lock().expect("pair blockers");
-                    let bytes = 64 + 8 * b.packets();
-                    if kept.bytes + bytes <= PAIR_BLOCKERS_MAX_BYTES {
-                        kept.bytes += bytes;
-                        kept.map.insert(pair_key(p, q), b.clone());
-                    }
-                }
                 if cached {
+                    let state = if clear { PAIR_CLEAR } else { PAIR_BLOCKED };
                     self.pair_clear[q * n + p].store(state, Ordering::Relaxed);
                     self.pair_clear[p * n + q].store(state, Ordering::Relaxed);
                 }
-                pair
+                clear
             })
             .collect()
     }
@@ -828,36 +745,21 @@ impl<'s> Progressive<'s> {
         let (de, dr) = (self.unshot_emit[p], self.unshot_refl[p]);
         let row = self.patch_row(p);
         let area = self.patch_area(p);
-        // In parallel (a shot is thousands of shots' worth of serial work otherwise), each
-        // vertex and each patch summed as the serial loop would: the same bits on any thread
-        // count.
-        self.received_emit
-            .par_iter_mut()
-            .zip(self.received_refl.par_iter_mut())
-            .zip(row.par_iter())
-            .with_min_len(SHOT_CHUNK)
-            .for_each(|((e, r), &f)| {
-                if f > 0.0 {
-                    *e += de * f64::from(f);
-                    *r += dr * f64::from(f);
-                }
-            });
+        for (v, &f) in row.iter().enumerate() {
+            if f > 0.0 {
+                self.received_emit[v] += de * f64::from(f);
+                self.received_refl[v] += dr * f64::from(f);
+            }
+        }
         // Power arriving at each element: area times the mean irradiance of its vertices.
-        let gained: Vec<DVec3> = (0..self.mesh.patches.len())
-            .into_par_iter()
-            .with_min_len(SHOT_CHUNK / 16)
-            .map(|q| {
-                let mut gained = DVec3::ZERO;
-                for (h, area) in self.element_means(q, |v| f64::from(row[v])) {
-                    if h > 0.0 {
-                        gained += (de + dr) * h * area;
-                    }
-                }
-                gained
-            })
-            .collect();
         let mut arrived = DVec3::ZERO;
-        for (q, gained) in gained.into_iter().enumerate() {
+        for q in 0..self.mesh.patches.len() {
+            let mut gained = DVec3::ZERO;
+            for (h, area) in self.element_means(q, |v| f64::from(row[v])) {
+                if h > 0.0 {
+                    gained += (de + dr) * h * area;
+                }
+            }
             if gained != DVec3::ZERO {
                 arrived += gained;
                 self.receive(q, gained);

@@ -39,7 +39,7 @@ mod transform;
 mod unit;
 pub mod workload;
 
-pub use accel::{Accel, Blockers, Ray, SHAFT_TOLERANCE, ShaftContents, SurfacePoint, TriangleHit};
+pub use accel::{Accel, Ray, SHAFT_TOLERANCE, SurfacePoint, TriangleHit};
 pub use camera::Camera;
 pub use error::{CameraProblem, SceneError, Warning};
 pub use input::{

@@ -336,19 +336,6 @@ impl Scene {
         self.accel.any_hit(r.origin, r.direction, r.t_max)
     }
 
-    /// [`Scene::occluded_between`] tested against `blockers` alone: for a segment inside the
-    /// shaft they were found for ([`Accel::shaft_between`]), the answer the whole scene gives.
-    pub fn occluded_between_among(
-        &self,
-        from: &SurfacePoint,
-        to: &SurfacePoint,
-        blockers: &crate::accel::Blockers,
-    ) -> bool {
-        let r = Self::segment_between(from, to);
-        self.accel
-            .any_hit_among(blockers, r.origin, r.direction, r.t_max)
-    }
-
     /// The shadow ray [`Scene::occluded_between`] casts between two surface points: both ends
     /// offset off their surfaces, `t` in (0, `t_max`) covering the segment without its ends.
     /// Exposed so that other ray engines can be given exactly the same queries (`bench rays

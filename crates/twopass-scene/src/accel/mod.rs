@@ -51,43 +51,6 @@ impl Boundable for Padded {
         self.aabb
     }
 }
-/// The scene triangles that may block segments inside one shaft, found by
-/// [`Accel::shaft_between`]: leaf packets, each with the triangles (lanes) of it that reach
-/// into the shaft. Meaningful only with the [`Accel`] that found them.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
-pub struct Blockers {
-    /// `(packet, lanes)`: a packet's index and a bit per lane that may block. Shared: a list
-    /// is kept and handed to every row that asks for its pair.
-    packets: std::sync::Arc<[(u32, u32)]>,
-}
-
-impl Blockers {
-    /// How many leaf packets hold them.
-    pub fn packets(&self) -> usize {
-        self.packets.len()
-    }
-
-    /// How many triangles may block.
-    pub fn triangles(&self) -> usize {
-        self.packets
-            .iter()
-            .map(|&(_, lanes)| lanes.count_ones() as usize)
-            .sum()
-    }
-}
-
-/// What may block the segments between two triangles ([`Accel::shaft_between`]).
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub enum ShaftContents {
-    /// Nothing: every segment is unblocked.
-    Clear,
-    /// These triangles, and no other, may block a segment.
-    Few(Blockers),
-    /// More than asked for, or the test could not tell (the two triangles lie in one plane):
-    /// segments need the whole tree.
-    Many,
-}
-
 /// The result of a closest-hit query: which triangle, where along the ray, barycentrics.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TriangleHit {
@@ -289,88 +252,14 @@ impl Accel {
     /// `false` when the two triangles lie in one plane (the hull is flat). Conservative up to
     /// [`SHAFT_TOLERANCE`].
     pub fn shaft_clear_between(&self, a: [Vec3; 3], na: Vec3, b: [Vec3; 3], nb: Vec3) -> bool {
-        self.shaft_between(a, na, b, nb, 0) == ShaftContents::Clear
-    }
-
-    /// What may block the segments between triangles `a` and `b` (as in
-    /// [`Accel::shaft_clear_between`]): nothing ([`ShaftContents::Clear`]), the triangles
-    /// that reach into the hull when they fill at most `max_packets` leaf packets
-    /// ([`ShaftContents::Few`]), or more ([`ShaftContents::Many`], also for a flat hull).
-    /// Segments inside the hull can then be tested against the few alone
-    /// ([`Accel::any_hit_among`]) with the answer the whole tree would give, up to
-    /// [`SHAFT_TOLERANCE`] (the same tolerance that lets a clear pair skip its rays).
-    pub fn shaft_between(
-        &self,
-        a: [Vec3; 3],
-        na: Vec3,
-        b: [Vec3; 3],
-        nb: Vec3,
-        max_packets: usize,
-    ) -> ShaftContents {
         let Some(shaft) = Shaft::hull(a, na, b, nb) else {
-            return ShaftContents::Many;
+            return false;
         };
         let packets = self.packets.as_slice();
-        let mut found = Vec::new();
-        let many = self.bvh.any_leaf(
+        !self.bvh.any_leaf(
             |node| shaft.overlap(node),
-            |p, lanes| {
-                let lanes = shaft.blocking_lanes(&packets[p], lanes);
-                if lanes == 0 {
-                    return false;
-                }
-                if found.len() == max_packets {
-                    return true;
-                }
-                found.push((p as u32, lanes));
-                false
-            },
-        );
-        match (many, found.is_empty()) {
-            (true, _) => ShaftContents::Many,
-            (false, true) => ShaftContents::Clear,
-            (false, false) => {
-                // In tree order, which depends only on the tree: the same list every time.
-                ShaftContents::Few(Blockers {
-                    packets: found.into(),
-                })
-            }
-        }
-    }
-
-    /// [`Accel::any_hit`] against `blockers` alone: whether a segment that lies inside the
-    /// shaft they were found for is blocked. Each blocker gets the same watertight test the
-    /// tree walk gives it.
-    pub fn any_hit_among(
-        &self,
-        blockers: &Blockers,
-        origin: Vec3,
-        direction: Vec3,
-        t_max: f32,
-    ) -> bool {
-        let sheared = PacketRay::new(&ShearedRay::new(origin, direction));
-        let packets = self.packets.as_slice();
-        blockers
-            .packets
-            .iter()
-            .any(|&(p, lanes)| sheared.intersect(&packets[p as usize], lanes, t_max).mask != 0)
-    }
-
-    /// [`Accel::shaft_clear`] for a tetrahedron inside the shaft `blockers` were found for:
-    /// only they are tested, with the answer the whole tree would give.
-    pub fn shaft_clear_among(
-        &self,
-        blockers: &Blockers,
-        apex: Vec3,
-        apex_normal: Option<Vec3>,
-        base: [Vec3; 3],
-    ) -> bool {
-        let shaft = Shaft::new(apex, apex_normal, base);
-        let packets = self.packets.as_slice();
-        !blockers
-            .packets
-            .iter()
-            .any(|&(p, lanes)| shaft.may_block(&packets[p as usize], lanes))
+            |p, lanes| shaft.may_block(&packets[p], lanes),
+        )
     }
 
     /// Reference answer by testing every triangle, O(n): the oracle for BVH tests.

@@ -217,13 +217,6 @@ impl<const PLANES: usize, const CORNERS: usize> Shaft<PLANES, CORNERS> {
     /// shaft.
     #[inline(always)]
     pub(super) fn may_block(&self, packet: &TriPacket, lanes: u32) -> bool {
-        self.blocking_lanes(packet, lanes) != 0
-    }
-
-    /// The enabled lanes (bits of `lanes`) of `packet` that may block a segment inside the
-    /// shaft.
-    #[inline(always)]
-    pub(super) fn blocking_lanes(&self, packet: &TriPacket, lanes: u32) -> u32 {
         let v = &packet.v;
         let p = |vertex: usize| [v[0][vertex], v[1][vertex], v[2][vertex]];
         let (a, b, c) = (p(0), p(1), p(2));
@@ -262,6 +255,6 @@ impl<const PLANES: usize, const CORNERS: usize> Shaft<PLANES, CORNERS> {
             below |= d.cmplt(-tol).bitmask();
         }
         keep &= above & below;
-        keep & lanes
+        keep & lanes != 0
     }
 }
