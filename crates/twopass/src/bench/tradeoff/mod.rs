@@ -436,8 +436,9 @@ fn measure_runs(
 /// target, so that its time to reach every target is a measured crossing rather than a bound.
 /// Each further run takes the samples per pixel the last one predicts, with 15 % to spare:
 /// measured error^2 = reference noise^2 + c / spp (the reference's own noise is in every
-/// measured error; the path tracer's falls as 1 / spp), at most the reference's. Stops when a target at or below the reference's noise could not be
-/// reached at all. Nothing when the path tracer is not swept.
+/// measured error; the path tracer's falls as 1 / spp), at most the reference's. Stops when a
+/// target at or below the reference's noise could not be reached at all. Nothing when the
+/// path tracer is not swept.
 fn extend_path_tracer(
     scene: &twopass_scene::Scene,
     camera: &twopass_scene::Camera,
@@ -448,20 +449,21 @@ fn extend_path_tracer(
     bar: &indicatif::ProgressBar,
 ) -> Result<(), CliError> {
     let smallest = targets.iter().copied().fold(f64::INFINITY, f64::min);
-    let path_tracer = RenderMethod::Reference.name();
     loop {
-        let Some((last, error)) = runs
-            .iter()
-            .zip(rows.iter())
-            .filter(|(r, _)| r.method == RenderMethod::Reference)
+        let path_tracer = || {
+            runs.iter()
+                .zip(rows.iter())
+                .filter(|(r, _)| r.method == RenderMethod::Reference)
+        };
+        if path_tracer().any(|(_, row)| row.rel_rmse <= smallest) {
+            return Ok(());
+        }
+        let Some((last, error)) = path_tracer()
             .max_by_key(|(r, _)| r.render.spp)
             .map(|(r, row)| (r.render, row.rel_rmse))
         else {
             return Ok(());
         };
-        let reached = rows
-            .iter()
-            .any(|r| r.method == path_tracer && r.rel_rmse <= smallest);
         let Some(spp) = next_path_tracer_spp(
             (last.spp, error),
             converged.noise_rel_rmse,
@@ -470,9 +472,6 @@ fn extend_path_tracer(
         ) else {
             return Ok(());
         };
-        if reached {
-            return Ok(());
-        }
         let run = RunSpec {
             method: RenderMethod::Reference,
             knob: "spp-extended",
