@@ -105,6 +105,19 @@ pub struct VisibilityRays {
     pub max: u32,
 }
 
+impl VisibilityRays {
+    /// Rays of the first, coarse estimate as [`visibility`] casts them: `min` rounded to the
+    /// nearest square (at least 1).
+    pub fn coarse(&self) -> u32 {
+        grid_side(self.min).pow(2)
+    }
+}
+
+/// The side of the square grid of stratified shadow rays nearest to `count` rays (at least 1).
+fn grid_side(count: u32) -> u32 {
+    (f64::from(count).sqrt().round() as u32).max(1)
+}
+
 /// `MIN,MAX`, as the command line writes it (`4,16`).
 impl std::fmt::Display for VisibilityRays {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -207,8 +220,7 @@ pub fn visibility(
         let target = scene.mesh.surface_point(shooter_tri, b);
         Some(!scene.occluded_between(from, &target))
     };
-    let side = |count: u32| (f64::from(count).sqrt().round() as u32).max(1);
-    let (k1, k2) = (side(rays.min), side(rays.max.max(rays.min)));
+    let (k1, k2) = (grid_side(rays.min), grid_side(rays.max.max(rays.min)));
     // When the fine grid splits every coarse stratum into r x r whole ones, each coarse sample
     // is drawn in one of its fine strata chosen at random (so it is still uniform over the
     // coarse stratum), and the fine estimate keeps it: that stratum gets no second ray.

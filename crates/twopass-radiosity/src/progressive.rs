@@ -57,8 +57,8 @@ pub struct Progressive<'s> {
     /// Per vertex: reflectance, emitted exitance E = pi L_e.
     rho: Vec<DVec3>,
     emission: Vec<DVec3>,
-    /// Per vertex: where its shadow rays start (position with its error bound on its scene
-    /// triangle), computed once instead of once per shooter.
+    /// Per vertex: where its shadow rays start ([`Progressive::receiving_point`] with its error
+    /// bound on its scene triangle), computed once instead of once per shooter.
     receivers: Vec<SurfacePoint>,
     /// Per vertex: irradiance received from emitted and from reflected light, W/m^2.
     received_emit: Vec<DVec3>,
@@ -505,15 +505,33 @@ impl<'s> Progressive<'s> {
                 .material
                 .diffuse_albedo()));
             self.emission.push(rgb(o.emission) * std::f64::consts::PI);
-            let vert = &self.mesh.vertices[v];
+            let x = self.receiving_point(v);
             self.receivers.push(
                 self.scene
                     .mesh
-                    .surface_point_at(vert.triangle, vert.position),
+                    .surface_point_at(self.mesh.vertices[v].triangle, x.as_vec3()),
             );
             self.received_emit.push(DVec3::ZERO);
             self.received_refl.push(DVec3::ZERO);
         }
+    }
+
+    /// Where vertex `v` receives, form factors and shadow rays alike: a hair inside its own
+    /// scene triangle ([`RECEIVER_INSET`] of the way to its centroid). A vertex on a junction
+    /// lies in the plane of the surface it meets, which it would see edge-on (F = 0), and half
+    /// of its shadow rays would start a rounding error behind that surface and find it
+    /// blocking; from inside its own surface it gets the limits both converge to.
+    fn receiving_point(&self, v: usize) -> DVec3 {
+        let vert = &self.mesh.vertices[v];
+        let centroid = self
+            .scene
+            .mesh
+            .corners(vert.triangle)
+            .iter()
+            .map(|c| c.as_dvec3())
+            .sum::<DVec3>()
+            / 3.0;
+        vert.position.as_dvec3() + (centroid - vert.position.as_dvec3()) * RECEIVER_INSET
     }
 
     fn rebuild_patch_elements(&mut self) {
@@ -529,24 +547,17 @@ impl<'s> Progressive<'s> {
         let shooter_tri = node.scene_triangle;
         let ns = self.scene.mesh.geometric_normals[shooter_tri as usize].as_dvec3();
         let clear = self.clear_patches(p, vertices);
+        // A vertex's own shaft test costs about what one shadow ray does, so it pays only when
+        // it can spare several: with one ray a pair it made the final Cornell box mesh's solve
+        // 1.24x slower (`twopass bake --visibility-rays 1,1`). The patch hull, one test for
+        // many vertices, is kept.
+        let vertex_shafts = self.options.shaft_culling && self.options.visibility.coarse() > 1;
         let results: Vec<(f32, u64)> = vertices
             .par_iter()
             .with_min_len(64)
             .map(|&v| {
                 let vert = &self.mesh.vertices[v];
-                // Evaluated a hair inside the vertex's own triangle: a vertex on a junction
-                // lies in the plane of the surface it meets, which it would see edge-on
-                // (F = 0); from inside its own surface it gets the limit it converges to.
-                let centroid = self
-                    .scene
-                    .mesh
-                    .corners(vert.triangle)
-                    .iter()
-                    .map(|c| c.as_dvec3())
-                    .sum::<DVec3>()
-                    / 3.0;
-                let x = vert.position.as_dvec3()
-                    + (centroid - vert.position.as_dvec3()) * RECEIVER_INSET;
+                let x = self.receiving_point(v);
                 let f =
                     form_factor::point_to_polygon(x, vert.normal.as_dvec3(), &shooter, Some(ns));
                 if f <= 0.0 || !self.options.occlusion {
@@ -560,8 +571,7 @@ impl<'s> Progressive<'s> {
                     .get(v)
                     .is_some_and(|&q| clear.get(q as usize).copied().unwrap_or(false));
                 if patch_clear
-                    || self.options.shaft_culling
-                        && form_factor::shaft_clear(self.scene, from, shooter)
+                    || vertex_shafts && form_factor::shaft_clear(self.scene, from, shooter)
                 {
                     return (f as f32, 0);
                 }
