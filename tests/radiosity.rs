@@ -661,7 +661,8 @@ fn shaft_culling_changes_nothing_but_the_rays_cast() {
         .collect();
     let s = scene(&objects, &m);
     // With one ray a pair only the patch hulls are tested (a vertex's own test would cost
-    // about the ray it saves), with more rays the vertices' own shafts too.
+    // about the ray it saves); with more, also the shafts of the vertices whose patch has no
+    // hull test.
     for rays in [(4, 16), (1, 1)] {
         let solve = |shaft_culling: bool| {
             let options = Options {

@@ -546,11 +546,13 @@ impl<'s> Progressive<'s> {
         let shooter = self.mesh.corners(self.mesh.patches[p]);
         let shooter_tri = node.scene_triangle;
         let ns = self.scene.mesh.geometric_normals[shooter_tri as usize].as_dvec3();
-        let clear = self.clear_patches(p, vertices);
-        // A vertex's own shaft test costs about what one shadow ray does, so it pays only when
-        // it can spare several: with one ray a pair it made the final Cornell box mesh's solve
-        // 1.24x slower (`twopass bake --visibility-rays 1,1`). The patch hull, one test for
-        // many vertices, is kept.
+        let hulls = self.patch_hulls(p, vertices);
+        // A vertex's own shaft test costs about what one shadow ray does, and where its
+        // patch's hull was tested and found blocked it rarely clears more: it pays only for
+        // vertices whose hull was not tested (too few of them on their patch) and when it can
+        // spare several rays. On the final Cornell box mesh testing every vertex made the
+        // solve 1.07x slower at 4-16 rays a pair and 1.24x at one ray (`twopass bake
+        // --visibility-rays`); on coarse meshes, without hulls, it saves 4-6 %.
         let vertex_shafts = self.options.shaft_culling && self.options.visibility.coarse() > 1;
         let results: Vec<(f32, u64)> = vertices
             .par_iter()
@@ -565,13 +567,16 @@ impl<'s> Progressive<'s> {
                 }
                 let from = &self.receivers[v];
                 let seed = hash(self.options.seed ^ hash((v as u64) << 32 | p as u64));
-                let patch_clear = self
+                let hull = self
                     .elements
                     .vertex_patch
                     .get(v)
-                    .is_some_and(|&q| clear.get(q as usize).copied().unwrap_or(false));
-                if patch_clear
-                    || vertex_shafts && form_factor::shaft_clear(self.scene, from, shooter)
+                    .and_then(|&q| hulls.get(q as usize).copied())
+                    .unwrap_or(PAIR_UNKNOWN);
+                if hull == PAIR_CLEAR
+                    || hull == PAIR_UNKNOWN
+                        && vertex_shafts
+                        && form_factor::shaft_clear(self.scene, from, shooter)
                 {
                     return (f as f32, 0);
                 }
@@ -592,11 +597,11 @@ impl<'s> Progressive<'s> {
     }
 
     /// With shaft culling: per patch, whether nothing can come between it and shooter patch
-    /// `p` ([`form_factor::patches_clear`]), tested only for the patches at least
-    /// [`HULL_MIN_VERTICES`] of `vertices` lie on (`false` for the others);
-    /// empty without shaft culling. A vertex on a clear patch needs
+    /// `p` ([`form_factor::patches_clear`]): [`PAIR_CLEAR`] or [`PAIR_BLOCKED`] for the
+    /// patches at least [`HULL_MIN_VERTICES`] of `vertices` lie on, [`PAIR_UNKNOWN`] (not
+    /// tested) for the others; empty without shaft culling. A vertex on a clear patch needs
     /// neither its own shaft test nor shadow rays: its segments to `p` lie in the hull.
-    fn clear_patches(&self, p: usize, vertices: &[usize]) -> Vec<bool> {
+    fn patch_hulls(&self, p: usize, vertices: &[usize]) -> Vec<u8> {
         if !(self.options.shaft_culling && self.options.occlusion) {
             return Vec::new();
         }
@@ -630,13 +635,12 @@ impl<'s> Progressive<'s> {
             .with_min_len(16)
             .map(|(q, &w)| {
                 if !w {
-                    return false;
+                    return PAIR_UNKNOWN;
                 }
                 if cached {
                     match self.pair_clear[q * n + p].load(Ordering::Relaxed) {
-                        PAIR_CLEAR => return true,
-                        PAIR_BLOCKED => return false,
-                        _ => {}
+                        PAIR_UNKNOWN => {}
+                        state => return state,
                     }
                 }
                 // The lower index first, whichever row asks: the rounding then never
@@ -646,12 +650,12 @@ impl<'s> Progressive<'s> {
                 } else {
                     form_factor::patches_clear(self.scene, shooter, patch(q))
                 };
+                let state = if clear { PAIR_CLEAR } else { PAIR_BLOCKED };
                 if cached {
-                    let state = if clear { PAIR_CLEAR } else { PAIR_BLOCKED };
                     self.pair_clear[q * n + p].store(state, Ordering::Relaxed);
                     self.pair_clear[p * n + q].store(state, Ordering::Relaxed);
                 }
-                clear
+                state
             })
             .collect()
     }
