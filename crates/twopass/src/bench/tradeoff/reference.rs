@@ -77,6 +77,8 @@ pub struct ReferenceKey {
     pub roulette_depth: u32,
     /// Who counts the caustic paths (`path tracing` or `light tracing`).
     pub caustics: String,
+    /// The sample values' sequence ([`twopass_trace::sampler::SAMPLE_SEQUENCE`]).
+    pub sampler: String,
     /// Version of twopass that rendered it.
     pub version: String,
 }
@@ -134,6 +136,7 @@ pub fn key(
             twopass_trace::Caustics::LightTracing => "light tracing",
         }
         .to_owned(),
+        sampler: twopass_trace::sampler::SAMPLE_SEQUENCE.to_owned(),
         version: env!("CARGO_PKG_VERSION").to_owned(),
     }
 }
