@@ -73,7 +73,7 @@ impl Sampler {
         if self.index != u32::MAX && self.dimension < sobol_burley::NUM_DIMENSIONS {
             let d = self.dimension;
             self.dimension += 1;
-            if d % 4 == 0 {
+            if d.is_multiple_of(4) {
                 self.set = sobol_burley::sample_4d(self.index, d / 4, self.scramble);
             }
             self.set[(d % 4) as usize]
