@@ -617,15 +617,15 @@ fn shadow_rays_from_a_room_s_creases_find_nothing() {
         .collect();
     let s = scene(&objects, &lambert("w", 0.7));
     let solve = |occlusion: bool| {
-        let options = Options {
-            occlusion,
-            shaft_culling: false,
-            visibility: VisibilityRays { min: 1, max: 1 },
-            ..fixed_mesh(300.0, 60.0, 1e-3)
-        };
-        let mut solver = Progressive::new(&s, options).unwrap();
-        run(&mut solver);
-        (solver.vertex_radiosity(), solver.progress().rays)
+        radiosity_and_rays(
+            &s,
+            Options {
+                occlusion,
+                shaft_culling: false,
+                visibility: VisibilityRays { min: 1, max: 1 },
+                ..fixed_mesh(300.0, 60.0, 1e-3)
+            },
+        )
     };
     let (traced, rays) = solve(true);
     let (open, no_rays) = solve(false);
@@ -633,9 +633,22 @@ fn shadow_rays_from_a_room_s_creases_find_nothing() {
         rays > 0 && no_rays == 0,
         "rays: {rays} traced, {no_rays} open"
     );
-    assert_eq!(traced.len(), open.len());
-    for (v, (a, b)) in traced.iter().zip(&open).enumerate() {
-        assert_eq!(a, b, "vertex {v}: {a} with shadow rays, {b} without");
+    assert_same_radiosity(&traced, &open, "with shadow rays / without");
+}
+
+/// Solves `s` with `options` to its stop criteria: the vertex radiosities and the shadow rays
+/// cast.
+fn radiosity_and_rays(s: &Scene, options: Options) -> (Vec<DVec3>, u64) {
+    let mut solver = Progressive::new(s, options).unwrap();
+    run(&mut solver);
+    (solver.vertex_radiosity(), solver.progress().rays)
+}
+
+/// Asserts two solutions equal bit for bit, vertex by vertex (`what` names the two).
+fn assert_same_radiosity(a: &[DVec3], b: &[DVec3], what: &str) {
+    assert_eq!(a.len(), b.len(), "{what}: vertex counts");
+    for (v, (x, y)) in a.iter().zip(b).enumerate() {
+        assert_eq!(x, y, "{what}: vertex {v}");
     }
 }
 
@@ -665,28 +678,22 @@ fn shaft_culling_changes_nothing_but_the_rays_cast() {
     // hull test.
     for rays in [(4, 16), (1, 1)] {
         let solve = |shaft_culling: bool| {
-            let options = Options {
-                shaft_culling,
-                visibility: twopass_radiosity::VisibilityRays {
-                    min: rays.0,
-                    max: rays.1,
+            radiosity_and_rays(
+                &s,
+                Options {
+                    shaft_culling,
+                    visibility: twopass_radiosity::VisibilityRays {
+                        min: rays.0,
+                        max: rays.1,
+                    },
+                    ..fixed_mesh(0.25, 0.1, 1e-4)
                 },
-                ..fixed_mesh(0.25, 0.1, 1e-4)
-            };
-            let mut solver = Progressive::new(&s, options).unwrap();
-            run(&mut solver);
-            (solver.vertex_radiosity(), solver.progress().rays)
+            )
         };
         let (culled, culled_rays) = solve(true);
         let (all, all_rays) = solve(false);
         println!("{rays:?} rays: {culled_rays} with shaft culling, {all_rays} without");
-        assert_eq!(culled.len(), all.len());
-        for (v, (a, b)) in culled.iter().zip(&all).enumerate() {
-            assert_eq!(
-                a, b,
-                "{rays:?}: vertex {v}: {a} with shaft culling, {b} without"
-            );
-        }
+        assert_same_radiosity(&culled, &all, &format!("{rays:?} rays, culled / all"));
         assert!(
             (culled_rays as f64) < 0.75 * all_rays as f64,
             "{rays:?} rays: {culled_rays} with shaft culling, {all_rays} without"
