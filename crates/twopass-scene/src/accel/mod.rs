@@ -11,6 +11,7 @@
 
 mod collapse;
 mod packet;
+mod prefetch;
 mod ray;
 mod shaft;
 mod table;
@@ -193,13 +194,11 @@ impl Accel {
         })
     }
 
-    /// Reads one word of each cache line of packet `p` (160 bytes: three lines, wherever it
-    /// starts), so that the test that follows finds it in the cache or on its way: a stable,
-    /// safe stand-in for a prefetch instruction (the workspace forbids `unsafe`).
+    /// Starts loading every cache line of packet `p` (160 bytes: three or four lines, wherever
+    /// it starts), so that the test that follows finds it in the cache or on its way.
     #[inline(always)]
     fn touch(&self, p: usize) {
-        let k = &self.packets.as_slice()[p];
-        std::hint::black_box(k.v[0][0].x.to_bits() ^ k.v[1][1].x.to_bits() ^ k.v[2][2].x.to_bits());
+        self.packets.as_slice()[p].prefetch();
     }
 
     /// Whether anything is hit with `0 < t < t_max`; stops at the first hit found.
