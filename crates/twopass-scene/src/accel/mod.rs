@@ -11,7 +11,6 @@
 
 mod collapse;
 mod packet;
-mod prefetch;
 mod ray;
 mod shaft;
 mod table;
@@ -194,11 +193,13 @@ impl Accel {
         })
     }
 
-    /// Starts loading every cache line of packet `p` (160 bytes: three or four lines, wherever
-    /// it starts), so that the test that follows finds it in the cache or on its way.
+    /// Reads one word of each cache line of packet `p` (160 bytes: three lines, wherever it
+    /// starts), so that the test that follows finds it in the cache or on its way: a stable,
+    /// safe stand-in for a prefetch instruction (the workspace forbids `unsafe`).
     #[inline(always)]
     fn touch(&self, p: usize) {
-        self.packets.as_slice()[p].prefetch();
+        let k = &self.packets.as_slice()[p];
+        std::hint::black_box(k.v[0][0].x.to_bits() ^ k.v[1][1].x.to_bits() ^ k.v[2][2].x.to_bits());
     }
 
     /// Whether anything is hit with `0 < t < t_max`; stops at the first hit found.

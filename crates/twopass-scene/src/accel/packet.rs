@@ -3,7 +3,6 @@
 
 use glam::{Vec3A, Vec4};
 
-use super::prefetch::prefetch;
 use super::ray::gamma;
 use super::triangle::ShearedRay;
 
@@ -35,16 +34,6 @@ impl TriPacket {
             v: v.map(|a| a.map(Vec4::from_array)),
             ids: [0, 1, 2, 3].map(|lane| ids.get(lane).copied().unwrap_or(u32::MAX)),
         }
-    }
-
-    /// Starts loading the packet's cache lines: bytes 0, 64, 128 and 144 (the ids) lie on
-    /// every line a 160-byte, 16-byte aligned packet can touch.
-    #[inline(always)]
-    pub(super) fn prefetch(&self) {
-        prefetch(&self.v[0][0]);
-        prefetch(&self.v[1][1]);
-        prefetch(&self.v[2][2]);
-        prefetch(&self.ids);
     }
 }
 

@@ -7,7 +7,6 @@ use glam::Vec3;
 use obvhs::faststack::FastStack;
 use wide::f32x8;
 
-use super::prefetch::prefetch;
 use super::table::NodeTable;
 
 /// Largest inverse direction component: finite, so the slab test never forms 0 * inf.
@@ -90,13 +89,15 @@ impl WideNode {
         }
     }
 
-    /// Starts loading the node's four cache lines (its boxes, then its children).
+    /// One word of each of the node's four cache lines, combined: reading them starts loading
+    /// the whole node (a safe stand-in for prefetch instructions; the workspace forbids
+    /// `unsafe`).
     #[inline(always)]
-    fn prefetch(&self) {
-        prefetch(&self.bounds[0]);
-        prefetch(&self.bounds[2]);
-        prefetch(&self.bounds[4]);
-        prefetch(&self.child);
+    fn line_words(&self) -> u32 {
+        self.bounds[0].as_array()[0].to_bits()
+            ^ self.bounds[2].as_array()[0].to_bits()
+            ^ self.bounds[4].as_array()[0].to_bits()
+            ^ self.child[0]
     }
 
     /// The children hit by `ray` within `[0, t_max]` (bit `c` for child `c`) and each child's
@@ -161,7 +162,7 @@ impl WideBvh {
     /// `t_max` is below its entry distance (closest hit); without, in the builder's octant order
     /// (any hit: no distances to sort or compare). Where a node has several leaves to visit,
     /// `touch(packet)` is called for each first, to start loading their packets; several inner
-    /// children to visit are prefetched likewise.
+    /// children to visit are read ahead likewise.
     #[inline(always)]
     pub(super) fn walk(
         &self,
@@ -243,11 +244,14 @@ impl WideBvh {
             let inner_hit = hit & u32::from(n.inner);
             if inner_hit.count_ones() > 1 {
                 let mut rest = inner_hit;
+                let mut words = 0;
                 while rest != 0 {
-                    self.nodes.as_slice()[n.child[rest.trailing_zeros() as usize] as usize]
-                        .prefetch();
+                    words ^= self.nodes.as_slice()
+                        [n.child[rest.trailing_zeros() as usize] as usize]
+                        .line_words();
                     rest &= rest - 1;
                 }
+                std::hint::black_box(words);
             }
             while leaves != 0 {
                 let c = leaves.trailing_zeros() as usize;
