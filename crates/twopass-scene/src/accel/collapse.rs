@@ -279,13 +279,14 @@ mod tests {
             } else {
                 continue;
             };
+            let (half, lane) = (c / 4, c % 4);
             for axis in 0..3 {
                 assert!(
-                    n.bounds[2 * axis].as_array()[c] <= lo[axis],
+                    n.bounds[4 * axis + half][lane] <= lo[axis],
                     "box misses a corner"
                 );
                 assert!(
-                    n.bounds[2 * axis + 1].as_array()[c] >= hi[axis],
+                    n.bounds[4 * axis + 2 + half][lane] >= hi[axis],
                     "box misses a corner"
                 );
             }

@@ -14,7 +14,6 @@
 //! leave their surfaces by.
 
 use glam::{Vec3, Vec4};
-use wide::f32x8;
 
 use super::packet::TriPacket;
 use super::wide::WideNode;
@@ -192,25 +191,26 @@ impl<const PLANES: usize, const CORNERS: usize> Shaft<PLANES, CORNERS> {
     #[inline(always)]
     pub(super) fn overlap(&self, node: &WideNode) -> u32 {
         let b = &node.bounds;
-        let min = |axis: usize| b[2 * axis];
-        let max = |axis: usize| b[2 * axis + 1];
-        let (lo, hi) = (self.lo, self.hi);
-        let mut inside = min(0).simd_le(f32x8::splat(hi.x))
-            & max(0).simd_ge(f32x8::splat(lo.x))
-            & min(1).simd_le(f32x8::splat(hi.y))
-            & max(1).simd_ge(f32x8::splat(lo.y))
-            & min(2).simd_le(f32x8::splat(hi.z))
-            & max(2).simd_ge(f32x8::splat(lo.z));
-        for &(n, d) in &self.planes[..self.count] {
-            // The box corner least far along `n`: outside the plane, the box is too.
-            let pick = |axis: usize| if n[axis] >= 0.0 { min(axis) } else { max(axis) };
-            let dist = pick(0) * f32x8::splat(n.x)
-                + pick(1) * f32x8::splat(n.y)
-                + pick(2) * f32x8::splat(n.z)
-                + f32x8::splat(d);
-            inside &= !dist.simd_gt(f32x8::ZERO);
+        let mut mask = 0u32;
+        for half in 0..2 {
+            let min = |axis: usize| b[4 * axis + half];
+            let max = |axis: usize| b[4 * axis + 2 + half];
+            let (lo, hi) = (self.lo, self.hi);
+            let mut inside = min(0).cmple(Vec4::splat(hi.x))
+                & max(0).cmpge(Vec4::splat(lo.x))
+                & min(1).cmple(Vec4::splat(hi.y))
+                & max(1).cmpge(Vec4::splat(lo.y))
+                & min(2).cmple(Vec4::splat(hi.z))
+                & max(2).cmpge(Vec4::splat(lo.z));
+            for &(n, d) in &self.planes[..self.count] {
+                // The box corner least far along `n`: outside the plane, the box is too.
+                let pick = |axis: usize| if n[axis] >= 0.0 { min(axis) } else { max(axis) };
+                let dist = pick(0) * n.x + pick(1) * n.y + pick(2) * n.z + Vec4::splat(d);
+                inside &= !dist.cmpgt(Vec4::ZERO);
+            }
+            mask |= inside.bitmask() << (4 * half);
         }
-        inside.to_bitmask()
+        mask
     }
 
     /// Whether any enabled lane (bits of `lanes`) of `packet` may block a segment inside the

@@ -1,11 +1,9 @@
 //! 8-wide BVH nodes (f32 child boxes, built by [`collapse`](mod@super::collapse)), the
-//! eight-box slab test (one 8-lane vector per box side and axis: AVX where the target has it,
-//! two 4-lane halves otherwise, the `wide` crate's `f32x8`), and the traversal: ordered front
-//! to back with distance culling for closest hits, early exit for occlusion.
+//! eight-box slab test, and the traversal: ordered front to back with distance culling for
+//! closest hits, early exit for occlusion.
 
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 use obvhs::faststack::FastStack;
-use wide::f32x8;
 
 use super::table::NodeTable;
 
@@ -46,9 +44,9 @@ const XOR_PERMUTE: [[u8; 256]; 8] = {
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C, align(64))]
 pub(super) struct WideNode {
-    /// `bounds[2 * axis + side]`: lane `c` is child `c`; side 0 is the box minimum, 1 the
-    /// maximum. Empty children are empty boxes (min +inf, max -inf).
-    pub(super) bounds: [f32x8; 6],
+    /// `bounds[4 * axis + 2 * side + half]`: lane `j` is child `4 * half + j`; side 0 is the
+    /// box minimum, 1 the maximum. Empty children are empty boxes (min +inf, max -inf).
+    pub(super) bounds: [Vec4; 12],
     /// Per child: its node index (inner) or its packet index (leaf); 0 when empty.
     pub(super) child: [u32; 8],
     /// Per child, four bits from bit `4 * child`: the leaf's lanes in its packet.
@@ -66,12 +64,18 @@ impl WideNode {
     /// A node with no children.
     pub(super) const EMPTY: Self = Self {
         bounds: [
-            f32x8::INFINITY,
-            f32x8::NEG_INFINITY,
-            f32x8::INFINITY,
-            f32x8::NEG_INFINITY,
-            f32x8::INFINITY,
-            f32x8::NEG_INFINITY,
+            Vec4::INFINITY,
+            Vec4::INFINITY,
+            Vec4::NEG_INFINITY,
+            Vec4::NEG_INFINITY,
+            Vec4::INFINITY,
+            Vec4::INFINITY,
+            Vec4::NEG_INFINITY,
+            Vec4::NEG_INFINITY,
+            Vec4::INFINITY,
+            Vec4::INFINITY,
+            Vec4::NEG_INFINITY,
+            Vec4::NEG_INFINITY,
         ],
         child: [0; 8],
         lanes: 0,
@@ -84,8 +88,11 @@ impl WideNode {
     /// child's box is min +inf, max -inf).
     pub(super) fn set_bounds(&mut self, min: &[[f32; 8]; 3], max: &[[f32; 8]; 3]) {
         for axis in 0..3 {
-            self.bounds[2 * axis] = f32x8::new(min[axis]);
-            self.bounds[2 * axis + 1] = f32x8::new(max[axis]);
+            for half in 0..2 {
+                let r = 4 * half..4 * half + 4;
+                self.bounds[4 * axis + half] = Vec4::from_slice(&min[axis][r.clone()]);
+                self.bounds[4 * axis + 2 + half] = Vec4::from_slice(&max[axis][r]);
+            }
         }
     }
 
@@ -94,33 +101,41 @@ impl WideNode {
     /// `unsafe`).
     #[inline(always)]
     fn line_words(&self) -> u32 {
-        self.bounds[0].as_array()[0].to_bits()
-            ^ self.bounds[2].as_array()[0].to_bits()
-            ^ self.bounds[4].as_array()[0].to_bits()
+        self.bounds[0].x.to_bits()
+            ^ self.bounds[4].x.to_bits()
+            ^ self.bounds[8].x.to_bits()
             ^ self.child[0]
     }
 
     /// The children hit by `ray` within `[0, t_max]` (bit `c` for child `c`) and each child's
-    /// entry distance. The same operations in the same order as a 4-lane test of each half
-    /// (`max`/`min` that return the second operand on NaN, ordered `<=`), so the masks and
-    /// distances are those of that test bit for bit.
+    /// entry distance.
     #[inline(always)]
     fn intersect(&self, ray: &NodeRay, t_max: f32) -> (u32, [f32; 8]) {
         let b = &self.bounds;
-        let slab = |axis: usize| {
-            let n = b[2 * axis + ray.near[axis]];
-            let f = b[2 * axis + 1 - ray.near[axis]];
-            (
-                (n - ray.origin[axis]) * ray.inv[axis],
-                (f - ray.origin[axis]) * ray.inv[axis],
-            )
-        };
-        let (nx, fx) = slab(0);
-        let (ny, fy) = slab(1);
-        let (nz, fz) = slab(2);
-        let t_near = nx.fast_max(ny).fast_max(nz.fast_max(f32x8::ZERO));
-        let t_far = fx.fast_min(fy).fast_min(fz.fast_min(f32x8::splat(t_max)));
-        (t_near.simd_le(t_far).to_bitmask(), t_near.to_array())
+        let t_max = Vec4::splat(t_max);
+        let mut mask = 0u32;
+        let mut near = [Vec4::ZERO; 2];
+        for (half, near) in near.iter_mut().enumerate() {
+            let slab = |axis: usize| {
+                let n = b[4 * axis + ray.near[axis] + half];
+                let f = b[4 * axis + (2 - ray.near[axis]) + half];
+                (
+                    (n - ray.origin[axis]) * ray.inv[axis],
+                    (f - ray.origin[axis]) * ray.inv[axis],
+                )
+            };
+            let (nx, fx) = slab(0);
+            let (ny, fy) = slab(1);
+            let (nz, fz) = slab(2);
+            let t_near = nx.max(ny).max(nz.max(Vec4::ZERO));
+            let t_far = fx.min(fy).min(fz.min(t_max));
+            mask |= t_near.cmple(t_far).bitmask() << (4 * half);
+            *near = t_near;
+        }
+        let mut entry = [0.0; 8];
+        near[0].write_to_slice(&mut entry[..4]);
+        near[1].write_to_slice(&mut entry[4..]);
+        (mask, entry)
     }
 }
 
@@ -316,15 +331,15 @@ impl WideBvh {
     }
 }
 
-/// The ray as the node test sees it: origin and inverse direction splatted per axis (eight
-/// lanes), and for each axis which side of a box the ray enters first. Negative zeros in the direction become
+/// The ray as the node test sees it: origin and inverse direction splatted per axis, and for
+/// each axis which side of a box the ray enters first. Negative zeros in the direction become
 /// positive and inverses are clamped to [`MAX_INVERSE`], so no slab ever forms 0 * inf; the
 /// entry side is chosen from the sign of the inverse itself, so near and far always agree
 /// with it (a mismatch would cull every box).
 pub(super) struct NodeRay {
-    pub(super) origin: [f32x8; 3],
-    pub(super) inv: [f32x8; 3],
-    /// 0 when the ray enters through the box minimum on this axis, 1 through the maximum.
+    pub(super) origin: [Vec4; 3],
+    pub(super) inv: [Vec4; 3],
+    /// 0 when the ray enters through the box minimum on this axis, 2 through the maximum.
     pub(super) near: [usize; 3],
     /// The direction's octant as the builder orders children by: bit 2 set for x >= 0, bit 1 for
     /// y, bit 0 for z.
@@ -345,12 +360,12 @@ impl NodeRay {
         let inv = [inv(d.x), inv(d.y), inv(d.z)];
         Self {
             origin: [
-                f32x8::splat(origin.x),
-                f32x8::splat(origin.y),
-                f32x8::splat(origin.z),
+                Vec4::splat(origin.x),
+                Vec4::splat(origin.y),
+                Vec4::splat(origin.z),
             ],
-            inv: inv.map(f32x8::splat),
-            near: inv.map(|i| usize::from(i < 0.0)),
+            inv: inv.map(Vec4::splat),
+            near: inv.map(|i| if i < 0.0 { 2 } else { 0 }),
             octant: usize::from(inv[0] >= 0.0) << 2
                 | usize::from(inv[1] >= 0.0) << 1
                 | usize::from(inv[2] >= 0.0),
