@@ -7,7 +7,7 @@
 use glam::Vec4;
 use obvhs::bvh2::Bvh2;
 
-use super::wide::{WideBvh, WideNode};
+use super::wide::WideNode;
 
 /// Most triangles in one leaf: the lanes of one packet.
 pub(super) const LEAF_SIZE: u32 = 4;
@@ -168,9 +168,10 @@ fn slots(centres: &[Vec4]) -> [usize; 8] {
 }
 
 /// Collapses `bvh` (non-empty, one triangle per leaf) into 8-wide nodes, root first and every
-/// node before its children (depth first). `leaf(triangles)` stores a leaf's scene triangles
-/// (at most [`LEAF_SIZE`]) as one packet and returns its index.
-pub(super) fn collapse(bvh: &Bvh2, mut leaf: impl FnMut(&[u32]) -> u32) -> WideBvh {
+/// node before its children (depth first), each naming its inner children by their index in
+/// the list. `leaf(triangles)` stores a leaf's scene triangles (at most [`LEAF_SIZE`]) as one
+/// packet and returns its index, which names the leaf.
+pub(super) fn collapse(bvh: &Bvh2, mut leaf: impl FnMut(&[u32]) -> u32) -> Vec<WideNode> {
     let plan = plan(bvh);
     let mut nodes: Vec<WideNode> = Vec::new();
     let mut pieces = Vec::with_capacity(8);
@@ -221,7 +222,7 @@ pub(super) fn collapse(bvh: &Bvh2, mut leaf: impl FnMut(&[u32]) -> u32) -> WideB
         inner.sort_unstable_by_key(|&(_, s)| s);
         stack.extend(inner.iter().rev().map(|&(p, s)| (p, index, s)));
     }
-    WideBvh::new(nodes)
+    nodes
 }
 
 #[cfg(test)]
@@ -229,7 +230,7 @@ mod tests {
     use glam::{Vec3, Vec3A};
 
     use super::LEAF_SIZE;
-    use crate::accel::Accel;
+    use crate::accel::{Accel, Ray};
     use crate::workload::rng;
 
     /// Checks the subtree of node `node`: every child box contains its subtree's triangles,
@@ -243,7 +244,7 @@ mod tests {
         node: usize,
         seen: &mut [u32],
     ) -> (Vec3A, Vec3A) {
-        let n = &accel.bvh.nodes.as_slice()[node];
+        let n = accel.bvh.arena.node(node as u32);
         assert_eq!(n.inner & n.leaf, 0, "a child both inner and leaf");
         let mut all = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
         for c in 0..8 {
@@ -255,7 +256,7 @@ mod tests {
                     "lanes {lanes:b}"
                 );
                 assert!(lanes.count_ones() <= LEAF_SIZE);
-                let packet = &accel.packets.as_slice()[p];
+                let packet = accel.bvh.arena.packet(p as u32);
                 let v = &packet.v;
                 let mut b = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
                 for (lane, &id) in packet.ids.iter().enumerate() {
@@ -354,6 +355,9 @@ mod tests {
             let (positions, triangles) = soup(count, scale, flat, seed as u64);
             let accel = build_and_check(&positions, &triangles);
             let mut r = rng(1000 + seed as u64);
+            // Every ray cast, and the brute force's answer: the many-ray walks must agree.
+            let mut rays = Vec::new();
+            let mut expected = Vec::new();
             for _ in 0..1000 {
                 let o = Vec3::new(r.next_f32(), r.next_f32(), r.next_f32() * 2.0 - 0.5) * scale;
                 let target = if triangles.is_empty() || r.next_f32() < 0.5 {
@@ -374,9 +378,37 @@ mod tests {
                     slow.is_some(),
                     "case {seed}"
                 );
+                rays.push(Ray {
+                    origin: o,
+                    direction: d,
+                    t_max: f32::INFINITY,
+                });
+                expected.push(slow);
                 if let Some(h) = slow {
                     // Just short of the nearest hit: nothing is hit.
                     assert!(!accel.any_hit(o, d, h.t), "case {seed}");
+                    rays.push(Ray {
+                        origin: o,
+                        direction: d,
+                        t_max: h.t,
+                    });
+                    expected.push(None);
+                }
+            }
+            // Whole batches, and batches shorter than the rays a walk keeps in flight.
+            for n in [rays.len(), 0, 1, 7, 9] {
+                let n = n.min(rays.len());
+                let mut hits = vec![None; n];
+                accel.closest_many(&rays[..n], &mut hits);
+                let mut blocked = vec![true; n];
+                accel.any_hit_many(&rays[..n], &mut blocked);
+                for ((hit, blocked), (ray, slow)) in
+                    hits.iter().zip(&blocked).zip(rays.iter().zip(&expected))
+                {
+                    let one = accel.closest(ray.origin, ray.direction, ray.t_max);
+                    assert_eq!(*hit, one, "case {seed}");
+                    assert_eq!(hit.map(|h| h.t), slow.map(|h| h.t), "case {seed}");
+                    assert_eq!(*blocked, slow.is_some(), "case {seed}");
                 }
             }
         }

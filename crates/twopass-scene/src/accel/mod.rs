@@ -31,7 +31,6 @@ pub(crate) use ray::SHADOW_EPSILON;
 pub use ray::{Ray, SurfacePoint};
 pub use shaft::SHAFT_TOLERANCE;
 use shaft::Shaft;
-use table::PacketTable;
 pub(crate) use triangle::triangle_normal;
 use triangle::{AxisTriangle, ShearedRay};
 use wide::{NodeRay, WideBvh};
@@ -69,19 +68,17 @@ pub struct TriangleHit {
 /// collapsed into 8-wide nodes with leaves of up to four triangles) with the queries every
 /// pass uses.
 pub struct Accel {
-    /// The decoded tree.
+    /// The tree: its nodes, and one packet per leaf (the leaf's triangles, at most four, in its
+    /// first lanes) right after the node that leads to it.
     bvh: WideBvh,
-    /// One packet per leaf: the leaf's triangles (at most four) in its first lanes, in the
-    /// order the traversal meets the leaves (depth first).
-    packets: PacketTable,
     build_time: Duration,
 }
 
 impl std::fmt::Debug for Accel {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Accel")
-            .field("packets", &self.packets.as_slice().len())
-            .field("nodes", &self.bvh.nodes.as_slice().len())
+            .field("packets", &self.bvh.packets)
+            .field("nodes", &self.bvh.nodes)
             .field("build_time", &self.build_time)
             .finish()
     }
@@ -126,7 +123,7 @@ impl Accel {
             .collect();
         let mut packets = Vec::new();
         let bvh = if boxes.is_empty() {
-            WideBvh::new(Vec::new())
+            WideBvh::new(Vec::new(), &[])
         } else {
             let mut bvh2 = PlocBuilder::with_capacity(boxes.len()).build(
                 params.ploc_search_distance,
@@ -136,15 +133,15 @@ impl Accel {
                 params.search_depth_threshold,
             );
             ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
-            collapse(&bvh2, |leaf| {
+            let nodes = collapse(&bvh2, |leaf| {
                 let tris: Vec<[Vec3A; 3]> = leaf.iter().map(|&i| corners[i as usize]).collect();
                 packets.push(TriPacket::new(&tris, leaf));
                 (packets.len() - 1) as u32
-            })
+            });
+            WideBvh::new(nodes, &packets)
         };
         Self {
             bvh,
-            packets: PacketTable::of(packets),
             build_time: start.elapsed(),
         }
     }
@@ -156,7 +153,7 @@ impl Accel {
 
     /// Number of BVH nodes (8-wide).
     pub fn node_count(&self) -> usize {
-        self.bvh.nodes.as_slice().len()
+        self.bvh.nodes
     }
 
     /// The closest hit with `0 < t < t_max`, if any.
@@ -170,10 +167,9 @@ impl Accel {
             &ray,
             &mut t_max,
             true,
-            &|p| self.touch(p),
             #[inline(always)]
             |p, lanes, t_max| {
-                let hits = sheared.intersect(&self.packets.as_slice()[p], lanes, *t_max);
+                let hits = sheared.intersect(self.bvh.arena.packet(p as u32), lanes, *t_max);
                 if hits.mask != 0 {
                     let lane = hits.nearest();
                     *t_max = hits.t[lane];
@@ -183,23 +179,19 @@ impl Accel {
             },
         );
         let (p, lane, barycentric) = best?;
-        let packet = &self.packets.as_slice()[p];
-        let v = &packet.v;
-        Some(TriangleHit {
-            triangle: packet.ids[lane],
-            t: t_max,
-            barycentric,
-            corners: [0, 1, 2].map(|i| Vec3::new(v[0][i][lane], v[1][i][lane], v[2][i][lane])),
-        })
+        Some(self.hit(p as u32, lane, t_max, barycentric))
     }
 
-    /// Reads one word of each cache line of packet `p` (160 bytes: three lines, wherever it
-    /// starts), so that the test that follows finds it in the cache or on its way: a stable,
-    /// safe stand-in for a prefetch instruction (the workspace forbids `unsafe`).
-    #[inline(always)]
-    fn touch(&self, p: usize) {
-        let k = &self.packets.as_slice()[p];
-        std::hint::black_box(k.v[0][0].x.to_bits() ^ k.v[1][1].x.to_bits() ^ k.v[2][2].x.to_bits());
+    /// The hit on lane `lane` of packet `p` at `t`.
+    fn hit(&self, p: u32, lane: usize, t: f32, barycentric: [f32; 3]) -> TriangleHit {
+        let packet = self.bvh.arena.packet(p);
+        let v = &packet.v;
+        TriangleHit {
+            triangle: packet.ids[lane],
+            t,
+            barycentric,
+            corners: [0, 1, 2].map(|i| Vec3::new(v[0][i][lane], v[1][i][lane], v[2][i][lane])),
+        }
     }
 
     /// Whether anything is hit with `0 < t < t_max`; stops at the first hit found.
@@ -212,17 +204,76 @@ impl Accel {
             &ray,
             &mut t_max,
             false,
-            &|p| self.touch(p),
             #[inline(always)]
             |p, lanes, t_max| {
                 hit = sheared
-                    .intersect(&self.packets.as_slice()[p], lanes, *t_max)
+                    .intersect(self.bvh.arena.packet(p as u32), lanes, *t_max)
                     .mask
                     != 0;
                 hit
             },
         );
         hit
+    }
+
+    /// [`Accel::closest`] for many rays: `hits[i]` for ray `i`, the same answers. The rays are
+    /// walked several at a time, interleaved, so that one ray's cache misses overlap
+    /// another's work: faster than one ray after another wherever the tree does not fit in
+    /// the cache (a large scene), about the same where it does.
+    pub fn closest_many(&self, rays: &[Ray], hits: &mut [Option<TriangleHit>]) {
+        assert_eq!(rays.len(), hits.len(), "one answer per ray");
+        self.bvh.walk_many(
+            rays.len(),
+            true,
+            |i| {
+                let r = &rays[i];
+                let sheared = PacketRay::new(&ShearedRay::new(r.origin, r.direction));
+                (
+                    NodeRay::new(r.origin, r.direction),
+                    r.t_max,
+                    (sheared, None),
+                )
+            },
+            #[inline(always)]
+            |(sheared, best), p, lanes, t_max| {
+                let found = sheared.intersect(self.bvh.arena.packet(p), lanes, *t_max);
+                if found.mask != 0 {
+                    let lane = found.nearest();
+                    *t_max = found.t[lane];
+                    *best = Some((p, lane, found.barycentric(lane)));
+                }
+                false
+            },
+            |i, t, (_, best)| hits[i] = best.map(|(p, lane, b)| self.hit(p, lane, t, b)),
+        );
+    }
+
+    /// [`Accel::any_hit`] for many rays: `blocked[i]` for ray `i`, the same answers,
+    /// interleaved as [`Accel::closest_many`].
+    pub fn any_hit_many(&self, rays: &[Ray], blocked: &mut [bool]) {
+        assert_eq!(rays.len(), blocked.len(), "one answer per ray");
+        self.bvh.walk_many(
+            rays.len(),
+            false,
+            |i| {
+                let r = &rays[i];
+                let sheared = PacketRay::new(&ShearedRay::new(r.origin, r.direction));
+                (
+                    NodeRay::new(r.origin, r.direction),
+                    r.t_max,
+                    (sheared, false),
+                )
+            },
+            #[inline(always)]
+            |(sheared, hit), p, lanes, t_max| {
+                *hit = sheared
+                    .intersect(self.bvh.arena.packet(p), lanes, *t_max)
+                    .mask
+                    != 0;
+                *hit
+            },
+            |i, _, (_, hit)| blocked[i] = hit,
+        );
     }
 
     /// Whether every segment from `apex` to a point of triangle `base` is certainly
@@ -236,10 +287,9 @@ impl Accel {
     /// [`SHAFT_TOLERANCE`].
     pub fn shaft_clear(&self, apex: Vec3, apex_normal: Option<Vec3>, base: [Vec3; 3]) -> bool {
         let shaft = Shaft::new(apex, apex_normal, base);
-        let packets = self.packets.as_slice();
         !self.bvh.any_leaf(
             |node| shaft.overlap(node),
-            |p, lanes| shaft.may_block(&packets[p], lanes),
+            |p, lanes| shaft.may_block(self.bvh.arena.packet(p as u32), lanes),
         )
     }
 
@@ -255,10 +305,9 @@ impl Accel {
         let Some(shaft) = Shaft::hull(a, na, b, nb) else {
             return false;
         };
-        let packets = self.packets.as_slice();
         !self.bvh.any_leaf(
             |node| shaft.overlap(node),
-            |p, lanes| shaft.may_block(&packets[p], lanes),
+            |p, lanes| shaft.may_block(self.bvh.arena.packet(p as u32), lanes),
         )
     }
 

@@ -1,5 +1,5 @@
-//! Read-only tables (the BVH's nodes and triangle packets) in memory the OS may back with huge
-//! pages. A ray visits nodes and packets all over tables of tens of MB, so with 4 KiB pages
+//! The BVH's read-only table (its nodes and triangle packets) in memory the OS may back with
+//! huge pages. A ray visits nodes and packets all over tables of tens of MB, so with 4 KiB pages
 //! nearly every visit misses the TLB as well as the cache; on Linux, a table of at least
 //! [`HUGE_MIN`] bytes goes into an anonymous map advised to use transparent huge pages (2 MiB),
 //! as Embree's BVH gets too. The slice of the map is formed once and kept beside it, so an
@@ -52,51 +52,86 @@ impl<T: Pod> Store<T> {
     }
 }
 
-/// A borrowed slice of packets.
-type Packets<'a> = &'a [TriPacket];
-/// A borrowed slice of nodes.
-type Nodes<'a> = &'a [WideNode];
+/// The unit the tree's memory is counted in: 32 bytes. A node is [`NODE_UNITS`] units, a
+/// packet [`PACKET_UNITS`].
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C, align(32))]
+pub(super) struct Unit([f32; 8]);
+
+/// Units of one [`WideNode`] (256 bytes: four cache lines when it starts on a line).
+pub(super) const NODE_UNITS: usize = 8;
+
+/// Units of one [`TriPacket`] (160 bytes: three cache lines wherever it starts on a unit).
+pub(super) const PACKET_UNITS: usize = 5;
+
+const _: () = assert!(std::mem::size_of::<WideNode>() == 32 * NODE_UNITS);
+const _: () = assert!(std::mem::size_of::<TriPacket>() == 32 * PACKET_UNITS);
+const _: () = assert!(std::mem::align_of::<WideNode>() <= std::mem::align_of::<Unit>());
+const _: () = assert!(std::mem::align_of::<TriPacket>() <= std::mem::align_of::<Unit>());
+
+/// A borrowed slice of units.
+type Units<'a> = &'a [Unit];
 
 self_cell!(
-    /// The triangle packets, with their slice.
-    pub(super) struct PacketTable {
-        owner: Store<TriPacket>,
+    /// The tree's nodes and triangle packets in one table of [`Unit`]s, each node followed by
+    /// the packets of its leaves (the layout Embree's allocator gives its trees): the packets
+    /// a node leads to lie in the same memory page as the node, often in the lines right after
+    /// it, where the hardware's prefetchers find them.
+    pub(super) struct Arena {
+        owner: Store<Unit>,
         #[covariant]
-        dependent: Packets,
+        dependent: Units,
     }
 );
 
-self_cell!(
-    /// The BVH nodes, with their slice.
-    pub(super) struct NodeTable {
-        owner: Store<WideNode>,
-        #[covariant]
-        dependent: Nodes,
-    }
-);
-
-impl PacketTable {
-    /// The table of `items`.
-    pub(super) fn of(items: Vec<TriPacket>) -> Self {
-        Self::new(Store::new(items), |s| s.slice())
+impl Arena {
+    /// The table of `units`.
+    pub(super) fn of(units: Vec<Unit>) -> Self {
+        Self::new(Store::new(units), |s| s.slice())
     }
 
-    /// The packets.
+    /// The units.
     #[inline(always)]
-    pub(super) fn as_slice(&self) -> &[TriPacket] {
+    pub(super) fn units(&self) -> &[Unit] {
         self.borrow_dependent()
+    }
+
+    /// The node at unit `at`.
+    #[inline(always)]
+    pub(super) fn node(&self, at: u32) -> &WideNode {
+        let at = at as usize;
+        let units: &[Unit; NODE_UNITS] = self.units()[at..at + NODE_UNITS]
+            .try_into()
+            .expect("a node's units");
+        bytemuck::cast_ref(units)
+    }
+
+    /// The packet at unit `at`.
+    #[inline(always)]
+    pub(super) fn packet(&self, at: u32) -> &TriPacket {
+        let at = at as usize;
+        let units: &[Unit; PACKET_UNITS] = self.units()[at..at + PACKET_UNITS]
+            .try_into()
+            .expect("a packet's units");
+        bytemuck::cast_ref(units)
     }
 }
 
-impl NodeTable {
-    /// The table of `items`.
-    pub(super) fn of(items: Vec<WideNode>) -> Self {
-        Self::new(Store::new(items), |s| s.slice())
-    }
+/// Writes `item` (a node or a packet) into `units` from unit `at`.
+pub(super) fn write_units<T: Pod>(units: &mut [Unit], at: usize, item: &T) {
+    let bytes = bytemuck::bytes_of(item);
+    let count = bytes.len() / std::mem::size_of::<Unit>();
+    bytemuck::cast_slice_mut::<Unit, u8>(&mut units[at..at + count]).copy_from_slice(bytes);
+}
 
-    /// The nodes.
-    #[inline(always)]
-    pub(super) fn as_slice(&self) -> &[WideNode] {
-        self.borrow_dependent()
-    }
+/// Starts loading the cache line holding `item` with a prefetch instruction, which retires at
+/// once: a load whose value goes unused would wait in the reorder buffer until its line
+/// arrives, and the work behind it stalls once the buffer is full. A no-op where the
+/// instruction is not available.
+#[inline(always)]
+pub(super) fn prefetch<T>(item: &T) {
+    #[cfg(all(target_arch = "x86_64", target_feature = "sse"))]
+    safe_arch::prefetch_t0(item);
+    #[cfg(not(all(target_arch = "x86_64", target_feature = "sse")))]
+    let _ = item;
 }

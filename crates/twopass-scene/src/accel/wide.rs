@@ -5,7 +5,8 @@
 use glam::{Vec3, Vec4};
 use obvhs::faststack::FastStack;
 
-use super::table::NodeTable;
+use super::packet::TriPacket;
+use super::table::{Arena, NODE_UNITS, PACKET_UNITS, prefetch, write_units};
 
 /// Largest inverse direction component: finite, so the slab test never forms 0 * inf.
 pub(super) const MAX_INVERSE: f32 = 1e20;
@@ -41,13 +42,15 @@ const XOR_PERMUTE: [[u8; 256]; 8] = {
 
 /// One 8-wide node: its children's boxes (the binary tree's boxes, exact unions of the padded
 /// triangle boxes) and what each child is: an inner node, a leaf (one triangle packet), or empty.
+/// In the built tree ([`WideBvh`]) children are named by where they start in its arena (in
+/// [`Unit`](super::table::Unit)s); while building, by their index in the builder's node and packet lists.
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
-#[repr(C, align(64))]
+#[repr(C)]
 pub(super) struct WideNode {
     /// `bounds[4 * axis + 2 * side + half]`: lane `j` is child `4 * half + j`; side 0 is the
     /// box minimum, 1 the maximum. Empty children are empty boxes (min +inf, max -inf).
     pub(super) bounds: [Vec4; 12],
-    /// Per child: its node index (inner) or its packet index (leaf); 0 when empty.
+    /// Per child: where its node (inner) or its packet (leaf) starts; 0 when empty.
     pub(super) child: [u32; 8],
     /// Per child, four bits from bit `4 * child`: the leaf's lanes in its packet.
     pub(super) lanes: u32,
@@ -55,8 +58,8 @@ pub(super) struct WideNode {
     pub(super) inner: u8,
     /// Bit `c` set when child `c` is a leaf.
     pub(super) leaf: u8,
-    /// Up to the 256 bytes (four cache lines) the alignment makes a node anyway, spelled out so
-    /// that a node has no padding bytes (it can be copied as plain bytes).
+    /// Up to 256 bytes (four cache lines, eight arena units), spelled out so that a node has
+    /// no padding bytes (it can be copied as plain bytes).
     _unused: [u8; 26],
 }
 
@@ -96,15 +99,65 @@ impl WideNode {
         }
     }
 
-    /// One word of each of the node's four cache lines, combined: reading them starts loading
-    /// the whole node (a safe stand-in for prefetch instructions; the workspace forbids
-    /// `unsafe`).
+    /// Of the inner children `inner` (hit by `ray`, entry distances `near`), the one to descend
+    /// into; the others go to `push` (child, entry distance) so that the next to visit is
+    /// pushed last. With `ordered`, nearest first; without, in the builder's octant order (any
+    /// hit: no distances to sort; pushed with distance 0).
     #[inline(always)]
-    fn line_words(&self) -> u32 {
-        self.bounds[0].x.to_bits()
-            ^ self.bounds[4].x.to_bits()
-            ^ self.bounds[8].x.to_bits()
-            ^ self.child[0]
+    fn descend(
+        &self,
+        mut inner: u32,
+        near: &[f32; 8],
+        ray: &NodeRay,
+        ordered: bool,
+        mut push: impl FnMut((u32, f32)),
+    ) -> u32 {
+        if inner.count_ones() == 1 {
+            return self.child[inner.trailing_zeros() as usize];
+        }
+        if !ordered {
+            // Descending `slot ^ octant`; push the rest so that the next in that order is
+            // popped first.
+            let o = ray.octant;
+            let mut order = u32::from(XOR_PERMUTE[o][inner as usize]);
+            let first = 31 - order.leading_zeros();
+            order &= !(1 << first);
+            while order != 0 {
+                let b = order.trailing_zeros();
+                order &= order - 1;
+                push((self.child[(b as usize) ^ o], 0.0));
+            }
+            return self.child[first as usize ^ o];
+        }
+        // Push the hit children farthest first, then descend into the nearest.
+        let mut found = [(0u32, 0.0f32); 8];
+        let mut k = 0;
+        while inner != 0 {
+            let c = inner.trailing_zeros() as usize;
+            inner &= inner - 1;
+            let t = near[c];
+            // Insertion by distance, nearest last.
+            let mut j = k;
+            while j > 0 && found[j - 1].1 < t {
+                found[j] = found[j - 1];
+                j -= 1;
+            }
+            found[j] = (self.child[c], t);
+            k += 1;
+        }
+        for &entry in &found[..k - 1] {
+            push(entry);
+        }
+        found[k - 1].0
+    }
+
+    /// Starts loading the node's four cache lines.
+    #[inline(always)]
+    fn prefetch(&self) {
+        prefetch(&self.bounds[0]);
+        prefetch(&self.bounds[4]);
+        prefetch(&self.bounds[8]);
+        prefetch(&self.child);
     }
 
     /// The children hit by `ray` within `[0, t_max]` (bit `c` for child `c`) and each child's
@@ -139,17 +192,24 @@ impl WideNode {
     }
 }
 
-/// The decoded tree: node 0 is the root.
+/// The tree, laid out for the walk: node 0 (the root) at unit 0, and depth first from there,
+/// each node followed by its leaves' packets (in slot order), then its inner children's
+/// subtrees (in slot order). A node starts on an even unit (64 bytes: a cache line, since the
+/// table starts on one).
 pub(super) struct WideBvh {
-    pub(super) nodes: NodeTable,
+    pub(super) arena: Arena,
+    /// Numbers of nodes and packets.
+    pub(super) nodes: usize,
+    pub(super) packets: usize,
     /// The most entries the traversal stack can hold at once: over every path from the root,
     /// the sum of the inner children pushed beside the one descended into.
     stack_need: usize,
 }
 
 impl WideBvh {
-    /// The tree of `nodes`: the root first, every node before its children.
-    pub(super) fn new(nodes: Vec<WideNode>) -> Self {
+    /// The tree of `nodes` (the root first, every node before its children; children named by
+    /// their index in `nodes` or `packets`) and `packets`.
+    pub(super) fn new(nodes: Vec<WideNode>, packets: &[TriPacket]) -> Self {
         // Children come after their parents, so one backward sweep sees every
         // child's need before its parent's.
         let mut need = vec![0usize; nodes.len()];
@@ -165,9 +225,51 @@ impl WideBvh {
                 .unwrap_or(0);
             need[i] = (n.inner.count_ones() as usize).saturating_sub(1) + deepest;
         }
+        // Depth first, inner children in slot order: where each node starts, then its
+        // packets right after it.
+        let slots = |mask: u8| (0..8).filter(move |c| mask & (1 << c) != 0);
+        let mut order = Vec::with_capacity(nodes.len());
+        let mut stack = if nodes.is_empty() {
+            vec![]
+        } else {
+            vec![0usize]
+        };
+        while let Some(i) = stack.pop() {
+            order.push(i);
+            let n = &nodes[i];
+            stack.extend(slots(n.inner).rev().map(|c| n.child[c] as usize));
+        }
+        let mut node_at = vec![0u32; nodes.len()];
+        let mut packet_at = vec![0u32; packets.len()];
+        let mut end = 0usize;
+        for &i in &order {
+            end += end % 2;
+            node_at[i] = end as u32;
+            end += NODE_UNITS;
+            for c in slots(nodes[i].leaf) {
+                packet_at[nodes[i].child[c] as usize] = end as u32;
+                end += PACKET_UNITS;
+            }
+        }
+        assert!(u32::try_from(end).is_ok(), "tree over 128 GiB");
+        let mut units = vec![bytemuck::Zeroable::zeroed(); end];
+        for &i in &order {
+            let mut n = nodes[i];
+            for c in slots(n.inner) {
+                n.child[c] = node_at[n.child[c] as usize];
+            }
+            for c in slots(n.leaf) {
+                let p = n.child[c] as usize;
+                n.child[c] = packet_at[p];
+                write_units(&mut units, packet_at[p] as usize, &packets[p]);
+            }
+            write_units(&mut units, node_at[i] as usize, &n);
+        }
         Self {
             stack_need: need.first().copied().unwrap_or(0),
-            nodes: NodeTable::of(nodes),
+            arena: Arena::of(units),
+            nodes: nodes.len(),
+            packets: packets.len(),
         }
     }
 
@@ -176,22 +278,20 @@ impl WideBvh {
     /// `ordered`, inner children are visited nearest first and a pushed child is skipped once
     /// `t_max` is below its entry distance (closest hit); without, in the builder's octant order
     /// (any hit: no distances to sort or compare). Where a node has several leaves to visit,
-    /// `touch(packet)` is called for each first, to start loading their packets; several inner
-    /// children to visit are read ahead likewise.
+    /// their packets are prefetched first; several inner children to visit likewise.
     #[inline(always)]
     pub(super) fn walk(
         &self,
         ray: &NodeRay,
         t_max: &mut f32,
         ordered: bool,
-        touch: &impl Fn(usize),
         mut leaf: impl FnMut(usize, u32, &mut f32) -> bool,
     ) {
-        if self.nodes.as_slice().is_empty() {
+        if self.nodes == 0 {
             return;
         }
         obvhs::fast_stack!((u32, f32), (INLINE_STACK), self.stack_need, stack, {
-            self.walk_with(&mut stack, ray, t_max, ordered, touch, &mut leaf)
+            self.walk_with(&mut stack, ray, t_max, ordered, &mut leaf)
         });
     }
 
@@ -203,14 +303,13 @@ impl WideBvh {
         overlap: impl Fn(&WideNode) -> u32,
         mut leaf: impl FnMut(usize, u32) -> bool,
     ) -> bool {
-        if self.nodes.as_slice().is_empty() {
+        if self.nodes == 0 {
             return false;
         }
-        let nodes = self.nodes.as_slice();
         obvhs::fast_stack!(u32, (INLINE_STACK), self.stack_need + 1, stack, {
             stack.push(0);
             while let Some(node) = stack.pop() {
-                let n = &nodes[node as usize];
+                let n = self.arena.node(node);
                 let kept = overlap(n);
                 let mut leaves = kept & u32::from(n.leaf);
                 while leaves != 0 {
@@ -230,6 +329,104 @@ impl WideBvh {
         })
     }
 
+    /// The walk of `count` rays at once ([`WideBvh::walk`] for each): [`INTERLEAVE`] rays are
+    /// walked in turn, one node each, and what a ray will read next (its next node, its
+    /// leaves' packets) is prefetched when its turn ends, so that by its next turn it is in the
+    /// cache: the cache misses of different rays overlap instead of each ray waiting on its
+    /// own. `start(i)` gives ray `i`'s node ray, its `t_max` and the state `leaf(state, packet,
+    /// lanes, t_max)` tests a packet with (it may shorten `t_max`, and returns `true` to stop
+    /// the ray's walk); `finish(i, t_max, state)` is called once per ray, in no particular
+    /// order. Each ray meets the leaves the single-ray walk would, in the same order.
+    pub(super) fn walk_many<P>(
+        &self,
+        count: usize,
+        ordered: bool,
+        start: impl Fn(usize) -> (NodeRay, f32, P),
+        leaf: impl Fn(&mut P, u32, u32, &mut f32) -> bool,
+        mut finish: impl FnMut(usize, f32, P),
+    ) {
+        if self.nodes == 0 {
+            for i in 0..count {
+                let (_, t_max, state) = start(i);
+                finish(i, t_max, state);
+            }
+            return;
+        }
+        let depth = self.stack_need + 1;
+        let mut stacks = vec![(0u32, 0.0f32); INTERLEAVE * depth];
+        let mut slots: [Option<Walker<P>>; INTERLEAVE] = std::array::from_fn(|_| None);
+        let mut fed = 0;
+        loop {
+            let mut busy = false;
+            for (s, slot) in slots.iter_mut().enumerate() {
+                if slot.is_none() && fed < count {
+                    let (ray, t_max, state) = start(fed);
+                    *slot = Some(Walker {
+                        index: fed,
+                        ray,
+                        t_max,
+                        state,
+                        depth: 0,
+                        next: Some(0),
+                        pending: [(0, 0); 8],
+                        pending_count: 0,
+                    });
+                    fed += 1;
+                }
+                let Some(w) = slot else { continue };
+                busy = true;
+                // The leaves the last turn found, prefetched since.
+                let mut stop = false;
+                for &(p, lanes) in &w.pending[..w.pending_count] {
+                    if leaf(&mut w.state, p, lanes, &mut w.t_max) {
+                        stop = true;
+                        break;
+                    }
+                }
+                w.pending_count = 0;
+                let stack = &mut stacks[s * depth..(s + 1) * depth];
+                let mut node = if stop { None } else { w.next.take() };
+                while node.is_none() && !stop && w.depth > 0 {
+                    w.depth -= 1;
+                    let (child, t) = stack[w.depth];
+                    if t <= w.t_max {
+                        node = Some(child);
+                    }
+                }
+                let Some(node) = node else {
+                    if let Some(w) = slot.take() {
+                        finish(w.index, w.t_max, w.state);
+                    }
+                    continue;
+                };
+                let n = self.arena.node(node);
+                let (hit, near) = n.intersect(&w.ray, w.t_max);
+                let mut leaves = hit & u32::from(n.leaf);
+                while leaves != 0 {
+                    let c = leaves.trailing_zeros() as usize;
+                    leaves &= leaves - 1;
+                    self.arena.packet(n.child[c]).prefetch();
+                    w.pending[w.pending_count] = (n.child[c], (n.lanes >> (4 * c)) & 0xf);
+                    w.pending_count += 1;
+                }
+                let inner = hit & u32::from(n.inner);
+                if inner != 0 {
+                    let next = n.descend(inner, &near, &w.ray, ordered, |entry| {
+                        stack[w.depth] = entry;
+                        w.depth += 1;
+                    });
+                    self.arena.node(next).prefetch();
+                    w.next = Some(next);
+                } else if w.depth > 0 {
+                    self.arena.node(stack[w.depth - 1].0).prefetch();
+                }
+            }
+            if !busy {
+                return;
+            }
+        }
+    }
+
     #[inline(always)]
     fn walk_with(
         &self,
@@ -237,12 +434,11 @@ impl WideBvh {
         ray: &NodeRay,
         t_max: &mut f32,
         ordered: bool,
-        touch: &impl Fn(usize),
         leaf: &mut impl FnMut(usize, u32, &mut f32) -> bool,
     ) {
         let mut node = 0u32;
         loop {
-            let n = &self.nodes.as_slice()[node as usize];
+            let n = self.arena.node(node);
             let (hit, near) = n.intersect(ray, *t_max);
             let mut leaves = hit & u32::from(n.leaf);
             // Start loading what this node leads to before working on any of it, so that the
@@ -252,21 +448,21 @@ impl WideBvh {
             if leaves.count_ones() > 1 {
                 let mut rest = leaves;
                 while rest != 0 {
-                    touch(n.child[rest.trailing_zeros() as usize] as usize);
+                    self.arena
+                        .packet(n.child[rest.trailing_zeros() as usize])
+                        .prefetch();
                     rest &= rest - 1;
                 }
             }
             let inner_hit = hit & u32::from(n.inner);
             if inner_hit.count_ones() > 1 {
                 let mut rest = inner_hit;
-                let mut words = 0;
                 while rest != 0 {
-                    words ^= self.nodes.as_slice()
-                        [n.child[rest.trailing_zeros() as usize] as usize]
-                        .line_words();
+                    self.arena
+                        .node(n.child[rest.trailing_zeros() as usize])
+                        .prefetch();
                     rest &= rest - 1;
                 }
-                std::hint::black_box(words);
             }
             while leaves != 0 {
                 let c = leaves.trailing_zeros() as usize;
@@ -275,47 +471,8 @@ impl WideBvh {
                     return;
                 }
             }
-            let mut inner = inner_hit;
-            let next = match inner.count_ones() {
-                0 => None,
-                1 => Some(n.child[inner.trailing_zeros() as usize]),
-                _ if !ordered => {
-                    // The builder's order: descending `slot ^ octant`; push the rest so that the
-                    // next in that order is popped first.
-                    let o = ray.octant;
-                    let mut order = u32::from(XOR_PERMUTE[o][inner as usize]);
-                    let first = 31 - order.leading_zeros();
-                    order &= !(1 << first);
-                    while order != 0 {
-                        let b = order.trailing_zeros();
-                        order &= order - 1;
-                        stack.push((n.child[(b as usize) ^ o], 0.0));
-                    }
-                    Some(n.child[first as usize ^ o])
-                }
-                _ => {
-                    // Push the hit children farthest first, then descend into the nearest.
-                    let mut found = [(0u32, 0.0f32); 8];
-                    let mut k = 0;
-                    while inner != 0 {
-                        let c = inner.trailing_zeros() as usize;
-                        inner &= inner - 1;
-                        let t = near[c];
-                        // Insertion by distance, nearest last.
-                        let mut j = k;
-                        while j > 0 && found[j - 1].1 < t {
-                            found[j] = found[j - 1];
-                            j -= 1;
-                        }
-                        found[j] = (n.child[c], t);
-                        k += 1;
-                    }
-                    for &entry in &found[..k - 1] {
-                        stack.push(entry);
-                    }
-                    Some(found[k - 1].0)
-                }
-            };
+            let next = (inner_hit != 0)
+                .then(|| n.descend(inner_hit, &near, ray, ordered, |entry| stack.push(entry)));
             node = match next {
                 Some(child) => child,
                 None => loop {
@@ -329,6 +486,26 @@ impl WideBvh {
             };
         }
     }
+}
+
+/// Rays an interleaved walk ([`WideBvh::walk_many`]) keeps in flight.
+const INTERLEAVE: usize = 8;
+
+/// One ray of an interleaved walk: where it is in the tree.
+struct Walker<P> {
+    /// The ray's index in the batch.
+    index: usize,
+    ray: NodeRay,
+    t_max: f32,
+    /// What the leaf test needs and finds.
+    state: P,
+    /// Entries on its stack.
+    depth: usize,
+    /// The node to visit on its next turn (prefetched), else the stack's top.
+    next: Option<u32>,
+    /// Leaves to test on its next turn (prefetched): packet and lanes.
+    pending: [(u32, u32); 8],
+    pending_count: usize,
 }
 
 /// The ray as the node test sees it: origin and inverse direction splatted per axis, and for

@@ -1,7 +1,8 @@
 //! `twopass bench rays`: ray queries per second (camera, incoherent, occlusion) on one and on
-//! all threads, and the BVH build time. It measures the accelerator's queries
-//! ([`Accel::closest`], [`Accel::any_hit`]) as another engine's are measured: the hit's
-//! shading data that `Scene::intersect` adds (normals, material) is not part of a ray query.
+//! all threads, one ray at a time and interleaved, and the BVH build time. It measures the
+//! accelerator's queries ([`Accel::closest`], [`Accel::any_hit`] and their interleaved forms)
+//! as another engine's are measured: the hit's shading data that `Scene::intersect` adds
+//! (normals, material) is not part of a ray query.
 
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -40,17 +41,23 @@ pub struct RaysArgs {
     pub export: Option<PathBuf>,
 }
 
-/// One measured ray query: rates on one and on all threads.
+/// One measured ray query: rates on one and on all threads, one ray at a time
+/// ([`Accel::closest`], [`Accel::any_hit`]) and interleaved ([`Accel::closest_many`],
+/// [`Accel::any_hit_many`], in batches of [`CHUNK`] rays).
 #[derive(Debug, Serialize)]
 struct RayRow {
     query: &'static str,
     rays: usize,
-    /// Millions of rays per second on one thread.
+    /// Millions of rays per second on one thread, one ray at a time.
     mrays_1: f64,
-    /// Millions of rays per second on all threads.
+    /// Millions of rays per second on all threads, one ray at a time.
     mrays_n: f64,
     /// mrays_n / mrays_1.
     speedup: f64,
+    /// Millions of rays per second on one thread, interleaved.
+    interleaved_mrays_1: f64,
+    /// Millions of rays per second on all threads, interleaved.
+    interleaved_mrays_n: f64,
     /// Fraction of rays that hit (closest hit) or are blocked (occlusion).
     hit_fraction: f64,
     /// Largest resident memory while measuring this query (scene, BVH and ray batch), MiB.
@@ -68,6 +75,9 @@ struct RayReport {
     bvh_nodes: usize,
     rows: Vec<RayRow>,
 }
+
+/// Rays per chunk: one rayon job when casting on all threads, one interleaved walk.
+const CHUNK: usize = 1024;
 
 /// One batch of rays as the accelerator receives them: closest-hit rays, or occlusion
 /// segments (already offset off their surfaces, [`Scene::segment_between`]).
@@ -113,26 +123,54 @@ impl Batch {
         self.rays().len()
     }
 
-    /// Casts the whole batch once; returns how many rays hit.
-    fn cast(&self, accel: &Accel, parallel: bool) -> usize {
-        const CHUNK: usize = 1024;
+    /// Casts `rays` interleaved ([`Accel::closest_many`], [`Accel::any_hit_many`]); returns
+    /// how many hit.
+    fn cast_interleaved(&self, accel: &Accel, rays: &[Ray]) -> usize {
+        match self {
+            Self::Closest(_) => {
+                let mut hits = vec![None; rays.len()];
+                accel.closest_many(rays, &mut hits);
+                hits.iter().filter(|h| h.is_some()).count()
+            }
+            Self::Occlusion(_) => {
+                let mut blocked = vec![false; rays.len()];
+                accel.any_hit_many(rays, &mut blocked);
+                blocked.iter().filter(|&&b| b).count()
+            }
+        }
+    }
+
+    /// Casts the whole batch once, in chunks of [`CHUNK`] rays (one rayon job each when
+    /// `parallel`), one ray at a time or interleaved; returns how many rays hit.
+    fn cast(&self, accel: &Accel, parallel: bool, interleaved: bool) -> usize {
+        let chunk = |c: &[Ray]| {
+            if interleaved {
+                self.cast_interleaved(accel, c)
+            } else {
+                c.iter().filter(|r| self.cast_one(accel, r)).count()
+            }
+        };
         let rays = self.rays();
         if parallel {
-            rays.par_chunks(CHUNK)
-                .map(|c| c.iter().filter(|r| self.cast_one(accel, r)).count())
-                .sum()
+            rays.par_chunks(CHUNK).map(chunk).sum()
         } else {
-            rays.iter().filter(|r| self.cast_one(accel, r)).count()
+            rays.chunks(CHUNK).map(chunk).sum()
         }
     }
 
     /// Rays per second (casting repeatedly for at least `min`) and the hit fraction.
-    fn measure(&self, accel: &Accel, parallel: bool, min: Duration) -> (f64, f64) {
-        let hits = self.cast(accel, parallel); // warm-up, also the hit count
+    fn measure(
+        &self,
+        accel: &Accel,
+        parallel: bool,
+        interleaved: bool,
+        min: Duration,
+    ) -> (f64, f64) {
+        let hits = self.cast(accel, parallel, interleaved); // warm-up, also the hit count
         let start = Instant::now();
         let mut passes = 0usize;
         while passes == 0 || start.elapsed() < min {
-            std::hint::black_box(self.cast(accel, parallel));
+            std::hint::black_box(self.cast(accel, parallel, interleaved));
             passes += 1;
         }
         let rate = (passes * self.len()) as f64 / start.elapsed().as_secs_f64();
@@ -262,7 +300,7 @@ pub fn run(args: &RaysArgs, ctx: &Context) -> Result<(), CliError> {
     if let Some(dir) = &args.export {
         export(dir, &scene, &batches)?;
     }
-    let progress = ctx.progress(7, "bench rays");
+    let progress = ctx.progress(13, "bench rays");
     let mut builds: Vec<f64> = (0..5)
         .map(|_| {
             let a = Accel::build(&scene.mesh.positions, &scene.mesh.triangles);
@@ -275,16 +313,23 @@ pub fn run(args: &RaysArgs, ctx: &Context) -> Result<(), CliError> {
     let mut rows = Vec::new();
     for (_, label, batch) in &batches {
         reset_peak_memory();
-        let (r1, hit) = batch.measure(scene.accel(), false, min);
-        progress.inc(1);
-        let (rn, _) = batch.measure(scene.accel(), true, min);
-        progress.inc(1);
+        let mut rates = [[0.0; 2]; 2];
+        let mut hit = 0.0;
+        for (interleaved, rates) in [false, true].into_iter().zip(&mut rates) {
+            for (parallel, rate) in [false, true].into_iter().zip(rates.iter_mut()) {
+                (*rate, hit) = batch.measure(scene.accel(), parallel, interleaved, min);
+                progress.inc(1);
+            }
+        }
+        let [[r1, rn], [i1, i_n]] = rates;
         rows.push(RayRow {
             query: label,
             rays: batch.len(),
             mrays_1: r1 / 1e6,
             mrays_n: rn / 1e6,
             speedup: rn / r1,
+            interleaved_mrays_1: i1 / 1e6,
+            interleaved_mrays_n: i_n / 1e6,
             hit_fraction: hit,
             peak_memory_mib: mib(peak_memory()),
         });
@@ -308,23 +353,27 @@ pub fn run(args: &RaysArgs, ctx: &Context) -> Result<(), CliError> {
             report.threads
         );
         outln!(
-            "{:<18} {:>9} {:>14} {:>14} {:>9} {:>7} {:>9}",
+            "{:<18} {:>9} {:>14} {:>14} {:>9} {:>14} {:>14} {:>7} {:>9}",
             "query",
             "rays",
             "1 thr Mrays/s",
             format!("{} thr Mrays/s", report.threads),
             "speed-up",
+            "interleaved 1",
+            format!("interleaved {}", report.threads),
             "hit %",
             "peak MiB"
         );
         for r in &report.rows {
             outln!(
-                "{:<18} {:>9} {:>14.2} {:>14.2} {:>8.2}x {:>6.1}% {:>9}",
+                "{:<18} {:>9} {:>14.2} {:>14.2} {:>8.2}x {:>14.2} {:>14.2} {:>6.1}% {:>9}",
                 r.query,
                 r.rays,
                 r.mrays_1,
                 r.mrays_n,
                 r.speedup,
+                r.interleaved_mrays_1,
+                r.interleaved_mrays_n,
                 100.0 * r.hit_fraction,
                 fmt_mib(r.peak_memory_mib)
             );
