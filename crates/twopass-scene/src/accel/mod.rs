@@ -182,6 +182,17 @@ impl Accel {
         Some(self.hit(p as u32, lane, t_max, barycentric))
     }
 
+    /// What an interleaved walk starts ray `r` with: the ray as the node and packet tests see
+    /// it, its `t_max`, and `found`, what it has found so far.
+    fn walk_start<F>(r: &Ray, found: F) -> (NodeRay, f32, (PacketRay, F)) {
+        let sheared = PacketRay::new(&ShearedRay::new(r.origin, r.direction));
+        (
+            NodeRay::new(r.origin, r.direction),
+            r.t_max,
+            (sheared, found),
+        )
+    }
+
     /// The hit on lane `lane` of packet `p` at `t`.
     fn hit(&self, p: u32, lane: usize, t: f32, barycentric: [f32; 3]) -> TriangleHit {
         let packet = self.bvh.arena.packet(p);
@@ -218,22 +229,18 @@ impl Accel {
 
     /// [`Accel::closest`] for many rays: `hits[i]` for ray `i`, the same answers. The rays are
     /// walked several at a time, interleaved, so that one ray's cache misses overlap
-    /// another's work: faster than one ray after another wherever the tree does not fit in
-    /// the cache (a large scene), about the same where it does.
+    /// another's work: faster than one ray after another for incoherent rays where the tree
+    /// does not fit in the cache (about 1.5x on a million triangles), slower where it does or
+    /// where the rays are coherent (about 15 %: camera rays, small scenes).
+    ///
+    /// # Panics
+    /// When `hits` and `rays` differ in length.
     pub fn closest_many(&self, rays: &[Ray], hits: &mut [Option<TriangleHit>]) {
         assert_eq!(rays.len(), hits.len(), "one answer per ray");
         self.bvh.walk_many(
             rays.len(),
             true,
-            |i| {
-                let r = &rays[i];
-                let sheared = PacketRay::new(&ShearedRay::new(r.origin, r.direction));
-                (
-                    NodeRay::new(r.origin, r.direction),
-                    r.t_max,
-                    (sheared, None),
-                )
-            },
+            |i| Self::walk_start(&rays[i], None),
             #[inline(always)]
             |(sheared, best), p, lanes, t_max| {
                 let found = sheared.intersect(self.bvh.arena.packet(p), lanes, *t_max);
@@ -249,21 +256,16 @@ impl Accel {
     }
 
     /// [`Accel::any_hit`] for many rays: `blocked[i]` for ray `i`, the same answers,
-    /// interleaved as [`Accel::closest_many`].
+    /// interleaved as [`Accel::closest_many`] (and as much faster or slower).
+    ///
+    /// # Panics
+    /// When `blocked` and `rays` differ in length.
     pub fn any_hit_many(&self, rays: &[Ray], blocked: &mut [bool]) {
         assert_eq!(rays.len(), blocked.len(), "one answer per ray");
         self.bvh.walk_many(
             rays.len(),
             false,
-            |i| {
-                let r = &rays[i];
-                let sheared = PacketRay::new(&ShearedRay::new(r.origin, r.direction));
-                (
-                    NodeRay::new(r.origin, r.direction),
-                    r.t_max,
-                    (sheared, false),
-                )
-            },
+            |i| Self::walk_start(&rays[i], false),
             #[inline(always)]
             |(sheared, hit), p, lanes, t_max| {
                 *hit = sheared

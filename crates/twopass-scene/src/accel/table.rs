@@ -99,20 +99,23 @@ impl Arena {
     /// The node at unit `at`.
     #[inline(always)]
     pub(super) fn node(&self, at: u32) -> &WideNode {
-        let at = at as usize;
-        let units: &[Unit; NODE_UNITS] = self.units()[at..at + NODE_UNITS]
-            .try_into()
-            .expect("a node's units");
-        bytemuck::cast_ref(units)
+        self.item::<WideNode, NODE_UNITS>(at)
     }
 
     /// The packet at unit `at`.
     #[inline(always)]
     pub(super) fn packet(&self, at: u32) -> &TriPacket {
+        self.item::<TriPacket, PACKET_UNITS>(at)
+    }
+
+    /// The `T` of `UNITS` units at unit `at` (sizes and alignments checked at compile time
+    /// above; the slice bounds here).
+    #[inline(always)]
+    fn item<T: Pod, const UNITS: usize>(&self, at: u32) -> &T {
         let at = at as usize;
-        let units: &[Unit; PACKET_UNITS] = self.units()[at..at + PACKET_UNITS]
+        let units: &[Unit; UNITS] = self.units()[at..at + UNITS]
             .try_into()
-            .expect("a packet's units");
+            .expect("an item's units");
         bytemuck::cast_ref(units)
     }
 }
