@@ -355,8 +355,8 @@ impl Scene {
     }
 
     /// [`Scene::intersect`] for many rays in parallel (rayon); results in input order. Each
-    /// thread walks its rays several at a time, interleaved ([`Accel::closest_many`]): faster
-    /// for incoherent rays in large scenes, slower for coherent camera rays.
+    /// thread walks its rays through [`Accel::closest_many`] (interleaved on large trees:
+    /// faster for incoherent rays, slower for coherent camera rays).
     pub fn intersect_batch(&self, rays: &[Ray]) -> Vec<Option<Hit>> {
         let mut hits = vec![None; rays.len()];
         rays.par_chunks(BATCH_CHUNK)
@@ -372,7 +372,8 @@ impl Scene {
     }
 
     /// [`Scene::occluded_between`] for many pairs in parallel (rayon); results in input order.
-    /// Each thread walks its segments several at a time, interleaved ([`Accel::any_hit_many`]).
+    /// Each thread walks its segments through [`Accel::any_hit_many`] (interleaved on large
+    /// trees).
     pub fn occluded_batch(&self, pairs: &[(SurfacePoint, SurfacePoint)]) -> Vec<bool> {
         let mut blocked = vec![false; pairs.len()];
         pairs

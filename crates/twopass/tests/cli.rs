@@ -103,7 +103,7 @@ fn bench_rays_reports_every_query_kind() {
         assert!(one.is_finite() && one > 0.0 && all.is_finite() && all > 0.0);
         let speedup = r["speedup"].as_f64().unwrap();
         assert!((speedup - all / one).abs() <= 1e-9 * speedup, "{r}");
-        for key in ["interleaved_mrays_1", "interleaved_mrays_n"] {
+        for key in ["many_mrays_1", "many_mrays_n"] {
             let rate = r[key].as_f64().unwrap();
             assert!(rate.is_finite() && rate > 0.0, "{r}");
         }

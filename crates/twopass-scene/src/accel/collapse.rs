@@ -398,17 +398,23 @@ mod tests {
             // Whole batches, and batches shorter than the rays a walk keeps in flight.
             for n in [rays.len(), 0, 1, 7, 9] {
                 let n = n.min(rays.len());
+                // The public calls (one ray after another on these small trees) and the
+                // interleaved walks they use on large ones.
                 let mut hits = vec![None; n];
                 accel.closest_many(&rays[..n], &mut hits);
                 let mut blocked = vec![true; n];
                 accel.any_hit_many(&rays[..n], &mut blocked);
-                for ((hit, blocked), (ray, slow)) in
-                    hits.iter().zip(&blocked).zip(rays.iter().zip(&expected))
-                {
+                let mut woven = vec![None; n];
+                accel.closest_interleaved(&rays[..n], &mut woven);
+                let mut woven_blocked = vec![true; n];
+                accel.any_hit_interleaved(&rays[..n], &mut woven_blocked);
+                for (i, (ray, slow)) in rays.iter().zip(&expected).take(n).enumerate() {
                     let one = accel.closest(ray.origin, ray.direction, ray.t_max);
-                    assert_eq!(*hit, one, "case {seed}");
-                    assert_eq!(hit.map(|h| h.t), slow.map(|h| h.t), "case {seed}");
-                    assert_eq!(*blocked, slow.is_some(), "case {seed}");
+                    assert_eq!(hits[i], one, "case {seed}");
+                    assert_eq!(woven[i], one, "case {seed}");
+                    assert_eq!(hits[i].map(|h| h.t), slow.map(|h| h.t), "case {seed}");
+                    assert_eq!(blocked[i], slow.is_some(), "case {seed}");
+                    assert_eq!(woven_blocked[i], slow.is_some(), "case {seed}");
                 }
             }
         }

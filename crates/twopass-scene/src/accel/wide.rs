@@ -207,6 +207,11 @@ pub(super) struct WideBvh {
 }
 
 impl WideBvh {
+    /// The tree's memory (nodes and packets), bytes.
+    pub(super) fn bytes(&self) -> usize {
+        std::mem::size_of_val(self.arena.units())
+    }
+
     /// The tree of `nodes` (the root first, every node before its children; children named by
     /// their index in `nodes` or `packets`) and `packets`.
     pub(super) fn new(nodes: Vec<WideNode>, packets: &[TriPacket]) -> Self {

@@ -1,6 +1,7 @@
 //! `twopass bench rays`: ray queries per second (camera, incoherent, occlusion) on one and on
-//! all threads, one ray at a time and interleaved, and the BVH build time. It measures the
-//! accelerator's queries ([`Accel::closest`], [`Accel::any_hit`] and their interleaved forms)
+//! all threads, one ray at a time and through the many-ray calls, and the BVH build time. It
+//! measures the accelerator's queries ([`Accel::closest`], [`Accel::any_hit`] and their
+//! many-ray forms)
 //! as another engine's are measured: the hit's shading data that `Scene::intersect` adds
 //! (normals, material) is not part of a ray query.
 
@@ -42,8 +43,9 @@ pub struct RaysArgs {
 }
 
 /// One measured ray query: rates on one and on all threads, one ray at a time
-/// ([`Accel::closest`], [`Accel::any_hit`]) and interleaved ([`Accel::closest_many`],
-/// [`Accel::any_hit_many`], in batches of [`CHUNK`] rays).
+/// ([`Accel::closest`], [`Accel::any_hit`]) and through the many-ray calls
+/// ([`Accel::closest_many`], [`Accel::any_hit_many`], in batches of [`CHUNK`] rays: interleaved
+/// where the tree is larger than [`twopass_scene::INTERLEAVE_MIN_BYTES`]).
 #[derive(Debug, Serialize)]
 struct RayRow {
     query: &'static str,
@@ -54,10 +56,10 @@ struct RayRow {
     mrays_n: f64,
     /// mrays_n / mrays_1.
     speedup: f64,
-    /// Millions of rays per second on one thread, interleaved.
-    interleaved_mrays_1: f64,
-    /// Millions of rays per second on all threads, interleaved.
-    interleaved_mrays_n: f64,
+    /// Millions of rays per second on one thread, through the many-ray calls.
+    many_mrays_1: f64,
+    /// Millions of rays per second on all threads, through the many-ray calls.
+    many_mrays_n: f64,
     /// Fraction of rays that hit (closest hit) or are blocked (occlusion).
     hit_fraction: f64,
     /// Largest resident memory while measuring this query (scene, BVH and ray batch), MiB.
@@ -76,7 +78,7 @@ struct RayReport {
     rows: Vec<RayRow>,
 }
 
-/// Rays per chunk: one rayon job when casting on all threads, one interleaved walk.
+/// Rays per chunk: one rayon job when casting on all threads, one many-ray call.
 const CHUNK: usize = 1024;
 
 /// One batch of rays as the accelerator receives them: closest-hit rays, or occlusion
@@ -123,8 +125,8 @@ impl Batch {
         self.rays().len()
     }
 
-    /// Casts `rays` interleaved ([`Accel::closest_many`], [`Accel::any_hit_many`]); returns
-    /// how many hit.
+    /// Casts `rays` through the many-ray calls ([`Accel::closest_many`],
+    /// [`Accel::any_hit_many`]); returns how many hit.
     fn cast_interleaved(&self, accel: &Accel, rays: &[Ray]) -> usize {
         match self {
             Self::Closest(_) => {
@@ -141,7 +143,8 @@ impl Batch {
     }
 
     /// Casts the whole batch once, in chunks of [`CHUNK`] rays (one rayon job each when
-    /// `parallel`), one ray at a time or interleaved; returns how many rays hit.
+    /// `parallel`), one ray at a time or through the many-ray calls; returns how many rays
+    /// hit.
     fn cast(&self, accel: &Accel, parallel: bool, interleaved: bool) -> usize {
         let chunk = |c: &[Ray]| {
             if interleaved {
@@ -328,8 +331,8 @@ pub fn run(args: &RaysArgs, ctx: &Context) -> Result<(), CliError> {
             mrays_1: r1 / 1e6,
             mrays_n: rn / 1e6,
             speedup: rn / r1,
-            interleaved_mrays_1: i1 / 1e6,
-            interleaved_mrays_n: i_n / 1e6,
+            many_mrays_1: i1 / 1e6,
+            many_mrays_n: i_n / 1e6,
             hit_fraction: hit,
             peak_memory_mib: mib(peak_memory()),
         });
@@ -359,8 +362,8 @@ pub fn run(args: &RaysArgs, ctx: &Context) -> Result<(), CliError> {
             "1 thr Mrays/s",
             format!("{} thr Mrays/s", report.threads),
             "speed-up",
-            "interleaved 1",
-            format!("interleaved {}", report.threads),
+            "many-ray 1",
+            format!("many-ray {}", report.threads),
             "hit %",
             "peak MiB"
         );
@@ -372,8 +375,8 @@ pub fn run(args: &RaysArgs, ctx: &Context) -> Result<(), CliError> {
                 r.mrays_1,
                 r.mrays_n,
                 r.speedup,
-                r.interleaved_mrays_1,
-                r.interleaved_mrays_n,
+                r.many_mrays_1,
+                r.many_mrays_n,
                 100.0 * r.hit_fraction,
                 fmt_mib(r.peak_memory_mib)
             );
