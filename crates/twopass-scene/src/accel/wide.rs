@@ -173,8 +173,8 @@ impl WideNode {
                 let n = b[4 * axis + ray.near[axis] + half];
                 let f = b[4 * axis + (2 - ray.near[axis]) + half];
                 (
-                    (n - ray.origin[axis]) * ray.inv[axis],
-                    (f - ray.origin[axis]) * ray.inv[axis],
+                    n.mul_add(ray.inv[axis], ray.neg_origin_inv[axis]),
+                    f.mul_add(ray.inv[axis], ray.neg_origin_inv[axis]),
                 )
             };
             let (nx, fx) = slab(0);
@@ -513,14 +513,17 @@ struct Walker<P> {
     pending_count: usize,
 }
 
-/// The ray as the node test sees it: origin and inverse direction splatted per axis, and for
-/// each axis which side of a box the ray enters first. Negative zeros in the direction become
-/// positive and inverses are clamped to [`MAX_INVERSE`], so no slab ever forms 0 * inf; the
-/// entry side is chosen from the sign of the inverse itself, so near and far always agree
-/// with it (a mismatch would cull every box).
+/// The ray as the node test sees it: inverse direction and `-origin * inverse` splatted per
+/// axis, so that a plane at `p` is met at `t = p * inv - origin * inv`, one fused
+/// multiply-add (its rounding, like that of `(p - origin) * inv`, is a few ulps of the
+/// coordinates, far inside the boxes' padding), and for each axis which side of a box the ray
+/// enters first. Negative zeros in the direction become positive and inverses are clamped to
+/// [`MAX_INVERSE`], so no slab ever forms 0 * inf; the entry side is chosen from the sign of
+/// the inverse itself, so near and far always agree with it (a mismatch would cull every box).
 pub(super) struct NodeRay {
-    pub(super) origin: [Vec4; 3],
     pub(super) inv: [Vec4; 3],
+    /// `-origin * inv` per axis, splatted.
+    pub(super) neg_origin_inv: [Vec4; 3],
     /// 0 when the ray enters through the box minimum on this axis, 2 through the maximum.
     pub(super) near: [usize; 3],
     /// The direction's octant as the builder orders children by: bit 2 set for x >= 0, bit 1 for
@@ -541,12 +544,12 @@ impl NodeRay {
         };
         let inv = [inv(d.x), inv(d.y), inv(d.z)];
         Self {
-            origin: [
-                Vec4::splat(origin.x),
-                Vec4::splat(origin.y),
-                Vec4::splat(origin.z),
-            ],
             inv: inv.map(Vec4::splat),
+            neg_origin_inv: [
+                Vec4::splat(-origin.x * inv[0]),
+                Vec4::splat(-origin.y * inv[1]),
+                Vec4::splat(-origin.z * inv[2]),
+            ],
             near: inv.map(|i| if i < 0.0 { 2 } else { 0 }),
             octant: usize::from(inv[0] >= 0.0) << 2
                 | usize::from(inv[1] >= 0.0) << 1
