@@ -11,8 +11,8 @@ same machine load. It reports, per query kind, millions of rays per second on on
 ratio twopass / Embree, build times, and how far the answers agree. twopass is measured twice:
 one ray at a time (`Accel::closest`, `Accel::any_hit`) and interleaved (`Accel::closest_many`,
 `Accel::any_hit_many`: eight rays walked in turn, what each reads next prefetched, on trees
-over 1 MiB; smaller ones, which the generated rooms are not, walk one ray after another). Embree is
-measured one ray at a time only: embreex binds `rtcIntersect1` / `rtcOccluded1` and none of
+over 1 MiB; smaller ones, which the generated rooms are not, walk one ray after another).
+Embree is measured one ray at a time only: embreex binds `rtcIntersect1` / `rtcOccluded1` and none of
 Embree 4's packet calls (`rtcIntersect4/8/16`), and Embree 4 has no stream API.
 
 Embree's figures include embreex's per-ray cost of the Python-side loop (filling a ray from numpy

@@ -37,8 +37,8 @@ use wide::{NodeRay, WideBvh};
 
 /// Size of the tree (nodes and packets, bytes) up to which [`Accel::closest_many`] and
 /// [`Accel::any_hit_many`] walk their rays one after another: such a tree stays in a core's
-/// L2 cache (1.25 MiB on the Ice Lake Xeon this was measured on, 0.5-2 MiB on current x86
-/// cores), where interleaving has no misses to overlap and costs 15-20 % (the Cornell box).
+/// L2 cache (1.25 MiB on the Ice Lake Xeon this was measured on), where interleaving has no
+/// misses to overlap and costs 12-18 % (`twopass bench rays scenes/cornell-box.toml`).
 pub const INTERLEAVE_MIN_BYTES: usize = 1 << 20;
 
 /// Relative padding of primitive bounds: a slab test can round a ray that passes exactly
@@ -236,7 +236,7 @@ impl Accel {
     /// [`Accel::closest`] for many rays: `hits[i]` for ray `i`, the same answers. Where the
     /// tree is larger than [`INTERLEAVE_MIN_BYTES`] the rays are walked several at a time,
     /// interleaved, so that one ray's cache misses overlap another's work: about 1.5x faster
-    /// than one ray after another for incoherent rays on a million triangles, about 15 %
+    /// than one ray after another for incoherent rays on a million triangles, about 20 %
     /// slower for coherent ones (camera rays). A smaller tree stays in the cache, where
     /// interleaving only costs: its rays are walked one after another.
     ///
@@ -244,13 +244,19 @@ impl Accel {
     /// When `hits` and `rays` differ in length.
     pub fn closest_many(&self, rays: &[Ray], hits: &mut [Option<TriangleHit>]) {
         assert_eq!(rays.len(), hits.len(), "one answer per ray");
-        if self.bvh.bytes() <= INTERLEAVE_MIN_BYTES {
+        if self.interleaves() {
+            self.closest_interleaved(rays, hits);
+        } else {
             for (hit, r) in hits.iter_mut().zip(rays) {
                 *hit = self.closest(r.origin, r.direction, r.t_max);
             }
-        } else {
-            self.closest_interleaved(rays, hits);
         }
+    }
+
+    /// Whether the many-ray calls interleave their rays: the tree is larger than
+    /// [`INTERLEAVE_MIN_BYTES`].
+    fn interleaves(&self) -> bool {
+        self.bvh.bytes() > INTERLEAVE_MIN_BYTES
     }
 
     /// [`Accel::closest_many`]'s interleaved walk, whatever the tree's size.
@@ -281,12 +287,12 @@ impl Accel {
     /// When `blocked` and `rays` differ in length.
     pub fn any_hit_many(&self, rays: &[Ray], blocked: &mut [bool]) {
         assert_eq!(rays.len(), blocked.len(), "one answer per ray");
-        if self.bvh.bytes() <= INTERLEAVE_MIN_BYTES {
+        if self.interleaves() {
+            self.any_hit_interleaved(rays, blocked);
+        } else {
             for (b, r) in blocked.iter_mut().zip(rays) {
                 *b = self.any_hit(r.origin, r.direction, r.t_max);
             }
-        } else {
-            self.any_hit_interleaved(rays, blocked);
         }
     }
 

@@ -36,9 +36,7 @@ impl TriPacket {
             ids: [0, 1, 2, 3].map(|lane| ids.get(lane).copied().unwrap_or(u32::MAX)),
         }
     }
-}
 
-impl TriPacket {
     /// Starts loading the packet's three cache lines (160 bytes from a 32-byte boundary).
     #[inline(always)]
     pub(super) fn prefetch(&self) {

@@ -1,5 +1,5 @@
 //! The BVH's read-only table (its nodes and triangle packets) in memory the OS may back with
-//! huge pages. A ray visits nodes and packets all over tables of tens of MB, so with 4 KiB pages
+//! huge pages. A ray visits nodes and packets all over a table of tens of MB, so with 4 KiB pages
 //! nearly every visit misses the TLB as well as the cache; on Linux, a table of at least
 //! [`HUGE_MIN`] bytes goes into an anonymous map advised to use transparent huge pages (2 MiB),
 //! as Embree's BVH gets too. The slice of the map is formed once and kept beside it, so an
@@ -74,9 +74,9 @@ type Units<'a> = &'a [Unit];
 
 self_cell!(
     /// The tree's nodes and triangle packets in one table of [`Unit`]s, each node followed by
-    /// the packets of its leaves (the layout Embree's allocator gives its trees): the packets
-    /// a node leads to lie in the same memory page as the node, often in the lines right after
-    /// it, where the hardware's prefetchers find them.
+    /// the packets of its leaves (the layout Embree's allocator gives its trees). Measured
+    /// against two separate tables, nodes and packets, it is as fast (1M triangles, in one
+    /// process: 0.98-1.00x); the walk prefetches what it reads next either way.
     pub(super) struct Arena {
         owner: Store<Unit>,
         #[covariant]

@@ -43,7 +43,8 @@ const XOR_PERMUTE: [[u8; 256]; 8] = {
 /// One 8-wide node: its children's boxes (the binary tree's boxes, exact unions of the padded
 /// triangle boxes) and what each child is: an inner node, a leaf (one triangle packet), or empty.
 /// In the built tree ([`WideBvh`]) children are named by where they start in its arena (in
-/// [`Unit`](super::table::Unit)s); while building, by their index in the builder's node and packet lists.
+/// [`Unit`](super::table::Unit)s); while building, by their index in the builder's node and
+/// packet lists.
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub(super) struct WideNode {
@@ -198,8 +199,9 @@ impl WideNode {
 /// table starts on one).
 pub(super) struct WideBvh {
     pub(super) arena: Arena,
-    /// Numbers of nodes and packets.
+    /// Number of nodes.
     pub(super) nodes: usize,
+    /// Number of packets (leaves).
     pub(super) packets: usize,
     /// The most entries the traversal stack can hold at once: over every path from the root,
     /// the sum of the inner children pushed beside the one descended into.

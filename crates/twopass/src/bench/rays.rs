@@ -1,9 +1,8 @@
 //! `twopass bench rays`: ray queries per second (camera, incoherent, occlusion) on one and on
 //! all threads, one ray at a time and through the many-ray calls, and the BVH build time. It
 //! measures the accelerator's queries ([`Accel::closest`], [`Accel::any_hit`] and their
-//! many-ray forms)
-//! as another engine's are measured: the hit's shading data that `Scene::intersect` adds
-//! (normals, material) is not part of a ray query.
+//! many-ray forms) as another engine's are measured: the hit's shading data that
+//! `Scene::intersect` adds (normals, material) is not part of a ray query.
 
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -127,7 +126,7 @@ impl Batch {
 
     /// Casts `rays` through the many-ray calls ([`Accel::closest_many`],
     /// [`Accel::any_hit_many`]); returns how many hit.
-    fn cast_interleaved(&self, accel: &Accel, rays: &[Ray]) -> usize {
+    fn cast_many(&self, accel: &Accel, rays: &[Ray]) -> usize {
         match self {
             Self::Closest(_) => {
                 let mut hits = vec![None; rays.len()];
@@ -145,10 +144,10 @@ impl Batch {
     /// Casts the whole batch once, in chunks of [`CHUNK`] rays (one rayon job each when
     /// `parallel`), one ray at a time or through the many-ray calls; returns how many rays
     /// hit.
-    fn cast(&self, accel: &Accel, parallel: bool, interleaved: bool) -> usize {
+    fn cast(&self, accel: &Accel, parallel: bool, many: bool) -> usize {
         let chunk = |c: &[Ray]| {
-            if interleaved {
-                self.cast_interleaved(accel, c)
+            if many {
+                self.cast_many(accel, c)
             } else {
                 c.iter().filter(|r| self.cast_one(accel, r)).count()
             }
@@ -166,14 +165,14 @@ impl Batch {
         &self,
         accel: &Accel,
         parallel: bool,
-        interleaved: bool,
+        many: bool,
         min: Duration,
     ) -> (f64, f64) {
-        let hits = self.cast(accel, parallel, interleaved); // warm-up, also the hit count
+        let hits = self.cast(accel, parallel, many); // warm-up, also the hit count
         let start = Instant::now();
         let mut passes = 0usize;
         while passes == 0 || start.elapsed() < min {
-            std::hint::black_box(self.cast(accel, parallel, interleaved));
+            std::hint::black_box(self.cast(accel, parallel, many));
             passes += 1;
         }
         let rate = (passes * self.len()) as f64 / start.elapsed().as_secs_f64();
@@ -318,9 +317,9 @@ pub fn run(args: &RaysArgs, ctx: &Context) -> Result<(), CliError> {
         reset_peak_memory();
         let mut rates = [[0.0; 2]; 2];
         let mut hit = 0.0;
-        for (interleaved, rates) in [false, true].into_iter().zip(&mut rates) {
+        for (many, rates) in [false, true].into_iter().zip(&mut rates) {
             for (parallel, rate) in [false, true].into_iter().zip(rates.iter_mut()) {
-                (*rate, hit) = batch.measure(scene.accel(), parallel, interleaved, min);
+                (*rate, hit) = batch.measure(scene.accel(), parallel, many, min);
                 progress.inc(1);
             }
         }
