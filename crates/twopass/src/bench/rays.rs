@@ -161,13 +161,7 @@ impl Batch {
     }
 
     /// Rays per second (casting repeatedly for at least `min`) and the hit fraction.
-    fn measure(
-        &self,
-        accel: &Accel,
-        parallel: bool,
-        many: bool,
-        min: Duration,
-    ) -> (f64, f64) {
+    fn measure(&self, accel: &Accel, parallel: bool, many: bool, min: Duration) -> (f64, f64) {
         let hits = self.cast(accel, parallel, many); // warm-up, also the hit count
         let start = Instant::now();
         let mut passes = 0usize;
