@@ -15,6 +15,10 @@ pub(super) const MAX_INVERSE: f32 = 1e20;
 /// at build time, [`WideBvh::stack_need`]) traverses with a heap stack of the exact size.
 const INLINE_STACK: usize = 64;
 
+/// A smaller stack on the call stack for trees that need no more (most: a walk pushes only
+/// the inner children beside the one it descends into), since a stack is zeroed per ray.
+const SMALL_STACK: usize = 16;
+
 /// `XOR_PERMUTE[o][m]` moves bit `c` of `m` to bit `c ^ o`. The builder places a node's
 /// children in slots such that, for a ray whose octant is `o` (bit 2 set for x >= 0, bit 1
 /// for y, bit 0 for z), descending `slot ^ o` is roughly front to back.
@@ -297,9 +301,13 @@ impl WideBvh {
         if self.nodes == 0 {
             return;
         }
-        obvhs::fast_stack!((u32, f32), (INLINE_STACK), self.stack_need, stack, {
-            self.walk_with(&mut stack, ray, t_max, ordered, &mut leaf)
-        });
+        obvhs::fast_stack!(
+            (u32, f32),
+            (SMALL_STACK, INLINE_STACK),
+            self.stack_need,
+            stack,
+            { self.walk_with(&mut stack, ray, t_max, ordered, &mut leaf) }
+        );
     }
 
     /// Visits, in no particular order, the leaves of every node whose box `overlap` keeps
@@ -313,27 +321,33 @@ impl WideBvh {
         if self.nodes == 0 {
             return false;
         }
-        obvhs::fast_stack!(u32, (INLINE_STACK), self.stack_need + 1, stack, {
-            stack.push(0);
-            while let Some(node) = stack.pop() {
-                let n = self.arena.node(node);
-                let kept = overlap(n);
-                let mut leaves = kept & u32::from(n.leaf);
-                while leaves != 0 {
-                    let c = leaves.trailing_zeros() as usize;
-                    leaves &= leaves - 1;
-                    if leaf(n.child[c] as usize, (n.lanes >> (4 * c)) & 0xf) {
-                        return true;
+        obvhs::fast_stack!(
+            u32,
+            (SMALL_STACK, INLINE_STACK),
+            self.stack_need + 1,
+            stack,
+            {
+                stack.push(0);
+                while let Some(node) = stack.pop() {
+                    let n = self.arena.node(node);
+                    let kept = overlap(n);
+                    let mut leaves = kept & u32::from(n.leaf);
+                    while leaves != 0 {
+                        let c = leaves.trailing_zeros() as usize;
+                        leaves &= leaves - 1;
+                        if leaf(n.child[c] as usize, (n.lanes >> (4 * c)) & 0xf) {
+                            return true;
+                        }
+                    }
+                    let mut inner = kept & u32::from(n.inner);
+                    while inner != 0 {
+                        stack.push(n.child[inner.trailing_zeros() as usize]);
+                        inner &= inner - 1;
                     }
                 }
-                let mut inner = kept & u32::from(n.inner);
-                while inner != 0 {
-                    stack.push(n.child[inner.trailing_zeros() as usize]);
-                    inner &= inner - 1;
-                }
+                false
             }
-            false
-        })
+        )
     }
 
     /// The walk of `count` rays at once ([`WideBvh::walk`] for each): [`INTERLEAVE`] rays are
@@ -556,6 +570,118 @@ impl NodeRay {
             octant: usize::from(inv[0] >= 0.0) << 2
                 | usize::from(inv[1] >= 0.0) << 1
                 | usize::from(inv[2] >= 0.0),
+        }
+    }
+}
+
+#[cfg(test)]
+mod stack_tests {
+    use glam::Vec3;
+
+    use super::{INLINE_STACK, SMALL_STACK};
+    use crate::accel::{Accel, Ray};
+    use crate::workload::rng;
+
+    /// The unit cube split into 3 x 3 x 3 cells: a cluster of eight triangles in each cell but
+    /// the one at the origin, and in that one the same again, `levels` deep. Each level gives a walk many inner
+    /// children to push beside the one it descends into, so the tree's stack need grows with
+    /// `levels`.
+    fn nested(levels: usize, seed: u64) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+        let mut r = rng(seed);
+        let mut positions = Vec::new();
+        let mut side = 1.0f32;
+        for _ in 0..levels {
+            let cell = side / 3.0;
+            for k in 0..27u32 {
+                let at = Vec3::new((k % 3) as f32, (k / 3 % 3) as f32, (k / 9) as f32) * cell;
+                if k == 0 {
+                    continue;
+                }
+                for _ in 0..8 {
+                    let mut point =
+                        || at + Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) * cell * 0.8;
+                    positions.extend([point(), point(), point()]);
+                }
+            }
+            side = cell;
+        }
+        let triangles = (0..positions.len() as u32 / 3)
+            .map(|i| [3 * i, 3 * i + 1, 3 * i + 2])
+            .collect();
+        (positions, triangles)
+    }
+
+    /// Every stack the walks choose by the tree's stack need (a small and a larger one on the
+    /// call stack, else one on the heap) holds what the walk pushes: on trees whose need lies
+    /// in each range, closest hits match the brute force, any-hit and the interleaved walks
+    /// agree with it, and a walk that keeps every child visits every triangle exactly once.
+    #[test]
+    fn every_stack_size_holds_the_walk() {
+        for (levels, need) in [
+            (1, 1..=SMALL_STACK),
+            (4, SMALL_STACK + 1..=INLINE_STACK),
+            (11, INLINE_STACK + 1..=usize::MAX),
+        ] {
+            let (positions, triangles) = nested(levels, levels as u64);
+            let accel = Accel::build(&positions, &triangles);
+            assert!(
+                need.contains(&accel.bvh.stack_need),
+                "{levels} levels: stack need {} outside {need:?}",
+                accel.bvh.stack_need
+            );
+            let mut seen = vec![0u32; triangles.len()];
+            let stopped = accel.bvh.any_leaf(
+                |_| 0xff,
+                |p, lanes| {
+                    let ids = accel.bvh.arena.packet(p as u32).ids;
+                    for (lane, &id) in ids.iter().enumerate() {
+                        if lanes & (1 << lane) != 0 {
+                            seen[id as usize] += 1;
+                        }
+                    }
+                    false
+                },
+            );
+            assert!(!stopped);
+            assert!(
+                seen.iter().all(|&s| s == 1),
+                "{levels} levels: a triangle not visited once"
+            );
+            let mut r = rng(99);
+            let mut rays = Vec::new();
+            for _ in 0..2000 {
+                let origin = Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) * 1.4 - 0.2;
+                let target = if r.next_f32() < 0.5 {
+                    // Toward the deepest levels, near the corner the boxes nest in.
+                    Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) * 1e-3
+                } else {
+                    positions[(r.next_u64() % positions.len() as u64) as usize]
+                };
+                rays.push(Ray::new(origin, target - origin));
+            }
+            let mut woven = vec![None; rays.len()];
+            accel.closest_interleaved(&rays, &mut woven);
+            let mut woven_blocked = vec![false; rays.len()];
+            accel.any_hit_interleaved(&rays, &mut woven_blocked);
+            for (i, ray) in rays.iter().enumerate() {
+                let slow = Accel::closest_brute_force(
+                    &positions,
+                    &triangles,
+                    ray.origin,
+                    ray.direction,
+                    ray.t_max,
+                );
+                let fast = accel.closest(ray.origin, ray.direction, ray.t_max);
+                assert_eq!(
+                    fast.map(|h| h.t),
+                    slow.map(|h| h.t),
+                    "{levels} levels, ray {i}"
+                );
+                assert_eq!(woven[i], fast, "{levels} levels, ray {i}");
+                let blocked = accel.any_hit(ray.origin, ray.direction, ray.t_max);
+                assert_eq!(blocked, slow.is_some(), "{levels} levels, ray {i}");
+                assert_eq!(woven_blocked[i], blocked, "{levels} levels, ray {i}");
+            }
         }
     }
 }
