@@ -708,7 +708,7 @@ fn shaft_culling_changes_nothing_but_the_rays_cast() {
 #[test]
 fn visibility_keeps_its_coarse_samples_and_stays_unbiased() {
     use twopass_radiosity::VisibilityRays;
-    use twopass_radiosity::form_factor::visibility;
+    use twopass_radiosity::form_factor::{Shooter, visibility};
     // A receiving floor at z = 0 and a light triangle of half-width `r` at height `z`, facing
     // down, symmetric about x = 0; `extra` objects between them.
     let room = |z: f64, r: f64, extra: &str| {
@@ -722,13 +722,13 @@ fn visibility_keeps_its_coarse_samples_and_stays_unbiased() {
     let blocker = "[[object]]\nname = \"blocker\"\nmaterial = \"w\"\nshape = { type = \"quad\", origin = [-3, -3, 0.5], edge_u = [3, 0, 0], edge_v = [0, 6, 0] }\n";
     let s = room(1.0, 1.0, blocker);
     assert_eq!(s.mesh.triangles.len(), 5);
-    let shooter = s.mesh.corners(4).map(|c| c.as_dvec3());
+    let shooter = Shooter::new(&s, s.mesh.corners(4).map(|c| c.as_dvec3()), 4);
     let from = s.mesh.surface_point_at(0, glam::Vec3::ZERO);
     let rays = VisibilityRays { min: 4, max: 16 };
     let seeds = 4000;
     let mut sum = 0.0;
     for seed in 0..seeds {
-        let (v, cast) = visibility(&s, &from, glam::Vec3::Z, shooter, 4, rays, seed);
+        let (v, cast) = visibility(&s, &from, glam::Vec3::Z, &shooter, rays, seed);
         assert_eq!(cast, 16, "seed {seed}");
         assert_eq!((v * 16.0).fract(), 0.0, "seed {seed}: {v}");
         sum += v;
@@ -739,8 +739,8 @@ fn visibility_keeps_its_coarse_samples_and_stays_unbiased() {
     assert!((mean - 0.5).abs() < 0.01, "mean visibility {mean}");
     // Far from a small shooter, four open rays settle it.
     let far = room(10.0, 0.1, "");
-    let shooter = far.mesh.corners(2).map(|c| c.as_dvec3());
+    let shooter = Shooter::new(&far, far.mesh.corners(2).map(|c| c.as_dvec3()), 2);
     let from = far.mesh.surface_point_at(0, glam::Vec3::ZERO);
-    let settled = visibility(&far, &from, glam::Vec3::Z, shooter, 2, rays, 7);
+    let settled = visibility(&far, &from, glam::Vec3::Z, &shooter, rays, 7);
     assert_eq!(settled, (1.0, 4));
 }

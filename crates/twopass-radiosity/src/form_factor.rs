@@ -180,30 +180,61 @@ pub fn patches_clear(
     )
 }
 
-/// The visible fraction of shooter triangle `shooter` (corners, scene triangle `shooter_tri`)
-/// from receiver `from`, by stratified shadow rays. Samples behind the receiver's plane do not
-/// count. Starts with `rays.min` rays and goes to `rays.max` when they disagree or when the
-/// receiver is closer than twice the shooter's size; when the finer grid nests the coarser
-/// (4 and 16 rays: 2 x 2 and 4 x 4), the coarse samples are kept as samples of the fine grid,
-/// and only the fine strata without one get a ray. Deterministic for a `seed`. Returns the
-/// fraction and the number of shadow rays cast.
+/// A shooter triangle prepared for [`visibility`]: its corners and scene triangle, and what
+/// every estimate from it needs (the corners' barycentrics on the scene triangle, its longest
+/// edge and centroid), computed once per shooter instead of once per receiver.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Shooter {
+    /// Corners, scene units.
+    pub corners: [DVec3; 3],
+    /// The scene triangle the shooter lies on.
+    pub triangle: u32,
+    /// Barycentrics of each corner on the scene triangle.
+    barycentric: [[f64; 3]; 3],
+    /// Longest edge, scene units.
+    size: f64,
+    /// Centroid, scene units.
+    centroid: DVec3,
+}
+
+impl Shooter {
+    /// The shooter with corners `corners` on scene triangle `triangle` of `scene`.
+    pub fn new(scene: &Scene, corners: [DVec3; 3], triangle: u32) -> Self {
+        Self {
+            corners,
+            triangle,
+            barycentric: corners.map(|c| scene.mesh.barycentric(triangle, c)),
+            size: (corners[1] - corners[0])
+                .length()
+                .max((corners[2] - corners[0]).length())
+                .max((corners[2] - corners[1]).length()),
+            centroid: (corners[0] + corners[1] + corners[2]) / 3.0,
+        }
+    }
+}
+
+/// The visible fraction of `shooter` from receiver `from`, by stratified shadow rays. Samples
+/// behind the receiver's plane do not count. Starts with `rays.min` rays and goes to `rays.max`
+/// when they disagree or when the receiver is closer than twice the shooter's size; when the
+/// finer grid nests the coarser (4 and 16 rays: 2 x 2 and 4 x 4), the coarse samples are kept
+/// as samples of the fine grid, and only the fine strata without one get a ray. Deterministic
+/// for a `seed`. Returns the fraction and the number of shadow rays cast.
 pub fn visibility(
     scene: &Scene,
     from: &SurfacePoint,
     receiver_normal: Vec3,
-    shooter: [DVec3; 3],
-    shooter_tri: u32,
+    shooter: &Shooter,
     rays: VisibilityRays,
     seed: u64,
 ) -> (f64, u64) {
     let x = from.position.as_dvec3();
-    // Barycentrics of the shooter's corners on its scene triangle.
-    let corners = shooter.map(|c| scene.mesh.barycentric(shooter_tri, c));
-    let size = (shooter[1] - shooter[0])
-        .length()
-        .max((shooter[2] - shooter[0]).length())
-        .max((shooter[2] - shooter[1]).length());
-    let centroid = (shooter[0] + shooter[1] + shooter[2]) / 3.0;
+    let Shooter {
+        corners: shooter,
+        triangle: shooter_tri,
+        barycentric: corners,
+        size,
+        centroid,
+    } = *shooter;
     let near = (centroid - x).length() < 2.0 * size;
     // One shadow ray to a point of stratum (i, j) of the shooter's k x k grid, jittered by `h`:
     // `None` when the point is behind the receiver's plane (it does not count), else whether

@@ -554,6 +554,7 @@ impl<'s> Progressive<'s> {
         // solve 1.09x slower at 4-16 rays a pair and 1.24x at one ray (`twopass bake
         // --visibility-rays`); on coarse meshes, without hulls, it saves 4-6 %.
         let vertex_shafts = self.options.shaft_culling && self.options.visibility.coarse() > 1;
+        let prepared = form_factor::Shooter::new(self.scene, shooter, shooter_tri);
         let results: Vec<(f32, u64)> = vertices
             .par_iter()
             .with_min_len(64)
@@ -584,8 +585,7 @@ impl<'s> Progressive<'s> {
                     self.scene,
                     from,
                     vert.normal,
-                    shooter,
-                    shooter_tri,
+                    &prepared,
                     self.options.visibility,
                     seed,
                 );
