@@ -231,7 +231,7 @@ pub fn visibility(
     let Shooter {
         corners: shooter,
         triangle: shooter_tri,
-        barycentric: corners,
+        barycentric,
         size,
         centroid,
     } = *shooter;
@@ -246,8 +246,9 @@ pub fn visibility(
         }
         // The sample's barycentrics on the scene triangle, from the corners' (the map is
         // affine), instead of solving for them per ray.
-        let b = [0, 1, 2]
-            .map(|c| (corners[0][c] * w[0] + corners[1][c] * w[1] + corners[2][c] * w[2]) as f32);
+        let b = [0, 1, 2].map(|c| {
+            (barycentric[0][c] * w[0] + barycentric[1][c] * w[1] + barycentric[2][c] * w[2]) as f32
+        });
         let target = scene.mesh.surface_point(shooter_tri, b);
         Some(!scene.occluded_between(from, &target))
     };

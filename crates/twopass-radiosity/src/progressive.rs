@@ -543,9 +543,12 @@ impl<'s> Progressive<'s> {
     /// patch), never on scheduling.
     fn form_factors(&self, p: usize, vertices: &[usize]) -> (Vec<f32>, u64) {
         let node = self.mesh.nodes[self.mesh.patches[p] as usize];
-        let shooter = self.mesh.corners(self.mesh.patches[p]);
-        let shooter_tri = node.scene_triangle;
-        let ns = self.scene.mesh.geometric_normals[shooter_tri as usize].as_dvec3();
+        let shooter = form_factor::Shooter::new(
+            self.scene,
+            self.mesh.corners(self.mesh.patches[p]),
+            node.scene_triangle,
+        );
+        let ns = self.scene.mesh.geometric_normals[shooter.triangle as usize].as_dvec3();
         let hulls = self.patch_hulls(p, vertices);
         // A vertex's own shaft test costs about what one shadow ray does, and where its
         // patch's hull was tested and found blocked it rarely clears more: it pays only for
@@ -554,15 +557,18 @@ impl<'s> Progressive<'s> {
         // solve 1.09x slower at 4-16 rays a pair and 1.24x at one ray (`twopass bake
         // --visibility-rays`); on coarse meshes, without hulls, it saves 4-6 %.
         let vertex_shafts = self.options.shaft_culling && self.options.visibility.coarse() > 1;
-        let prepared = form_factor::Shooter::new(self.scene, shooter, shooter_tri);
         let results: Vec<(f32, u64)> = vertices
             .par_iter()
             .with_min_len(64)
             .map(|&v| {
                 let vert = &self.mesh.vertices[v];
                 let x = self.receiving_point(v);
-                let f =
-                    form_factor::point_to_polygon(x, vert.normal.as_dvec3(), &shooter, Some(ns));
+                let f = form_factor::point_to_polygon(
+                    x,
+                    vert.normal.as_dvec3(),
+                    &shooter.corners,
+                    Some(ns),
+                );
                 if f <= 0.0 || !self.options.occlusion {
                     return (f as f32, 0);
                 }
@@ -577,7 +583,7 @@ impl<'s> Progressive<'s> {
                 if hull == PAIR_CLEAR
                     || hull == PAIR_UNKNOWN
                         && vertex_shafts
-                        && form_factor::shaft_clear(self.scene, from, shooter)
+                        && form_factor::shaft_clear(self.scene, from, shooter.corners)
                 {
                     return (f as f32, 0);
                 }
@@ -585,7 +591,7 @@ impl<'s> Progressive<'s> {
                     self.scene,
                     from,
                     vert.normal,
-                    &prepared,
+                    &shooter,
                     self.options.visibility,
                     seed,
                 );

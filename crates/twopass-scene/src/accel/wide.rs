@@ -583,20 +583,17 @@ mod stack_tests {
     use crate::workload::rng;
 
     /// The unit cube split into 3 x 3 x 3 cells: a cluster of eight triangles in each cell but
-    /// the one at the origin, and in that one the same again, `levels` deep. Each level gives a walk many inner
-    /// children to push beside the one it descends into, so the tree's stack need grows with
-    /// `levels`.
+    /// the one at the origin, and in that one the same again, `levels` deep. Each level gives a
+    /// walk many inner children to push beside the one it descends into, so the tree's stack
+    /// need grows with `levels`.
     fn nested(levels: usize, seed: u64) -> (Vec<Vec3>, Vec<[u32; 3]>) {
         let mut r = rng(seed);
         let mut positions = Vec::new();
         let mut side = 1.0f32;
         for _ in 0..levels {
             let cell = side / 3.0;
-            for k in 0..27u32 {
+            for k in 1..27u32 {
                 let at = Vec3::new((k % 3) as f32, (k / 3 % 3) as f32, (k / 9) as f32) * cell;
-                if k == 0 {
-                    continue;
-                }
                 for _ in 0..8 {
                     let mut point =
                         || at + Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) * cell * 0.8;
