@@ -56,6 +56,18 @@ impl Boundable for Padded {
         self.aabb
     }
 }
+/// The nearest hit a closest-hit walk has found so far (its `t` is the walk's `t_max`).
+#[derive(Clone, Copy)]
+struct Nearest {
+    /// Where its packet starts in the tree's arena.
+    packet: u32,
+    /// Its lane in the packet.
+    lane: usize,
+    /// Scene triangle index.
+    id: u32,
+    barycentric: [f32; 3],
+}
+
 /// The result of a closest-hit query: which triangle, where along the ray, barycentrics.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TriangleHit {
@@ -162,12 +174,13 @@ impl Accel {
         self.bvh.nodes
     }
 
-    /// The closest hit with `0 < t < t_max`, if any.
+    /// The closest hit with `0 < t < t_max`, if any; of hits at the same `t` (a ray through an
+    /// edge or vertex that triangles share), the one with the smallest triangle index, as
+    /// [`Accel::closest_brute_force`] finds, whatever order the walk meets them in.
     pub fn closest(&self, origin: Vec3, direction: Vec3, t_max: f32) -> Option<TriangleHit> {
         let sheared = PacketRay::new(&ShearedRay::new(origin, direction));
         let ray = NodeRay::new(origin, direction);
-        // Packet, lane, barycentrics of the nearest hit so far; its t is `t_max`.
-        let mut best: Option<(usize, usize, [f32; 3])> = None;
+        let mut best = None;
         let mut t_max = t_max;
         self.bvh.walk(
             &ray,
@@ -175,17 +188,52 @@ impl Accel {
             true,
             #[inline(always)]
             |p, lanes, t_max| {
-                let hits = sheared.intersect(self.bvh.arena.packet(p as u32), lanes, *t_max);
-                if hits.mask != 0 {
-                    let lane = hits.nearest();
-                    *t_max = hits.t[lane];
-                    best = Some((p, lane, hits.barycentric(lane)));
-                }
+                self.nearer(&sheared, p as u32, lanes, t_max, &mut best);
                 false
             },
         );
-        let (p, lane, barycentric) = best?;
-        Some(self.hit(p as u32, lane, t_max, barycentric))
+        best.map(|b| self.hit(b, t_max))
+    }
+
+    /// Tests lanes `lanes` of packet `p` against `ray` and keeps in `best` (its `t` is
+    /// `t_max`) the nearer of it and the packet's nearest hit, at equal `t` the one with the
+    /// smaller triangle index. Once there is a hit, triangles are tested up to a few ulps
+    /// beyond it, so that one at exactly its `t` is not rounded away by the test's early
+    /// rejection; the comparison here then decides.
+    #[inline(always)]
+    fn nearer(
+        &self,
+        ray: &PacketRay,
+        p: u32,
+        lanes: u32,
+        t_max: &mut f32,
+        best: &mut Option<Nearest>,
+    ) {
+        let packet = self.bvh.arena.packet(p);
+        let bound = if best.is_some() {
+            t_max.next_up().next_up().next_up().next_up()
+        } else {
+            *t_max
+        };
+        let hits = ray.intersect(packet, lanes, bound);
+        if hits.mask == 0 {
+            return;
+        }
+        let lane = hits.nearest(&packet.ids);
+        let (t, id) = (hits.t[lane], packet.ids[lane]);
+        let closer = match best {
+            None => true,
+            Some(b) => t < *t_max || (t == *t_max && id < b.id),
+        };
+        if closer {
+            *t_max = t;
+            *best = Some(Nearest {
+                packet: p,
+                lane,
+                id,
+                barycentric: hits.barycentric(lane),
+            });
+        }
     }
 
     /// What an interleaved walk starts ray `r` with: the ray as the node and packet tests see
@@ -199,14 +247,14 @@ impl Accel {
         )
     }
 
-    /// The hit on lane `lane` of packet `p` at `t`.
-    fn hit(&self, p: u32, lane: usize, t: f32, barycentric: [f32; 3]) -> TriangleHit {
-        let packet = self.bvh.arena.packet(p);
-        let v = &packet.v;
+    /// The hit `best` at `t`.
+    fn hit(&self, best: Nearest, t: f32) -> TriangleHit {
+        let packet = self.bvh.arena.packet(best.packet);
+        let (v, lane) = (&packet.v, best.lane);
         TriangleHit {
-            triangle: packet.ids[lane],
+            triangle: best.id,
             t,
-            barycentric,
+            barycentric: best.barycentric,
             corners: [0, 1, 2].map(|i| Vec3::new(v[0][i][lane], v[1][i][lane], v[2][i][lane])),
         }
     }
@@ -267,15 +315,10 @@ impl Accel {
             |i| Self::walk_start(&rays[i], None),
             #[inline(always)]
             |(sheared, best), p, lanes, t_max| {
-                let found = sheared.intersect(self.bvh.arena.packet(p), lanes, *t_max);
-                if found.mask != 0 {
-                    let lane = found.nearest();
-                    *t_max = found.t[lane];
-                    *best = Some((p, lane, found.barycentric(lane)));
-                }
+                self.nearer(sheared, p, lanes, t_max, best);
                 false
             },
-            |i, t, (_, best)| hits[i] = best.map(|(p, lane, b)| self.hit(p, lane, t, b)),
+            |i, t, (_, best)| hits[i] = best.map(|b| self.hit(b, t)),
         );
     }
 

@@ -56,13 +56,15 @@ pub(super) struct PacketHits {
 }
 
 impl PacketHits {
-    /// The lane with the smallest `t` among the hits (there must be one).
-    pub(super) fn nearest(&self) -> usize {
+    /// The lane with the smallest `t` among the hits (there must be one), and of lanes at
+    /// equal `t` the one with the smallest triangle index (`ids`, the packet's), so that the
+    /// answer does not depend on the order a walk meets triangles in.
+    pub(super) fn nearest(&self, ids: &[u32; 4]) -> usize {
         let mut best = self.mask.trailing_zeros() as usize;
         let mut rest = self.mask & (self.mask - 1);
         while rest != 0 {
             let lane = rest.trailing_zeros() as usize;
-            if self.t[lane] < self.t[best] {
+            if (self.t[lane], ids[lane]) < (self.t[best], ids[best]) {
                 best = lane;
             }
             rest &= rest - 1;
