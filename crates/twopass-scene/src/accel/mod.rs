@@ -56,6 +56,7 @@ impl Boundable for Padded {
         self.aabb
     }
 }
+
 /// The nearest hit a closest-hit walk has found so far (its `t` is the walk's `t_max`).
 #[derive(Clone, Copy)]
 struct Nearest {
@@ -65,6 +66,7 @@ struct Nearest {
     lane: usize,
     /// Scene triangle index.
     id: u32,
+    /// Barycentric weights of the triangle's vertices 0, 1, 2.
     barycentric: [f32; 3],
 }
 
@@ -221,11 +223,7 @@ impl Accel {
         }
         let lane = hits.nearest(&packet.ids);
         let (t, id) = (hits.t[lane], packet.ids[lane]);
-        let closer = match best {
-            None => true,
-            Some(b) => t < *t_max || (t == *t_max && id < b.id),
-        };
-        if closer {
+        if best.is_none_or(|b| t < *t_max || (t == *t_max && id < b.id)) {
             *t_max = t;
             *best = Some(Nearest {
                 packet: p,
