@@ -396,3 +396,42 @@ fn shaft_clear_between_facing_squares() {
     let in_plane = quad("b", [-1.0, 0.0, 0.2], [0.0, 0.0, 0.5], [0.9, 0.0, 0.0]);
     assert!(clear(&room(&in_plane)));
 }
+
+/// Rays from far outside the scene, aimed exactly at a closed mesh's vertices and edge
+/// midpoints (a long lens on a small object): the box test's rounding grows with the ray's
+/// origin, not only with the scene's size, and must still never cull the triangles met there.
+/// Every such ray hits, and hits what testing every triangle hits.
+#[test]
+fn rays_from_far_away_hit_what_they_aim_at() {
+    let text = "version = 1\n[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\nfov_y = 40\n\
+                [[material]]\nname = \"w\"\ntype = \"lambert\"\ndiffuse = 0.5\n\
+                [[object]]\nname = \"s\"\nmaterial = \"w\"\nshape = { type = \"sphere\", center = [0.1, -0.2, 0.3], radius = 1.7, subdivisions = 3 }\n";
+    let (scene, _) = load_toml(text, std::path::Path::new("sphere.toml")).unwrap();
+    let m = &scene.mesh;
+    let mut targets: Vec<Vec3> = m.positions.clone();
+    for t in &m.triangles {
+        for k in 0..3 {
+            targets.push((m.positions[t[k] as usize] + m.positions[t[(k + 1) % 3] as usize]) * 0.5);
+        }
+    }
+    let mut r = rng(17);
+    for distance in [1e2f32, 1e3, 1e4, 1e5] {
+        let mut rays = Vec::new();
+        for target in &targets {
+            // From the side the target faces, so the ray meets the sphere there first.
+            let out = (*target - Vec3::new(0.1, -0.2, 0.3)).normalize();
+            let o = *target + (out + random_dir(&mut r) * 0.5).normalize() * distance;
+            rays.push(Ray::new(o, *target - o));
+        }
+        for (i, ray) in rays.iter().enumerate() {
+            assert!(
+                scene
+                    .accel()
+                    .closest(ray.origin, ray.direction, ray.t_max)
+                    .is_some(),
+                "from {distance}: ray {i} {ray:?} missed"
+            );
+        }
+        assert_bvh_equals_brute_force(&scene, &rays);
+    }
+}

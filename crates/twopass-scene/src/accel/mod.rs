@@ -21,8 +21,7 @@ use std::time::{Duration, Instant};
 
 use glam::{Vec3, Vec3A};
 use obvhs::{
-    Boundable, BvhBuildParams, aabb::Aabb, bvh2::reinsertion::ReinsertionOptimizer,
-    ploc::PlocBuilder,
+    BvhBuildParams, aabb::Aabb, bvh2::reinsertion::ReinsertionOptimizer, ploc::PlocBuilder,
 };
 
 use collapse::collapse;
@@ -40,22 +39,6 @@ use wide::{NodeRay, WideBvh};
 /// L2 cache (1.25 MiB on the Ice Lake Xeon this was measured on), where interleaving has no
 /// misses to overlap and costs 12-18 % (`twopass bench rays scenes/cornell-box.toml`).
 pub const INTERLEAVE_MIN_BYTES: usize = 1 << 20;
-
-/// Relative padding of primitive bounds: a slab test can round a ray that passes exactly
-/// through a box's corner or edge (a triangle vertex on the box face) to a miss. Boxes grow by
-/// this fraction of the scene's extent, far above the few ulps of rounding.
-const BOX_PADDING: f32 = 1e-5;
-
-/// A triangle as the BVH builder sees it: its bounds, padded.
-struct Padded {
-    aabb: Aabb,
-}
-
-impl Boundable for Padded {
-    fn aabb(&self) -> Aabb {
-        self.aabb
-    }
-}
 
 /// The nearest hit a closest-hit walk has found so far (its `t` is the walk's `t_max`).
 #[derive(Clone, Copy)]
@@ -122,23 +105,13 @@ impl Accel {
             .iter()
             .map(|t| t.map(|i| Vec3A::from(positions[i as usize])))
             .collect();
-        let (lo, hi) = corners.iter().flatten().fold(
-            (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY)),
-            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
-        );
-        let extent = if corners.is_empty() {
-            0.0
-        } else {
-            (hi - lo).length() + lo.abs().max(hi.abs()).max_element()
-        };
-        let pad = Vec3A::splat(BOX_PADDING * extent);
-        let boxes: Vec<Padded> = corners
+        // Each triangle's exact bounds: the node test allows for its own rounding
+        // (`wide::FAR_SLACK`), so boxes need no padding.
+        let boxes: Vec<Aabb> = corners
             .iter()
-            .map(|c| Padded {
-                aabb: Aabb {
-                    min: c[0].min(c[1]).min(c[2]) - pad,
-                    max: c[0].max(c[1]).max(c[2]) + pad,
-                },
+            .map(|c| Aabb {
+                min: c[0].min(c[1]).min(c[2]),
+                max: c[0].max(c[1]).max(c[2]),
             })
             .collect();
         let mut packets = Vec::new();

@@ -11,6 +11,18 @@ use super::table::{Arena, NODE_UNITS, PACKET_UNITS, prefetch, write_units};
 /// Largest inverse direction component: finite, so the slab test never forms 0 * inf.
 pub(super) const MAX_INVERSE: f32 = 1e20;
 
+/// Factor on a box's exit distance (and on `t_max` where an entry distance is compared with
+/// it), so that rounding never culls a box the ray meets. The slab distances `(p - origin) *
+/// inverse` are each within `gamma(3)` of their exact values, relative (pbrt-v4's
+/// `Bounds3::IntersectP` scales by `1 + 2 * gamma(3)`, 3 `f32::EPSILON`); this is 16, which
+/// also covers a hit's `t` (a closest-hit walk's `t_max`) a few ulps short of the exact entry
+/// of a box holding a triangle hit at that same point. Relative, the slack holds for any
+/// scene size and any distance of the ray's origin, and it never turns a negative exit (a box
+/// behind the origin, such as that of the surface a ray leaves) positive. The walk's tests
+/// (`accel::wide`, `accel::collapse`, the workspace's `accel` suite) fail with 1.0 and pass
+/// from `1 + 2 * f32::EPSILON`.
+pub(super) const FAR_SLACK: f32 = 1.0 + 16.0 * f32::EPSILON;
+
 /// Depth of the traversal stack kept on the call stack; a tree that could need more (checked
 /// at build time, [`WideBvh::stack_need`]) traverses with a heap stack of the exact size.
 const INLINE_STACK: usize = 64;
@@ -44,8 +56,8 @@ const XOR_PERMUTE: [[u8; 256]; 8] = {
     table
 };
 
-/// One 8-wide node: its children's boxes (the binary tree's boxes, exact unions of the padded
-/// triangle boxes) and what each child is: an inner node, a leaf (one triangle packet), or empty.
+/// One 8-wide node: its children's boxes (the binary tree's boxes, exact unions of the
+/// triangles' boxes) and what each child is: an inner node, a leaf (one triangle packet), or empty.
 /// In the built tree ([`WideBvh`]) children are named by where they start in its arena (in
 /// [`Unit`](super::table::Unit)s); while building, by their index in the builder's node and
 /// packet lists.
@@ -178,15 +190,15 @@ impl WideNode {
                 let n = b[4 * axis + ray.near[axis] + half];
                 let f = b[4 * axis + (2 - ray.near[axis]) + half];
                 (
-                    n.mul_add(ray.inv[axis], ray.neg_origin_inv[axis]),
-                    f.mul_add(ray.inv[axis], ray.neg_origin_inv[axis]),
+                    (n - ray.origin[axis]) * ray.inv[axis],
+                    (f - ray.origin[axis]) * ray.inv[axis],
                 )
             };
             let (nx, fx) = slab(0);
             let (ny, fy) = slab(1);
             let (nz, fz) = slab(2);
             let t_near = nx.max(ny).max(nz.max(Vec4::ZERO));
-            let t_far = fx.min(fy).min(fz.min(t_max));
+            let t_far = fx.min(fy).min(fz.min(t_max)) * Vec4::splat(FAR_SLACK);
             mask |= t_near.cmple(t_far).bitmask() << (4 * half);
             *near = t_near;
         }
@@ -410,7 +422,7 @@ impl WideBvh {
                 while node.is_none() && !stop && w.depth > 0 {
                     w.depth -= 1;
                     let (child, t) = stack[w.depth];
-                    if t <= w.t_max {
+                    if t <= w.t_max * FAR_SLACK {
                         node = Some(child);
                     }
                 }
@@ -500,7 +512,7 @@ impl WideBvh {
                     let Some((child, t)) = stack.pop() else {
                         return;
                     };
-                    if t <= *t_max {
+                    if t <= *t_max * FAR_SLACK {
                         break child;
                     }
                 },
@@ -529,17 +541,18 @@ struct Walker<P> {
     pending_count: usize,
 }
 
-/// The ray as the node test sees it: inverse direction and `-origin * inverse` splatted per
-/// axis, so that a plane at `p` is met at `t = p * inv - origin * inv`, one fused
-/// multiply-add (its rounding, like that of `(p - origin) * inv`, is a few ulps of the
-/// coordinates, far inside the boxes' padding), and for each axis which side of a box the ray
-/// enters first. Negative zeros in the direction become positive and inverses are clamped to
+/// The ray as the node test sees it: origin and inverse direction splatted per axis, so that a
+/// plane at `p` is met at `t = (p - origin) * inv`, within a few ulps of `t` itself whatever
+/// the coordinates' size (the test allows for it with [`FAR_SLACK`]; the fused `p * inv -
+/// origin * inv` would err by ulps of `origin * inv`, which a ray from far away makes larger
+/// than the distances it compares), and for each axis which side of a box the ray enters
+/// first. Negative zeros in the direction become positive and inverses are clamped to
 /// [`MAX_INVERSE`], so no slab ever forms 0 * inf; the entry side is chosen from the sign of
 /// the inverse itself, so near and far always agree with it (a mismatch would cull every box).
 pub(super) struct NodeRay {
     pub(super) inv: [Vec4; 3],
-    /// `-origin * inv` per axis, splatted.
-    pub(super) neg_origin_inv: [Vec4; 3],
+    /// The origin per axis, splatted.
+    pub(super) origin: [Vec4; 3],
     /// 0 when the ray enters through the box minimum on this axis, 2 through the maximum.
     pub(super) near: [usize; 3],
     /// The direction's octant as the builder orders children by: bit 2 set for x >= 0, bit 1 for
@@ -561,10 +574,10 @@ impl NodeRay {
         let inv = [inv(d.x), inv(d.y), inv(d.z)];
         Self {
             inv: inv.map(Vec4::splat),
-            neg_origin_inv: [
-                Vec4::splat(-origin.x * inv[0]),
-                Vec4::splat(-origin.y * inv[1]),
-                Vec4::splat(-origin.z * inv[2]),
+            origin: [
+                Vec4::splat(origin.x),
+                Vec4::splat(origin.y),
+                Vec4::splat(origin.z),
             ],
             near: inv.map(|i| if i < 0.0 { 2 } else { 0 }),
             octant: usize::from(inv[0] >= 0.0) << 2
