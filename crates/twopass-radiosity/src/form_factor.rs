@@ -28,13 +28,70 @@ pub(crate) const RECEIVER_INSET: f64 = 1e-5;
 /// receiver touches the polygon (an edge through `x` contributes nothing), unlike the disc
 /// approximation, and is exact for any distance.
 pub fn point_to_polygon(x: DVec3, n: DVec3, poly: &[DVec3], shooter_normal: Option<DVec3>) -> f64 {
+    let (centroid, reach) = centroid_and_reach(poly);
+    prepared_point_to_polygon(x, n, poly, centroid, reach, shooter_normal)
+}
+
+/// A polygon's centroid (the mean of its vertices) and its reach (the largest distance of a
+/// vertex from the centroid), as [`point_to_polygon`] measures "in the polygon's plane" by.
+fn centroid_and_reach(poly: &[DVec3]) -> (DVec3, f64) {
     let centroid = poly.iter().sum::<DVec3>() / poly.len() as f64;
-    let size = poly
+    let reach = poly
         .iter()
         .map(|p| (*p - centroid).length())
         .fold(0.0, f64::max);
+    (centroid, reach)
+}
+
+/// A triangle prepared as the source of many point form factors: [`point_to_polygon`] to it,
+/// bit for bit, from any number of points, with what every evaluation needs (its centroid and
+/// reach) computed once.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SourceTriangle {
+    /// Corners, scene units.
+    pub corners: [DVec3; 3],
+    /// The mean of the corners, scene units.
+    centroid: DVec3,
+    /// Largest distance of a corner from the centroid, scene units.
+    reach: f64,
+}
+
+impl SourceTriangle {
+    /// The triangle with corners `corners`.
+    pub fn new(corners: [DVec3; 3]) -> Self {
+        let (centroid, reach) = centroid_and_reach(&corners);
+        Self {
+            corners,
+            centroid,
+            reach,
+        }
+    }
+
+    /// [`point_to_polygon`] from `x` (unit normal `n`) to this triangle: the unoccluded form
+    /// factor, one-sided when `shooter_normal` is given.
+    pub fn form_factor(&self, x: DVec3, n: DVec3, shooter_normal: Option<DVec3>) -> f64 {
+        prepared_point_to_polygon(
+            x,
+            n,
+            &self.corners,
+            self.centroid,
+            self.reach,
+            shooter_normal,
+        )
+    }
+}
+
+/// [`point_to_polygon`] with the polygon's centroid and reach given.
+fn prepared_point_to_polygon(
+    x: DVec3,
+    n: DVec3,
+    poly: &[DVec3],
+    centroid: DVec3,
+    reach: f64,
+    shooter_normal: Option<DVec3>,
+) -> f64 {
     if let Some(ns) = shooter_normal
-        && (x - centroid).dot(ns) <= PLANE_TOLERANCE * (size + (x - centroid).length())
+        && (x - centroid).dot(ns) <= PLANE_TOLERANCE * (reach + (x - centroid).length())
     {
         return 0.0;
     }
@@ -52,7 +109,11 @@ pub fn point_to_polygon(x: DVec3, n: DVec3, poly: &[DVec3], shooter_normal: Opti
     };
     let h = |p: DVec3| {
         let d = (p - x).dot(n);
-        if d.abs() <= PLANE_TOLERANCE * (p - x).length() {
+        // Far off the plane (|p - x| is at most sqrt(3) times its largest component, and 1.75
+        // leaves room for rounding) no square root decides it.
+        if d.abs() > (1.75 * PLANE_TOLERANCE) * (p - x).abs().max_element() {
+            d
+        } else if d.abs() <= PLANE_TOLERANCE * (p - x).length() {
             0.0
         } else {
             d
@@ -180,35 +241,33 @@ pub fn patches_clear(
     )
 }
 
-/// A shooter triangle prepared for [`visibility`]: its corners and scene triangle, and what
-/// every estimate from it needs (the corners' barycentrics on the scene triangle, its longest
-/// edge and centroid), computed once per shooter instead of once per receiver.
+/// A shooter triangle prepared for [`visibility`] and its form factors: its corners and scene
+/// triangle, and what every estimate from it needs (the corners' barycentrics on the scene
+/// triangle, its longest edge, centroid and reach), computed once per shooter instead of once
+/// per receiver.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Shooter {
-    /// Corners, scene units.
-    pub corners: [DVec3; 3],
+    /// Its corners, as the source of point form factors.
+    pub source: SourceTriangle,
     /// The scene triangle the shooter lies on.
     pub triangle: u32,
     /// Barycentrics of each corner on the scene triangle.
     barycentric: [[f64; 3]; 3],
     /// Longest edge, scene units.
     size: f64,
-    /// Centroid, scene units.
-    centroid: DVec3,
 }
 
 impl Shooter {
     /// The shooter with corners `corners` on scene triangle `triangle` of `scene`.
     pub fn new(scene: &Scene, corners: [DVec3; 3], triangle: u32) -> Self {
         Self {
-            corners,
+            source: SourceTriangle::new(corners),
             triangle,
             barycentric: corners.map(|c| scene.mesh.barycentric(triangle, c)),
             size: (corners[1] - corners[0])
                 .length()
                 .max((corners[2] - corners[0]).length())
                 .max((corners[2] - corners[1]).length()),
-            centroid: (corners[0] + corners[1] + corners[2]) / 3.0,
         }
     }
 }
@@ -229,11 +288,15 @@ pub fn visibility(
 ) -> (f64, u64) {
     let x = from.position.as_dvec3();
     let Shooter {
-        corners: shooter,
+        source:
+            SourceTriangle {
+                corners: shooter,
+                centroid,
+                ..
+            },
         triangle: shooter_tri,
         barycentric,
         size,
-        centroid,
     } = *shooter;
     let near = (centroid - x).length() < 2.0 * size;
     // One shadow ray to a point of stratum (i, j) of the shooter's k x k grid, jittered by `h`:

@@ -1085,9 +1085,8 @@ impl<'s> HierarchicalSolver<'s> {
     /// receiver area).
     fn surface_transport(&self, p: u32, q: u32) -> ([f64; 7], f64, f64) {
         let (x, n) = self.receiving_points(p);
-        let (poly, ns) = self.source_polygon(q);
-        let f: [f64; 7] =
-            std::array::from_fn(|i| form_factor::point_to_polygon(x[i], n[i], &poly, Some(ns)));
+        let (source, ns) = self.source_polygon(q);
+        let f: [f64; 7] = std::array::from_fn(|i| source.form_factor(x[i], n[i], Some(ns)));
         // The corners keep their exact point values; the receiver's area-averaged form factor
         // sets the light it gets (interpolating a curved F linearly would lose or add light
         // with a consistent sign), by the seven-point rule exact for cubics (corners 1/20, edge
@@ -1112,16 +1111,16 @@ impl<'s> HierarchicalSolver<'s> {
     /// receiving corners.
     fn corner_form_factors(&self, p: u32, q: u32) -> [f64; 3] {
         let (x, n) = self.receiving_points(p);
-        let (poly, ns) = self.source_polygon(q);
-        std::array::from_fn(|i| form_factor::point_to_polygon(x[i], n[i], &poly, Some(ns)))
+        let (source, ns) = self.source_polygon(q);
+        std::array::from_fn(|i| source.form_factor(x[i], n[i], Some(ns)))
     }
 
     /// Surface node `q` as a source polygon: its corners and its scene triangle's normal.
-    fn source_polygon(&self, q: u32) -> ([DVec3; 3], DVec3) {
+    fn source_polygon(&self, q: u32) -> (form_factor::SourceTriangle, DVec3) {
         let ns = self.scene.mesh.geometric_normals
             [self.mesh.nodes[q as usize].scene_triangle as usize]
             .as_dvec3();
-        (self.mesh.corners(q), ns)
+        (form_factor::SourceTriangle::new(self.mesh.corners(q)), ns)
     }
 
     /// Transport, error estimate and visibility of the link `s -> r`, with `rays` shadow rays.

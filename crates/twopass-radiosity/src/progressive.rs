@@ -57,8 +57,10 @@ pub struct Progressive<'s> {
     /// Per vertex: reflectance, emitted exitance E = pi L_e.
     rho: Vec<DVec3>,
     emission: Vec<DVec3>,
-    /// Per vertex: where its shadow rays start ([`Progressive::receiving_point`] with its error
-    /// bound on its scene triangle), computed once instead of once per shooter.
+    /// Per vertex: where it receives ([`Progressive::receiving_point`]), and there, with its
+    /// error bound on its scene triangle, where its shadow rays start; computed once instead of
+    /// once per shooter.
+    receiving: Vec<DVec3>,
     receivers: Vec<SurfacePoint>,
     /// Per vertex: irradiance received from emitted and from reflected light, W/m^2.
     received_emit: Vec<DVec3>,
@@ -279,6 +281,7 @@ impl<'s> Progressive<'s> {
             element_size,
             rho: Vec::new(),
             emission: Vec::new(),
+            receiving: Vec::new(),
             receivers: Vec::new(),
             received_emit: Vec::new(),
             received_refl: Vec::new(),
@@ -506,6 +509,7 @@ impl<'s> Progressive<'s> {
                 .diffuse_albedo()));
             self.emission.push(rgb(o.emission) * std::f64::consts::PI);
             let x = self.receiving_point(v);
+            self.receiving.push(x);
             self.receivers.push(
                 self.scene
                     .mesh
@@ -562,13 +566,10 @@ impl<'s> Progressive<'s> {
             .with_min_len(64)
             .map(|&v| {
                 let vert = &self.mesh.vertices[v];
-                let x = self.receiving_point(v);
-                let f = form_factor::point_to_polygon(
-                    x,
-                    vert.normal.as_dvec3(),
-                    &shooter.corners,
-                    Some(ns),
-                );
+                let x = self.receiving[v];
+                let f = shooter
+                    .source
+                    .form_factor(x, vert.normal.as_dvec3(), Some(ns));
                 if f <= 0.0 || !self.options.occlusion {
                     return (f as f32, 0);
                 }
@@ -583,7 +584,7 @@ impl<'s> Progressive<'s> {
                 if hull == PAIR_CLEAR
                     || hull == PAIR_UNKNOWN
                         && vertex_shafts
-                        && form_factor::shaft_clear(self.scene, from, shooter.corners)
+                        && form_factor::shaft_clear(self.scene, from, shooter.source.corners)
                 {
                     return (f as f32, 0);
                 }
