@@ -183,23 +183,36 @@ fn spawned_rays_never_rehit_their_own_surface() {
     }
 }
 
-#[test]
-fn rays_from_inside_a_closed_mesh_never_escape() {
-    // An icosphere has shared vertices and edges everywhere: aim exactly at them.
-    let text = "version = 1\n[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\nfov_y = 40\n\
-                [[material]]\nname = \"w\"\ntype = \"lambert\"\ndiffuse = 0.5\n\
-                [[object]]\nname = \"s\"\nmaterial = \"w\"\nshape = { type = \"sphere\", center = [0.1, -0.2, 0.3], radius = 1.7, subdivisions = 4 }\n";
-    let (scene, _) = load_toml(text, std::path::Path::new("sphere.toml")).unwrap();
+/// Centre of [`icosphere_targets`]'s sphere.
+const SPHERE_CENTRE: Vec3 = Vec3::new(0.1, -0.2, 0.3);
+
+/// A scene of one icosphere (radius 1.7 about [`SPHERE_CENTRE`], `subdivisions` deep), and the
+/// points where its triangles meet: every vertex and every edge midpoint. An icosphere has
+/// shared vertices and edges everywhere; rays aimed exactly at them find any gap.
+fn icosphere_targets(subdivisions: u32) -> (Scene, Vec<Vec3>) {
+    let text = format!(
+        "version = 1\n[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\nfov_y = 40\n\
+         [[material]]\nname = \"w\"\ntype = \"lambert\"\ndiffuse = 0.5\n\
+         [[object]]\nname = \"s\"\nmaterial = \"w\"\nshape = {{ type = \"sphere\", \
+         center = [0.1, -0.2, 0.3], radius = 1.7, subdivisions = {subdivisions} }}\n"
+    );
+    let (scene, _) = load_toml(&text, std::path::Path::new("sphere.toml")).unwrap();
     let m = &scene.mesh;
-    let mut r = rng(9);
     let mut targets: Vec<Vec3> = m.positions.clone();
     for t in &m.triangles {
         for k in 0..3 {
             targets.push((m.positions[t[k] as usize] + m.positions[t[(k + 1) % 3] as usize]) * 0.5);
         }
     }
+    (scene, targets)
+}
+
+#[test]
+fn rays_from_inside_a_closed_mesh_never_escape() {
+    let (scene, targets) = icosphere_targets(4);
+    let mut r = rng(9);
     for (i, target) in targets.iter().enumerate() {
-        let o = Vec3::new(0.1, -0.2, 0.3) + random_dir(&mut r) * r.next_f32() * 0.5;
+        let o = SPHERE_CENTRE + random_dir(&mut r) * r.next_f32() * 0.5;
         let d = (*target - o).normalize();
         assert!(
             scene.intersect(&Ray::new(o, d)).is_some(),
@@ -403,23 +416,13 @@ fn shaft_clear_between_facing_squares() {
 /// Every such ray hits, and hits what testing every triangle hits.
 #[test]
 fn rays_from_far_away_hit_what_they_aim_at() {
-    let text = "version = 1\n[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\nfov_y = 40\n\
-                [[material]]\nname = \"w\"\ntype = \"lambert\"\ndiffuse = 0.5\n\
-                [[object]]\nname = \"s\"\nmaterial = \"w\"\nshape = { type = \"sphere\", center = [0.1, -0.2, 0.3], radius = 1.7, subdivisions = 3 }\n";
-    let (scene, _) = load_toml(text, std::path::Path::new("sphere.toml")).unwrap();
-    let m = &scene.mesh;
-    let mut targets: Vec<Vec3> = m.positions.clone();
-    for t in &m.triangles {
-        for k in 0..3 {
-            targets.push((m.positions[t[k] as usize] + m.positions[t[(k + 1) % 3] as usize]) * 0.5);
-        }
-    }
+    let (scene, targets) = icosphere_targets(3);
     let mut r = rng(17);
     for distance in [1e2f32, 1e3, 1e4, 1e5] {
         let mut rays = Vec::new();
         for target in &targets {
             // From the side the target faces, so the ray meets the sphere there first.
-            let out = (*target - Vec3::new(0.1, -0.2, 0.3)).normalize();
+            let out = (*target - SPHERE_CENTRE).normalize();
             let o = *target + (out + random_dir(&mut r) * 0.5).normalize() * distance;
             rays.push(Ray::new(o, *target - o));
         }
