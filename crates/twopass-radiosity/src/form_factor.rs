@@ -108,12 +108,13 @@ fn prepared_point_to_polygon(
         &mut heap
     };
     let h = |p: DVec3| {
-        let d = (p - x).dot(n);
-        // Far off the plane (|p - x| is at most sqrt(3) times its largest component, and 1.75
+        let r = p - x;
+        let d = r.dot(n);
+        // Far off the plane (|r| is at most sqrt(3) times its largest component, and 1.75
         // leaves room for rounding) no square root decides it.
-        if d.abs() > (1.75 * PLANE_TOLERANCE) * (p - x).abs().max_element() {
+        if d.abs() > (1.75 * PLANE_TOLERANCE) * r.abs().max_element() {
             d
-        } else if d.abs() <= PLANE_TOLERANCE * (p - x).length() {
+        } else if d.abs() <= PLANE_TOLERANCE * r.length() {
             0.0
         } else {
             d

@@ -1115,7 +1115,8 @@ impl<'s> HierarchicalSolver<'s> {
         std::array::from_fn(|i| source.form_factor(x[i], n[i], Some(ns)))
     }
 
-    /// Surface node `q` as a source polygon: its corners and its scene triangle's normal.
+    /// Surface node `q` as a source of point form factors (its corners, prepared) and its scene
+    /// triangle's unit normal.
     fn source_polygon(&self, q: u32) -> (form_factor::SourceTriangle, DVec3) {
         let ns = self.scene.mesh.geometric_normals
             [self.mesh.nodes[q as usize].scene_triangle as usize]
