@@ -230,6 +230,7 @@ mod tests {
     use glam::{Vec3, Vec3A};
 
     use super::LEAF_SIZE;
+    use crate::accel::wide::HOT_BYTES;
     use crate::accel::{Accel, Ray, TriangleHit};
     use crate::workload::rng;
 
@@ -297,8 +298,13 @@ mod tests {
     }
 
     /// Builds the accelerator and checks the whole tree; every triangle is in exactly one leaf.
-    fn build_and_check(positions: &[Vec3], triangles: &[[u32; 3]]) -> Accel {
-        let accel = Accel::build(positions, triangles);
+    fn build_and_check(positions: &[Vec3], triangles: &[[u32; 3]], hot_bytes: usize) -> Accel {
+        let accel = Accel::build_laid_out(
+            positions,
+            triangles,
+            obvhs::BvhBuildParams::medium_build(),
+            hot_bytes,
+        );
         let mut seen = vec![0; triangles.len()];
         if triangles.is_empty() {
             assert_eq!(accel.node_count(), 0);
@@ -359,7 +365,20 @@ mod tests {
         ];
         for (seed, &(count, scale, flat)) in cases.iter().enumerate() {
             let (positions, triangles) = soup(count, scale, flat, seed as u64);
-            let accel = build_and_check(&positions, &triangles);
+            let accel = build_and_check(&positions, &triangles, HOT_BYTES);
+            // The same tree with no top levels stored first (every interleaved turn one node),
+            // with only the first two or so (turns go on through them, then switch), and with
+            // every level first.
+            let laid_out =
+                [0, 6 << 10, usize::MAX].map(|hot| build_and_check(&positions, &triangles, hot));
+            if count == 2000 {
+                let ends = laid_out
+                    .each_ref()
+                    .map(|a| (a.bvh.hot_end as usize, a.bvh.arena.units().len()));
+                assert_eq!(ends[0].0, 0);
+                assert!(ends[1].0 > 0 && ends[1].0 < ends[1].1, "{ends:?}");
+                assert_eq!(ends[2].0, ends[2].1);
+            }
             let mut r = rng(1000 + seed as u64);
             // Every ray cast, and the brute force's answer: the many-ray walks must agree.
             let mut rays = Vec::new();
@@ -403,7 +422,10 @@ mod tests {
                 }
             }
             // Whole batches, and batches shorter than the rays a walk keeps in flight.
-            for n in [rays.len(), 0, 1, 7, 9] {
+            for (accel, n) in [&accel, &laid_out[0], &laid_out[1], &laid_out[2]]
+                .into_iter()
+                .flat_map(|a| [rays.len(), 0, 1, 7, 9].map(|n| (a, n)))
+            {
                 let n = n.min(rays.len());
                 // The public calls (one ray after another on these small trees) and the
                 // interleaved walks they use on large ones.

@@ -100,6 +100,17 @@ impl Accel {
     /// sizes and collapse costs do not (the 8-wide collapse chooses leaves of up to four
     /// triangles by its own costs).
     pub fn build_with(positions: &[Vec3], triangles: &[[u32; 3]], params: BvhBuildParams) -> Self {
+        Self::build_laid_out(positions, triangles, params, wide::HOT_BYTES)
+    }
+
+    /// [`Accel::build_with`], the tree's top levels stored first as far as they fit in
+    /// `hot_bytes`.
+    fn build_laid_out(
+        positions: &[Vec3],
+        triangles: &[[u32; 3]],
+        params: BvhBuildParams,
+        hot_bytes: usize,
+    ) -> Self {
         let start = Instant::now();
         let corners: Vec<[Vec3A; 3]> = triangles
             .iter()
@@ -116,7 +127,7 @@ impl Accel {
             .collect();
         let mut packets = Vec::new();
         let bvh = if boxes.is_empty() {
-            WideBvh::new(Vec::new(), &[])
+            WideBvh::new(Vec::new(), &[], hot_bytes)
         } else {
             let mut bvh2 = PlocBuilder::with_capacity(boxes.len()).build(
                 params.ploc_search_distance,
@@ -131,7 +142,7 @@ impl Accel {
                 packets.push(TriPacket::new(&tris, leaf));
                 (packets.len() - 1) as u32
             });
-            WideBvh::new(nodes, &packets)
+            WideBvh::new(nodes, &packets, hot_bytes)
         };
         Self {
             bvh,

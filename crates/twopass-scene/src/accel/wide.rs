@@ -207,12 +207,44 @@ impl WideNode {
         near[1].write_to_slice(&mut entry[4..]);
         (mask, entry)
     }
+
+    /// [`WideNode::intersect`] with both planes of each slab loaded from fixed places and
+    /// ordered by `min` / `max` instead of picked by the ray's direction: more operations, but
+    /// no load waits on the ray's data, which an interleaved walk reloads on every turn. The
+    /// same answers for every child, but an empty one (its box min +inf, max -inf spans every
+    /// distance here), which is neither inner nor leaf and so never visited.
+    #[inline(always)]
+    fn intersect_both_planes(&self, ray: &NodeRay, t_max: f32) -> (u32, [f32; 8]) {
+        let b = &self.bounds;
+        let t_max = Vec4::splat(t_max);
+        let mut mask = 0u32;
+        let mut near = [Vec4::ZERO; 2];
+        for (half, near) in near.iter_mut().enumerate() {
+            let slab = |axis: usize| {
+                let lo = (b[4 * axis + half] - ray.origin[axis]) * ray.inv[axis];
+                let hi = (b[4 * axis + 2 + half] - ray.origin[axis]) * ray.inv[axis];
+                (lo.min(hi), lo.max(hi))
+            };
+            let (nx, fx) = slab(0);
+            let (ny, fy) = slab(1);
+            let (nz, fz) = slab(2);
+            let t_near = nx.max(ny).max(nz.max(Vec4::ZERO));
+            let t_far = fx.min(fy).min(fz.min(t_max)) * Vec4::splat(FAR_SLACK);
+            mask |= t_near.cmple(t_far).bitmask() << (4 * half);
+            *near = t_near;
+        }
+        let mut entry = [0.0; 8];
+        near[0].write_to_slice(&mut entry[..4]);
+        near[1].write_to_slice(&mut entry[4..]);
+        (mask, entry)
+    }
 }
 
-/// The tree, laid out for the walk: node 0 (the root) at unit 0, and depth first from there,
-/// each node followed by its leaves' packets (in slot order), then its inner children's
-/// subtrees (in slot order). A node starts on an even unit (64 bytes: a cache line, since the
-/// table starts on one).
+/// The tree, laid out for the walk: the root at unit 0, then the rest of the top levels that
+/// fit in [`HOT_BYTES`] level by level (units before `hot_end`), then the subtrees below them
+/// depth first, each node followed by its leaves' packets (in slot order), then its inner
+/// children's subtrees (in slot order). A node starts on an even unit (64 bytes: a cache
+/// line, since the table starts on one).
 pub(super) struct WideBvh {
     pub(super) arena: Arena,
     /// Number of nodes.
@@ -222,7 +254,14 @@ pub(super) struct WideBvh {
     /// The most entries the traversal stack can hold at once: over every path from the root,
     /// the sum of the inner children pushed beside the one descended into.
     stack_need: usize,
+    /// Nodes that start before this unit are the tree's top levels (at most [`HOT_BYTES`]),
+    /// stored first.
+    pub(super) hot_end: u32,
 }
+
+/// Size of the tree's top levels that are stored first and that an interleaved walk goes
+/// through without switching rays, bytes (a part of a core's L2 cache).
+pub(super) const HOT_BYTES: usize = 128 << 10;
 
 impl WideBvh {
     /// The tree's memory (nodes and packets), bytes.
@@ -231,8 +270,10 @@ impl WideBvh {
     }
 
     /// The tree of `nodes` (the root first, every node before its children; children named by
-    /// their index in `nodes` or `packets`) and `packets`.
-    pub(super) fn new(nodes: Vec<WideNode>, packets: &[TriPacket]) -> Self {
+    /// their index in `nodes` or `packets`) and `packets`, its top levels stored first as far
+    /// as they fit in `hot_bytes` ([`HOT_BYTES`] for the trees [`Accel`](super::Accel) builds;
+    /// the tests vary it).
+    pub(super) fn new(nodes: Vec<WideNode>, packets: &[TriPacket], hot_bytes: usize) -> Self {
         // Children come after their parents, so one backward sweep sees every
         // child's need before its parent's.
         let mut need = vec![0usize; nodes.len()];
@@ -248,30 +289,77 @@ impl WideBvh {
                 .unwrap_or(0);
             need[i] = (n.inner.count_ones() as usize).saturating_sub(1) + deepest;
         }
-        // Depth first, inner children in slot order: where each node starts, then its
-        // packets right after it.
         let slots = |mask: u8| (0..8).filter(move |c| mask & (1 << c) != 0);
+        // The top levels, those that fit in `hot_bytes`, first, level by level: nearly every
+        // walk passes through them, so they stay in the cache, and an interleaved walk goes
+        // through them without switching rays (`hot_end`).
+        let mut level = vec![0usize; nodes.len()];
+        let mut per_level = Vec::new();
+        for (i, n) in nodes.iter().enumerate() {
+            if per_level.len() <= level[i] {
+                per_level.push(0usize);
+            }
+            per_level[level[i]] += 1 + n.leaf.count_ones() as usize;
+            for c in slots(n.inner) {
+                level[n.child[c] as usize] = level[i] + 1;
+            }
+        }
+        let mut hot_levels = 0;
+        let mut hot_units = 0;
+        for &items in &per_level {
+            // Counted generously: a packet as a node.
+            hot_units += items * NODE_UNITS;
+            if hot_units * 32 > hot_bytes {
+                break;
+            }
+            hot_levels += 1;
+        }
         let mut order = Vec::with_capacity(nodes.len());
-        let mut stack = if nodes.is_empty() {
-            vec![]
-        } else {
-            vec![0usize]
-        };
-        while let Some(i) = stack.pop() {
+        let mut top = std::collections::VecDeque::new();
+        if !nodes.is_empty() && hot_levels > 0 {
+            top.push_back(0usize);
+        }
+        let mut roots = Vec::new();
+        while let Some(i) = top.pop_front() {
             order.push(i);
             let n = &nodes[i];
-            stack.extend(slots(n.inner).rev().map(|c| n.child[c] as usize));
+            for c in slots(n.inner) {
+                let child = n.child[c] as usize;
+                if level[child] < hot_levels {
+                    top.push_back(child);
+                } else {
+                    roots.push(child);
+                }
+            }
+        }
+        let hot_nodes = order.len();
+        if !nodes.is_empty() && hot_levels == 0 {
+            roots.push(0);
+        }
+        // Below them depth first, inner children in slot order; each node's packets right
+        // after it.
+        for root in roots {
+            let mut stack = vec![root];
+            while let Some(i) = stack.pop() {
+                order.push(i);
+                let n = &nodes[i];
+                stack.extend(slots(n.inner).rev().map(|c| n.child[c] as usize));
+            }
         }
         let mut node_at = vec![0u32; nodes.len()];
         let mut packet_at = vec![0u32; packets.len()];
         let mut end = 0usize;
-        for &i in &order {
+        let mut hot_end = 0usize;
+        for (k, &i) in order.iter().enumerate() {
             end += end % 2;
             node_at[i] = end as u32;
             end += NODE_UNITS;
             for c in slots(nodes[i].leaf) {
                 packet_at[nodes[i].child[c] as usize] = end as u32;
                 end += PACKET_UNITS;
+            }
+            if k + 1 == hot_nodes {
+                hot_end = end;
             }
         }
         assert!(u32::try_from(end).is_ok(), "tree over 128 GiB");
@@ -289,6 +377,7 @@ impl WideBvh {
             write_units(&mut units, node_at[i] as usize, &n);
         }
         Self {
+            hot_end: hot_end as u32,
             stack_need: need.first().copied().unwrap_or(0),
             arena: Arena::of(units),
             nodes: nodes.len(),
@@ -366,7 +455,8 @@ impl WideBvh {
     /// walked in turn, one node each, and what a ray will read next (its next node, its
     /// leaves' packets) is prefetched when its turn ends, so that by its next turn it is in the
     /// cache: the cache misses of different rays overlap instead of each ray waiting on its
-    /// own. `start(i)` gives ray `i`'s node ray, its `t_max` and the state `leaf(state, packet,
+    /// own. Through the top levels (before `hot_end`, which every walk passes and the cache
+    /// keeps) a turn goes on descending until it finds leaves or leaves them. `start(i)` gives ray `i`'s node ray, its `t_max` and the state `leaf(state, packet,
     /// lanes, t_max)` tests a packet with (it may shorten `t_max`, and returns `true` to stop
     /// the ray's walk); `finish(i, t_max, state)` is called once per ray, in no particular
     /// order. Each ray meets the leaves the single-ray walk would, in the same order.
@@ -426,32 +516,40 @@ impl WideBvh {
                         node = Some(child);
                     }
                 }
-                let Some(node) = node else {
+                let Some(mut node) = node else {
                     if let Some(w) = slot.take() {
                         finish(w.index, w.t_max, w.state);
                     }
                     continue;
                 };
-                let n = self.arena.node(node);
-                let (hit, near) = n.intersect(&w.ray, w.t_max);
-                let mut leaves = hit & u32::from(n.leaf);
-                while leaves != 0 {
-                    let c = leaves.trailing_zeros() as usize;
-                    leaves &= leaves - 1;
-                    self.arena.packet(n.child[c]).prefetch();
-                    w.pending[w.pending_count] = (n.child[c], (n.lanes >> (4 * c)) & 0xf);
-                    w.pending_count += 1;
-                }
-                let inner = hit & u32::from(n.inner);
-                if inner != 0 {
-                    let next = n.descend(inner, &near, &w.ray, ordered, |entry| {
-                        stack[w.depth] = entry;
-                        w.depth += 1;
-                    });
-                    self.arena.node(next).prefetch();
-                    w.next = Some(next);
-                } else if w.depth > 0 {
-                    self.arena.node(stack[w.depth - 1].0).prefetch();
+                loop {
+                    let n = self.arena.node(node);
+                    let (hit, near) = n.intersect_both_planes(&w.ray, w.t_max);
+                    let mut leaves = hit & u32::from(n.leaf);
+                    while leaves != 0 {
+                        let c = leaves.trailing_zeros() as usize;
+                        leaves &= leaves - 1;
+                        self.arena.packet(n.child[c]).prefetch();
+                        w.pending[w.pending_count] = (n.child[c], (n.lanes >> (4 * c)) & 0xf);
+                        w.pending_count += 1;
+                    }
+                    let inner = hit & u32::from(n.inner);
+                    if inner != 0 {
+                        let next = n.descend(inner, &near, &w.ray, ordered, |entry| {
+                            stack[w.depth] = entry;
+                            w.depth += 1;
+                        });
+                        if next < self.hot_end && w.pending_count == 0 {
+                            // In the cache: go on with this ray.
+                            node = next;
+                            continue;
+                        }
+                        self.arena.node(next).prefetch();
+                        w.next = Some(next);
+                    } else if w.depth > 0 {
+                        self.arena.node(stack[w.depth - 1].0).prefetch();
+                    }
+                    break;
                 }
             }
             if !busy {
