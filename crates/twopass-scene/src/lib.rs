@@ -39,7 +39,10 @@ mod transform;
 mod unit;
 pub mod workload;
 
-pub use accel::{Accel, INTERLEAVE_MIN_BYTES, Ray, SHAFT_TOLERANCE, SurfacePoint, TriangleHit};
+pub use accel::{
+    Accel, COHERENT_ANGLE, COHERENT_ORIGINS, INTERLEAVE_MIN_BYTES, Ray, SHAFT_TOLERANCE,
+    SurfacePoint, TriangleHit,
+};
 pub use camera::Camera;
 pub use error::{CameraProblem, SceneError, Warning};
 pub use input::{

@@ -355,8 +355,9 @@ impl Scene {
     }
 
     /// [`Scene::intersect`] for many rays in parallel (rayon); results in input order. Each
-    /// thread walks its rays through [`Accel::closest_many`] (interleaved on large trees:
-    /// faster for incoherent rays, slower for coherent camera rays).
+    /// thread walks its rays through [`Accel::closest_many`] (interleaved on large trees,
+    /// where that is faster: unless the rays are coherent, such as camera rays in pixel
+    /// order).
     pub fn intersect_batch(&self, rays: &[Ray]) -> Vec<Option<Hit>> {
         let mut hits = vec![None; rays.len()];
         rays.par_chunks(BATCH_CHUNK)

@@ -9,9 +9,11 @@ loop) and alternates the two engines for `--rounds` rounds, so their ratio is me
 same machine load. It reports, per query kind, millions of rays per second on one thread and on
 `--threads` processes (each with its own copy of the scene, casting its share of the batch), the
 ratio twopass / Embree, build times, and how far the answers agree. twopass is measured twice:
-one ray at a time (`Accel::closest`, `Accel::any_hit`) and interleaved (`Accel::closest_many`,
+one ray at a time (`Accel::closest`, `Accel::any_hit`) and through the many-ray calls, the
+rows marked `many` (`Accel::closest_many`,
 `Accel::any_hit_many`: eight rays walked in turn, what each reads next prefetched, on trees
-over 1 MiB; smaller ones, which the generated rooms are not, walk one ray after another).
+over 1 MiB; smaller ones, which the generated rooms are not, and coherent batches such as the
+camera rays walk one ray after another).
 Embree is measured one ray at a time only: embreex binds `rtcIntersect1` / `rtcOccluded1` and none of
 Embree 4's packet calls (`rtcIntersect4/8/16`), and Embree 4 has no stream API.
 
@@ -191,15 +193,15 @@ def main():
         # embreex commits the scene on its first query.
         cast(scene, batches["camera"], 0, 1)
         embree_build = time.perf_counter() - start
-        results = {k: {"twopass_1": [], "twopass_n": [], "interleaved_1": [], "interleaved_n": [],
+        results = {k: {"twopass_1": [], "twopass_n": [], "many_1": [], "many_n": [],
                        "embree_1": [], "embree_n": []} for k in KINDS}
         for _ in range(args.rounds):
             _, rows = twopass(args, directory, export=False)
             for k in KINDS:
                 results[k]["twopass_1"].append(rows[k]["mrays_1"])
                 results[k]["twopass_n"].append(rows[k]["mrays_n"])
-                results[k]["interleaved_1"].append(rows[k]["many_mrays_1"])
-                results[k]["interleaved_n"].append(rows[k]["many_mrays_n"])
+                results[k]["many_1"].append(rows[k]["many_mrays_1"])
+                results[k]["many_n"].append(rows[k]["many_mrays_n"])
             for k in KINDS:
                 rate = measure(scene, batches[k], args.seconds)
                 results[k]["embree_1"].append(rate / 1e6)
@@ -221,7 +223,7 @@ def main():
     summary = []
     for k in KINDS:
         r = results[k]
-        for walk, prefix in (("single", "twopass"), ("interleaved", "interleaved")):
+        for walk, prefix in (("single", "twopass"), ("many", "many")):
             for t, suffix in (("1", "_1"), (str(args.threads), "_n")):
                 ours, theirs = r[prefix + suffix], r["embree" + suffix]
                 ratios = [x / y for x, y in zip(ours, theirs)]

@@ -40,6 +40,16 @@ use wide::{NodeRay, WideBvh};
 /// misses to overlap and costs 12-18 % (`twopass bench rays scenes/cornell-box.toml`).
 pub const INTERLEAVE_MIN_BYTES: usize = 1 << 20;
 
+/// Angle between two neighbouring rays' directions, radians, within which
+/// [`Accel::closest_many`] and [`Accel::any_hit_many`] count them as coherent (with
+/// [`COHERENT_ORIGINS`]): one degree, about 13 pixels of a 512-pixel-wide image at a 40-degree
+/// field of view.
+pub const COHERENT_ANGLE: f32 = std::f32::consts::PI / 180.0;
+
+/// Distance between two neighbouring rays' origins, as a fraction of the scene's diagonal,
+/// within which the many-ray calls count them as coherent (with [`COHERENT_ANGLE`]).
+pub const COHERENT_ORIGINS: f32 = 1e-3;
+
 /// The nearest hit a closest-hit walk has found so far (its `t` is the walk's `t_max`).
 #[derive(Clone, Copy)]
 struct Nearest {
@@ -265,16 +275,17 @@ impl Accel {
 
     /// [`Accel::closest`] for many rays: `hits[i]` for ray `i`, the same answers. Where the
     /// tree is larger than [`INTERLEAVE_MIN_BYTES`] the rays are walked several at a time,
-    /// interleaved, so that one ray's cache misses overlap another's work: about 1.5x faster
-    /// than one ray after another for incoherent rays on a million triangles, about 20 %
-    /// slower for coherent ones (camera rays). A smaller tree stays in the cache, where
-    /// interleaving only costs: its rays are walked one after another.
+    /// interleaved, so that one ray's cache misses overlap another's work: about 1.6x faster
+    /// than one ray after another for incoherent rays on a million triangles. A smaller tree
+    /// stays in the cache, and coherent rays (neighbours within [`COHERENT_ANGLE`] and
+    /// [`COHERENT_ORIGINS`] of each other, such as camera rays in pixel order) find their
+    /// nodes in it: interleaving would only cost, so such rays are walked one after another.
     ///
     /// # Panics
     /// When `hits` and `rays` differ in length.
     pub fn closest_many(&self, rays: &[Ray], hits: &mut [Option<TriangleHit>]) {
         assert_eq!(rays.len(), hits.len(), "one answer per ray");
-        if self.interleaves() {
+        if self.interleaves(rays) {
             self.closest_interleaved(rays, hits);
         } else {
             for (hit, r) in hits.iter_mut().zip(rays) {
@@ -283,10 +294,34 @@ impl Accel {
         }
     }
 
-    /// Whether the many-ray calls interleave their rays: the tree is larger than
-    /// [`INTERLEAVE_MIN_BYTES`].
-    fn interleaves(&self) -> bool {
-        self.bvh.bytes() > INTERLEAVE_MIN_BYTES
+    /// Whether the many-ray calls interleave `rays`: the tree is larger than
+    /// [`INTERLEAVE_MIN_BYTES`] and the rays are not [`Accel::coherent`].
+    fn interleaves(&self, rays: &[Ray]) -> bool {
+        self.bvh.bytes() > INTERLEAVE_MIN_BYTES && !self.coherent(rays)
+    }
+
+    /// Whether most of `rays` (three in four, of every fourth pair of neighbours) leave from
+    /// within [`COHERENT_ORIGINS`] of the scene's diagonal of the ray before them, in a
+    /// direction within [`COHERENT_ANGLE`] of it: camera rays in pixel order, say. Such rays
+    /// walk the same nodes one after another, which then stay in the cache, so interleaving
+    /// them only costs (0.89x on a million triangles, 0.78x on 102k, against one ray after
+    /// another).
+    fn coherent(&self, rays: &[Ray]) -> bool {
+        let Some((lo, hi)) = self.bvh.bounds() else {
+            return false;
+        };
+        let near = COHERENT_ORIGINS * (hi - lo).length();
+        let cos = COHERENT_ANGLE.cos();
+        let (mut pairs, mut close) = (0usize, 0usize);
+        for w in rays.windows(2).step_by(4) {
+            let (a, b) = (&w[0], &w[1]);
+            pairs += 1;
+            let lengths = a.direction.length() * b.direction.length();
+            if a.direction.dot(b.direction) > cos * lengths && a.origin.distance(b.origin) <= near {
+                close += 1;
+            }
+        }
+        pairs > 0 && 4 * close >= 3 * pairs
     }
 
     /// [`Accel::closest_many`]'s interleaved walk, whatever the tree's size.
@@ -305,14 +340,14 @@ impl Accel {
     }
 
     /// [`Accel::any_hit`] for many rays: `blocked[i]` for ray `i`, the same answers, walked
-    /// as [`Accel::closest_many`] walks its rays (interleaved on large trees: about 1.5x
-    /// faster on a million triangles).
+    /// as [`Accel::closest_many`] walks its rays (interleaved on large trees unless the rays
+    /// are coherent: about 1.6x faster on a million triangles).
     ///
     /// # Panics
     /// When `blocked` and `rays` differ in length.
     pub fn any_hit_many(&self, rays: &[Ray], blocked: &mut [bool]) {
         assert_eq!(rays.len(), blocked.len(), "one answer per ray");
-        if self.interleaves() {
+        if self.interleaves(rays) {
             self.any_hit_interleaved(rays, blocked);
         } else {
             for (b, r) in blocked.iter_mut().zip(rays) {
@@ -414,6 +449,35 @@ mod tests {
             Vec3::new(0.0, 1.0, 0.0),
         ];
         (p, vec![[0, 1, 2], [0, 2, 3]])
+    }
+
+    #[test]
+    fn camera_rays_are_coherent_and_bounces_and_shadow_rays_are_not() {
+        let scene = crate::workload::synthetic_scene(10_000, 0)
+            .expect("scene")
+            .0;
+        let accel = scene.accel();
+        assert!(accel.coherent(&crate::workload::camera_rays(&scene)));
+        assert!(!accel.coherent(&crate::workload::incoherent_rays(&scene, 1024, 1)));
+        let shadow: Vec<Ray> = crate::workload::occlusion_pairs(&scene, 1024, 2)
+            .iter()
+            .map(|(a, b)| crate::Scene::segment_between(a, b))
+            .collect();
+        assert!(!accel.coherent(&shadow));
+        // Rays from one point in random directions (a point light's) and parallel rays from
+        // scattered origins (a directional light's) are not either.
+        let spread = crate::workload::incoherent_rays(&scene, 1024, 3);
+        let from_one_point: Vec<Ray> = spread
+            .iter()
+            .map(|r| Ray::new(spread[0].origin, r.direction))
+            .collect();
+        assert!(!accel.coherent(&from_one_point));
+        let parallel: Vec<Ray> = spread
+            .iter()
+            .map(|r| Ray::new(r.origin, spread[0].direction))
+            .collect();
+        assert!(!accel.coherent(&parallel));
+        assert!(!accel.coherent(&[]));
     }
 
     #[test]

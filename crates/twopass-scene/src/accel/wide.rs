@@ -269,6 +269,27 @@ impl WideBvh {
         std::mem::size_of_val(self.arena.units())
     }
 
+    /// The box around every triangle (min, max), from the root's children; `None` for an
+    /// empty tree.
+    pub(super) fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        if self.nodes == 0 {
+            return None;
+        }
+        let b = &self.arena.node(0).bounds;
+        let side = |axis: usize, side: usize| {
+            let (a, c) = (b[4 * axis + 2 * side], b[4 * axis + 2 * side + 1]);
+            if side == 0 {
+                a.min(c).min_element()
+            } else {
+                a.max(c).max_element()
+            }
+        };
+        Some((
+            Vec3::new(side(0, 0), side(1, 0), side(2, 0)),
+            Vec3::new(side(0, 1), side(1, 1), side(2, 1)),
+        ))
+    }
+
     /// The tree of `nodes` (the root first, every node before its children; children named by
     /// their index in `nodes` or `packets`) and `packets`, its top levels stored first as far
     /// as they fit in `hot_bytes` ([`HOT_BYTES`] for the trees [`Accel`](super::Accel) builds;

@@ -44,7 +44,8 @@ pub struct RaysArgs {
 /// One measured ray query: rates on one and on all threads, one ray at a time
 /// ([`Accel::closest`], [`Accel::any_hit`]) and through the many-ray calls
 /// ([`Accel::closest_many`], [`Accel::any_hit_many`], in batches of [`CHUNK`] rays: interleaved
-/// where the tree is larger than [`twopass_scene::INTERLEAVE_MIN_BYTES`]).
+/// where the tree is larger than [`twopass_scene::INTERLEAVE_MIN_BYTES`] and the batch is not
+/// coherent, as camera rays are).
 #[derive(Debug, Serialize)]
 struct RayRow {
     query: &'static str,
