@@ -181,31 +181,7 @@ impl WideNode {
     /// entry distance.
     #[inline(always)]
     fn intersect(&self, ray: &NodeRay, t_max: f32) -> (u32, [f32; 8]) {
-        let b = &self.bounds;
-        let t_max = Vec4::splat(t_max);
-        let mut mask = 0u32;
-        let mut near = [Vec4::ZERO; 2];
-        for (half, near) in near.iter_mut().enumerate() {
-            let slab = |axis: usize| {
-                let n = b[4 * axis + ray.near[axis] + half];
-                let f = b[4 * axis + (2 - ray.near[axis]) + half];
-                (
-                    (n - ray.origin[axis]) * ray.inv[axis],
-                    (f - ray.origin[axis]) * ray.inv[axis],
-                )
-            };
-            let (nx, fx) = slab(0);
-            let (ny, fy) = slab(1);
-            let (nz, fz) = slab(2);
-            let t_near = nx.max(ny).max(nz.max(Vec4::ZERO));
-            let t_far = fx.min(fy).min(fz.min(t_max)) * Vec4::splat(FAR_SLACK);
-            mask |= t_near.cmple(t_far).bitmask() << (4 * half);
-            *near = t_near;
-        }
-        let mut entry = [0.0; 8];
-        near[0].write_to_slice(&mut entry[..4]);
-        near[1].write_to_slice(&mut entry[4..]);
-        (mask, entry)
+        self.slab_test::<false>(ray, t_max)
     }
 
     /// [`WideNode::intersect`] with both planes of each slab loaded from fixed places and
@@ -215,15 +191,27 @@ impl WideNode {
     /// distance here), which is neither inner nor leaf and so never visited.
     #[inline(always)]
     fn intersect_both_planes(&self, ray: &NodeRay, t_max: f32) -> (u32, [f32; 8]) {
+        self.slab_test::<true>(ray, t_max)
+    }
+
+    /// The slab test of [`WideNode::intersect`] (`BOTH_PLANES` false) and
+    /// [`WideNode::intersect_both_planes`] (true).
+    #[inline(always)]
+    fn slab_test<const BOTH_PLANES: bool>(&self, ray: &NodeRay, t_max: f32) -> (u32, [f32; 8]) {
         let b = &self.bounds;
         let t_max = Vec4::splat(t_max);
         let mut mask = 0u32;
         let mut near = [Vec4::ZERO; 2];
         for (half, near) in near.iter_mut().enumerate() {
             let slab = |axis: usize| {
-                let lo = (b[4 * axis + half] - ray.origin[axis]) * ray.inv[axis];
-                let hi = (b[4 * axis + 2 + half] - ray.origin[axis]) * ray.inv[axis];
-                (lo.min(hi), lo.max(hi))
+                let t =
+                    |plane: usize| (b[4 * axis + plane + half] - ray.origin[axis]) * ray.inv[axis];
+                if BOTH_PLANES {
+                    let (lo, hi) = (t(0), t(2));
+                    (lo.min(hi), lo.max(hi))
+                } else {
+                    (t(ray.near[axis]), t(2 - ray.near[axis]))
+                }
             };
             let (nx, fx) = slab(0);
             let (ny, fy) = slab(1);
