@@ -457,6 +457,14 @@ mod tests {
             .expect("scene")
             .0;
         let accel = scene.accel();
+        // The scene's extent, which the origins' distance is measured against: the root's
+        // children's boxes are the exact bounds of the triangles.
+        let corners = scene.mesh.triangles.iter().flatten();
+        let points = corners.map(|&i| scene.mesh.positions[i as usize]);
+        let (lo, hi) = points.fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(p), hi.max(p))
+        });
+        assert_eq!(accel.bvh.bounds(), Some((lo, hi)));
         assert!(accel.coherent(&crate::workload::camera_rays(&scene)));
         assert!(!accel.coherent(&crate::workload::incoherent_rays(&scene, 1024, 1)));
         let shadow: Vec<Ray> = crate::workload::occlusion_pairs(&scene, 1024, 2)

@@ -264,17 +264,14 @@ impl WideBvh {
             return None;
         }
         let b = &self.arena.node(0).bounds;
-        let side = |axis: usize, side: usize| {
-            let (a, c) = (b[4 * axis + 2 * side], b[4 * axis + 2 * side + 1]);
-            if side == 0 {
-                a.min(c).min_element()
-            } else {
-                a.max(c).max_element()
-            }
-        };
+        // The smallest child minimum and the largest child maximum on `axis`, both halves.
+        let (lo, hi) = (
+            |axis: usize| b[4 * axis].min(b[4 * axis + 1]).min_element(),
+            |axis: usize| b[4 * axis + 2].max(b[4 * axis + 3]).max_element(),
+        );
         Some((
-            Vec3::new(side(0, 0), side(1, 0), side(2, 0)),
-            Vec3::new(side(0, 1), side(1, 1), side(2, 1)),
+            Vec3::new(lo(0), lo(1), lo(2)),
+            Vec3::new(hi(0), hi(1), hi(2)),
         ))
     }
 
