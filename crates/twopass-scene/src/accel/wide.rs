@@ -321,11 +321,14 @@ impl WideBvh {
             hot_levels += 1;
         }
         let mut order = Vec::with_capacity(nodes.len());
-        let mut top = std::collections::VecDeque::new();
-        if !nodes.is_empty() && hot_levels > 0 {
-            top.push_back(0usize);
+        let (mut top, mut roots) = (std::collections::VecDeque::new(), Vec::new());
+        if !nodes.is_empty() {
+            if hot_levels > 0 {
+                top.push_back(0usize);
+            } else {
+                roots.push(0usize);
+            }
         }
-        let mut roots = Vec::new();
         while let Some(i) = top.pop_front() {
             order.push(i);
             let n = &nodes[i];
@@ -339,9 +342,6 @@ impl WideBvh {
             }
         }
         let hot_nodes = order.len();
-        if !nodes.is_empty() && hot_levels == 0 {
-            roots.push(0);
-        }
         // Below them depth first, inner children in slot order; each node's packets right
         // after it.
         for root in roots {
@@ -462,10 +462,10 @@ impl WideBvh {
     /// leaves' packets) is prefetched when its turn ends, so that by its next turn it is in the
     /// cache: the cache misses of different rays overlap instead of each ray waiting on its
     /// own. Through the top levels (before `hot_end`, which every walk passes and the cache
-    /// keeps) a turn goes on descending until it finds leaves or leaves them. `start(i)` gives ray `i`'s node ray, its `t_max` and the state `leaf(state, packet,
-    /// lanes, t_max)` tests a packet with (it may shorten `t_max`, and returns `true` to stop
-    /// the ray's walk); `finish(i, t_max, state)` is called once per ray, in no particular
-    /// order. Each ray meets the leaves the single-ray walk would, in the same order.
+    /// keeps) a turn goes on descending until it finds leaves or leaves them. `start(i)` gives
+    /// ray `i`'s node ray, its `t_max` and the state `leaf(state, packet, lanes, t_max)` tests
+    /// a packet with (it may shorten `t_max`, and returns `true` to stop the ray's walk);
+    /// `finish(i, t_max, state)` is called once per ray, in no particular order. Each ray meets the leaves the single-ray walk would, in the same order.
     pub(super) fn walk_many<P>(
         &self,
         count: usize,
