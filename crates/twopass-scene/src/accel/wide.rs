@@ -4,6 +4,7 @@
 
 use glam::{Vec3, Vec4};
 use obvhs::faststack::FastStack;
+use wide::f32x8;
 
 use super::packet::TriPacket;
 use super::table::{Arena, NODE_UNITS, PACKET_UNITS, prefetch, write_units};
@@ -195,36 +196,31 @@ impl WideNode {
     }
 
     /// The slab test of [`WideNode::intersect`] (`BOTH_PLANES` false) and
-    /// [`WideNode::intersect_both_planes`] (true).
+    /// [`WideNode::intersect_both_planes`] (true), on all eight children at once.
     #[inline(always)]
     fn slab_test<const BOTH_PLANES: bool>(&self, ray: &NodeRay, t_max: f32) -> (u32, [f32; 8]) {
-        let b = &self.bounds;
-        let t_max = Vec4::splat(t_max);
-        let mut mask = 0u32;
-        let mut near = [Vec4::ZERO; 2];
-        for (half, near) in near.iter_mut().enumerate() {
-            let slab = |axis: usize| {
-                let t =
-                    |plane: usize| (b[4 * axis + plane + half] - ray.origin[axis]) * ray.inv[axis];
-                if BOTH_PLANES {
-                    let (lo, hi) = (t(0), t(2));
-                    (lo.min(hi), lo.max(hi))
-                } else {
-                    (t(ray.near[axis]), t(2 - ray.near[axis]))
-                }
-            };
-            let (nx, fx) = slab(0);
-            let (ny, fy) = slab(1);
-            let (nz, fz) = slab(2);
-            let t_near = nx.max(ny).max(nz.max(Vec4::ZERO));
-            let t_far = fx.min(fy).min(fz.min(t_max)) * Vec4::splat(FAR_SLACK);
-            mask |= t_near.cmple(t_far).bitmask() << (4 * half);
-            *near = t_near;
-        }
-        let mut entry = [0.0; 8];
-        near[0].write_to_slice(&mut entry[..4]);
-        near[1].write_to_slice(&mut entry[4..]);
-        (mask, entry)
+        // `planes[2 * axis + side]`: the eight children's box minima (side 0) or maxima (1)
+        // on `axis`, child `c` in lane `c`.
+        let planes: &[[f32; 8]; 6] = bytemuck::cast_ref(&self.bounds);
+        let t = |axis: usize, side: usize| {
+            (f32x8::new(planes[2 * axis + side]) - ray.origin[axis]) * ray.inv[axis]
+        };
+        let slab = |axis: usize| {
+            if BOTH_PLANES {
+                let (lo, hi) = (t(axis, 0), t(axis, 1));
+                (lo.fast_min(hi), lo.fast_max(hi))
+            } else {
+                let near = ray.near[axis] & 1;
+                (t(axis, near), t(axis, near ^ 1))
+            }
+        };
+        let (nx, fx) = slab(0);
+        let (ny, fy) = slab(1);
+        let (nz, fz) = slab(2);
+        let t_near = nx.fast_max(ny).fast_max(nz.fast_max(f32x8::ZERO));
+        let t_far =
+            fx.fast_min(fy).fast_min(fz.fast_min(f32x8::splat(t_max))) * f32x8::splat(FAR_SLACK);
+        (t_near.simd_le(t_far).to_bitmask(), t_near.to_array())
     }
 }
 
@@ -654,10 +650,10 @@ struct Walker<P> {
 /// [`MAX_INVERSE`], so no slab ever forms 0 * inf; the entry side is chosen from the sign of
 /// the inverse itself, so near and far always agree with it (a mismatch would cull every box).
 pub(super) struct NodeRay {
-    pub(super) inv: [Vec4; 3],
+    pub(super) inv: [f32x8; 3],
     /// The origin per axis, splatted.
-    pub(super) origin: [Vec4; 3],
-    /// 0 when the ray enters through the box minimum on this axis, 2 through the maximum.
+    pub(super) origin: [f32x8; 3],
+    /// 0 when the ray enters through the box minimum on this axis, 1 through the maximum.
     pub(super) near: [usize; 3],
     /// The direction's octant as the builder orders children by: bit 2 set for x >= 0, bit 1 for
     /// y, bit 0 for z.
@@ -677,13 +673,13 @@ impl NodeRay {
         };
         let inv = [inv(d.x), inv(d.y), inv(d.z)];
         Self {
-            inv: inv.map(Vec4::splat),
+            inv: inv.map(f32x8::splat),
             origin: [
-                Vec4::splat(origin.x),
-                Vec4::splat(origin.y),
-                Vec4::splat(origin.z),
+                f32x8::splat(origin.x),
+                f32x8::splat(origin.y),
+                f32x8::splat(origin.z),
             ],
-            near: inv.map(|i| if i < 0.0 { 2 } else { 0 }),
+            near: inv.map(|i| usize::from(i < 0.0)),
             octant: usize::from(inv[0] >= 0.0) << 2
                 | usize::from(inv[1] >= 0.0) << 1
                 | usize::from(inv[2] >= 0.0),
