@@ -32,7 +32,7 @@ pub use shaft::SHAFT_TOLERANCE;
 use shaft::Shaft;
 pub(crate) use triangle::triangle_normal;
 use triangle::{AxisTriangle, ShearedRay};
-use wide::{NodeRay, WideBvh};
+use wide::{NodeRay, PacketNodeRays, WideBvh};
 
 /// Size of the tree (nodes and packets, bytes) up to which [`Accel::closest_many`] and
 /// [`Accel::any_hit_many`] walk their rays one after another: such a tree stays in a core's
@@ -285,11 +285,49 @@ impl Accel {
     /// When `hits` and `rays` differ in length.
     pub fn closest_many(&self, rays: &[Ray], hits: &mut [Option<TriangleHit>]) {
         assert_eq!(rays.len(), hits.len(), "one answer per ray");
-        if self.interleaves(rays) {
+        if self.coherent(rays) {
+            self.closest_packets(rays, hits);
+        } else if self.bvh.bytes() > INTERLEAVE_MIN_BYTES {
             self.closest_interleaved(rays, hits);
         } else {
             for (hit, r) in hits.iter_mut().zip(rays) {
                 *hit = self.closest(r.origin, r.direction, r.t_max);
+            }
+        }
+    }
+
+    /// [`Accel::closest_many`]'s walk of coherent rays: eight neighbours at a time as one
+    /// packet ([`WideBvh::walk_packet`]), or one after another where a packet's rays differ
+    /// in direction octant.
+    fn closest_packets(&self, rays: &[Ray], hits: &mut [Option<TriangleHit>]) {
+        let mut stack = Vec::new();
+        for (rays, hits) in rays.chunks(8).zip(hits.chunks_mut(8)) {
+            let n = rays.len();
+            let ray = |i: usize| &rays[i.min(n - 1)];
+            let origins: [Vec3; 8] = std::array::from_fn(|i| ray(i).origin);
+            let directions: [Vec3; 8] = std::array::from_fn(|i| ray(i).direction);
+            let Some(packet) = PacketNodeRays::new(&origins[..n], &directions[..n]) else {
+                for (hit, r) in hits.iter_mut().zip(rays) {
+                    *hit = self.closest(r.origin, r.direction, r.t_max);
+                }
+                continue;
+            };
+            let sheared: [PacketRay; 8] = std::array::from_fn(|i| {
+                PacketRay::new(&ShearedRay::new(ray(i).origin, ray(i).direction))
+            });
+            let mut t_max: [f32; 8] = std::array::from_fn(|i| ray(i).t_max);
+            let mut best: [Option<Nearest>; 8] = [None; 8];
+            self.bvh.walk_packet(
+                &packet,
+                &mut t_max,
+                &mut stack,
+                #[inline(always)]
+                |lane, p, lanes, t_max| {
+                    self.nearer(&sheared[lane], p, lanes, t_max, &mut best[lane])
+                },
+            );
+            for (i, hit) in hits.iter_mut().enumerate() {
+                *hit = best[i].map(|b| self.hit(b, t_max[i]));
             }
         }
     }

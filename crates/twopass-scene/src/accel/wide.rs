@@ -621,6 +621,225 @@ impl WideBvh {
     }
 }
 
+impl WideBvh {
+    /// The walk of up to eight coherent rays as one packet (rays in lanes): a node's eight
+    /// child boxes are first tested against the packet's bounding interval of rays (one
+    /// eight-box test for all its rays, [`PacketNodeRays::cull`]), and only the children it
+    /// keeps against each active ray ([`PacketNodeRays::lanes_hit`], the very operations of
+    /// [`WideNode::intersect`] for that ray, so each ray gets the single-ray walk's answer for
+    /// every box). A leaf is handed to `leaf(lane, packet, lanes, t_max)` once for each ray
+    /// whose box test it passed; `t_max[lane]` (each ray's, shortened by its hits) bounds its
+    /// box tests. Each ray meets every leaf the single-ray walk would meet for it, perhaps in
+    /// another order, so its closest hit is the same. `stack` is reused from packet to packet.
+    pub(super) fn walk_packet(
+        &self,
+        rays: &PacketNodeRays,
+        t_max: &mut [f32; 8],
+        stack: &mut Vec<(u32, u32, f32)>,
+        mut leaf: impl FnMut(usize, u32, u32, &mut f32),
+    ) {
+        if self.nodes == 0 || rays.active == 0 {
+            return;
+        }
+        stack.clear();
+        let mut entry = (0u32, rays.active);
+        loop {
+            let (node, active) = entry;
+            let n = self.arena.node(node);
+            let farthest = t_max.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+            let (kept, near) = rays.cull(n, farthest);
+            // The kept children nearest first (by the packet's bound on their entry), their
+            // packets and nodes prefetched.
+            let mut rest = kept & u32::from(n.leaf | n.inner);
+            let mut order = [0usize; 8];
+            let mut count = 0;
+            while rest != 0 {
+                let c = rest.trailing_zeros() as usize;
+                rest &= rest - 1;
+                if n.leaf & (1 << c) != 0 {
+                    self.arena.packet(n.child[c]).prefetch();
+                } else {
+                    self.arena.node(n.child[c]).prefetch();
+                }
+                let mut j = count;
+                while j > 0 && near[order[j - 1]] > near[c] {
+                    order[j] = order[j - 1];
+                    j -= 1;
+                }
+                order[j] = c;
+                count += 1;
+            }
+            let mut inner = [(0u32, 0u32, 0.0f32); 8];
+            let mut inner_count = 0;
+            for &c in &order[..count] {
+                // Against each ray's `t_max` as the leaves before have left it.
+                let (lanes, entries) = rays.lanes_hit(n, c, f32x8::new(*t_max));
+                let lanes = lanes & active;
+                if lanes == 0 {
+                    continue;
+                }
+                if n.leaf & (1 << c) != 0 {
+                    let (p, tri_lanes) = (n.child[c], (n.lanes >> (4 * c)) & 0xf);
+                    let mut l = lanes;
+                    while l != 0 {
+                        let lane = l.trailing_zeros() as usize;
+                        l &= l - 1;
+                        leaf(lane, p, tri_lanes, &mut t_max[lane]);
+                    }
+                } else {
+                    let mut l = lanes;
+                    let mut nearest = f32::INFINITY;
+                    while l != 0 {
+                        nearest = nearest.min(entries[l.trailing_zeros() as usize]);
+                        l &= l - 1;
+                    }
+                    inner[inner_count] = (n.child[c], lanes, nearest);
+                    inner_count += 1;
+                }
+            }
+            // Nearest visited first: pushed last.
+            stack.extend(inner[..inner_count].iter().rev());
+            entry = loop {
+                let Some((child, lanes, near)) = stack.pop() else {
+                    return;
+                };
+                // Skipped once every ray that entered it has found a hit nearer than its
+                // entry.
+                let mut l = lanes;
+                let mut live = 0;
+                while l != 0 {
+                    let lane = l.trailing_zeros() as usize;
+                    l &= l - 1;
+                    if near <= t_max[lane] * FAR_SLACK {
+                        live |= 1 << lane;
+                    }
+                }
+                if live != 0 {
+                    break (child, live);
+                }
+            };
+        }
+    }
+}
+
+/// Up to eight rays as [`WideBvh::walk_packet`] tests them: each ray's origin and inverse
+/// direction in its lane (exactly as [`NodeRay`] forms them), and the interval of all of them
+/// for the packet's conservative cull. Built only for rays whose inverse directions agree in
+/// sign on each axis, so all enter a box through the same planes.
+pub(super) struct PacketNodeRays {
+    origin: [f32x8; 3],
+    inv: [f32x8; 3],
+    /// Per axis, 0 when the rays enter a box through its minimum, 1 through its maximum.
+    near: [usize; 3],
+    /// Per axis, the origin coordinate that makes the distance to the near plane smallest (the
+    /// largest for rays entering through the minimum) and the one that makes the distance to
+    /// the far plane largest.
+    origin_near: [f32; 3],
+    origin_far: [f32; 3],
+    /// Per axis, the smallest and largest inverse direction.
+    inv_lo: [f32; 3],
+    inv_hi: [f32; 3],
+    /// The lanes that hold a ray.
+    pub(super) active: u32,
+}
+
+impl PacketNodeRays {
+    /// The packet of the rays from `origins` along `directions` (at most eight, and as many
+    /// of each), or `None` when their directions differ in sign on some axis or an origin or
+    /// inverse direction is not finite.
+    pub(super) fn new(origins: &[Vec3], directions: &[Vec3]) -> Option<Self> {
+        let count = origins.len().min(directions.len()).min(8);
+        if count == 0 {
+            return None;
+        }
+        let mut origin = [[0.0f32; 8]; 3];
+        let mut inv = [[0.0f32; 8]; 3];
+        for i in 0..8 {
+            let (o, d) = (origins[i.min(count - 1)], directions[i.min(count - 1)]);
+            let d = d + Vec3::ZERO;
+            for axis in 0..3 {
+                origin[axis][i] = o[axis];
+                inv[axis][i] = inverse(d[axis]);
+            }
+        }
+        let finite = |v: &[[f32; 8]; 3]| v.iter().flatten().all(|x| x.is_finite());
+        let lo = |v: &[f32; 8]| v.iter().copied().fold(f32::INFINITY, f32::min);
+        let hi = |v: &[f32; 8]| v.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+        // Entering through the maximum where the inverse is negative, as `NodeRay` decides.
+        let near = inv.map(|v| usize::from(v[0] < 0.0));
+        let agree = (0..3).all(|a| v_sign_agrees(&inv[a], near[a]));
+        if !finite(&origin) || !finite(&inv) || !agree {
+            return None;
+        }
+        let pick = |a: usize, max_first: bool| {
+            if (near[a] == 0) == max_first {
+                hi(&origin[a])
+            } else {
+                lo(&origin[a])
+            }
+        };
+        Some(Self {
+            origin: origin.map(f32x8::new),
+            inv: inv.map(f32x8::new),
+            near,
+            origin_near: [0, 1, 2].map(|a| pick(a, true)),
+            origin_far: [0, 1, 2].map(|a| pick(a, false)),
+            inv_lo: inv.map(|v| lo(&v)),
+            inv_hi: inv.map(|v| hi(&v)),
+            active: (1u32 << count) - 1,
+        })
+    }
+
+    /// The children of `n` that some ray of the packet may meet within `t_max` (the largest of
+    /// the rays'), bit `c` for child `c`, and per child a bound below every ray's entry: a child is dropped only when the nearest entry any
+    /// ray could have lies beyond the farthest exit any could have (times [`FAR_SLACK`]).
+    /// Rounding is monotone, so the distances formed from the interval's corners with the
+    /// rays' own operations bound every ray's rounded ones.
+    #[inline(always)]
+    fn cull(&self, n: &WideNode, t_max: f32) -> (u32, [f32; 8]) {
+        let planes: &[[f32; 8]; 6] = bytemuck::cast_ref(&n.bounds);
+        let (mut t_near, mut t_far) = (f32x8::ZERO, f32x8::splat(t_max));
+        for axis in 0..3 {
+            let side = self.near[axis] & 1;
+            let d_near = f32x8::new(planes[2 * axis + side]) - f32x8::splat(self.origin_near[axis]);
+            let d_far =
+                f32x8::new(planes[2 * axis + (side ^ 1)]) - f32x8::splat(self.origin_far[axis]);
+            let (lo, hi) = (
+                f32x8::splat(self.inv_lo[axis]),
+                f32x8::splat(self.inv_hi[axis]),
+            );
+            t_near = t_near.fast_max((d_near * lo).fast_min(d_near * hi));
+            t_far = t_far.fast_min((d_far * lo).fast_max(d_far * hi));
+        }
+        (
+            t_near.simd_le(t_far * f32x8::splat(FAR_SLACK)).to_bitmask(),
+            t_near.to_array(),
+        )
+    }
+
+    /// The rays (lanes) that meet child `c` of `n` within their `t_max`, each by exactly the
+    /// operations [`WideNode::intersect`] applies for it, and each ray's entry distance.
+    #[inline(always)]
+    fn lanes_hit(&self, n: &WideNode, c: usize, t_max: f32x8) -> (u32, [f32; 8]) {
+        let b = &n.bounds;
+        let (half, j) = (c / 4, c % 4);
+        let plane = |axis: usize, side: usize| b[4 * axis + 2 * side + half].to_array()[j];
+        let t = |axis: usize, side: usize| {
+            (f32x8::splat(plane(axis, side)) - self.origin[axis]) * self.inv[axis]
+        };
+        let slab = |axis: usize| {
+            let side = self.near[axis] & 1;
+            (t(axis, side), t(axis, side ^ 1))
+        };
+        let (nx, fx) = slab(0);
+        let (ny, fy) = slab(1);
+        let (nz, fz) = slab(2);
+        let t_near = nx.fast_max(ny).fast_max(nz.fast_max(f32x8::ZERO));
+        let t_far = fx.fast_min(fy).fast_min(fz.fast_min(t_max)) * f32x8::splat(FAR_SLACK);
+        (t_near.simd_le(t_far).to_bitmask(), t_near.to_array())
+    }
+}
+
 /// Rays an interleaved walk ([`WideBvh::walk_many`]) keeps in flight.
 const INTERLEAVE: usize = 8;
 
@@ -660,18 +879,27 @@ pub(super) struct NodeRay {
     pub(super) octant: usize,
 }
 
+/// The inverse of a direction component `x` (a negative zero made positive first), clamped to
+/// [`MAX_INVERSE`].
+#[inline(always)]
+fn inverse(x: f32) -> f32 {
+    let i = 1.0 / x;
+    if i.abs() > MAX_INVERSE {
+        MAX_INVERSE.copysign(x)
+    } else {
+        i
+    }
+}
+
+/// Whether every lane of `inv` is negative (`near` 1) or none is (`near` 0).
+fn v_sign_agrees(inv: &[f32; 8], near: usize) -> bool {
+    inv.iter().all(|&i| usize::from(i < 0.0) == near)
+}
+
 impl NodeRay {
     pub(super) fn new(origin: Vec3, direction: Vec3) -> Self {
         let d = direction + Vec3::ZERO;
-        let inv = |x: f32| {
-            let i = 1.0 / x;
-            if i.abs() > MAX_INVERSE {
-                MAX_INVERSE.copysign(x)
-            } else {
-                i
-            }
-        };
-        let inv = [inv(d.x), inv(d.y), inv(d.z)];
+        let inv = [inverse(d.x), inverse(d.y), inverse(d.z)];
         Self {
             inv: inv.map(f32x8::splat),
             origin: [
