@@ -1,6 +1,7 @@
 //! 8-wide BVH nodes (f32 child boxes, built by [`collapse`](mod@super::collapse)), the
-//! eight-box slab test, and the traversal: ordered front to back with distance culling for
-//! closest hits, early exit for occlusion.
+//! eight-box slab test (one eight-lane vector per plane), and the traversals: one ray ordered
+//! front to back with distance culling for closest hits and early exit for occlusion, several
+//! rays interleaved, and coherent rays as packets of eight.
 
 use glam::{Vec3, Vec4};
 use obvhs::faststack::FastStack;

@@ -45,7 +45,7 @@ pub struct RaysArgs {
 /// ([`Accel::closest`], [`Accel::any_hit`]) and through the many-ray calls
 /// ([`Accel::closest_many`], [`Accel::any_hit_many`], in batches of [`CHUNK`] rays: interleaved
 /// where the tree is larger than [`twopass_scene::INTERLEAVE_MIN_BYTES`] and the batch is not
-/// coherent, as camera rays are).
+/// coherent; coherent closest-hit batches, as camera rays are, walked eight rays to a packet).
 #[derive(Debug, Serialize)]
 struct RayRow {
     query: &'static str,
