@@ -215,14 +215,19 @@ impl WideNode {
                 (t(axis, near), t(axis, near ^ 1))
             }
         };
-        let (nx, fx) = slab(0);
-        let (ny, fy) = slab(1);
-        let (nz, fz) = slab(2);
-        let t_near = nx.fast_max(ny).fast_max(nz.fast_max(f32x8::ZERO));
-        let t_far =
-            fx.fast_min(fy).fast_min(fz.fast_min(f32x8::splat(t_max))) * f32x8::splat(FAR_SLACK);
-        (t_near.simd_le(t_far).to_bitmask(), t_near.to_array())
+        slabs_hit([slab(0), slab(1), slab(2)], f32x8::splat(t_max))
     }
+}
+
+/// The slab test's last step, for eight boxes against one ray or one box against eight rays:
+/// each lane's entry and exit distances on the three axes (`slabs[axis]`, near then far)
+/// clipped to `[0, t_max]`; the lanes hit (bit per lane) and each lane's entry distance.
+#[inline(always)]
+fn slabs_hit(slabs: [(f32x8, f32x8); 3], t_max: f32x8) -> (u32, [f32; 8]) {
+    let [(nx, fx), (ny, fy), (nz, fz)] = slabs;
+    let t_near = nx.fast_max(ny).fast_max(nz.fast_max(f32x8::ZERO));
+    let t_far = fx.fast_min(fy).fast_min(fz.fast_min(t_max)) * f32x8::splat(FAR_SLACK);
+    (t_near.simd_le(t_far).to_bitmask(), t_near.to_array())
 }
 
 /// The tree, laid out for the walk: the root at unit 0, then the rest of the top levels that
@@ -832,12 +837,7 @@ impl PacketNodeRays {
             let side = self.near[axis] & 1;
             (t(axis, side), t(axis, side ^ 1))
         };
-        let (nx, fx) = slab(0);
-        let (ny, fy) = slab(1);
-        let (nz, fz) = slab(2);
-        let t_near = nx.fast_max(ny).fast_max(nz.fast_max(f32x8::ZERO));
-        let t_far = fx.fast_min(fy).fast_min(fz.fast_min(t_max)) * f32x8::splat(FAR_SLACK);
-        (t_near.simd_le(t_far).to_bitmask(), t_near.to_array())
+        slabs_hit([slab(0), slab(1), slab(2)], t_max)
     }
 }
 
