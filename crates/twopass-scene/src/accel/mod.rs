@@ -35,9 +35,10 @@ use triangle::{AxisTriangle, ShearedRay};
 use wide::{NodeRay, PacketNodeRays, WideBvh};
 
 /// Size of the tree (nodes and packets, bytes) up to which [`Accel::closest_many`] and
-/// [`Accel::any_hit_many`] walk rays that are not coherent one after another: such a tree stays in a core's
-/// L2 cache (1.25 MiB on the Ice Lake Xeon this was measured on), where interleaving has no
-/// misses to overlap and costs 12-18 % (`twopass bench rays scenes/cornell-box.toml`).
+/// [`Accel::any_hit_many`] walk rays that are not coherent one after another: such a tree
+/// stays in a core's L2 cache (1.25 MiB on the Ice Lake Xeon this was measured on), where
+/// interleaving has no misses to overlap and costs 12-18 % (`twopass bench rays
+/// scenes/cornell-box.toml`).
 pub const INTERLEAVE_MIN_BYTES: usize = 1 << 20;
 
 /// Angle between two neighbouring rays' directions, radians, within which
@@ -300,7 +301,7 @@ impl Accel {
 
     /// [`Accel::closest_many`]'s walk of coherent rays: eight neighbours at a time as one
     /// packet ([`WideBvh::walk_packet`]), or one after another where a packet's rays differ
-    /// in direction octant.
+    /// in direction octant or one of them is not finite.
     fn closest_packets(&self, rays: &[Ray], hits: &mut [Option<TriangleHit>]) {
         let mut stack = Vec::new();
         for (rays, hits) in rays.chunks(8).zip(hits.chunks_mut(8)) {

@@ -467,7 +467,8 @@ impl WideBvh {
     /// keeps) a turn goes on descending until it finds leaves or leaves them. `start(i)` gives
     /// ray `i`'s node ray, its `t_max` and the state `leaf(state, packet, lanes, t_max)` tests
     /// a packet with (it may shorten `t_max`, and returns `true` to stop the ray's walk);
-    /// `finish(i, t_max, state)` is called once per ray, in no particular order. Each ray meets the leaves the single-ray walk would, in the same order.
+    /// `finish(i, t_max, state)` is called once per ray, in no particular order. Each ray
+    /// meets the leaves the single-ray walk would, in the same order.
     pub(super) fn walk_many<P>(
         &self,
         count: usize,
@@ -773,7 +774,7 @@ impl PacketNodeRays {
         let hi = |v: &[f32; 8]| v.iter().copied().fold(f32::NEG_INFINITY, f32::max);
         // Entering through the maximum where the inverse is negative, as `NodeRay` decides.
         let near = inv.map(|v| usize::from(v[0] < 0.0));
-        let agree = (0..3).all(|a| v_sign_agrees(&inv[a], near[a]));
+        let agree = (0..3).all(|a| signs_agree(&inv[a], near[a]));
         if !finite(&origin) || !finite(&inv) || !agree {
             return None;
         }
@@ -797,10 +798,11 @@ impl PacketNodeRays {
     }
 
     /// The children of `n` that some ray of the packet may meet within `t_max` (the largest of
-    /// the rays'), bit `c` for child `c`, and per child a bound below every ray's entry: a child is dropped only when the nearest entry any
-    /// ray could have lies beyond the farthest exit any could have (times [`FAR_SLACK`]).
-    /// Rounding is monotone, so the distances formed from the interval's corners with the
-    /// rays' own operations bound every ray's rounded ones.
+    /// the rays'), bit `c` for child `c`, and per child a bound below every ray's entry
+    /// distance. A child is dropped only when the nearest entry any ray could have lies beyond
+    /// the farthest exit any could have (times [`FAR_SLACK`]). Rounding is monotone, so the
+    /// distances formed from the interval's corners with the rays' own operations bound every
+    /// ray's rounded ones.
     #[inline(always)]
     fn cull(&self, n: &WideNode, t_max: f32) -> (u32, [f32; 8]) {
         let planes: &[[f32; 8]; 6] = bytemuck::cast_ref(&n.bounds);
@@ -893,7 +895,7 @@ fn inverse(x: f32) -> f32 {
 }
 
 /// Whether every lane of `inv` is negative (`near` 1) or none is (`near` 0).
-fn v_sign_agrees(inv: &[f32; 8], near: usize) -> bool {
+fn signs_agree(inv: &[f32; 8], near: usize) -> bool {
     inv.iter().all(|&i| usize::from(i < 0.0) == near)
 }
 
