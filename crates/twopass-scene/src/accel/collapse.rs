@@ -472,8 +472,9 @@ mod tests {
             let (p, t) = (&positions, &triangles);
             let oracle = |r: &Ray| Accel::closest_brute_force(p, t, r.origin, r.direction, r.t_max);
             let mut r = rng(2000 + seed as u64);
-            // Looking down at the soup from above its middle (every direction has z < 0),
-            // and from off its side (x > 0 throughout, then a fan across x = 0).
+            // Looking down at the soup from above its middle (every direction has z < 0), in
+            // from its side (x > 0 throughout), and from its front with a fan whose directions
+            // change sign across the image (those packets fall back).
             for (eye, look, spread) in [
                 (Vec3::new(0.5, 0.5, 2.0), Vec3::new(0.5, 0.5, 0.0), 0.6),
                 (Vec3::new(-1.0, 0.4, 0.5), Vec3::new(0.5, 0.5, 0.5), 0.3),

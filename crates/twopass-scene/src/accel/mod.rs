@@ -293,9 +293,14 @@ impl Accel {
         } else if self.bvh.bytes() > INTERLEAVE_MIN_BYTES {
             self.closest_interleaved(rays, hits);
         } else {
-            for (hit, r) in hits.iter_mut().zip(rays) {
-                *hit = self.closest(r.origin, r.direction, r.t_max);
-            }
+            self.closest_each(rays, hits);
+        }
+    }
+
+    /// [`Accel::closest`] for each of `rays` in turn.
+    fn closest_each(&self, rays: &[Ray], hits: &mut [Option<TriangleHit>]) {
+        for (hit, r) in hits.iter_mut().zip(rays) {
+            *hit = self.closest(r.origin, r.direction, r.t_max);
         }
     }
 
@@ -310,9 +315,7 @@ impl Accel {
             let origins: [Vec3; 8] = std::array::from_fn(|i| ray(i).origin);
             let directions: [Vec3; 8] = std::array::from_fn(|i| ray(i).direction);
             let Some(packet) = PacketNodeRays::new(&origins[..n], &directions[..n]) else {
-                for (hit, r) in hits.iter_mut().zip(rays) {
-                    *hit = self.closest(r.origin, r.direction, r.t_max);
-                }
+                self.closest_each(rays, hits);
                 continue;
             };
             let sheared: [PacketRay; 8] = std::array::from_fn(|i| {

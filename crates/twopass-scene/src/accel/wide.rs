@@ -747,7 +747,7 @@ pub(super) struct PacketNodeRays {
     inv_lo: [f32; 3],
     inv_hi: [f32; 3],
     /// The lanes that hold a ray.
-    pub(super) active: u32,
+    active: u32,
 }
 
 impl PacketNodeRays {
