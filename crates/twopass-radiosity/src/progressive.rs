@@ -86,6 +86,11 @@ pub struct Progressive<'s> {
     unshot_refl: Vec<DVec3>,
     shot_emit: Vec<DVec3>,
     shot_refl: Vec<DVec3>,
+    /// Per patch: its unshot power, W summed over channels (`|unshot_emit + unshot_refl|`
+    /// times its area): what the next shooter is chosen by and the stop is decided by, kept
+    /// up to date wherever the unshot radiosity changes ([`Progressive::note_unshot`]) rather
+    /// than recomputed for every patch on every shot.
+    unshot_power: Vec<f64>,
     /// Per patch: its elements (leaves), flat, with what every shot reads of them.
     elements: PatchElements,
     /// Per patch: diffuse reflectance and area (scene units squared); patches never change.
@@ -93,6 +98,10 @@ pub struct Progressive<'s> {
     patch_area: Vec<f64>,
     /// Per patch: cached form factors (with visibility) to every vertex, once computed.
     cache: Vec<Option<Vec<f32>>>,
+    /// Per patch whose row is cached and that has shot on the current element mesh: its
+    /// [`Progressive::arrival_weights`], kept beside the row (a patch shoots several times) and
+    /// dropped when the elements change.
+    weights: Vec<Option<Vec<f64>>>,
     /// Per pair of patches `(q, p)` at `q * n + p`, with shaft culling and at most
     /// [`PAIR_CACHE_MAX_PATCHES`] patches: whether the shaft between them is clear
     /// ([`PAIR_UNKNOWN`], [`PAIR_CLEAR`], [`PAIR_BLOCKED`]); patches never change, and every
@@ -295,10 +304,12 @@ impl<'s> Progressive<'s> {
             unshot_refl: Vec::new(),
             shot_emit: Vec::new(),
             shot_refl: Vec::new(),
+            unshot_power: Vec::new(),
             elements: PatchElements::default(),
             patch_rho: Vec::new(),
             patch_area: Vec::new(),
             cache: Vec::new(),
+            weights: Vec::new(),
             pair_clear: Vec::new(),
             cached_bytes: 0,
             book: Bookkeeping::new(started, started.elapsed()),
@@ -322,12 +333,17 @@ impl<'s> Progressive<'s> {
         s.shot_emit = vec![DVec3::ZERO; n];
         s.shot_refl = vec![DVec3::ZERO; n];
         s.cache = vec![None; n];
+        s.weights = vec![None; n];
         if s.options.shaft_culling && s.options.occlusion && n <= PAIR_CACHE_MAX_PATCHES {
             s.pair_clear = (0..n * n).map(|_| AtomicU8::new(PAIR_UNKNOWN)).collect();
         }
         s.unshot_emit = (0..n).map(|p| s.patch_emission(p)).collect();
         s.book.energy.emitted = (0..n).map(|p| s.unshot_emit[p] * s.patch_area(p)).sum();
         s.book.energy.unshot = s.book.energy.emitted;
+        s.unshot_power = vec![0.0; n];
+        for p in 0..n {
+            s.note_unshot(p);
+        }
         s.rebuild_patch_elements();
         s.resplat();
         Ok(s)
@@ -489,7 +505,16 @@ impl<'s> Progressive<'s> {
         self.book.energy.absorbed += gained * (DVec3::ONE - rho);
         let a = self.patch_area(q);
         self.unshot_refl[q] += gained * rho / a;
+        self.note_unshot(q);
         self.book.energy.unshot += gained * rho;
+    }
+
+    /// Brings patch `p`'s entry of `unshot_power` up to date with its unshot radiosity.
+    fn note_unshot(&mut self, p: usize) {
+        self.unshot_power[p] = (self.unshot_emit[p] + self.unshot_refl[p])
+            .abs()
+            .element_sum()
+            * self.patch_area(p);
     }
 
     fn patch_rho(&self, p: usize) -> DVec3 {
@@ -540,6 +565,37 @@ impl<'s> Progressive<'s> {
 
     fn rebuild_patch_elements(&mut self) {
         self.elements = PatchElements::new(&self.mesh);
+        for w in &mut self.weights {
+            if let Some(w) = w.take() {
+                self.cached_bytes -= std::mem::size_of_val(w.as_slice());
+            }
+        }
+    }
+
+    /// Per patch `q`, what it receives of a shot with form factors `row` (per vertex, to the
+    /// shooter), per unit of the shooter's unshot exitance: the sum over its elements of area
+    /// times the mean of the element's vertices' form factors (elements with a positive mean
+    /// only), scene units squared. Patch `q` gains `exitance * weights[q]` W per channel.
+    fn arrival_weights(&self, row: &[f32]) -> Vec<f64> {
+        (0..self.mesh.patches.len())
+            .map(|q| {
+                let range = self.elements.range(q);
+                let mut weight = 0.0;
+                for (vertices, &area) in self.elements.vertices[range.clone()]
+                    .iter()
+                    .zip(&self.elements.area[range])
+                {
+                    let h = (f64::from(row[vertices[0] as usize])
+                        + f64::from(row[vertices[1] as usize])
+                        + f64::from(row[vertices[2] as usize]))
+                        / 3.0;
+                    if h > 0.0 {
+                        weight += h * area;
+                    }
+                }
+                weight
+            })
+            .collect()
     }
 
     /// Form factors (with visibility) from every vertex in `vertices` to patch `p`, and the
@@ -751,11 +807,11 @@ impl<'s> Progressive<'s> {
 
     /// Shoots the patch with the most unshot power. Returns `false` when none has any.
     pub fn shoot(&mut self) -> bool {
-        let unshot = |s: &Self, p: usize| {
-            ((s.unshot_emit[p] + s.unshot_refl[p]).abs().element_sum()) * s.patch_area(p)
-        };
-        let Some((p, power)) = (0..self.mesh.patches.len())
-            .map(|p| (p, unshot(self, p)))
+        let Some((p, power)) = self
+            .unshot_power
+            .iter()
+            .copied()
+            .enumerate()
             .max_by(|a, b| a.1.total_cmp(&b.1))
         else {
             return false;
@@ -772,19 +828,28 @@ impl<'s> Progressive<'s> {
                 self.received_refl[v] += dr * f64::from(f);
             }
         }
-        // Power arriving at each element: area times the mean irradiance of its vertices.
-        let mut arrived = DVec3::ZERO;
-        for q in 0..self.mesh.patches.len() {
-            let mut gained = DVec3::ZERO;
-            for (h, area) in self.element_means(q, |v| f64::from(row[v])) {
-                if h > 0.0 {
-                    gained += (de + dr) * h * area;
-                }
+        // Power arriving at each patch: its elements' areas times the mean irradiance of their
+        // vertices, from the weights kept beside the row (computed on the first shot).
+        let weights = match self.weights[p].take() {
+            Some(w) => {
+                self.cached_bytes -= std::mem::size_of_val(w.as_slice());
+                w
             }
-            if gained != DVec3::ZERO {
+            None => self.arrival_weights(&row),
+        };
+        let sent = de + dr;
+        let mut arrived = DVec3::ZERO;
+        for (q, &weight) in weights.iter().enumerate() {
+            let gained = sent * weight;
+            if weight > 0.0 && gained != DVec3::ZERO {
                 arrived += gained;
                 self.receive(q, gained);
             }
+        }
+        let bytes = std::mem::size_of_val(weights.as_slice());
+        if self.cache[p].is_some() && self.cached_bytes + bytes <= self.options.cache_bytes {
+            self.cached_bytes += bytes;
+            self.weights[p] = Some(weights);
         }
         if self.specular.is_some() {
             arrived += self.shoot_specular(p);
@@ -796,6 +861,7 @@ impl<'s> Progressive<'s> {
         self.shot_refl[p] += dr;
         self.unshot_emit[p] -= de;
         self.unshot_refl[p] -= dr;
+        self.note_unshot(p);
         self.shots += 1;
         self.book.note_imbalance();
         true
@@ -803,14 +869,7 @@ impl<'s> Progressive<'s> {
 
     /// Unshot power over emitted power (sums over channels).
     pub fn unshot_fraction(&self) -> f64 {
-        let unshot: f64 = (0..self.mesh.patches.len())
-            .map(|p| {
-                (self.unshot_emit[p] + self.unshot_refl[p])
-                    .abs()
-                    .element_sum()
-                    * self.patch_area(p)
-            })
-            .sum();
+        let unshot: f64 = self.unshot_power.iter().sum();
         unshot
             / self
                 .book
@@ -912,6 +971,7 @@ impl<'s> Progressive<'s> {
             self.book.energy.unshot += change;
             self.book.energy.remeshing -= change;
             self.unshot_refl[p] = new_unshot;
+            self.note_unshot(p);
         }
         self.book.rounds += 1;
         splits
