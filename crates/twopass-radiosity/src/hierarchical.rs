@@ -1086,7 +1086,8 @@ impl<'s> HierarchicalSolver<'s> {
     fn surface_transport(&self, p: u32, q: u32) -> ([f64; 7], f64, f64) {
         let (x, n) = self.receiving_points(p);
         let (source, ns) = self.source_polygon(q);
-        let f: [f64; 7] = std::array::from_fn(|i| source.form_factor(x[i], n[i], Some(ns)));
+        let mut f = [0.0; 7];
+        source.form_factors_into(&x, &n, Some(ns), &mut f);
         // The corners keep their exact point values; the receiver's area-averaged form factor
         // sets the light it gets (interpolating a curved F linearly would lose or add light
         // with a consistent sign), by the seven-point rule exact for cubics (corners 1/20, edge
@@ -1112,7 +1113,9 @@ impl<'s> HierarchicalSolver<'s> {
     fn corner_form_factors(&self, p: u32, q: u32) -> [f64; 3] {
         let (x, n) = self.receiving_points(p);
         let (source, ns) = self.source_polygon(q);
-        std::array::from_fn(|i| source.form_factor(x[i], n[i], Some(ns)))
+        let mut f = [0.0; 3];
+        source.form_factors_into(&x[..3], &n[..3], Some(ns), &mut f);
+        f
     }
 
     /// Surface node `q` as a source of point form factors (its corners, prepared) and its scene

@@ -618,41 +618,47 @@ impl<'s> Progressive<'s> {
         // --visibility-rays`); on coarse meshes, without hulls, it saves 4-6 %.
         let vertex_shafts = self.options.shaft_culling && self.options.visibility.coarse() > 1;
         let results: Vec<(f32, u64)> = vertices
-            .par_iter()
-            .with_min_len(64)
-            .map(|&v| {
-                let vert = &self.mesh.vertices[v];
-                let x = self.receiving[v];
-                let f = shooter
+            .par_chunks(64)
+            .flat_map_iter(|chunk| {
+                let x: Vec<DVec3> = chunk.iter().map(|&v| self.receiving[v]).collect();
+                let n: Vec<DVec3> = chunk
+                    .iter()
+                    .map(|&v| self.mesh.vertices[v].normal.as_dvec3())
+                    .collect();
+                let mut unoccluded = vec![0.0; chunk.len()];
+                shooter
                     .source
-                    .form_factor(x, vert.normal.as_dvec3(), Some(ns));
-                if f <= 0.0 || !self.options.occlusion {
-                    return (f as f32, 0);
-                }
-                let from = &self.receivers[v];
-                let seed = hash(self.options.seed ^ hash((v as u64) << 32 | p as u64));
-                let hull = self
-                    .elements
-                    .vertex_patch
-                    .get(v)
-                    .and_then(|&q| hulls.get(q as usize).copied())
-                    .unwrap_or(PAIR_UNKNOWN);
-                if hull == PAIR_CLEAR
-                    || hull == PAIR_UNKNOWN
-                        && vertex_shafts
-                        && form_factor::shaft_clear(self.scene, from, shooter.source.corners)
-                {
-                    return (f as f32, 0);
-                }
-                let (vis, rays) = form_factor::visibility(
-                    self.scene,
-                    from,
-                    vert.normal,
-                    &shooter,
-                    self.options.visibility,
-                    seed,
-                );
-                ((f * vis) as f32, rays)
+                    .form_factors_into(&x, &n, Some(ns), &mut unoccluded);
+                chunk.iter().zip(unoccluded).map(|(&v, f)| {
+                    if f <= 0.0 || !self.options.occlusion {
+                        return (f as f32, 0);
+                    }
+                    let vert = &self.mesh.vertices[v];
+                    let from = &self.receivers[v];
+                    let seed = hash(self.options.seed ^ hash((v as u64) << 32 | p as u64));
+                    let hull = self
+                        .elements
+                        .vertex_patch
+                        .get(v)
+                        .and_then(|&q| hulls.get(q as usize).copied())
+                        .unwrap_or(PAIR_UNKNOWN);
+                    if hull == PAIR_CLEAR
+                        || hull == PAIR_UNKNOWN
+                            && vertex_shafts
+                            && form_factor::shaft_clear(self.scene, from, shooter.source.corners)
+                    {
+                        return (f as f32, 0);
+                    }
+                    let (vis, rays) = form_factor::visibility(
+                        self.scene,
+                        from,
+                        vert.normal,
+                        &shooter,
+                        self.options.visibility,
+                        seed,
+                    );
+                    ((f * vis) as f32, rays)
+                })
             })
             .collect();
         let rays = results.iter().map(|r| r.1).sum();
