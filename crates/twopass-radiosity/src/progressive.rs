@@ -617,25 +617,34 @@ impl<'s> Progressive<'s> {
         // solve 1.09x slower at 4-16 rays a pair and 1.24x at one ray (`twopass bake
         // --visibility-rays`); on coarse meshes, without hulls, it saves 4-6 %.
         let vertex_shafts = self.options.shaft_culling && self.options.visibility.coarse() > 1;
-        let results: Vec<(f32, u64)> = vertices
-            .par_chunks(64)
-            .flat_map_iter(|chunk| {
-                let x: Vec<DVec3> = chunk.iter().map(|&v| self.receiving[v]).collect();
-                let n: Vec<DVec3> = chunk
-                    .iter()
-                    .map(|&v| self.mesh.vertices[v].normal.as_dvec3())
-                    .collect();
-                let mut unoccluded = vec![0.0; chunk.len()];
-                shooter
-                    .source
-                    .form_factors_into(&x, &n, Some(ns), &mut unoccluded);
-                chunk.iter().zip(unoccluded).map(|(&v, f)| {
+        const CHUNK: usize = 64;
+        let mut row = vec![0.0f32; vertices.len()];
+        let mut rays = vec![0u64; vertices.len().div_ceil(CHUNK)];
+        row.par_chunks_mut(CHUNK)
+            .zip(rays.par_iter_mut())
+            .zip(vertices.par_chunks(CHUNK))
+            .for_each(|((row, rays), chunk)| {
+                // The unoccluded form factors four vertices at a time.
+                let mut x = [DVec3::ZERO; CHUNK];
+                let mut n = [DVec3::ZERO; CHUNK];
+                for (i, &v) in chunk.iter().enumerate() {
+                    x[i] = self.receiving[v];
+                    n[i] = self.mesh.vertices[v].normal.as_dvec3();
+                }
+                let mut unoccluded = [0.0; CHUNK];
+                let count = chunk.len();
+                shooter.source.form_factors_into(
+                    &x[..count],
+                    &n[..count],
+                    Some(ns),
+                    &mut unoccluded[..count],
+                );
+                for ((out, &v), &f) in row.iter_mut().zip(chunk).zip(&unoccluded) {
+                    *out = f as f32;
                     if f <= 0.0 || !self.options.occlusion {
-                        return (f as f32, 0);
+                        continue;
                     }
-                    let vert = &self.mesh.vertices[v];
                     let from = &self.receivers[v];
-                    let seed = hash(self.options.seed ^ hash((v as u64) << 32 | p as u64));
                     let hull = self
                         .elements
                         .vertex_patch
@@ -647,22 +656,22 @@ impl<'s> Progressive<'s> {
                             && vertex_shafts
                             && form_factor::shaft_clear(self.scene, from, shooter.source.corners)
                     {
-                        return (f as f32, 0);
+                        continue;
                     }
-                    let (vis, rays) = form_factor::visibility(
+                    let seed = hash(self.options.seed ^ hash((v as u64) << 32 | p as u64));
+                    let (vis, cast) = form_factor::visibility(
                         self.scene,
                         from,
-                        vert.normal,
+                        self.mesh.vertices[v].normal,
                         &shooter,
                         self.options.visibility,
                         seed,
                     );
-                    ((f * vis) as f32, rays)
-                })
-            })
-            .collect();
-        let rays = results.iter().map(|r| r.1).sum();
-        (results.into_iter().map(|r| r.0).collect(), rays)
+                    *out = (f * vis) as f32;
+                    *rays += cast;
+                }
+            });
+        (row, rays.iter().sum())
     }
 
     /// With shaft culling: per patch, whether nothing can come between it and shooter patch
