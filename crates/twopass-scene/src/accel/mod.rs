@@ -208,7 +208,7 @@ impl Accel {
     ) {
         let packet = self.bvh.arena.packet(p);
         let bound = if best.is_some() {
-            t_max.next_up().next_up().next_up().next_up()
+            four_ulps_up(*t_max)
         } else {
             *t_max
         };
@@ -480,8 +480,53 @@ impl Accel {
     }
 }
 
+/// `t.next_up()` four times over: for a positive finite `t` (a hit's distance) one integer
+/// add on its bits (at most up to infinity), the bits of consecutive positive floats being
+/// consecutive integers; otherwise the four steps.
+#[inline(always)]
+fn four_ulps_up(t: f32) -> f32 {
+    if t > 0.0 && t.is_finite() {
+        f32::from_bits((t.to_bits() + 4).min(f32::INFINITY.to_bits()))
+    } else {
+        t.next_up().next_up().next_up().next_up()
+    }
+}
+
 #[cfg(test)]
 mod tests {
+    /// The one-add form is `next_up` four times over, from the smallest subnormal to just
+    /// under the largest float, and for zero, negative, infinite and NaN distances.
+    #[test]
+    fn four_ulps_up_is_next_up_four_times() {
+        let steps = |t: f32| t.next_up().next_up().next_up().next_up();
+        let mut cases = vec![
+            0.0,
+            -0.0,
+            -1.0,
+            f32::MIN_POSITIVE,
+            f32::MAX,
+            f32::MAX.next_down(),
+            f32::MAX.next_down().next_down().next_down().next_down(),
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::from_bits(1),
+            f32::from_bits(0x007f_ffff),
+        ];
+        let mut bits = 1u32;
+        while bits < 0x7f80_0000 {
+            cases.push(f32::from_bits(bits));
+            bits += 0x1357;
+        }
+        for t in cases {
+            assert_eq!(
+                super::four_ulps_up(t).to_bits(),
+                steps(t).to_bits(),
+                "{t:e}"
+            );
+        }
+        assert!(super::four_ulps_up(f32::NAN).is_nan());
+    }
+
     use super::*;
 
     /// Two triangles forming the unit square in the plane z = 0.

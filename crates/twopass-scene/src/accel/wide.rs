@@ -829,9 +829,10 @@ impl PacketNodeRays {
     /// operations [`WideNode::intersect`] applies for it, and each ray's entry distance.
     #[inline(always)]
     fn lanes_hit(&self, n: &WideNode, c: usize, t_max: f32x8) -> (u32, [f32; 8]) {
-        let b = &n.bounds;
+        // `bounds` as plain floats: child `c`'s plane is one load, not a vector taken apart.
+        let b: &[f32; 48] = bytemuck::cast_ref(&n.bounds);
         let (half, j) = (c / 4, c % 4);
-        let plane = |axis: usize, side: usize| b[4 * axis + 2 * side + half].to_array()[j];
+        let plane = |axis: usize, side: usize| b[4 * (4 * axis + 2 * side + half) + j];
         let t = |axis: usize, side: usize| {
             (f32x8::splat(plane(axis, side)) - self.origin[axis]) * self.inv[axis]
         };
