@@ -636,6 +636,40 @@ fn shadow_rays_from_a_room_s_creases_find_nothing() {
     assert_same_radiosity(&traced, &open, "with shadow rays / without");
 }
 
+/// What a shot keeps beside a cached form-factor row (each patch's arrival weight, dropped when
+/// a refinement changes the elements) and the rows themselves only save work: the Cornell box
+/// solved through two refinement rounds with every row cached, with a cache that holds a few
+/// rows, and with none (every row and weight recomputed on every shot) gives the same shots and
+/// the same radiosity at every vertex, bit for bit.
+#[test]
+fn cached_rows_and_arrival_weights_change_no_number() {
+    let (s, _) = load(scene_path("cornell-box.toml")).unwrap();
+    let solve = |cache_bytes: usize| {
+        let mut solver = Progressive::new(
+            &s,
+            Options {
+                cache_bytes,
+                adaptive: Some(Adaptive {
+                    rounds: 2,
+                    ..Adaptive::default()
+                }),
+                ..cornell_options(1e-2)
+            },
+        )
+        .unwrap();
+        run(&mut solver);
+        let p = solver.progress();
+        assert!(p.refinement_rounds >= 1, "no refinement round ran");
+        (solver.vertex_radiosity(), p.shots)
+    };
+    let (all, shots) = solve(Options::default().cache_bytes);
+    for cache_bytes in [0, 64 << 10] {
+        let (some, some_shots) = solve(cache_bytes);
+        assert_eq!(some_shots, shots, "cache of {cache_bytes} bytes: shots");
+        assert_same_radiosity(&some, &all, &format!("cache of {cache_bytes} bytes / all"));
+    }
+}
+
 /// Solves `s` with `options` to its stop criteria: the vertex radiosities and the shadow rays
 /// cast.
 fn radiosity_and_rays(s: &Scene, options: Options) -> (Vec<DVec3>, u64) {
