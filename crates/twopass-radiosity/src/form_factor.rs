@@ -80,9 +80,7 @@ impl SourceTriangle {
             shooter_normal,
         )
     }
-}
 
-impl SourceTriangle {
     /// [`SourceTriangle::form_factor`] from four points `x` (unit normals `n`) at once, bit
     /// for bit: the operations of the scalar evaluation in four f64 lanes where no corner lies
     /// near the receiver's plane (none clipped), the scalar evaluation for the lanes where one
