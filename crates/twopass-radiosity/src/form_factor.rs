@@ -413,7 +413,8 @@ pub fn visibility(
         barycentric,
         size,
     } = *shooter;
-    let near = (centroid - x).length() < 2.0 * size;
+    // Only a finer grid than the first asks how near the shooter is.
+    let near = || (centroid - x).length() < 2.0 * size;
     // One shadow ray to a point of stratum (i, j) of the shooter's k x k grid, jittered by `h`:
     // `None` when the point is behind the receiver's plane (it does not count), else whether
     // the segment is unblocked.
@@ -436,7 +437,8 @@ pub fn visibility(
     // coarse stratum), and the fine estimate keeps it: that stratum gets no second ray.
     let r = k2 / k1;
     let nested = k2 % k1 == 0 && r > 1 && (k1 * k1) as usize <= FIRST_PASS_MAX;
-    let mut first = [(0u32, None::<bool>); FIRST_PASS_MAX];
+    // The coarse samples, kept only when the fine grid nests them (not filled otherwise).
+    let mut first = nested.then_some([(0u32, None::<bool>); FIRST_PASS_MAX]);
     let (mut seen, mut total) = (0u32, 0u32);
     for i in 0..k1 {
         for j in 0..k1 {
@@ -444,7 +446,9 @@ pub fn visibility(
             let result = if nested {
                 let sub = (hash(h ^ 0x5eed) % u64::from(r * r)) as u32;
                 let result = sample(i * r + sub / r, j * r + sub % r, k2, h);
-                first[(i * k1 + j) as usize] = (sub, result);
+                if let Some(first) = &mut first {
+                    first[(i * k1 + j) as usize] = (sub, result);
+                }
                 result
             } else {
                 sample(i, j, k1, h)
@@ -456,7 +460,7 @@ pub fn visibility(
         }
     }
     let mut cast = u64::from(total);
-    if k2 == k1 || (total > 0 && !near && (seen == 0 || seen == total)) {
+    if k2 == k1 || (total > 0 && !near() && (seen == 0 || seen == total)) {
         if total > 0 {
             return (f64::from(seen) / f64::from(total), cast);
         }
@@ -465,8 +469,9 @@ pub fn visibility(
         (seen, total) = (0, 0);
         for i in 0..k2 {
             for j in 0..k2 {
-                let kept = nested
-                    .then(|| first[((i / r) * k1 + j / r) as usize])
+                let kept = first
+                    .as_ref()
+                    .map(|f| f[((i / r) * k1 + j / r) as usize])
                     .filter(|&(sub, _)| sub == (i % r) * r + j % r);
                 let result = match kept {
                     Some((_, result)) => result,
