@@ -153,8 +153,10 @@ impl SourceTriangle {
     }
 
     /// [`SourceTriangle::form_factor`] from every point `x[i]` (unit normal `n[i]`) into
-    /// `out[i]`, four at a time ([`SourceTriangle::form_factors`]); the three slices are
-    /// equally long.
+    /// `out[i]`, four at a time ([`SourceTriangle::form_factors`]).
+    ///
+    /// # Panics
+    /// When the three slices differ in length.
     pub fn form_factors_into(
         &self,
         x: &[DVec3],
@@ -234,36 +236,27 @@ fn prepared_point_to_polygon(
     if clipped.len() < 3 {
         return 0.0;
     }
-    // Per edge: the angle it subtends (four at a time, as `SourceTriangle::form_factors`
-    // forms them), times the cosine of its plane's normal to the receiver's.
-    let mut arms = [(0.0, 0.0, 0.0); 8];
-    let mut arms_heap = Vec::new();
-    let arms: &mut [(f64, f64, f64)] = if clipped.len() <= arms.len() {
-        &mut arms[..clipped.len()]
-    } else {
-        arms_heap.resize(clipped.len(), (0.0, 0.0, 0.0));
-        &mut arms_heap
-    };
-    for (k, arm) in arms.iter_mut().enumerate() {
-        let r0 = clipped[k] - x;
-        let r1 = clipped[(k + 1) % clipped.len()] - x;
-        let c = r0.cross(r1);
-        let len = c.length();
-        // Zero-length arms or an edge through x: no contribution (the bounded limit).
-        if len <= 1e-300 || r0.length_squared() == 0.0 || r1.length_squared() == 0.0 {
-            continue;
-        }
-        *arm = (len, r0.dot(r1), n.dot(c));
-    }
+    // Per edge: the angle it subtends (four edges at a time, with the arctangent
+    // `SourceTriangle::form_factors` uses), times the cosine of its plane's normal to the
+    // receiver's; summed edge by edge.
     let mut sum = 0.0;
-    for four in arms.chunks(4) {
-        let lane = |i: usize, f: fn(&(f64, f64, f64)) -> f64| four.get(i).map_or(1.0, f);
-        let len = f64x4::new([0, 1, 2, 3].map(|i| lane(i, |a| a.0)));
-        let cos = f64x4::new([0, 1, 2, 3].map(|i| lane(i, |a| a.1)));
-        let gamma = len.atan2(cos).to_array();
-        for (i, &(len, _, normal)) in four.iter().enumerate() {
+    for first in (0..clipped.len()).step_by(4) {
+        // (|r0 x r1|, r0 . r1, n . (r0 x r1)) per edge; zero for an edge that contributes
+        // nothing: zero-length arms or an edge through x (the bounded limit).
+        let mut arms = [(0.0, 0.0, 0.0); 4];
+        for (k, arm) in (first..clipped.len().min(first + 4)).zip(&mut arms) {
+            let r0 = clipped[k] - x;
+            let r1 = clipped[(k + 1) % clipped.len()] - x;
+            let c = r0.cross(r1);
+            let len = c.length();
+            if len > 1e-300 && r0.length_squared() != 0.0 && r1.length_squared() != 0.0 {
+                *arm = (len, r0.dot(r1), n.dot(c));
+            }
+        }
+        let gamma = f64x4::new(arms.map(|a| a.0)).atan2(f64x4::new(arms.map(|a| a.1)));
+        for (gamma, (len, _, normal)) in gamma.to_array().into_iter().zip(arms) {
             if len > 0.0 {
-                sum += gamma[i] * normal / len;
+                sum += gamma * normal / len;
             }
         }
     }

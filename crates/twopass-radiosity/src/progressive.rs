@@ -579,16 +579,8 @@ impl<'s> Progressive<'s> {
     fn arrival_weights(&self, row: &[f32]) -> Vec<f64> {
         (0..self.mesh.patches.len())
             .map(|q| {
-                let range = self.elements.range(q);
                 let mut weight = 0.0;
-                for (vertices, &area) in self.elements.vertices[range.clone()]
-                    .iter()
-                    .zip(&self.elements.area[range])
-                {
-                    let h = (f64::from(row[vertices[0] as usize])
-                        + f64::from(row[vertices[1] as usize])
-                        + f64::from(row[vertices[2] as usize]))
-                        / 3.0;
+                for (h, area) in self.element_means(q, |v| f64::from(row[v])) {
                     if h > 0.0 {
                         weight += h * area;
                     }
@@ -738,7 +730,6 @@ impl<'s> Progressive<'s> {
             .collect()
     }
 
-    /// The form factors of every vertex to patch `p`, from the cache when possible.
     /// Each element (leaf) of patch `p`: the mean of the per-vertex `value` over its three
     /// vertices, and its area (scene units squared).
     fn element_means<'a, T>(
