@@ -630,14 +630,18 @@ impl WideBvh {
 
 impl WideBvh {
     /// The walk of up to eight coherent rays as one packet (rays in lanes): a node's eight
-    /// child boxes are first tested against the packet's bounding interval of rays (one
-    /// eight-box test for all its rays, [`PacketNodeRays::cull`]), and only the children it
-    /// keeps against each active ray ([`PacketNodeRays::lanes_hit`], the very operations of
-    /// [`WideNode::intersect`] for that ray, so each ray gets the single-ray walk's answer for
-    /// every box). A leaf is handed to `leaf(lane, packet, lanes, t_max)` once for each ray
-    /// whose box test it passed; `t_max[lane]` (each ray's, shortened by its hits) bounds its
-    /// box tests. Each ray meets every leaf the single-ray walk would meet for it, perhaps in
-    /// another order, so its closest hit is the same. `stack` is reused from packet to packet.
+    /// child boxes are tested against the packet's bounding interval of rays (one eight-box
+    /// test for all its rays, [`PacketNodeRays::cull`]); the inner children it keeps are
+    /// visited, nearest first by its bound on their entry, with every ray that entered the
+    /// node, and each leaf child it keeps is tested against each of those rays
+    /// ([`PacketNodeRays::lanes_hit`], the very operations of [`WideNode::intersect`] for that
+    /// ray). A leaf is handed to `leaf(lane, packet, lanes, t_max)` once for each ray whose
+    /// own box test it passed; `t_max[lane]` (each ray's, shortened by its hits) bounds that
+    /// test, and a popped child is skipped for the rays whose `t_max` is below its entry bound.
+    /// The cull keeps every box a ray's own test would, so each ray meets every leaf the
+    /// single-ray walk would meet for it (and perhaps a few whose box it meets, under a node
+    /// it would have missed by a rounding), in another order: its closest hit is the same.
+    /// `stack` is reused from packet to packet.
     pub(super) fn walk_packet(
         &self,
         rays: &PacketNodeRays,
@@ -679,29 +683,22 @@ impl WideBvh {
             let mut inner = [(0u32, 0u32, 0.0f32); 8];
             let mut inner_count = 0;
             for &c in &order[..count] {
-                // Against each ray's `t_max` as the leaves before have left it.
-                let (lanes, entries) = rays.lanes_hit(n, c, f32x8::new(*t_max));
-                let lanes = lanes & active;
-                if lanes == 0 {
+                if n.leaf & (1 << c) == 0 {
+                    // An inner child goes on with every ray that entered this node: the
+                    // cull's bound is all its entry distance needs (per-ray box tests here
+                    // cost about what the packet saves; the leaves below test each ray).
+                    inner[inner_count] = (n.child[c], active, near[c]);
+                    inner_count += 1;
                     continue;
                 }
-                if n.leaf & (1 << c) != 0 {
-                    let (p, tri_lanes) = (n.child[c], (n.lanes >> (4 * c)) & 0xf);
-                    let mut l = lanes;
-                    while l != 0 {
-                        let lane = l.trailing_zeros() as usize;
-                        l &= l - 1;
-                        leaf(lane, p, tri_lanes, &mut t_max[lane]);
-                    }
-                } else {
-                    let mut l = lanes;
-                    let mut nearest = f32::INFINITY;
-                    while l != 0 {
-                        nearest = nearest.min(entries[l.trailing_zeros() as usize]);
-                        l &= l - 1;
-                    }
-                    inner[inner_count] = (n.child[c], lanes, nearest);
-                    inner_count += 1;
+                // A leaf: each ray's own box test, against its `t_max` as the leaves before
+                // have left it.
+                let mut lanes = rays.lanes_hit(n, c, f32x8::new(*t_max)) & active;
+                let (p, tri_lanes) = (n.child[c], (n.lanes >> (4 * c)) & 0xf);
+                while lanes != 0 {
+                    let lane = lanes.trailing_zeros() as usize;
+                    lanes &= lanes - 1;
+                    leaf(lane, p, tri_lanes, &mut t_max[lane]);
                 }
             }
             // Nearest visited first: pushed last.
@@ -712,15 +709,10 @@ impl WideBvh {
                 };
                 // Skipped once every ray that entered it has found a hit nearer than its
                 // entry.
-                let mut l = lanes;
-                let mut live = 0;
-                while l != 0 {
-                    let lane = l.trailing_zeros() as usize;
-                    l &= l - 1;
-                    if near <= t_max[lane] * FAR_SLACK {
-                        live |= 1 << lane;
-                    }
-                }
+                let live = lanes
+                    & f32x8::splat(near)
+                        .simd_le(f32x8::new(*t_max) * f32x8::splat(FAR_SLACK))
+                        .to_bitmask();
                 if live != 0 {
                     break (child, live);
                 }
@@ -826,9 +818,9 @@ impl PacketNodeRays {
     }
 
     /// The rays (lanes) that meet child `c` of `n` within their `t_max`, each by exactly the
-    /// operations [`WideNode::intersect`] applies for it, and each ray's entry distance.
+    /// operations [`WideNode::intersect`] applies for it.
     #[inline(always)]
-    fn lanes_hit(&self, n: &WideNode, c: usize, t_max: f32x8) -> (u32, [f32; 8]) {
+    fn lanes_hit(&self, n: &WideNode, c: usize, t_max: f32x8) -> u32 {
         // `bounds` as plain floats: child `c`'s plane is one load, not a vector taken apart.
         let b: &[f32; 48] = bytemuck::cast_ref(&n.bounds);
         let (half, j) = (c / 4, c % 4);
@@ -840,7 +832,7 @@ impl PacketNodeRays {
             let side = self.near[axis] & 1;
             (t(axis, side), t(axis, side ^ 1))
         };
-        slabs_hit([slab(0), slab(1), slab(2)], t_max)
+        slabs_hit([slab(0), slab(1), slab(2)], t_max).0
     }
 }
 
