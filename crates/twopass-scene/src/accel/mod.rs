@@ -25,7 +25,7 @@ use obvhs::{
 };
 
 use collapse::collapse;
-use packet::{PacketRay, TriPacket};
+use packet::{PacketRay, RayLanes, TriPacket};
 pub(crate) use ray::SHADOW_EPSILON;
 pub use ray::{Ray, SurfacePoint};
 pub use shaft::SHAFT_TOLERANCE;
@@ -229,6 +229,53 @@ impl Accel {
         }
     }
 
+    /// [`Accel::nearer`] for each ray `rays` (bits) of a packet against lanes `lanes` of packet
+    /// `p`, tested one triangle at a time against all those rays at once ([`RayLanes`]). Each
+    /// triangle is tested against each ray as [`Accel::nearer`] would test it (with a bound
+    /// of the ray's `t_max`, a few ulps beyond once it has a hit), each hit bit for bit the
+    /// same, and kept by the same rule, so each ray ends with the hit the one-ray tests give.
+    #[inline(always)]
+    fn nearer_in_lanes(
+        &self,
+        in_lanes: &RayLanes,
+        rays: u32,
+        p: u32,
+        lanes: u32,
+        t_max: &mut [f32; 8],
+        best: &mut [Option<Nearest>; 8],
+    ) {
+        let packet = self.bvh.arena.packet(p);
+        let mut tris = lanes;
+        while tris != 0 {
+            let lane = tris.trailing_zeros() as usize;
+            tris &= tris - 1;
+            let bound = ::wide::f32x8::new(std::array::from_fn(|i| {
+                if best[i].is_some() {
+                    four_ulps_up(t_max[i])
+                } else {
+                    t_max[i]
+                }
+            }));
+            let hits = in_lanes.intersect(packet, lane, rays, bound);
+            let id = packet.ids[lane];
+            let mut found = hits.mask;
+            while found != 0 {
+                let i = found.trailing_zeros() as usize;
+                found &= found - 1;
+                let t = hits.t[i];
+                if best[i].is_none_or(|b| t < t_max[i] || (t == t_max[i] && id < b.id)) {
+                    t_max[i] = t;
+                    best[i] = Some(Nearest {
+                        packet: p,
+                        lane,
+                        id,
+                        barycentric: hits.barycentric(i),
+                    });
+                }
+            }
+        }
+    }
+
     /// What an interleaved walk starts ray `r` with: the ray as the node and packet tests see
     /// it, its `t_max`, and `found`, what it has found so far.
     fn walk_start<F>(r: &Ray, found: F) -> (NodeRay, f32, (PacketRay, F)) {
@@ -323,13 +370,27 @@ impl Accel {
             });
             let mut t_max: [f32; 8] = std::array::from_fn(|i| ray(i).t_max);
             let mut best: [Option<Nearest>; 8] = [None; 8];
+            let in_lanes = RayLanes::new(&sheared);
             self.bvh.walk_packet(
                 &packet,
                 &mut t_max,
                 &mut stack,
                 #[inline(always)]
-                |lane, p, lanes, t_max| {
-                    self.nearer(&sheared[lane], p, lanes, t_max, &mut best[lane])
+                |mut rays, p, lanes, t_max| match &in_lanes {
+                    // More than twice as many rays as triangles: each triangle against all
+                    // the rays at once (camera rays on the generated 1M room, in one process
+                    // against one test per ray: 1.05 / 1.09 / 1.05 from more than one / two
+                    // / three times as many rays, 0.92 from two rays up).
+                    Some(in_lanes) if rays.count_ones() > 2 * lanes.count_ones() => {
+                        self.nearer_in_lanes(in_lanes, rays, p, lanes, t_max, &mut best)
+                    }
+                    _ => {
+                        while rays != 0 {
+                            let i = rays.trailing_zeros() as usize;
+                            rays &= rays - 1;
+                            self.nearer(&sheared[i], p, lanes, &mut t_max[i], &mut best[i]);
+                        }
+                    }
                 },
             );
             for (i, hit) in hits.iter_mut().enumerate() {

@@ -635,7 +635,7 @@ impl WideBvh {
     /// visited, nearest first by its bound on their entry, with every ray that entered the
     /// node, and each leaf child it keeps is tested against each of those rays
     /// ([`PacketNodeRays::lanes_hit`], the very operations of [`WideNode::intersect`] for that
-    /// ray). A leaf is handed to `leaf(lane, packet, lanes, t_max)` once for each ray whose
+    /// ray). A leaf is handed to `leaf(rays, packet, lanes, t_max)` with the rays (bits) whose
     /// own box test it passed; `t_max[lane]` (each ray's, shortened by its hits) bounds that
     /// test, and a popped child is skipped for the rays whose `t_max` is below its entry bound.
     /// The cull keeps every box a ray's own test would, so each ray meets every leaf the
@@ -647,7 +647,7 @@ impl WideBvh {
         rays: &PacketNodeRays,
         t_max: &mut [f32; 8],
         stack: &mut Vec<(u32, u32, f32)>,
-        mut leaf: impl FnMut(usize, u32, u32, &mut f32),
+        mut leaf: impl FnMut(u32, u32, u32, &mut [f32; 8]),
     ) {
         if self.nodes == 0 || rays.active == 0 {
             return;
@@ -693,12 +693,9 @@ impl WideBvh {
                 }
                 // A leaf: each ray's own box test, against its `t_max` as the leaves before
                 // have left it.
-                let mut lanes = rays.lanes_hit(n, c, f32x8::new(*t_max)) & active;
-                let (p, tri_lanes) = (n.child[c], (n.lanes >> (4 * c)) & 0xf);
-                while lanes != 0 {
-                    let lane = lanes.trailing_zeros() as usize;
-                    lanes &= lanes - 1;
-                    leaf(lane, p, tri_lanes, &mut t_max[lane]);
+                let lanes = rays.lanes_hit(n, c, f32x8::new(*t_max)) & active;
+                if lanes != 0 {
+                    leaf(lanes, n.child[c], (n.lanes >> (4 * c)) & 0xf, t_max);
                 }
             }
             // Nearest visited first: pushed last.
