@@ -1,5 +1,6 @@
 //! The watertight test on four triangles at once (one ray, four lanes), bit for bit the
-//! operations of the scalar test in [`super::triangle`].
+//! operations of the scalar test in [`super::triangle`], and on one triangle against up to
+//! eight rays at once (rays in lanes, [`RayLanes`]), bit for bit the four-triangle test's.
 
 use glam::{Vec3A, Vec4};
 use wide::f32x8;
@@ -180,8 +181,9 @@ impl PacketRay {
 
 /// Up to eight rays for a one-triangle, eight-ray watertight test (rays in lanes): each ray's
 /// [`ShearedRay`] origin and shear in its lane, for rays that share one axis permutation. A
-/// leaf that more of a packet's rays reach than it holds triangles is tested this way, one
-/// triangle at a time, instead of once per ray.
+/// leaf that more than twice as many of a packet's rays reach as it holds triangles (on a
+/// large room seen by a camera, mostly the walls' few large triangles, reached by all eight)
+/// is tested this way, one triangle at a time, instead of once per ray.
 pub(super) struct RayLanes {
     k: [usize; 3],
     origin: [f32x8; 3],
@@ -386,10 +388,9 @@ mod tests {
                         let first = one
                             .each_ref()
                             .map(|ray| ray.intersect(packet, 1 << tri, f32::INFINITY));
-                        let t_hit =
-                            first
-                                .each_ref()
-                                .map(|h| if h.mask != 0 { h.t[tri] } else { 1.0 });
+                        let t_hit = first
+                            .each_ref()
+                            .map(|h| if h.mask != 0 { h.t[tri] } else { 1.0 });
                         for bound in [
                             t_hit.map(|_| f32::INFINITY),
                             t_hit,
