@@ -13,7 +13,8 @@ one ray at a time (`Accel::closest`, `Accel::any_hit`) and through the many-ray 
 rows marked `many` (`Accel::closest_many`,
 `Accel::any_hit_many`: eight rays walked in turn, what each reads next prefetched, on trees
 over 1 MiB, for batches that are not coherent; coherent ones such as the camera rays are
-walked eight at a time as one packet, each node tested once for the packet).
+walked eight at a time as one packet, each node tested once for the packet, each ray only
+at the leaves).
 Embree is measured one ray at a time only: embreex binds `rtcIntersect1` / `rtcOccluded1` and none of
 Embree 4's packet calls (`rtcIntersect4/8/16`), and Embree 4 has no stream API.
 
