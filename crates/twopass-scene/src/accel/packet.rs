@@ -48,6 +48,66 @@ impl TriPacket {
     }
 }
 
+/// Four-lane (`Vec4`) and eight-lane (`f32x8`) vectors, for the part of the two tests written
+/// once for both ([`t_error`]).
+trait Lanes: Copy + std::ops::Add<Output = Self> + std::ops::Mul<Output = Self> {
+    fn splat(x: f32) -> Self;
+    fn abs(self) -> Self;
+    fn max(self, other: Self) -> Self;
+}
+
+impl Lanes for Vec4 {
+    #[inline(always)]
+    fn splat(x: f32) -> Self {
+        Vec4::splat(x)
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        Vec4::abs(self)
+    }
+    #[inline(always)]
+    fn max(self, other: Self) -> Self {
+        Vec4::max(self, other)
+    }
+}
+
+impl Lanes for f32x8 {
+    #[inline(always)]
+    fn splat(x: f32) -> Self {
+        f32x8::splat(x)
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        f32x8::abs(self)
+    }
+    #[inline(always)]
+    fn max(self, other: Self) -> Self {
+        f32x8::max(self, other)
+    }
+}
+
+/// Per lane, the watertight test's conservative bound on the error of `t` (Woop et al. 2013,
+/// as in pbrt-v4), from the sheared vertex coordinates `px`, `py`, the scaled `pz`, the edge
+/// functions `e` and `1 / det`: a hit whose `t` is not above it cannot be told from 0. The
+/// same operations in the same order for four and for eight lanes, so both tests' bounds
+/// agree bit for bit.
+#[inline(always)]
+fn t_error<L: Lanes>(px: [L; 3], py: [L; 3], pz: [L; 3], e: [L; 3], inv_det: L) -> L {
+    let max3 = |a: [L; 3]| a[0].abs().max(a[1].abs()).max(a[2].abs());
+    let max_z = max3(pz);
+    let max_x = max3(px);
+    let max_y = max3(py);
+    let max_e = max3(e);
+    let delta_z = L::splat(gamma(3)) * max_z;
+    let delta_x = L::splat(gamma(5)) * (max_x + max_z);
+    let delta_y = L::splat(gamma(5)) * (max_y + max_z);
+    let delta_e =
+        L::splat(2.0) * (L::splat(gamma(2)) * max_x * max_y + delta_y * max_x + delta_x * max_y);
+    L::splat(3.0)
+        * (L::splat(gamma(3)) * max_e * max_z + delta_e * max_z + delta_z * max_e)
+        * inv_det.abs()
+}
+
 /// The hits of one [`TriPacket`] test: per lane, `t` and the three edge functions and
 /// `1 / det` to form barycentrics from, and the lanes that hit.
 pub(super) struct PacketHits {
@@ -154,19 +214,7 @@ impl PacketRay {
         let t = t_scaled * inv_det;
         if mask != 0 {
             // Conservative bound: reject hits whose t cannot be told from 0.
-            let max3 = |a: [Vec4; 3]| a[0].abs().max(a[1].abs()).max(a[2].abs());
-            let max_z = max3(pz);
-            let max_x = max3(px);
-            let max_y = max3(py);
-            let max_e = max3(e);
-            let delta_z = Vec4::splat(gamma(3)) * max_z;
-            let delta_x = Vec4::splat(gamma(5)) * (max_x + max_z);
-            let delta_y = Vec4::splat(gamma(5)) * (max_y + max_z);
-            let delta_e = Vec4::splat(2.0)
-                * (Vec4::splat(gamma(2)) * max_x * max_y + delta_y * max_x + delta_x * max_y);
-            let delta_t = Vec4::splat(3.0)
-                * (Vec4::splat(gamma(3)) * max_e * max_z + delta_e * max_z + delta_z * max_e)
-                * inv_det.abs();
+            let delta_t = t_error(px, py, pz, e, inv_det);
             // t > delta_t and t < t_max, both false for NaN.
             mask &= (t.cmpgt(delta_t) & t.cmplt(t_max4)).bitmask();
         }
@@ -290,19 +338,7 @@ impl RayLanes {
         let t = t_scaled * inv_det;
         if mask != 0 {
             // The four-triangle test's conservative bound on `t`, lane by lane.
-            let max3 = |a: [f32x8; 3]| a[0].abs().max(a[1].abs()).max(a[2].abs());
-            let max_z = max3(pz);
-            let max_x = max3(px);
-            let max_y = max3(py);
-            let max_e = max3(e);
-            let delta_z = f32x8::splat(gamma(3)) * max_z;
-            let delta_x = f32x8::splat(gamma(5)) * (max_x + max_z);
-            let delta_y = f32x8::splat(gamma(5)) * (max_y + max_z);
-            let delta_e = f32x8::splat(2.0)
-                * (f32x8::splat(gamma(2)) * max_x * max_y + delta_y * max_x + delta_x * max_y);
-            let delta_t = f32x8::splat(3.0)
-                * (f32x8::splat(gamma(3)) * max_e * max_z + delta_e * max_z + delta_z * max_e)
-                * inv_det.abs();
+            let delta_t = t_error(px, py, pz, e, inv_det);
             mask &= (t.simd_gt(delta_t) & t.simd_lt(bound)).to_bitmask();
         }
         hits.t = t.to_array();
