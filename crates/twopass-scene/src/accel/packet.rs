@@ -48,15 +48,36 @@ impl TriPacket {
     }
 }
 
-/// Four-lane (`Vec4`) and eight-lane (`f32x8`) vectors, for the part of the two tests written
-/// once for both ([`t_error`]).
-trait Lanes: Copy + std::ops::Add<Output = Self> + std::ops::Mul<Output = Self> {
+/// Four-lane (`Vec4`) and eight-lane (`f32x8`) vectors, for the part of the watertight test
+/// written once for both ([`solve`]): a ray against four triangles, or a triangle against
+/// eight rays.
+trait Lanes:
+    Copy
+    + std::ops::Add<Output = Self>
+    + std::ops::Sub<Output = Self>
+    + std::ops::Mul<Output = Self>
+    + std::ops::Div<Output = Self>
+{
+    /// A lane-wise comparison's result.
+    type Mask: Copy + std::ops::BitOr<Output = Self::Mask> + std::ops::BitAnd<Output = Self::Mask>;
     fn splat(x: f32) -> Self;
     fn abs(self) -> Self;
     fn max(self, other: Self) -> Self;
+    fn lt(self, other: Self) -> Self::Mask;
+    fn gt(self, other: Self) -> Self::Mask;
+    fn le(self, other: Self) -> Self::Mask;
+    fn ge(self, other: Self) -> Self::Mask;
+    fn eq(self, other: Self) -> Self::Mask;
+    /// Bit `i` set where lane `i` of `mask` is.
+    fn bits(mask: Self::Mask) -> u32;
+    /// Lane `i`.
+    fn lane(self, i: usize) -> f32;
+    /// `self` with lane `i` set to `x`.
+    fn with_lane(self, i: usize, x: f32) -> Self;
 }
 
 impl Lanes for Vec4 {
+    type Mask = glam::BVec4A;
     #[inline(always)]
     fn splat(x: f32) -> Self {
         Vec4::splat(x)
@@ -69,9 +90,43 @@ impl Lanes for Vec4 {
     fn max(self, other: Self) -> Self {
         Vec4::max(self, other)
     }
+    #[inline(always)]
+    fn lt(self, other: Self) -> Self::Mask {
+        self.cmplt(other)
+    }
+    #[inline(always)]
+    fn gt(self, other: Self) -> Self::Mask {
+        self.cmpgt(other)
+    }
+    #[inline(always)]
+    fn le(self, other: Self) -> Self::Mask {
+        self.cmple(other)
+    }
+    #[inline(always)]
+    fn ge(self, other: Self) -> Self::Mask {
+        self.cmpge(other)
+    }
+    #[inline(always)]
+    fn eq(self, other: Self) -> Self::Mask {
+        self.cmpeq(other)
+    }
+    #[inline(always)]
+    fn bits(mask: Self::Mask) -> u32 {
+        mask.bitmask()
+    }
+    #[inline(always)]
+    fn lane(self, i: usize) -> f32 {
+        self[i]
+    }
+    #[inline(always)]
+    fn with_lane(mut self, i: usize, x: f32) -> Self {
+        self[i] = x;
+        self
+    }
 }
 
 impl Lanes for f32x8 {
+    type Mask = f32x8;
     #[inline(always)]
     fn splat(x: f32) -> Self {
         f32x8::splat(x)
@@ -83,6 +138,118 @@ impl Lanes for f32x8 {
     #[inline(always)]
     fn max(self, other: Self) -> Self {
         f32x8::max(self, other)
+    }
+    #[inline(always)]
+    fn lt(self, other: Self) -> Self::Mask {
+        self.simd_lt(other)
+    }
+    #[inline(always)]
+    fn gt(self, other: Self) -> Self::Mask {
+        self.simd_gt(other)
+    }
+    #[inline(always)]
+    fn le(self, other: Self) -> Self::Mask {
+        self.simd_le(other)
+    }
+    #[inline(always)]
+    fn ge(self, other: Self) -> Self::Mask {
+        self.simd_ge(other)
+    }
+    #[inline(always)]
+    fn eq(self, other: Self) -> Self::Mask {
+        self.simd_eq(other)
+    }
+    #[inline(always)]
+    fn bits(mask: Self::Mask) -> u32 {
+        mask.to_bitmask()
+    }
+    #[inline(always)]
+    fn lane(self, i: usize) -> f32 {
+        self.as_array()[i]
+    }
+    #[inline(always)]
+    fn with_lane(self, i: usize, x: f32) -> Self {
+        let mut a = self.to_array();
+        a[i] = x;
+        f32x8::new(a)
+    }
+}
+
+/// What [`solve`] finds, per lane: `t`, the three edge functions and `1 / det` to form
+/// barycentrics from, and the lanes that hit.
+struct Solved<L> {
+    t: L,
+    e: [L; 3],
+    inv_det: L,
+    mask: u32,
+}
+
+/// The watertight test's steps after the shear, lane by lane (Woop et al. 2013, as in
+/// pbrt-v4): from each lane's sheared vertex coordinates `px`, `py` and unscaled `pz`, the
+/// ray's z scale `sz` and bound `bound`, whether the enabled lanes (bits of `lanes`) hit with
+/// `0 < t < bound`, and where. Every lane goes through the scalar test's operations in its
+/// order (no fused multiply-add; an edge function of exactly 0 decided again in f64), so
+/// four lanes and eight agree bit for bit with it and with each other.
+#[inline(always)]
+fn solve<L: Lanes>(px: [L; 3], py: [L; 3], pz: [L; 3], sz: L, bound: L, lanes: u32) -> Solved<L> {
+    let mut e = [
+        px[1] * py[2] - py[1] * px[2],
+        px[2] * py[0] - py[2] * px[0],
+        px[0] * py[1] - py[0] * px[1],
+    ];
+    let zero = L::splat(0.0);
+    let on_edge = L::bits(e[0].eq(zero) | e[1].eq(zero) | e[2].eq(zero)) & lanes;
+    if on_edge != 0 {
+        // On an edge in f32: decide in f64 so neighbours agree (as the scalar test).
+        let f = |a: f32, b: f32, c: f32, d: f32| {
+            (f64::from(a) * f64::from(b) - f64::from(c) * f64::from(d)) as f32
+        };
+        let (x, y) = (
+            |v: usize, l: usize| px[v].lane(l),
+            |v: usize, l: usize| py[v].lane(l),
+        );
+        let mut bits = on_edge;
+        while bits != 0 {
+            let l = bits.trailing_zeros() as usize;
+            e[0] = e[0].with_lane(l, f(x(1, l), y(2, l), y(1, l), x(2, l)));
+            e[1] = e[1].with_lane(l, f(x(2, l), y(0, l), y(2, l), x(0, l)));
+            e[2] = e[2].with_lane(l, f(x(0, l), y(1, l), y(0, l), x(1, l)));
+            bits &= bits - 1;
+        }
+    }
+    let neg = e[0].lt(zero) | e[1].lt(zero) | e[2].lt(zero);
+    let pos = e[0].gt(zero) | e[1].gt(zero) | e[2].gt(zero);
+    if lanes & !L::bits(neg & pos) == 0 {
+        // Every enabled lane is missed on the edge functions alone (most tests): no
+        // division, no distance.
+        return Solved {
+            t: zero,
+            e,
+            inv_det: zero,
+            mask: 0,
+        };
+    }
+    let det = e[0] + e[1] + e[2];
+    let pz = pz.map(|z| z * sz);
+    let t_scaled = e[0] * pz[0] + e[1] * pz[1] + e[2] * pz[2];
+    let limit = bound * det;
+    let behind_neg = det.lt(zero) & (t_scaled.ge(zero) | t_scaled.lt(limit));
+    let behind_pos = det.gt(zero) & (t_scaled.le(zero) | t_scaled.gt(limit));
+    let miss = (neg & pos) | det.eq(zero) | behind_neg | behind_pos;
+    let mut mask = lanes & !L::bits(miss);
+    let inv_det = L::splat(1.0) / det;
+    let t = t_scaled * inv_det;
+    if mask != 0 {
+        // Conservative bound: reject hits whose t cannot be told from 0; t > delta_t and
+        // t < bound, both false for NaN.
+        let delta_t = t_error(px, py, pz, e, inv_det);
+        mask &= L::bits(t.gt(delta_t) & t.lt(bound));
+    }
+    Solved {
+        t,
+        e,
+        inv_det,
+        mask,
     }
 }
 
@@ -168,56 +335,12 @@ impl PacketRay {
         let pz = [vz[0] - oz, vz[1] - oz, vz[2] - oz];
         let px = [0, 1, 2].map(|i| (vx[i] - ox) + sx * pz[i]);
         let py = [0, 1, 2].map(|i| (vy[i] - oy) + sy * pz[i]);
-        let mut e = [
-            px[1] * py[2] - py[1] * px[2],
-            px[2] * py[0] - py[2] * px[0],
-            px[0] * py[1] - py[0] * px[1],
-        ];
-        let zero = Vec4::ZERO;
-        let on_edge = (e[0].cmpeq(zero) | e[1].cmpeq(zero) | e[2].cmpeq(zero)).bitmask() & lanes;
-        if on_edge != 0 {
-            // On an edge in f32: decide in f64 so neighbours agree (as the scalar test).
-            let f = |a: f32, b: f32, c: f32, d: f32| {
-                (f64::from(a) * f64::from(b) - f64::from(c) * f64::from(d)) as f32
-            };
-            let mut bits = on_edge;
-            while bits != 0 {
-                let l = bits.trailing_zeros() as usize;
-                e[0][l] = f(px[1][l], py[2][l], py[1][l], px[2][l]);
-                e[1][l] = f(px[2][l], py[0][l], py[2][l], px[0][l]);
-                e[2][l] = f(px[0][l], py[1][l], py[0][l], px[1][l]);
-                bits &= bits - 1;
-            }
-        }
-        let neg = e[0].cmplt(zero) | e[1].cmplt(zero) | e[2].cmplt(zero);
-        let pos = e[0].cmpgt(zero) | e[1].cmpgt(zero) | e[2].cmpgt(zero);
-        if lanes & !(neg & pos).bitmask() == 0 {
-            // Every enabled lane is missed on the edge functions alone (most leaf tests): no
-            // division, no distance.
-            return PacketHits {
-                t: zero,
-                e,
-                inv_det: zero,
-                mask: 0,
-            };
-        }
-        let det = e[0] + e[1] + e[2];
-        let pz = pz.map(|z| z * sz);
-        let t_scaled = e[0] * pz[0] + e[1] * pz[1] + e[2] * pz[2];
-        let t_max4 = Vec4::splat(t_max);
-        let limit = t_max4 * det;
-        let behind_neg = det.cmplt(zero) & (t_scaled.cmpge(zero) | t_scaled.cmplt(limit));
-        let behind_pos = det.cmpgt(zero) & (t_scaled.cmple(zero) | t_scaled.cmpgt(limit));
-        let miss = (neg & pos) | det.cmpeq(zero) | behind_neg | behind_pos;
-        let mut mask = lanes & !miss.bitmask();
-        let inv_det = Vec4::ONE / det;
-        let t = t_scaled * inv_det;
-        if mask != 0 {
-            // Conservative bound: reject hits whose t cannot be told from 0.
-            let delta_t = t_error(px, py, pz, e, inv_det);
-            // t > delta_t and t < t_max, both false for NaN.
-            mask &= (t.cmpgt(delta_t) & t.cmplt(t_max4)).bitmask();
-        }
+        let Solved {
+            t,
+            e,
+            inv_det,
+            mask,
+        } = solve(px, py, pz, sz, Vec4::splat(t_max), lanes);
         PacketHits {
             t,
             e,
@@ -290,61 +413,13 @@ impl RayLanes {
         let pz = [0, 1, 2].map(|i| v(kz, i) - oz);
         let px = [0, 1, 2].map(|i| (v(kx, i) - ox) + sx * pz[i]);
         let py = [0, 1, 2].map(|i| (v(ky, i) - oy) + sy * pz[i]);
-        let mut e = [
-            px[1] * py[2] - py[1] * px[2],
-            px[2] * py[0] - py[2] * px[0],
-            px[0] * py[1] - py[0] * px[1],
-        ];
-        let zero = f32x8::ZERO;
-        let on_edge =
-            (e[0].simd_eq(zero) | e[1].simd_eq(zero) | e[2].simd_eq(zero)).to_bitmask() & lanes;
-        if on_edge != 0 {
-            // On an edge in f32: decide in f64, as the four-triangle test does.
-            let f = |a: f32, b: f32, c: f32, d: f32| {
-                (f64::from(a) * f64::from(b) - f64::from(c) * f64::from(d)) as f32
-            };
-            let (px, py) = (px.map(f32x8::to_array), py.map(f32x8::to_array));
-            let mut ea = e.map(f32x8::to_array);
-            let mut bits = on_edge;
-            while bits != 0 {
-                let l = bits.trailing_zeros() as usize;
-                ea[0][l] = f(px[1][l], py[2][l], py[1][l], px[2][l]);
-                ea[1][l] = f(px[2][l], py[0][l], py[2][l], px[0][l]);
-                ea[2][l] = f(px[0][l], py[1][l], py[0][l], px[1][l]);
-                bits &= bits - 1;
-            }
-            e = ea.map(f32x8::new);
+        let solved = solve(px, py, pz, sz, bound, lanes);
+        LaneHits {
+            t: solved.t.to_array(),
+            e: solved.e.map(f32x8::to_array),
+            inv_det: solved.inv_det.to_array(),
+            mask: solved.mask,
         }
-        let neg = e[0].simd_lt(zero) | e[1].simd_lt(zero) | e[2].simd_lt(zero);
-        let pos = e[0].simd_gt(zero) | e[1].simd_gt(zero) | e[2].simd_gt(zero);
-        let mut hits = LaneHits {
-            t: [0.0; 8],
-            e: e.map(f32x8::to_array),
-            inv_det: [0.0; 8],
-            mask: 0,
-        };
-        if lanes & !(neg & pos).to_bitmask() == 0 {
-            return hits;
-        }
-        let det = e[0] + e[1] + e[2];
-        let pz = pz.map(|z| z * sz);
-        let t_scaled = e[0] * pz[0] + e[1] * pz[1] + e[2] * pz[2];
-        let limit = bound * det;
-        let behind_neg = det.simd_lt(zero) & (t_scaled.simd_ge(zero) | t_scaled.simd_lt(limit));
-        let behind_pos = det.simd_gt(zero) & (t_scaled.simd_le(zero) | t_scaled.simd_gt(limit));
-        let miss = (neg & pos) | det.simd_eq(zero) | behind_neg | behind_pos;
-        let mut mask = lanes & !miss.to_bitmask();
-        let inv_det = f32x8::ONE / det;
-        let t = t_scaled * inv_det;
-        if mask != 0 {
-            // The four-triangle test's conservative bound on `t`, lane by lane.
-            let delta_t = t_error(px, py, pz, e, inv_det);
-            mask &= (t.simd_gt(delta_t) & t.simd_lt(bound)).to_bitmask();
-        }
-        hits.t = t.to_array();
-        hits.inv_det = inv_det.to_array();
-        hits.mask = mask;
-        hits
     }
 }
 
