@@ -76,104 +76,50 @@ trait Lanes:
     fn with_lane(self, i: usize, x: f32) -> Self;
 }
 
-impl Lanes for Vec4 {
-    type Mask = glam::BVec4A;
-    #[inline(always)]
-    fn splat(x: f32) -> Self {
-        Vec4::splat(x)
-    }
-    #[inline(always)]
-    fn abs(self) -> Self {
-        Vec4::abs(self)
-    }
-    #[inline(always)]
-    fn max(self, other: Self) -> Self {
-        Vec4::max(self, other)
-    }
-    #[inline(always)]
-    fn lt(self, other: Self) -> Self::Mask {
-        self.cmplt(other)
-    }
-    #[inline(always)]
-    fn gt(self, other: Self) -> Self::Mask {
-        self.cmpgt(other)
-    }
-    #[inline(always)]
-    fn le(self, other: Self) -> Self::Mask {
-        self.cmple(other)
-    }
-    #[inline(always)]
-    fn ge(self, other: Self) -> Self::Mask {
-        self.cmpge(other)
-    }
-    #[inline(always)]
-    fn eq(self, other: Self) -> Self::Mask {
-        self.cmpeq(other)
-    }
-    #[inline(always)]
-    fn bits(mask: Self::Mask) -> u32 {
-        mask.bitmask()
-    }
-    #[inline(always)]
-    fn lane(self, i: usize) -> f32 {
-        self[i]
-    }
-    #[inline(always)]
-    fn with_lane(mut self, i: usize, x: f32) -> Self {
-        self[i] = x;
-        self
-    }
+/// [`Lanes`] for a vector type through its own functions: the mask type, the bitmask method,
+/// and for each comparison the method that makes it.
+macro_rules! lanes {
+    ($t:ty, $mask:ty, $bits:ident, $($cmp:ident => $method:ident),*) => {
+        impl Lanes for $t {
+            type Mask = $mask;
+            #[inline(always)]
+            fn splat(x: f32) -> Self {
+                <$t>::splat(x)
+            }
+            #[inline(always)]
+            fn abs(self) -> Self {
+                <$t>::abs(self)
+            }
+            #[inline(always)]
+            fn max(self, other: Self) -> Self {
+                <$t>::max(self, other)
+            }
+            $(
+                #[inline(always)]
+                fn $cmp(self, other: Self) -> Self::Mask {
+                    self.$method(other)
+                }
+            )*
+            #[inline(always)]
+            fn bits(mask: Self::Mask) -> u32 {
+                mask.$bits()
+            }
+            #[inline(always)]
+            fn lane(self, i: usize) -> f32 {
+                self.to_array()[i]
+            }
+            #[inline(always)]
+            fn with_lane(self, i: usize, x: f32) -> Self {
+                let mut a = self.to_array();
+                a[i] = x;
+                <$t>::from(a)
+            }
+        }
+    };
 }
 
-impl Lanes for f32x8 {
-    type Mask = f32x8;
-    #[inline(always)]
-    fn splat(x: f32) -> Self {
-        f32x8::splat(x)
-    }
-    #[inline(always)]
-    fn abs(self) -> Self {
-        f32x8::abs(self)
-    }
-    #[inline(always)]
-    fn max(self, other: Self) -> Self {
-        f32x8::max(self, other)
-    }
-    #[inline(always)]
-    fn lt(self, other: Self) -> Self::Mask {
-        self.simd_lt(other)
-    }
-    #[inline(always)]
-    fn gt(self, other: Self) -> Self::Mask {
-        self.simd_gt(other)
-    }
-    #[inline(always)]
-    fn le(self, other: Self) -> Self::Mask {
-        self.simd_le(other)
-    }
-    #[inline(always)]
-    fn ge(self, other: Self) -> Self::Mask {
-        self.simd_ge(other)
-    }
-    #[inline(always)]
-    fn eq(self, other: Self) -> Self::Mask {
-        self.simd_eq(other)
-    }
-    #[inline(always)]
-    fn bits(mask: Self::Mask) -> u32 {
-        mask.to_bitmask()
-    }
-    #[inline(always)]
-    fn lane(self, i: usize) -> f32 {
-        self.as_array()[i]
-    }
-    #[inline(always)]
-    fn with_lane(self, i: usize, x: f32) -> Self {
-        let mut a = self.to_array();
-        a[i] = x;
-        f32x8::new(a)
-    }
-}
+lanes!(Vec4, glam::BVec4A, bitmask, lt => cmplt, gt => cmpgt, le => cmple, ge => cmpge, eq => cmpeq);
+lanes!(f32x8, f32x8, to_bitmask, lt => simd_lt, gt => simd_gt, le => simd_le, ge => simd_ge, eq => simd_eq);
 
 /// What [`solve`] finds, per lane: `t`, the three edge functions and `1 / det` to form
 /// barycentrics from, and the lanes that hit.
