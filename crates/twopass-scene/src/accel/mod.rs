@@ -217,7 +217,7 @@ impl Accel {
             return;
         }
         let lane = hits.nearest(&packet.ids);
-        let (t, id) = (hits.t[lane], packet.ids[lane]);
+        let (t, id) = (hits.t_of(lane), packet.ids[lane]);
         if best.is_none_or(|b| t < *t_max || (t == *t_max && id < b.id)) {
             *t_max = t;
             *best = Some(Nearest {
@@ -262,7 +262,7 @@ impl Accel {
             while found != 0 {
                 let i = found.trailing_zeros() as usize;
                 found &= found - 1;
-                let t = hits.t[i];
+                let t = hits.t_of(i);
                 if best[i].is_none_or(|b| t < t_max[i] || (t == t_max[i] && id < b.id)) {
                     t_max[i] = t;
                     best[i] = Some(Nearest {
@@ -556,6 +556,8 @@ fn four_ulps_up(t: f32) -> f32 {
 
 #[cfg(test)]
 mod tests {
+    use super::*;
+
     /// The one-add form is `next_up` four times over, from the smallest subnormal to just
     /// under the largest float, and for zero, negative, infinite and NaN distances.
     #[test]
@@ -580,16 +582,10 @@ mod tests {
             bits += 0x1357;
         }
         for t in cases {
-            assert_eq!(
-                super::four_ulps_up(t).to_bits(),
-                steps(t).to_bits(),
-                "{t:e}"
-            );
+            assert_eq!(four_ulps_up(t).to_bits(), steps(t).to_bits(), "{t:e}");
         }
-        assert!(super::four_ulps_up(f32::NAN).is_nan());
+        assert!(four_ulps_up(f32::NAN).is_nan());
     }
-
-    use super::*;
 
     /// Two triangles forming the unit square in the plane z = 0.
     fn square() -> (Vec<Vec3>, Vec<[u32; 3]>) {

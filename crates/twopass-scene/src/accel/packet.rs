@@ -51,7 +51,7 @@ impl TriPacket {
 /// Four-lane (`Vec4`) and eight-lane (`f32x8`) vectors, for the part of the watertight test
 /// written once for both ([`solve`]): a ray against four triangles, or a triangle against
 /// eight rays.
-trait Lanes:
+pub(super) trait Lanes:
     Copy
     + std::ops::Add<Output = Self>
     + std::ops::Sub<Output = Self>
@@ -121,13 +121,32 @@ macro_rules! lanes {
 lanes!(Vec4, glam::BVec4A, bitmask, lt => cmplt, gt => cmpgt, le => cmple, ge => cmpge, eq => cmpeq);
 lanes!(f32x8, f32x8, to_bitmask, lt => simd_lt, gt => simd_gt, le => simd_le, ge => simd_ge, eq => simd_eq);
 
-/// What [`solve`] finds, per lane: `t`, the three edge functions and `1 / det` to form
-/// barycentrics from, and the lanes that hit.
-struct Solved<L> {
-    t: L,
-    e: [L; 3],
-    inv_det: L,
-    mask: u32,
+/// What a watertight test ([`solve`]) finds, per lane: `t`, the three edge functions and
+/// `1 / det` to form barycentrics from, and the lanes that hit. Lanes are triangles of a
+/// [`TriPacket`] for one ray ([`PacketHits`]) or rays for one triangle ([`LaneHits`]).
+pub(super) struct Hits<L> {
+    pub(super) t: L,
+    pub(super) e: [L; 3],
+    pub(super) inv_det: L,
+    pub(super) mask: u32,
+}
+
+/// The hits of one ray against a [`TriPacket`]'s four triangles ([`PacketRay::intersect`]).
+pub(super) type PacketHits = Hits<Vec4>;
+
+/// The hits of up to eight rays against one triangle ([`RayLanes::intersect`]).
+pub(super) type LaneHits = Hits<f32x8>;
+
+impl<L: Lanes> Hits<L> {
+    /// `t` of lane `lane`.
+    pub(super) fn t_of(&self, lane: usize) -> f32 {
+        self.t.lane(lane)
+    }
+
+    /// Barycentrics of lane `lane`.
+    pub(super) fn barycentric(&self, lane: usize) -> [f32; 3] {
+        self.e.map(|e| e.lane(lane) * self.inv_det.lane(lane))
+    }
 }
 
 /// The watertight test's steps after the shear, lane by lane (Woop et al. 2013, as in
@@ -137,7 +156,7 @@ struct Solved<L> {
 /// order (no fused multiply-add; an edge function of exactly 0 decided again in f64), so
 /// four lanes and eight agree bit for bit with it and with each other.
 #[inline(always)]
-fn solve<L: Lanes>(px: [L; 3], py: [L; 3], pz: [L; 3], sz: L, bound: L, lanes: u32) -> Solved<L> {
+fn solve<L: Lanes>(px: [L; 3], py: [L; 3], pz: [L; 3], sz: L, bound: L, lanes: u32) -> Hits<L> {
     let mut e = [
         px[1] * py[2] - py[1] * px[2],
         px[2] * py[0] - py[2] * px[0],
@@ -168,7 +187,7 @@ fn solve<L: Lanes>(px: [L; 3], py: [L; 3], pz: [L; 3], sz: L, bound: L, lanes: u
     if lanes & !L::bits(neg & pos) == 0 {
         // Every enabled lane is missed on the edge functions alone (most tests): no
         // division, no distance.
-        return Solved {
+        return Hits {
             t: zero,
             e,
             inv_det: zero,
@@ -191,7 +210,7 @@ fn solve<L: Lanes>(px: [L; 3], py: [L; 3], pz: [L; 3], sz: L, bound: L, lanes: u
         let delta_t = t_error(px, py, pz, e, inv_det);
         mask &= L::bits(t.gt(delta_t) & t.lt(bound));
     }
-    Solved {
+    Hits {
         t,
         e,
         inv_det,
@@ -221,15 +240,6 @@ fn t_error<L: Lanes>(px: [L; 3], py: [L; 3], pz: [L; 3], e: [L; 3], inv_det: L) 
         * inv_det.abs()
 }
 
-/// The hits of one [`TriPacket`] test: per lane, `t` and the three edge functions and
-/// `1 / det` to form barycentrics from, and the lanes that hit.
-pub(super) struct PacketHits {
-    pub(super) t: Vec4,
-    pub(super) e: [Vec4; 3],
-    pub(super) inv_det: Vec4,
-    pub(super) mask: u32,
-}
-
 impl PacketHits {
     /// The lane with the smallest `t` among the hits (there must be one), and of lanes at
     /// equal `t` the one with the smallest triangle index (`ids`, the packet's), so that the
@@ -245,11 +255,6 @@ impl PacketHits {
             rest &= rest - 1;
         }
         best
-    }
-
-    /// Barycentrics of lane `lane`.
-    pub(super) fn barycentric(&self, lane: usize) -> [f32; 3] {
-        self.e.map(|e| e[lane] * self.inv_det[lane])
     }
 }
 
@@ -281,18 +286,7 @@ impl PacketRay {
         let pz = [vz[0] - oz, vz[1] - oz, vz[2] - oz];
         let px = [0, 1, 2].map(|i| (vx[i] - ox) + sx * pz[i]);
         let py = [0, 1, 2].map(|i| (vy[i] - oy) + sy * pz[i]);
-        let Solved {
-            t,
-            e,
-            inv_det,
-            mask,
-        } = solve(px, py, pz, sz, Vec4::splat(t_max), lanes);
-        PacketHits {
-            t,
-            e,
-            inv_det,
-            mask,
-        }
+        solve(px, py, pz, sz, Vec4::splat(t_max), lanes)
     }
 }
 
@@ -305,22 +299,6 @@ pub(super) struct RayLanes {
     k: [usize; 3],
     origin: [f32x8; 3],
     shear: [f32x8; 3],
-}
-
-/// The hits of one [`RayLanes`] test: per ray (lane), `t`, the three edge functions and
-/// `1 / det` to form barycentrics from, and the lanes that hit.
-pub(super) struct LaneHits {
-    pub(super) t: [f32; 8],
-    pub(super) e: [[f32; 8]; 3],
-    pub(super) inv_det: [f32; 8],
-    pub(super) mask: u32,
-}
-
-impl LaneHits {
-    /// Barycentrics of ray `lane`'s hit.
-    pub(super) fn barycentric(&self, lane: usize) -> [f32; 3] {
-        self.e.map(|e| e[lane] * self.inv_det[lane])
-    }
 }
 
 impl RayLanes {
@@ -359,13 +337,7 @@ impl RayLanes {
         let pz = [0, 1, 2].map(|i| v(kz, i) - oz);
         let px = [0, 1, 2].map(|i| (v(kx, i) - ox) + sx * pz[i]);
         let py = [0, 1, 2].map(|i| (v(ky, i) - oy) + sy * pz[i]);
-        let solved = solve(px, py, pz, sz, bound, lanes);
-        LaneHits {
-            t: solved.t.to_array(),
-            e: solved.e.map(f32x8::to_array),
-            inv_det: solved.inv_det.to_array(),
-            mask: solved.mask,
-        }
+        solve(px, py, pz, sz, bound, lanes)
     }
 }
 
@@ -447,7 +419,7 @@ mod tests {
                             .map(|ray| ray.intersect(packet, 1 << tri, f32::INFINITY));
                         let t_hit = first
                             .each_ref()
-                            .map(|h| if h.mask != 0 { h.t[tri] } else { 1.0 });
+                            .map(|h| if h.mask != 0 { h.t_of(tri) } else { 1.0 });
                         for bound in [
                             t_hit.map(|_| f32::INFINITY),
                             t_hit,
@@ -462,10 +434,10 @@ mod tests {
                                 assert_eq!(hit, lanes.mask & (1 << i) != 0, "ray {i} tri {tri}");
                                 if hit {
                                     hits += 1;
-                                    assert_eq!(h.t[tri].to_bits(), lanes.t[i].to_bits());
+                                    assert_eq!(h.t_of(tri).to_bits(), lanes.t_of(i).to_bits());
                                     let b = h.barycentric(tri).map(f32::to_bits);
                                     assert_eq!(b, lanes.barycentric(i).map(f32::to_bits));
-                                    if lanes.e.iter().any(|e| e[i] == 0.0) {
+                                    if lanes.e.iter().any(|e| e.as_array()[i] == 0.0) {
                                         on_edge += 1;
                                     }
                                 }
