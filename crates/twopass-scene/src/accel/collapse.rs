@@ -2,7 +2,8 @@
 //! up to [`LEAF_SIZE`] triangles, one four-lane packet test each. Which binary nodes become
 //! 8-wide nodes, which become leaves and which are opened into their parent is chosen by
 //! dynamic programming on the surface area heuristic (the collapse of Ylitie, Karras & Laine
-//! 2017, with our costs: a leaf costs one packet test however many lanes it fills).
+//! 2017, with our costs: a leaf costs one packet test however many lanes it fills). Leaves
+//! of one node whose triangles fit together share a packet, each testing only its own lanes.
 
 use glam::Vec4;
 use obvhs::bvh2::Bvh2;
@@ -169,13 +170,15 @@ fn slots(centres: &[Vec4]) -> [usize; 8] {
 
 /// Collapses `bvh` (non-empty, one triangle per leaf) into 8-wide nodes, root first and every
 /// node before its children (depth first), each naming its inner children by their index in
-/// the list. `leaf(triangles)` stores a leaf's scene triangles (at most [`LEAF_SIZE`]) as one
-/// packet and returns its index, which names the leaf.
+/// the list. `leaf(triangles)` stores scene triangles (at most [`LEAF_SIZE`]: those of one
+/// leaf, or of several leaves of one node that fit together) as one packet and returns its
+/// index, which names those leaves; each leaf's lanes in it are in the node's `lanes`.
 pub(super) fn collapse(bvh: &Bvh2, mut leaf: impl FnMut(&[u32]) -> u32) -> Vec<WideNode> {
     let plan = plan(bvh);
     let mut nodes: Vec<WideNode> = Vec::new();
     let mut pieces = Vec::with_capacity(8);
     let mut tris = Vec::with_capacity(LEAF_SIZE as usize);
+    let mut leaves: Vec<(usize, Vec<u32>)> = Vec::with_capacity(8);
     // (binary node, its 8-wide parent and slot there); the root has no parent.
     let mut stack = vec![(0usize, usize::MAX, 0usize)];
     while let Some((n, parent, parent_slot)) = stack.pop() {
@@ -199,6 +202,7 @@ pub(super) fn collapse(bvh: &Bvh2, mut leaf: impl FnMut(&[u32]) -> u32) -> Vec<W
         let mut max = [[f32::NEG_INFINITY; 8]; 3];
         let mut node = WideNode::EMPTY;
         let mut inner = Vec::with_capacity(8);
+        leaves.clear();
         for (&p, &s) in pieces.iter().zip(&slot) {
             let b = bvh.nodes[p].aabb();
             for axis in 0..3 {
@@ -208,12 +212,39 @@ pub(super) fn collapse(bvh: &Bvh2, mut leaf: impl FnMut(&[u32]) -> u32) -> Vec<W
             if matches!(plan.choice[p][0], Choice::Leaf) {
                 tris.clear();
                 plan.triangles(p, &mut tris);
-                node.child[s] = leaf(&tris);
-                node.lanes |= ((1 << tris.len()) - 1) << (4 * s);
+                leaves.push((s, tris.clone()));
                 node.leaf |= 1 << s;
             } else {
                 node.inner |= 1 << s;
                 inner.push((p, s));
+            }
+        }
+        // The node's leaves share packets where their triangles fit together (largest first,
+        // each into the first packet with room, in slot order among equals): a packet's
+        // lanes are tested only where its leaf's box is hit, so sharing costs no test, and
+        // the tree is smaller (on the generated 1M room 2.59 triangles per packet alone).
+        leaves.sort_by_key(|(s, t)| (std::cmp::Reverse(t.len()), *s));
+        let mut shared: Vec<(Vec<u32>, Vec<usize>)> = Vec::with_capacity(8);
+        for (s, t) in &leaves {
+            match shared
+                .iter_mut()
+                .find(|(held, _)| held.len() + t.len() <= LEAF_SIZE as usize)
+            {
+                Some((held, slots)) => {
+                    node.lanes |= (((1 << t.len()) - 1) << held.len()) << (4 * s);
+                    held.extend_from_slice(t);
+                    slots.push(*s);
+                }
+                None => {
+                    node.lanes |= ((1 << t.len()) - 1) << (4 * s);
+                    shared.push((t.clone(), vec![*s]));
+                }
+            }
+        }
+        for (held, slots) in &shared {
+            let packet = leaf(held);
+            for &s in slots {
+                node.child[s] = packet;
             }
         }
         node.set_bounds(&min, &max);
@@ -248,21 +279,26 @@ mod tests {
         let n = accel.bvh.arena.node(node as u32);
         assert_eq!(n.inner & n.leaf, 0, "a child both inner and leaf");
         let mut all = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
+        // Per packet, the lanes the node's leaves hold.
+        let mut shared = std::collections::HashMap::new();
         for c in 0..8 {
             let (lo, hi) = if n.leaf & (1 << c) != 0 {
                 let p = n.child[c] as usize;
                 let lanes = (n.lanes >> (4 * c)) & 0xf;
                 assert!(
-                    lanes != 0 && (lanes + 1).is_power_of_two(),
+                    lanes != 0 && ((lanes >> lanes.trailing_zeros()) + 1).is_power_of_two(),
                     "lanes {lanes:b}"
                 );
                 assert!(lanes.count_ones() <= LEAF_SIZE);
+                // Leaves of this node that share the packet hold other lanes of it.
+                let held = shared.entry(p).or_insert(0);
+                assert_eq!(*held & lanes, 0, "two leaves hold one lane");
+                *held |= lanes;
                 let packet = accel.bvh.arena.packet(p as u32);
                 let v = &packet.v;
                 let mut b = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
                 for (lane, &id) in packet.ids.iter().enumerate() {
                     if lanes & (1 << lane) == 0 {
-                        assert_eq!(id, u32::MAX);
                         continue;
                     }
                     seen[id as usize] += 1;
@@ -293,6 +329,12 @@ mod tests {
                 );
             }
             all = (all.0.min(lo), all.1.max(hi));
+        }
+        // A packet's lanes that no leaf holds name no triangle.
+        for (p, held) in shared {
+            for (lane, &id) in accel.bvh.arena.packet(p as u32).ids.iter().enumerate() {
+                assert_eq!(held & (1 << lane) == 0, id == u32::MAX, "lane {lane}");
+            }
         }
         all
     }

@@ -71,7 +71,8 @@ pub(super) struct WideNode {
     pub(super) bounds: [Vec4; 12],
     /// Per child: where its node (inner) or its packet (leaf) starts; 0 when empty.
     pub(super) child: [u32; 8],
-    /// Per child, four bits from bit `4 * child`: the leaf's lanes in its packet.
+    /// Per child, four bits from bit `4 * child`: the leaf's lanes in its packet (leaves of
+    /// one node may share a packet, each holding other lanes of it).
     pub(super) lanes: u32,
     /// Bit `c` set when child `c` is an inner node.
     pub(super) inner: u8,
@@ -355,16 +356,20 @@ impl WideBvh {
             }
         }
         let mut node_at = vec![0u32; nodes.len()];
-        let mut packet_at = vec![0u32; packets.len()];
+        let mut packet_at = vec![u32::MAX; packets.len()];
         let mut end = 0usize;
         let mut hot_end = 0usize;
         for (k, &i) in order.iter().enumerate() {
             end += end % 2;
             node_at[i] = end as u32;
             end += NODE_UNITS;
+            // A packet that several of the node's leaves share is stored once.
             for c in slots(nodes[i].leaf) {
-                packet_at[nodes[i].child[c] as usize] = end as u32;
-                end += PACKET_UNITS;
+                let p = nodes[i].child[c] as usize;
+                if packet_at[p] == u32::MAX {
+                    packet_at[p] = end as u32;
+                    end += PACKET_UNITS;
+                }
             }
             if k + 1 == hot_nodes {
                 hot_end = end;
