@@ -121,8 +121,13 @@ impl WideNode {
 
     /// Of the inner children `inner` (hit by `ray`, entry distances `near`), the one to descend
     /// into; the others go to `push` (child, entry distance) so that the next to visit is
-    /// pushed last. With `ordered`, nearest first; without, in the builder's octant order (any
-    /// hit: no distances to sort; pushed with distance 0).
+    /// pushed last. With `ordered`, nearest first; without (any hit: no distances to sort;
+    /// pushed with distance 0), farthest first in the builder's octant order. A ray that
+    /// leaves a surface, as every shadow ray does, enters the boxes of that surface's own
+    /// leaves first, and they can hardly block it; from the far end (for a shadow ray, the
+    /// light's), what blocks it is found before them. Occlusion rays from surfaces to the
+    /// light on the generated 1M room: 1.18-1.23x faster than nearest first (in one process,
+    /// 1.19 on 102k); a hierarchical solve, whose rays join surfaces at both ends, as fast.
     #[inline(always)]
     fn descend(
         &self,
@@ -136,9 +141,10 @@ impl WideNode {
             return self.child[inner.trailing_zeros() as usize];
         }
         if !ordered {
-            // Descending `slot ^ octant`; push the rest so that the next in that order is
-            // popped first.
-            let o = ray.octant;
+            // Descending `slot ^ octant` is front to back; that of the reversed direction's
+            // octant back to front. Push the rest so that the next in that order is popped
+            // first.
+            let o = ray.octant ^ 7;
             let mut order = u32::from(XOR_PERMUTE[o][inner as usize]);
             let first = 31 - order.leading_zeros();
             order &= !(1 << first);
@@ -401,8 +407,9 @@ impl WideBvh {
     /// Visits the leaves `ray` reaches within `t_max`, calling `leaf(packet, lanes, t_max)`;
     /// the call may shorten `t_max` (a closer hit), and returns `true` to stop the walk. With
     /// `ordered`, inner children are visited nearest first and a pushed child is skipped once
-    /// `t_max` is below its entry distance (closest hit); without, in the builder's octant order
-    /// (any hit: no distances to sort or compare). Where a node has several leaves to visit,
+    /// `t_max` is below its entry distance (closest hit); without, farthest first in the
+    /// builder's octant order (any hit: no distances to sort or compare; see
+    /// [`WideNode::descend`]). Where a node has several leaves to visit,
     /// their packets are prefetched first; several inner children to visit likewise.
     #[inline(always)]
     pub(super) fn walk(
