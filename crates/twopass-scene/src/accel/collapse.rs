@@ -222,7 +222,8 @@ pub(super) fn collapse(bvh: &Bvh2, mut leaf: impl FnMut(&[u32]) -> u32) -> Vec<W
         // The node's leaves share packets where their triangles fit together (largest first,
         // each into the first packet with room, in slot order among equals): a packet's
         // lanes are tested only where its leaf's box is hit, so sharing costs no test, and
-        // the tree is smaller (on the generated 1M room 2.59 triangles per packet alone).
+        // the tree is smaller (on the generated 1M room 3.50 triangles per packet instead of
+        // 2.59, 62.7 MB instead of 78.9).
         leaves.sort_by_key(|(s, t)| (std::cmp::Reverse(t.len()), *s));
         let mut shared: Vec<(Vec<u32>, Vec<usize>)> = Vec::with_capacity(8);
         for (s, t) in &leaves {
