@@ -95,6 +95,23 @@ fn bench_rays_reports_every_query_kind() {
         v["triangles"].as_u64(),
         Some(loaded.mesh.triangles.len() as u64)
     );
+    // The tree's memory is its nodes (256 bytes each, each starting on a 64-byte line) and
+    // packets (160 bytes each, four triangles at most, every triangle in one).
+    let (nodes, packets) = (
+        v["bvh_nodes"].as_u64().unwrap(),
+        v["bvh_packets"].as_u64().unwrap(),
+    );
+    let triangles = v["triangles"].as_u64().unwrap();
+    assert!(
+        nodes >= 1 && 4 * packets >= triangles && packets <= triangles,
+        "{v}"
+    );
+    let bytes = v["bvh_mib"].as_f64().unwrap() * f64::from(1 << 20);
+    let least = (256 * nodes + 160 * packets) as f64;
+    assert!(
+        bytes >= least && bytes <= least + 32.0 * nodes as f64,
+        "{bytes} bytes"
+    );
     for r in rows {
         let (one, all) = (
             r["mrays_1"].as_f64().unwrap(),

@@ -173,6 +173,17 @@ impl Accel {
         self.bvh.nodes
     }
 
+    /// Number of triangle packets (up to four triangles each; a leaf's, or several leaves' of
+    /// one node).
+    pub fn packet_count(&self) -> usize {
+        self.bvh.packets
+    }
+
+    /// Memory of the tree (its nodes and triangle packets), bytes.
+    pub fn bytes(&self) -> usize {
+        self.bvh.bytes()
+    }
+
     /// The closest hit with `0 < t < t_max`, if any; of hits at the same `t` (a ray through an
     /// edge or vertex that triangles share), the one with the smallest triangle index, as
     /// [`Accel::closest_brute_force`] finds, whatever order the walk meets them in.

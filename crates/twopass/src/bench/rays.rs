@@ -75,6 +75,10 @@ struct RayReport {
     /// Median of 5 builds, milliseconds.
     bvh_build_ms: f64,
     bvh_nodes: usize,
+    /// Triangle packets (up to four triangles each).
+    bvh_packets: usize,
+    /// The tree's nodes and packets, MiB.
+    bvh_mib: f64,
     rows: Vec<RayRow>,
 }
 
@@ -338,14 +342,19 @@ pub fn run(args: &RaysArgs, ctx: &Context) -> Result<(), CliError> {
         threads: rayon::current_num_threads(),
         bvh_build_ms: builds[2],
         bvh_nodes: scene.accel().node_count(),
+        bvh_packets: scene.accel().packet_count(),
+        bvh_mib: scene.accel().bytes() as f64 / f64::from(1 << 20),
         rows,
     };
     crate::output::report(&report, ctx, || {
         outln!(
-            "scene {}: {} triangles, BVH {} nodes built in {:.2} ms (median of 5), {} threads",
+            "scene {}: {} triangles, BVH {} nodes and {} packets ({:.1} MiB) built in {:.2} ms \
+             (median of 5), {} threads",
             report.scene,
             report.triangles,
             report.bvh_nodes,
+            report.bvh_packets,
+            report.bvh_mib,
             report.bvh_build_ms,
             report.threads
         );
