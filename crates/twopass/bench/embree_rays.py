@@ -33,6 +33,7 @@ import argparse
 import json
 import multiprocessing as mp
 import os
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -220,7 +221,7 @@ def main():
     print(f"build: twopass {report['bvh_build_ms']:.1f} ms (median of 5), "
           f"Embree {1e3 * embree_build:.1f} ms (with embreex's scene setup)")
     print(f"{'query':<11} {'walk':<11} {'rays':>8} {'thr':>3} {'twopass Mrays/s':>18} "
-          f"{'Embree Mrays/s':>16} {'ratio':>11}  embreex ns/ray outside Embree")
+          f"{'Embree Mrays/s':>16} {'ratio':>11} {'median':>6}  embreex ns/ray outside Embree")
     summary = []
     for k in KINDS:
         r = results[k]
@@ -230,7 +231,8 @@ def main():
                 ratios = [x / y for x, y in zip(ours, theirs)]
                 print(f"{k:<11} {walk:<11} {len(batches[k]['t_max']):>8} {t:>3} "
                       f"{min(ours):>8.2f}-{max(ours):<8.2f} {min(theirs):>7.2f}-{max(theirs):<7.2f} "
-                      f"{min(ratios):>5.2f}-{max(ratios):<4.2f}x  {1e9 * overhead[k]:.0f}")
+                      f"{min(ratios):>5.2f}-{max(ratios):<4.2f}x {statistics.median(ratios):>5.2f}x  "
+                      f"{1e9 * overhead[k]:.0f}")
                 summary.append({"query": k, "walk": walk, "threads": int(t), "twopass_mrays": ours,
                                 "embree_mrays": theirs, "ratios": ratios})
     for k in KINDS:
