@@ -40,7 +40,9 @@ use wide::{NodeRay, PacketNodeRays, WideBvh};
 /// only costs. Measured on an AMD EPYC (Zen 3, 32 MiB L3), interleaved against one after
 /// another in one process, incoherent / occlusion rays of the generated rooms: 0.83 / 0.77 on
 /// a 6.4 MB tree (102k triangles), 1.15 / 0.96 on 19 MB (300k), 1.29 / 1.18 on 31 MB
-/// (500k), 1.51 / 1.40 on 63 MB (1M); on the Cornell box's three nodes it cost 12-18 %.
+/// (500k), 1.51 / 1.40 on 63 MB (1M); on the Cornell box's three nodes it cost 12-18 %. The
+/// crossover depends on the machine: on the 2-vCPU Ice Lake Xeon of earlier measurements
+/// interleaving gained 1.17 / 1.11 already on 102k triangles, where it loses here.
 pub const INTERLEAVE_MIN_BYTES: usize = 16 << 20;
 
 /// Angle between two neighbouring rays' directions, radians, within which
