@@ -82,9 +82,9 @@ impl SourceTriangle {
     }
 
     /// [`SourceTriangle::form_factor`] (dimensionless, in [0, 1]) from four points `x` (scene
-    /// units, as the shooter's corners) with unit normals `n` at once, bit for bit: the operations of the scalar evaluation in four f64 lanes where no corner lies
-    /// near the receiver's plane (none clipped), the scalar evaluation for the lanes where one
-    /// does.
+    /// units, as the shooter's corners) with unit normals `n` at once, bit for bit: the
+    /// operations of the scalar evaluation in four f64 lanes where no corner lies near the
+    /// receiver's plane (none clipped), the scalar evaluation for the lanes where one does.
     pub fn form_factors(
         &self,
         x: [DVec3; 4],

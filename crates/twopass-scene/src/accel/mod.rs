@@ -207,11 +207,9 @@ impl Accel {
         best.map(|b| self.hit(b, t_max))
     }
 
-    /// Tests lanes `lanes` of packet `p` against `ray` and keeps in `best` (its `t` is
-    /// `t_max`) the nearer of it and the packet's nearest hit, at equal `t` the one with the
-    /// smaller triangle index. Once there is a hit, triangles are tested up to a few ulps
-    /// beyond it, so that one at exactly its `t` is not rounded away by the test's early
-    /// rejection; the comparison here then decides.
+    /// Tests lanes `lanes` of packet `p` against `ray` (up to [`search_bound`]) and keeps in
+    /// `best` (its `t` is `t_max`) the nearer of it and the packet's nearest hit, at equal `t`
+    /// the one with the smaller triangle index ([`keep_nearer`]).
     #[inline(always)]
     fn nearer(
         &self,
@@ -222,26 +220,18 @@ impl Accel {
         best: &mut Option<Nearest>,
     ) {
         let packet = self.bvh.arena.packet(p);
-        let bound = if best.is_some() {
-            four_ulps_up(*t_max)
-        } else {
-            *t_max
-        };
-        let hits = ray.intersect(packet, lanes, bound);
+        let hits = ray.intersect(packet, lanes, search_bound(*t_max, best));
         if hits.mask == 0 {
             return;
         }
         let lane = hits.nearest(&packet.ids);
-        let (t, id) = (hits.t_of(lane), packet.ids[lane]);
-        if best.is_none_or(|b| t < *t_max || (t == *t_max && id < b.id)) {
-            *t_max = t;
-            *best = Some(Nearest {
-                packet: p,
-                lane,
-                id,
-                barycentric: hits.barycentric(lane),
-            });
-        }
+        let id = packet.ids[lane];
+        keep_nearer(best, t_max, hits.t_of(lane), id, || Nearest {
+            packet: p,
+            lane,
+            id,
+            barycentric: hits.barycentric(lane),
+        });
     }
 
     /// [`Accel::nearer`] for each ray `rays` (bits) of a packet against lanes `lanes` of packet
@@ -264,29 +254,20 @@ impl Accel {
         while tris != 0 {
             let lane = tris.trailing_zeros() as usize;
             tris &= tris - 1;
-            let bound = ::wide::f32x8::new(std::array::from_fn(|i| {
-                if best[i].is_some() {
-                    four_ulps_up(t_max[i])
-                } else {
-                    t_max[i]
-                }
-            }));
+            let bound =
+                ::wide::f32x8::new(std::array::from_fn(|i| search_bound(t_max[i], &best[i])));
             let hits = in_lanes.intersect(packet, lane, rays, bound);
             let id = packet.ids[lane];
             let mut found = hits.mask;
             while found != 0 {
                 let i = found.trailing_zeros() as usize;
                 found &= found - 1;
-                let t = hits.t_of(i);
-                if best[i].is_none_or(|b| t < t_max[i] || (t == t_max[i] && id < b.id)) {
-                    t_max[i] = t;
-                    best[i] = Some(Nearest {
-                        packet: p,
-                        lane,
-                        id,
-                        barycentric: hits.barycentric(i),
-                    });
-                }
+                keep_nearer(&mut best[i], &mut t_max[i], hits.t_of(i), id, || Nearest {
+                    packet: p,
+                    lane,
+                    id,
+                    barycentric: hits.barycentric(i),
+                });
             }
         }
     }
@@ -566,6 +547,35 @@ fn four_ulps_up(t: f32) -> f32 {
         f32::from_bits((t.to_bits() + 4).min(f32::INFINITY.to_bits()))
     } else {
         t.next_up().next_up().next_up().next_up()
+    }
+}
+
+/// The bound a closest-hit walk tests a ray's next triangles with: its `t_max`, and once it
+/// has a hit (`best`), a few ulps beyond, so that a triangle at exactly the hit's `t` is not
+/// rounded away by the test's early rejection and [`keep_nearer`] decides between them.
+#[inline(always)]
+fn search_bound(t_max: f32, best: &Option<Nearest>) -> f32 {
+    if best.is_some() {
+        four_ulps_up(t_max)
+    } else {
+        t_max
+    }
+}
+
+/// Keeps a hit of triangle `id` at `t` (`found` forms it) as the ray's nearest hit (`best`,
+/// its `t` in `t_max`) when it is nearer, or as near with a smaller triangle index: the
+/// answer then does not depend on the order a walk meets triangles in.
+#[inline(always)]
+fn keep_nearer(
+    best: &mut Option<Nearest>,
+    t_max: &mut f32,
+    t: f32,
+    id: u32,
+    found: impl FnOnce() -> Nearest,
+) {
+    if best.is_none_or(|b| t < *t_max || (t == *t_max && id < b.id)) {
+        *t_max = t;
+        *best = Some(found());
     }
 }
 

@@ -409,8 +409,8 @@ impl WideBvh {
     /// `ordered`, inner children are visited nearest first and a pushed child is skipped once
     /// `t_max` is below its entry distance (closest hit); without, farthest first in the
     /// builder's octant order (any hit: no distances to sort or compare; see
-    /// [`WideNode::descend`]). Where a node has several leaves to visit,
-    /// their packets are prefetched first; several inner children to visit likewise.
+    /// [`WideNode::descend`]). Where a node has several leaves to visit, their packets are
+    /// prefetched first; several inner children to visit likewise.
     #[inline(always)]
     pub(super) fn walk(
         &self,
