@@ -286,7 +286,10 @@ impl Accel {
     /// The hit `best` at `t`.
     fn hit(&self, best: Nearest, t: f32) -> TriangleHit {
         let packet = self.bvh.arena.packet(best.packet);
-        let (v, lane) = (&packet.v, best.lane);
+        // The packet's coordinates as plain arrays: `Vec4`'s index by a variable lane is a
+        // jump table, an indirect branch per coordinate.
+        let v: &[[[f32; 4]; 3]; 3] = bytemuck::cast_ref(&packet.v);
+        let lane = best.lane & 3;
         TriangleHit {
             triangle: best.id,
             t,

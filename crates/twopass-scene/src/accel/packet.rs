@@ -245,11 +245,13 @@ impl PacketHits {
     /// equal `t` the one with the smallest triangle index (`ids`, the packet's), so that the
     /// answer does not depend on the order a walk meets triangles in.
     pub(super) fn nearest(&self, ids: &[u32; 4]) -> usize {
-        let mut best = self.mask.trailing_zeros() as usize;
+        // As an array: `Vec4`'s index by a variable lane is a jump table.
+        let t = self.t.to_array();
+        let mut best = self.mask.trailing_zeros() as usize & 3;
         let mut rest = self.mask & (self.mask - 1);
         while rest != 0 {
-            let lane = rest.trailing_zeros() as usize;
-            if (self.t[lane], ids[lane]) < (self.t[best], ids[best]) {
+            let lane = rest.trailing_zeros() as usize & 3;
+            if (t[lane], ids[lane]) < (t[best], ids[best]) {
                 best = lane;
             }
             rest &= rest - 1;

@@ -48,6 +48,8 @@ impl ShearedRay {
         };
         let kx = (kz + 1) % 3;
         let ky = (kx + 1) % 3;
+        // Arrays, not `Vec3`'s index (a branch per component taken by a variable index).
+        let (dir, origin) = (dir.to_array(), origin.to_array());
         let d = Vec3::new(dir[kx], dir[ky], dir[kz]);
         Self {
             k: [kx, ky, kz],

@@ -209,6 +209,15 @@ impl WideNode {
             }
             return self.child[first as usize ^ o];
         }
+        if inner.count_ones() == 2 {
+            // The commonest case after one: push the farther, descend into the nearer (at
+            // equal distances the later slot, as the insertion below orders them).
+            let a = inner.trailing_zeros() as usize & 7;
+            let b = (inner & (inner - 1)).trailing_zeros() as usize & 7;
+            let (nearer, farther) = if near[b] <= near[a] { (b, a) } else { (a, b) };
+            push((self.child[farther], near[farther]));
+            return self.child[nearer];
+        }
         // Push the hit children farthest first, then descend into the nearest.
         let mut found = [(0u32, 0.0f32); 8];
         let mut k = 0;
