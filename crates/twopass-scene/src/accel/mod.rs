@@ -356,6 +356,10 @@ impl Accel {
     /// in direction octant or one of them is not finite.
     fn closest_packets(&self, rays: &[Ray], hits: &mut [Option<TriangleHit>]) {
         let mut stack = Vec::new();
+        // Each packet's rays as the triangle tests see them, written in place packet after
+        // packet (an array made anew per packet was copied, a kilobyte per packet).
+        let mut sheared: [PacketRay; 8] =
+            std::array::from_fn(|_| PacketRay::new(&ShearedRay::new(Vec3::ZERO, Vec3::Z)));
         for (rays, hits) in rays.chunks(8).zip(hits.chunks_mut(8)) {
             let n = rays.len();
             let ray = |i: usize| &rays[i.min(n - 1)];
@@ -365,9 +369,9 @@ impl Accel {
                 self.closest_each(rays, hits);
                 continue;
             };
-            let sheared: [PacketRay; 8] = std::array::from_fn(|i| {
-                PacketRay::new(&ShearedRay::new(ray(i).origin, ray(i).direction))
-            });
+            for (i, s) in sheared.iter_mut().enumerate() {
+                *s = PacketRay::new(&ShearedRay::new(ray(i).origin, ray(i).direction));
+            }
             let mut t_max: [f32; 8] = std::array::from_fn(|i| ray(i).t_max);
             let mut best: [Option<Nearest>; 8] = [None; 8];
             let in_lanes = RayLanes::new(&sheared);

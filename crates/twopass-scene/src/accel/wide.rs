@@ -827,9 +827,25 @@ impl PacketNodeRays {
                 inv[axis][i] = inverse(d[axis]);
             }
         }
-        let finite = |v: &[[f32; 8]; 3]| v.iter().flatten().all(|x| x.is_finite());
-        let lo = |v: &[f32; 8]| v.iter().copied().fold(f32::INFINITY, f32::min);
-        let hi = |v: &[f32; 8]| v.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+        // `x - x` is 0 for a finite `x` and NaN for an infinite or NaN one: the 24 values in
+        // three vector subtractions and two additions, not 24 scalar checks.
+        let finite = |v: &[[f32; 8]; 3]| {
+            let zero = |a: &[f32; 8]| f32x8::new(*a) - f32x8::new(*a);
+            (zero(&v[0]) + zero(&v[1]) + zero(&v[2]))
+                .simd_eq(f32x8::ZERO)
+                .to_bitmask()
+                == 0xff
+        };
+        // Plain compares (`minss` / `maxss`), not `f32::min`'s NaN checks: they run only on
+        // finite values (checked below before they are used).
+        let lo = |v: &[f32; 8]| {
+            v.iter()
+                .fold(f32::INFINITY, |m, &x| if x < m { x } else { m })
+        };
+        let hi = |v: &[f32; 8]| {
+            v.iter()
+                .fold(f32::NEG_INFINITY, |m, &x| if x > m { x } else { m })
+        };
         // Entering through the maximum where the inverse is negative, as `NodeRay` decides.
         let near = inv.map(|v| usize::from(v[0] < 0.0));
         let agree = (0..3).all(|a| signs_agree(&inv[a], near[a]));
