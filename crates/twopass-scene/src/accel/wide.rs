@@ -1028,10 +1028,10 @@ mod stack_tests {
     }
 
     /// Every stack the walks choose by the tree's stack need (one on the call stack, else one
-    /// on the heap) holds what the walk pushes: on trees whose need lies in each range (and
-    /// one near the call stack's capacity), closest hits match the brute force, any-hit and
-    /// the interleaved walks agree with it, and a walk that keeps every child visits every
-    /// triangle exactly once.
+    /// on the heap) holds what the walk pushes: on trees whose need lies in each range (a
+    /// small need and one of a quarter or more of the call stack's capacity, both on it, and
+    /// one over it), closest hits match the brute force, any-hit and the interleaved walks
+    /// agree with it, and a walk that keeps every child visits every triangle exactly once.
     #[test]
     fn every_stack_size_holds_the_walk() {
         for (levels, need) in [
