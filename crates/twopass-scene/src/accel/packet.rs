@@ -245,7 +245,8 @@ impl PacketHits {
     /// equal `t` the one with the smallest triangle index (`ids`, the packet's), so that the
     /// answer does not depend on the order a walk meets triangles in.
     pub(super) fn nearest(&self, ids: &[u32; 4]) -> usize {
-        // As an array: `Vec4`'s index by a variable lane is a jump table.
+        // As an array: `Vec4`'s index by a variable lane is a jump table. The `& 3` only
+        // tells the compiler a lane is below 4, so it drops the bounds checks.
         let t = self.t.to_array();
         let mut best = self.mask.trailing_zeros() as usize & 3;
         let mut rest = self.mask & (self.mask - 1);

@@ -211,7 +211,8 @@ impl WideNode {
         }
         if inner.count_ones() == 2 {
             // The commonest case after one: push the farther, descend into the nearer (at
-            // equal distances the later slot, as the insertion below orders them).
+            // equal distances the later slot, as the insertion below orders them). The `& 7`
+            // only tells the compiler a slot is below 8, so it drops the bounds checks.
             let a = inner.trailing_zeros() as usize & 7;
             let b = (inner & (inner - 1)).trailing_zeros() as usize & 7;
             let (nearer, farther) = if near[b] <= near[a] { (b, a) } else { (a, b) };
