@@ -10,7 +10,7 @@
 //! | `ior` | n + i k per channel | n > 0, k >= 0 |
 //!
 //! Reciprocal; energy is lost at high roughness because single-scattering microfacet models drop
-//! the light that bounces more than once between facets (measured in the README).
+//! the light that bounces more than once between facets (measured in the crate README).
 //! Sampling draws h from D(h) cos(theta_h) and reflects wo about it.
 
 use glam::{Vec2, Vec3};
