@@ -12,12 +12,16 @@
 //!   `twopass_scene::DiffuseRadiance` (a normal dependency, or a mention in `src/`; its tests
 //!   and examples may build a solution through a dev-dependency);
 //! - a physics crate (brdf, radiosity, trace) or the plain-data image crate touches the file
-//!   system (`std::fs`, `File`, `tempfile`) or depends on a file-format crate.
+//!   system (`std::fs`, `File`, `tempfile`) or depends on a file-format crate;
+//! - a source file under `crates/*/src` is longer than [`MAX_FILE_LINES`], its test code
+//!   excepted (a file that long holds more than one job: split it into a folder module);
+//! - the files of one crate import each other in a circle (the `use crate::` / `use super::`
+//!   graph between files, re-exports followed to the file that defines the name).
 //!
 //! The checks are pure functions of the manifest and source text, and each is also run on a
 //! small counter-example, so a check that could never fire fails too.
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 /// Crates that touch no file (ARCHITECTURE.md, "Architecture invariants"): the physics crates
@@ -335,4 +339,409 @@ fn every_check_fires_on_a_counter_example() {
     assert!(
         source_violations("twopass-trace", p, "/// see `twopass_radiosity::Solution`").is_empty()
     );
+}
+
+/// The most lines a file under `crates/*/src` may hold before its first top-level
+/// `#[cfg(test)]` (ARCHITECTURE.md, "Invariants": one job per file).
+const MAX_FILE_LINES: usize = 700;
+
+/// A module of a crate by its path from the crate root: `[]` for `lib.rs` or `main.rs`,
+/// `["accel", "ray"]` for `accel/ray.rs`, `["accel"]` for `accel/mod.rs` or `accel.rs`.
+type ModPath = Vec<String>;
+
+/// The module that the file `file` under the crate's `src` folder defines.
+fn module_path(src: &Path, file: &Path) -> ModPath {
+    let rel = file.strip_prefix(src).expect("a file under src/");
+    let mut parts: Vec<String> = rel
+        .components()
+        .map(|c| c.as_os_str().to_string_lossy().into_owned())
+        .collect();
+    let last = parts.pop().expect("a file name");
+    let stem = last.trim_end_matches(".rs");
+    let root = parts.is_empty() && matches!(stem, "lib" | "main");
+    if stem != "mod" && !root {
+        parts.push(stem.to_owned());
+    }
+    parts
+}
+
+/// The part of a file that is not test code: everything before its first top-level
+/// `#[cfg(test)]` (tests sit at the end of a file, after the code they test).
+fn non_test(text: &str) -> &str {
+    text.find("\n#[cfg(test)]").map_or(text, |i| &text[..i + 1])
+}
+
+/// The files of `files` (module path to text) longer than [`MAX_FILE_LINES`] outside their
+/// test code, with their line counts.
+fn long_files(files: &BTreeMap<ModPath, String>) -> Vec<(ModPath, usize)> {
+    files
+        .iter()
+        .map(|(m, text)| (m.clone(), non_test(text).lines().count()))
+        .filter(|(_, n)| *n > MAX_FILE_LINES)
+        .collect()
+}
+
+/// The top-level `use` declarations of a file's non-test code, each as the text between `use`
+/// and `;`, and whether it is public (`pub`, `pub(crate)`, `pub(super)`: a re-export).
+fn use_declarations(text: &str) -> Vec<(String, bool)> {
+    let mut out = Vec::new();
+    let mut open: Option<(String, bool)> = None;
+    for line in non_test(text).lines() {
+        let c = code(line);
+        if let Some((tree, public)) = open.as_mut() {
+            tree.push(' ');
+            tree.push_str(c);
+            if tree.contains(';') {
+                let tree = tree.split(';').next().unwrap_or_default().to_owned();
+                out.push((tree, *public));
+                open = None;
+            }
+            continue;
+        }
+        let (rest, public) = if let Some(r) = c.strip_prefix("use ") {
+            (r, false)
+        } else if let Some(r) = c.strip_prefix("pub ") {
+            match r.strip_prefix("use ") {
+                Some(r) => (r, true),
+                None => continue,
+            }
+        } else if c.starts_with("pub(") {
+            match c.split_once(") use ") {
+                Some((_, r)) => (r, true),
+                None => continue,
+            }
+        } else {
+            continue;
+        };
+        match rest.split_once(';') {
+            Some((tree, _)) => out.push((tree.to_owned(), public)),
+            None => open = Some((rest.to_owned(), public)),
+        }
+    }
+    out
+}
+
+/// A use tree (`crate::a::{b::C, d as E, self}`) expanded into its paths, each with the name
+/// it binds: `[("crate::a::b::C", "C"), ("crate::a::d", "E"), ("crate::a", "a")]`.
+fn expand_use_tree(tree: &str) -> Vec<(String, String)> {
+    let tree = tree.trim();
+    let Some(open) = tree.find('{') else {
+        let (path, alias) = match tree.split_once(" as ") {
+            Some((p, a)) => (p.trim(), Some(a.trim())),
+            None => (tree, None),
+        };
+        let path: String = path.split_whitespace().collect();
+        let name = alias.unwrap_or_else(|| path.rsplit("::").next().unwrap_or_default());
+        return vec![(path.clone(), name.to_owned())];
+    };
+    let prefix: String = tree[..open].split_whitespace().collect();
+    let inner = &tree[open + 1..tree.rfind('}').unwrap_or(tree.len())];
+    let mut items = Vec::new();
+    let (mut depth, mut start) = (0, 0);
+    for (i, ch) in inner.char_indices() {
+        match ch {
+            '{' => depth += 1,
+            '}' => depth -= 1,
+            ',' if depth == 0 => {
+                items.push(&inner[start..i]);
+                start = i + 1;
+            }
+            _ => {}
+        }
+    }
+    items.push(&inner[start..]);
+    let mut out = Vec::new();
+    for item in items.into_iter().map(str::trim).filter(|i| !i.is_empty()) {
+        if item == "self" {
+            let path = prefix.trim_end_matches("::").to_owned();
+            let name = path.rsplit("::").next().unwrap_or_default().to_owned();
+            out.push((path, name));
+        } else {
+            for (path, name) in expand_use_tree(item) {
+                out.push((format!("{prefix}{path}"), name));
+            }
+        }
+    }
+    out
+}
+
+/// The module a path names, from `module` (the file whose code holds it): `crate::`, `super::`
+/// and `self::` paths and paths that start with a child module; `None` for another crate's.
+/// Segments are followed down through module files; an item name is then followed through
+/// the module's re-exports to the file that defines it.
+fn resolve(
+    files: &BTreeMap<ModPath, String>,
+    module: &ModPath,
+    path: &str,
+    depth: usize,
+) -> Option<ModPath> {
+    let mut segments = path.split("::").filter(|s| !s.is_empty()).peekable();
+    let mut at: ModPath = match *segments.peek()? {
+        "crate" => {
+            segments.next();
+            Vec::new()
+        }
+        "self" => {
+            segments.next();
+            module.clone()
+        }
+        "super" => {
+            let mut at = module.clone();
+            while segments.next_if_eq(&"super").is_some() {
+                at.pop();
+            }
+            at
+        }
+        first => {
+            let mut child = module.clone();
+            child.push(first.to_owned());
+            if !files.contains_key(&child) {
+                return None;
+            }
+            module.clone()
+        }
+    };
+    for segment in segments {
+        let mut child = at.clone();
+        child.push(segment.to_owned());
+        if files.contains_key(&child) {
+            at = child;
+            continue;
+        }
+        if depth < 8 {
+            let exported = use_declarations(&files[&at])
+                .into_iter()
+                .filter(|(_, public)| *public)
+                .flat_map(|(tree, _)| expand_use_tree(&tree))
+                .find(|(_, name)| name == segment);
+            if let Some((target, _)) = exported {
+                return resolve(files, &at, &target, depth + 1).or(Some(at));
+            }
+        }
+        break;
+    }
+    Some(at)
+}
+
+/// The import graph of one crate's files: for each module, the other modules whose items its
+/// non-test code names by `crate::` anywhere or by `super::`/`self::`/child paths in its
+/// top-level `use` declarations (`mod x;` declares, it does not import).
+fn import_graph(files: &BTreeMap<ModPath, String>) -> BTreeMap<ModPath, BTreeSet<ModPath>> {
+    let mut graph = BTreeMap::new();
+    for (module, text) in files {
+        let mut paths: Vec<String> = use_declarations(text)
+            .into_iter()
+            .flat_map(|(tree, _)| expand_use_tree(&tree))
+            .map(|(path, _)| path)
+            .collect();
+        for line in non_test(text).lines() {
+            let c = code(line);
+            let mut rest = c;
+            while let Some(i) = rest.find("crate::") {
+                let before = rest[..i].chars().next_back();
+                let tail = &rest[i..];
+                let end = tail
+                    .find(|ch: char| !(ch.is_alphanumeric() || ch == '_' || ch == ':'))
+                    .unwrap_or(tail.len());
+                if !before.is_some_and(|b| b.is_alphanumeric() || b == '_') {
+                    paths.push(tail[..end].to_owned());
+                }
+                rest = &tail[end.max(1)..];
+            }
+        }
+        let targets: BTreeSet<ModPath> = paths
+            .iter()
+            .filter_map(|p| resolve(files, module, p, 0))
+            .filter(|t| t != module)
+            .collect();
+        graph.insert(module.clone(), targets);
+    }
+    graph
+}
+
+/// The circles of `graph`: each strongly connected set of more than one module (Tarjan).
+fn circles(graph: &BTreeMap<ModPath, BTreeSet<ModPath>>) -> Vec<Vec<ModPath>> {
+    struct Walk<'g> {
+        graph: &'g BTreeMap<ModPath, BTreeSet<ModPath>>,
+        index: BTreeMap<&'g ModPath, usize>,
+        low: BTreeMap<&'g ModPath, usize>,
+        stack: Vec<&'g ModPath>,
+        on_stack: BTreeSet<&'g ModPath>,
+        found: Vec<Vec<ModPath>>,
+    }
+    impl<'g> Walk<'g> {
+        fn visit(&mut self, v: &'g ModPath) {
+            let i = self.index.len();
+            self.index.insert(v, i);
+            self.low.insert(v, i);
+            self.stack.push(v);
+            self.on_stack.insert(v);
+            for w in self.graph.get(v).into_iter().flatten() {
+                if !self.graph.contains_key(w) {
+                    continue;
+                }
+                if !self.index.contains_key(w) {
+                    self.visit(w);
+                    let low = self.low[v].min(self.low[w]);
+                    self.low.insert(v, low);
+                } else if self.on_stack.contains(w) {
+                    let low = self.low[v].min(self.index[w]);
+                    self.low.insert(v, low);
+                }
+            }
+            if self.low[v] == self.index[v] {
+                let mut set = Vec::new();
+                while let Some(w) = self.stack.pop() {
+                    self.on_stack.remove(w);
+                    set.push(w.clone());
+                    if w == v {
+                        break;
+                    }
+                }
+                if set.len() > 1 {
+                    set.sort();
+                    self.found.push(set);
+                }
+            }
+        }
+    }
+    let mut walk = Walk {
+        graph,
+        index: BTreeMap::new(),
+        low: BTreeMap::new(),
+        stack: Vec::new(),
+        on_stack: BTreeSet::new(),
+        found: Vec::new(),
+    };
+    for v in graph.keys() {
+        if !walk.index.contains_key(v) {
+            walk.visit(v);
+        }
+    }
+    walk.found
+}
+
+/// A module path as its file-like name for messages (`accel::ray`, `crate root`).
+fn module_name(m: &ModPath) -> String {
+    if m.is_empty() {
+        "crate root".to_owned()
+    } else {
+        m.join("::")
+    }
+}
+
+#[test]
+fn every_crate_has_short_files_and_no_import_circle() {
+    let mut problems = Vec::new();
+    for dir in crate_dirs() {
+        let src = dir.join("src");
+        let mut paths = Vec::new();
+        rust_files(&src, &mut paths);
+        let files: BTreeMap<ModPath, String> = paths
+            .iter()
+            .map(|p| {
+                let text = std::fs::read_to_string(p).expect("source file");
+                (module_path(&src, p), text)
+            })
+            .collect();
+        let name = dir.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+        for (m, n) in long_files(&files) {
+            problems.push(format!(
+                "{name}: module {} has {n} lines outside its tests (at most {MAX_FILE_LINES}): \
+                 split it by job",
+                module_name(&m)
+            ));
+        }
+        for set in circles(&import_graph(&files)) {
+            let names: Vec<String> = set.iter().map(module_name).collect();
+            problems.push(format!(
+                "{name}: these modules import each other in a circle: {}",
+                names.join(", ")
+            ));
+        }
+    }
+    assert!(
+        problems.is_empty(),
+        "file invariants broken (ARCHITECTURE.md, \"Invariants\"):\n{}",
+        problems.join("\n")
+    );
+}
+
+#[test]
+fn the_file_checks_fire_on_counter_examples() {
+    let crate_of = |files: &[(&str, &str)]| -> BTreeMap<ModPath, String> {
+        files
+            .iter()
+            .map(|(m, text)| {
+                let path = m.split("::").filter(|s| !s.is_empty());
+                (path.map(str::to_owned).collect(), (*text).to_owned())
+            })
+            .collect()
+    };
+    let count = |files: &[(&str, &str)]| circles(&import_graph(&crate_of(files))).len();
+
+    // Two files that import each other, directly or by a full path in code.
+    assert_eq!(
+        count(&[
+            ("", "mod a;\nmod b;\n"),
+            ("a", "use crate::b::B;\npub struct A;\n"),
+            ("b", "pub struct B;\nfn f() -> crate::a::A { crate::a::A }\n"),
+        ]),
+        1
+    );
+    // A child that imports its parent's item while the parent imports the child's.
+    assert_eq!(
+        count(&[
+            ("", "mod walk;\n"),
+            ("walk", "mod stack;\nuse stack::Stack;\npub struct Walk;\n"),
+            ("walk::stack", "use super::Walk;\npub struct Stack;\n"),
+        ]),
+        1
+    );
+    // A circle through a re-export at the root, in a grouped use tree over three files.
+    assert_eq!(
+        count(&[
+            ("", "mod a;\nmod b;\nmod c;\npub use c::C;\n"),
+            ("a", "use crate::{C, b::{self, B as Bee}};\npub struct A;\n"),
+            ("b", "pub struct B;\n"),
+            (
+                "c",
+                "use crate::{\n    a::A,\n};\npub struct C;\n"
+            ),
+        ]),
+        1
+    );
+    // The same names without a circle: a re-export is followed to the file that defines the
+    // name, so using `crate::A` from a sibling does not point at the root.
+    assert_eq!(
+        count(&[
+            ("", "mod a;\nmod b;\npub use a::A;\npub use b::B;\n"),
+            ("a", "pub struct A;\n"),
+            ("b", "use crate::A;\nuse super::a;\npub struct B(A);\n"),
+        ]),
+        0
+    );
+    // Tests, prose and other crates' paths are not imports.
+    assert_eq!(
+        count(&[
+            ("", "mod a;\nmod b;\n"),
+            ("a", "use crate::b::B;\n/// Unlike `crate::a::A`.\npub struct A;\n"),
+            (
+                "b",
+                "use twopass_scene::a::A;\n// crate::a::A\npub struct B;\n#[cfg(test)]\nmod \
+                 tests {\n    use crate::a::A;\n}\n"
+            ),
+        ]),
+        0
+    );
+
+    // A file one line over the bound, and one at it with tests beyond.
+    let over = "fn f() {}\n".repeat(MAX_FILE_LINES + 1);
+    let at = format!(
+        "{}#[cfg(test)]\nmod tests {{\n{}}}\n",
+        "fn f() {}\n".repeat(MAX_FILE_LINES),
+        "    fn g() {}\n".repeat(100)
+    );
+    let long = long_files(&crate_of(&[("", "mod a;\n"), ("a", &over), ("b", &at)]));
+    assert_eq!(long, vec![(vec!["a".to_owned()], MAX_FILE_LINES + 1)]);
 }

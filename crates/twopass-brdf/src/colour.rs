@@ -1,7 +1,10 @@
-//! Colour: linear RGB ([`crate::Rgb`], sRGB / Rec. 709 primaries) and its luminance, the one
+//! Colour: linear RGB ([`Rgb`], sRGB / Rec. 709 primaries) and its luminance, the one
 //! home of the Rec. 709 weights in the workspace (ARCHITECTURE.md, "Where each idea lives").
 
 use glam::{DVec3, Vec3};
+
+/// Linear RGB triple, one value per channel (reflectance, radiance or power depending on use).
+pub type Rgb = Vec3;
 
 /// Rec. 709 luminance weights of linear RGB.
 pub const LUMINANCE: Vec3 = Vec3::new(0.2126, 0.7152, 0.0722);

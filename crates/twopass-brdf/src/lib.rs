@@ -66,6 +66,7 @@ pub mod random;
 pub mod sample;
 pub mod v_cavity;
 
+pub use colour::Rgb;
 pub use error::ParamError;
 pub use ior::ComplexIor;
 pub use material::{
@@ -73,5 +74,3 @@ pub use material::{
 };
 pub use model::{Brdf, BrdfModel, BrdfSample, SampleKind};
 
-/// Linear RGB triple, one value per channel (reflectance, radiance or power depending on use).
-pub type Rgb = glam::Vec3;
