@@ -6,7 +6,7 @@
 //! nodes. Linking starts with the root linked to itself and refines a link, by splitting the
 //! larger end, while its estimated transport error (BF refinement: the source's radiosity
 //! times the link's form-factor error times the receiver's area and reflectance) exceeds
-//! [`Hierarchical::link_tolerance`] of the emitted power, or while an end is a cluster too
+//! [`HierarchicalOptions::link_tolerance`] of the emitted power, or while an end is a cluster too
 //! close to the other end for the far-field estimate. So distant groups exchange light through
 //! one link and the initial linking is not all-pairs.
 //!

@@ -2,7 +2,7 @@
 //! - progressive-refinement radiosity (Cohen, Chen, Wallace & Greenberg 1988) with exact
 //!   differential-area-to-polygon form factors and ray-traced visibility at the receiving
 //!   vertices (Wallace, Elmquist & Haines 1989), patch/element substructuring with conforming
-//!   adaptive subdivision (Cohen et al. 1986) and a dense reference solve ([`Progressive`]);
+//!   adaptive subdivision (Cohen et al. 1986) and a dense reference solve ([`ProgressiveSolver`]);
 //!   Each shot also carries the shooter's light through mirrors and glass to the diffuse
 //!   surfaces it lands on ([`specular`]: the paths L S+ D and D S+ D);
 //! - hierarchical radiosity with clustering (Hanrahan, Salzman & Aupperle 1991; Smits, Arvo &
@@ -45,10 +45,10 @@ pub use direct::{MAX_DENSE_VERTICES, dense_solve};
 pub use form_factor::VisibilityRays;
 pub use hierarchical::HierarchicalSolver;
 pub use mesh_error::{InvalidMesh, MeshPart};
-pub use progressive::{MAX_ELEMENTS, Progressive};
+pub use progressive::{MAX_ELEMENTS, ProgressiveSolver};
 pub use solution::Solution;
 pub use solver::{
-    Adaptive, Energy, Finish, Hierarchical, MAX_VISIBILITY_RAYS, Method, Options, Residuals,
-    SolveError, SolveProgress, Solver, Stop,
+    AdaptiveOptions, Energy, Finish, HierarchicalOptions, MAX_VISIBILITY_RAYS, Method, Options,
+    Residuals, SolveError, SolveProgress, Solver, Stop,
 };
-pub use specular::SpecularTransfer;
+pub use specular::SpecularOptions;

@@ -17,8 +17,8 @@ use crate::element::ElementMesh;
 use crate::form_factor::{self, RECEIVER_INSET, hash};
 use crate::solution::Solution;
 use crate::solver::{
-    Adaptive, Bookkeeping, Finish, Options, Residuals, SolveError, SolveProgress, check_common,
-    participating,
+    AdaptiveOptions, Bookkeeping, Finish, Options, Residuals, SolveError, SolveProgress,
+    check_common, participating,
 };
 use crate::specular::{self, Deposit, Specular, focused, power};
 
@@ -30,26 +30,26 @@ pub const MAX_ELEMENTS: usize = 4_000_000;
 /// and receiving points, the edge map and the patch lists.
 const BYTES_PER_ELEMENT: f64 = 400.0;
 
-/// Most form factors [`Progressive::patch_rows`] computes in one parallel pass (16 MiB of
+/// Most form factors [`ProgressiveSolver::patch_rows`] computes in one parallel pass (16 MiB of
 /// rows in flight beside the cache).
 const ROW_BATCH: usize = 1 << 22;
 
-/// Most patches for which [`Progressive`] keeps every pair's shaft test (one byte per pair:
+/// Most patches for which [`ProgressiveSolver`] keeps every pair's shaft test (one byte per pair:
 /// 16 MiB at this many); above it, each row tests its pairs afresh.
 const PAIR_CACHE_MAX_PATCHES: usize = 4096;
-/// Fewest vertices of a row that must lie on a patch for [`Progressive`] to test the shaft
+/// Fewest vertices of a row that must lie on a patch for [`ProgressiveSolver`] to test the shaft
 /// between that patch and the shooter: a hull test costs several vertex tests (the coarse
 /// preview mesh of the Cornell box has 2.3 vertices per patch and was slower with every
 /// pair tested), and a pair tested once is kept.
 const HULL_MIN_VERTICES: u32 = 6;
-/// States of a pair of patches in [`Progressive`]'s shaft cache.
+/// States of a pair of patches in [`ProgressiveSolver`]'s shaft cache.
 const PAIR_UNKNOWN: u8 = 0;
 const PAIR_CLEAR: u8 = 1;
 const PAIR_BLOCKED: u8 = 2;
 
 /// A progressive-refinement radiosity solve over a scene. Deterministic: the same options and
 /// seed give the same solution bit for bit on any number of threads.
-pub struct Progressive<'s> {
+pub struct ProgressiveSolver<'s> {
     scene: &'s Scene,
     options: Options,
     mesh: ElementMesh,
@@ -57,7 +57,7 @@ pub struct Progressive<'s> {
     /// Per vertex: reflectance, emitted exitance E = pi L_e.
     rho: Vec<DVec3>,
     emission: Vec<DVec3>,
-    /// Per vertex: where it receives ([`Progressive::receiving_point`]), and there, with its
+    /// Per vertex: where it receives ([`ProgressiveSolver::receiving_point`]), and there, with its
     /// error bound on its scene triangle, where its shadow rays start; computed once instead of
     /// once per shooter.
     receiving: Vec<DVec3>,
@@ -88,7 +88,7 @@ pub struct Progressive<'s> {
     shot_refl: Vec<DVec3>,
     /// Per patch: its unshot power, W summed over channels (`|unshot_emit + unshot_refl|`
     /// times its area): what the next shooter is chosen by and the stop is decided by, kept
-    /// up to date wherever the unshot radiosity changes ([`Progressive::note_unshot`]) rather
+    /// up to date wherever the unshot radiosity changes ([`ProgressiveSolver::note_unshot`]) rather
     /// than recomputed for every patch on every shot.
     unshot_power: Vec<f64>,
     /// Per patch: its elements (leaves), flat, with what every shot reads of them.
@@ -99,7 +99,7 @@ pub struct Progressive<'s> {
     /// Per patch: cached form factors (with visibility) to every vertex, once computed.
     cache: Vec<Option<Vec<f32>>>,
     /// Per patch whose row is cached and that has shot on the current element mesh: its
-    /// [`Progressive::arrival_weights`], kept beside the row (a patch shoots several times) and
+    /// [`ProgressiveSolver::arrival_weights`], kept beside the row (a patch shoots several times) and
     /// dropped when the elements change.
     weights: Vec<Option<Vec<f64>>>,
     /// Per pair of patches `(q, p)` at `q * n + p`, with shaft culling and at most
@@ -192,7 +192,7 @@ fn rgb(v: Rgb) -> DVec3 {
     v.as_dvec3()
 }
 
-impl<'s> Progressive<'s> {
+impl<'s> ProgressiveSolver<'s> {
     /// Meshes the scene into patches and elements and sets up the emitters' unshot power.
     /// Only objects that reflect diffusely or emit take part; others still cast shadows.
     pub fn new(scene: &'s Scene, options: Options) -> Result<Self, SolveError> {
@@ -766,7 +766,7 @@ impl<'s> Progressive<'s> {
         self.cache[p].as_ref().map_or(0, Vec::len)
     }
 
-    /// The rows of `patches` (as [`Progressive::patch_row`] gives them, in that order), with
+    /// The rows of `patches` (as [`ProgressiveSolver::patch_row`] gives them, in that order), with
     /// what they lack computed in parallel over patches and vertices at once: after a
     /// refinement every patch shot so far lacks the new vertices, and one small parallel
     /// pass per patch would cost more in starting and joining than in form factors. Rows go
@@ -907,14 +907,14 @@ impl<'s> Progressive<'s> {
     /// luminances differ by more than the threshold, gathers the new vertices' radiosity from
     /// everything shot so far, and re-estimates the patches' unshot radiosity on the finer
     /// mesh. Returns how many elements were split.
-    pub fn refine(&mut self, adaptive: &Adaptive) -> usize {
+    pub fn refine(&mut self, adaptive: &AdaptiveOptions) -> usize {
         let started = Instant::now();
         let splits = self.refine_round(adaptive);
         self.book.refining += started.elapsed();
         splits
     }
 
-    fn refine_round(&mut self, adaptive: &Adaptive) -> usize {
+    fn refine_round(&mut self, adaptive: &AdaptiveOptions) -> usize {
         let lum = luminance_f64;
         let (mut total, mut area) = (0.0, 0.0);
         let leaves: Vec<u32> = self.mesh.leaves().collect();
@@ -985,7 +985,7 @@ impl<'s> Progressive<'s> {
 
     /// Runs the whole schedule: shooting, adaptive rounds (if enabled), shooting to the stop
     /// criteria. `observer` sees the solver after every shot: it can read
-    /// [`Progressive::progress`], take an intermediate [`Progressive::solution`] (with the
+    /// [`ProgressiveSolver::progress`], take an intermediate [`ProgressiveSolver::solution`] (with the
     /// ambient term) or stop the solve early by returning `Break`; the solution is usable
     /// whenever this returns.
     pub fn run(&mut self, mut observer: impl FnMut(&Self) -> ControlFlow<()>) -> Finish {

@@ -1,6 +1,6 @@
 //! What every radiosity solve shares: the settings, the stop criteria, the errors, the
 //! progress and consistency reports, and [`Solver`], which runs the method the options (or the
-//! scene's size) choose: progressive refinement ([`Progressive`]) or hierarchical radiosity
+//! scene's size) choose: progressive refinement ([`ProgressiveSolver`]) or hierarchical radiosity
 //! with clustering ([`HierarchicalSolver`]).
 
 use std::ops::ControlFlow;
@@ -13,9 +13,9 @@ use twopass_scene::Scene;
 use crate::element::ElementMesh;
 use crate::form_factor::VisibilityRays;
 use crate::hierarchical::HierarchicalSolver;
-use crate::progressive::Progressive;
+use crate::progressive::ProgressiveSolver;
 use crate::solution::Solution;
-use crate::specular::SpecularTransfer;
+use crate::specular::SpecularOptions;
 
 /// When the solver stops. The first criterion met ends the solve.
 #[derive(SmartDefault, Debug, Clone, Copy, PartialEq)]
@@ -34,7 +34,7 @@ pub struct Stop {
 
 /// Adaptive subdivision of elements where the radiosity changes fast.
 #[derive(SmartDefault, Debug, Clone, Copy, PartialEq)]
-pub struct Adaptive {
+pub struct AdaptiveOptions {
     /// Split an element when its vertices' luminances differ by more than this fraction of
     /// the scene's mean luminance.
     #[default(0.2)]
@@ -59,8 +59,8 @@ pub struct Options {
     /// Longest element edge (receivers) before adaptive subdivision; default diagonal / 24.
     pub element_size: Option<f32>,
     /// Adaptive subdivision, or `None` for a fixed mesh.
-    #[default(Some(Adaptive::default()))]
-    pub adaptive: Option<Adaptive>,
+    #[default(Some(AdaptiveOptions::default()))]
+    pub adaptive: Option<AdaptiveOptions>,
     /// Shadow rays per visibility estimate.
     pub visibility: VisibilityRays,
     /// Measure visibility with shadow rays; `false` treats every pair as unoccluded (exact only
@@ -83,7 +83,7 @@ pub struct Options {
     #[default(Method::Auto)]
     pub method: Method,
     /// Settings of the hierarchical solver.
-    pub hierarchical: Hierarchical,
+    pub hierarchical: HierarchicalOptions,
     /// Memory the solve may take, bytes (default 16 GiB): a mesh or link structure estimated
     /// to need more is refused before it is built ([`SolveError::TooLarge`]), and the
     /// hierarchical solver stops refining links when it reaches it.
@@ -91,8 +91,8 @@ pub struct Options {
     pub memory_limit: u64,
     /// Light carried through mirrors and glass onto diffuse surfaces (both solvers), or `None`
     /// to treat specular objects as absorbers. It runs only where [`crate::specular::decide`] says the scene needs it.
-    #[default(Some(SpecularTransfer::default()))]
-    pub specular: Option<SpecularTransfer>,
+    #[default(Some(SpecularOptions::default()))]
+    pub specular: Option<SpecularOptions>,
 }
 
 /// Why a solve cannot start.
@@ -441,7 +441,7 @@ pub(crate) fn participating(scene: &Scene) -> Vec<bool> {
 
 /// Settings of the hierarchical solver.
 #[derive(SmartDefault, Debug, Clone, Copy, PartialEq)]
-pub struct Hierarchical {
+pub struct HierarchicalOptions {
     /// A link is refined while its estimated transport error, in power, exceeds this fraction
     /// of the emitted power (luminance), default 2e-5: the BF refinement oracle.
     #[default(2e-5)]
@@ -455,7 +455,7 @@ pub struct Hierarchical {
 /// the commands and tools that solve, whatever the method.
 pub enum Solver<'s> {
     /// Progressive refinement.
-    Progressive(Box<Progressive<'s>>),
+    Progressive(Box<ProgressiveSolver<'s>>),
     /// Hierarchical radiosity with clustering.
     Hierarchical(Box<HierarchicalSolver<'s>>),
 }
@@ -468,7 +468,7 @@ impl<'s> Solver<'s> {
             Method::Hierarchical => {
                 Self::Hierarchical(Box::new(HierarchicalSolver::new(scene, options)?))
             }
-            _ => Self::Progressive(Box::new(Progressive::new(scene, options)?)),
+            _ => Self::Progressive(Box::new(ProgressiveSolver::new(scene, options)?)),
         })
     }
 
