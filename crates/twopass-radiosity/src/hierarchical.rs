@@ -41,17 +41,19 @@ use std::time::{Duration, Instant};
 use glam::{DMat3, DVec2, DVec3, Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 use twopass_brdf::colour::luminance_f64;
+use twopass_brdf::random::unit_f64;
 use twopass_scene::{Scene, SurfacePoint};
 
+use crate::ambient::ambient;
 use crate::cluster::{Clusters, Kind, NodeRef};
 use crate::element::{ElementMesh, barycentric_2d};
+use crate::error::SolveError;
 use crate::form_factor::{self, hash};
+use crate::options::{Method, Options, check_common, participating};
+use crate::report::{Bookkeeping, Finish, Residuals, SolveProgress};
 use crate::solution::Solution;
-use crate::solver::{
-    Bookkeeping, Finish, Method, Options, Residuals, SolveError, SolveProgress, check_common,
-    participating,
-};
-use crate::specular::{self, Deposit, Specular};
+use crate::specular::{self, Specular};
+use crate::specular_receivers::SpecularReceivers;
 
 /// A link: light from `source` gathered at `receiver`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -62,13 +64,13 @@ struct Link {
     /// table entry `dir` for a cluster), visibility included: irradiance at the receiver's
     /// three corners for a surface receiver (point values: what the vertices display); flux
     /// density from direction `dir ^ OPPOSITE` for a cluster receiver (three equal values).
-    k: [f32; 3],
+    transport: [f32; 3],
     /// The direction from the source's centre to the receiver's, as table bins.
     dir: Dir,
-    /// Area-averaged irradiance per unit source exitance less the mean of `k`: what the
+    /// Area-averaged irradiance per unit source exitance less the mean of `transport`: what the
     /// linear interpolant of the corner values misses of the light the receiver gets (surface
     /// pairs; zero otherwise), added uniformly over the receiver.
-    shift: f32,
+    area_correction: f32,
     /// Estimated error of the transport per unit source exitance luminance and receiver
     /// reflectance, as power: receiver area (scene units squared) times form-factor error.
     error: f32,
@@ -101,11 +103,11 @@ enum Piece {
 
 /// A link's evaluation.
 struct Eval {
-    k: [f64; 3],
-    /// `k` before visibility.
+    transport: [f64; 3],
+    /// `transport` before visibility.
     open: [f64; 3],
     dir: Dir,
-    shift: f64,
+    area_correction: f64,
     error: f64,
     /// An end is a cluster overlapping the other end's bounding sphere: the far-field estimate
     /// does not hold, the link must be refined.
@@ -288,7 +290,7 @@ fn merge_cones(a: (DVec3, f64), b: (DVec3, f64)) -> (DVec3, f64) {
 impl Eval {
     /// Whether the link carries no light: no corner and no part of the receiver gets any.
     fn carries_nothing(&self) -> bool {
-        self.k.iter().all(|&v| v <= 0.0) && self.shift <= 0.0
+        self.transport.iter().all(|&v| v <= 0.0) && self.area_correction <= 0.0
     }
 }
 
@@ -336,7 +338,7 @@ pub struct HierarchicalSolver<'s> {
     clusters: Clusters,
     min_size: f32,
     /// Link error threshold, W (luminance, scene units).
-    eps: f64,
+    error_threshold: f64,
     /// Per scene triangle: reflectance and emitted exitance E = pi L_e.
     tri_rho: Vec<DVec3>,
     tri_emission: Vec<DVec3>,
@@ -376,14 +378,14 @@ pub struct HierarchicalSolver<'s> {
     residual_fraction: f64,
     emitted: DVec3,
     /// Rounds, time and power, kept as the other solver keeps them.
-    book: Bookkeeping,
+    bookkeeping: Bookkeeping,
     iterations: u64,
     rays: u64,
     linked: bool,
     /// Past the time budget: links still being decided get the first, coarse visibility
     /// estimate only (no confirmation, no finer count, no visibility per corner), so that the
     /// candidates left when the budget runs out cost a few rays each, not dozens.
-    hurry: bool,
+    out_of_time: bool,
     /// The partly blocked links have had their visibility estimated again with the
     /// converged radiosities.
     refreshed: bool,
@@ -391,29 +393,9 @@ pub struct HierarchicalSolver<'s> {
     max_nodes: usize,
     /// The specular transfer, when the scene needs it ([`specular::decide`]): light the
     /// leaves send through mirrors and glass, deposited on the vertices it lands near.
-    specular: Option<Specular>,
-    /// Per vertex, with the specular transfer: irradiance from every deposit so far, and the
-    /// part of it that left an emitter and went through a refraction (W/m^2); the vertices'
-    /// areas. Empty without it.
-    spec_in: Vec<DVec3>,
-    spec_focused: Vec<DVec3>,
-    vertex_areas: specular::VertexAreas,
-    scratch: Vec<DVec3>,
-    /// Per surface node, with the specular transfer: the exitance (emitted, reflected) already
-    /// sent through the specular surfaces, W/m^2; `None` for nodes split off since (they have
-    /// their parent's).
-    spec_sent: Vec<Option<[DVec3; 2]>>,
+    specular: Option<SpecularReceivers>,
     /// The mesh changed since the deposits were last splatted onto it.
-    spec_stale: bool,
-}
-
-fn to_f32(v: DVec3) -> Vec3 {
-    Vec3::new(v.x as f32, v.y as f32, v.z as f32)
-}
-
-/// A uniform number in [0, 1) from a hash.
-fn unit(h: u64) -> f64 {
-    (h >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+    specular_stale: bool,
 }
 
 /// A random affine permutation `m -> (mult m + off) mod n` of `0..n` from hash `h`: `off`
@@ -513,7 +495,7 @@ impl<'s> HierarchicalSolver<'s> {
             mesh,
             clusters,
             min_size,
-            eps: 0.0,
+            error_threshold: 0.0,
             tri_rho,
             tri_emission,
             links: Vec::new(),
@@ -533,23 +515,19 @@ impl<'s> HierarchicalSolver<'s> {
             residual: DVec3::ZERO,
             residual_fraction: 1.0,
             emitted: DVec3::ZERO,
-            book: Bookkeeping::new(started, Duration::ZERO),
+            bookkeeping: Bookkeeping::new(started, Duration::ZERO),
             iterations: 0,
             rays: 0,
             linked: false,
-            hurry: false,
+            out_of_time: false,
             refreshed: false,
             max_links: (spare / 2 / BYTES_PER_LINK) as usize,
             max_nodes: (spare / 2 / BYTES_PER_NODE) as usize,
             specular: options
                 .specular
-                .and_then(|settings| Specular::new(scene, settings, &takes_part)),
-            spec_in: Vec::new(),
-            spec_focused: Vec::new(),
-            vertex_areas: specular::VertexAreas::default(),
-            scratch: Vec::new(),
-            spec_sent: Vec::new(),
-            spec_stale: false,
+                .and_then(|settings| Specular::new(scene, settings, &takes_part))
+                .map(SpecularReceivers::new),
+            specular_stale: false,
             options,
         };
         s.grow_arrays();
@@ -562,12 +540,12 @@ impl<'s> HierarchicalSolver<'s> {
                 s.tri_emission[node.scene_triangle as usize] * f64::from(node.area)
             })
             .sum();
-        s.eps = h.link_tolerance * luminance_f64(s.emitted).max(f64::MIN_POSITIVE);
+        s.error_threshold = h.link_tolerance * luminance_f64(s.emitted).max(f64::MIN_POSITIVE);
         // Before the first gather every node's exitance is its emission.
         s.push_pull();
-        s.book.energy.emitted = s.emitted;
-        s.book.energy.unshot = s.emitted;
-        s.book.meshing = started.elapsed();
+        s.bookkeeping.energy.emitted = s.emitted;
+        s.bookkeeping.energy.unshot = s.emitted;
+        s.bookkeeping.meshing = started.elapsed();
         Ok(s)
     }
 
@@ -660,44 +638,20 @@ impl<'s> HierarchicalSolver<'s> {
         self.cluster_exitance.resize(c, [DVec3::ZERO; 2]);
         self.radiant.resize(c, EMPTY);
         self.cluster_spread.resize(c, 0.0);
-        if self.specular.is_some() {
-            self.spec_sent.resize(n, None);
-            self.spec_stale = true;
+        if let Some(spec) = &mut self.specular {
+            spec.sent.resize(n, None);
+            self.specular_stale = true;
         }
     }
 
-    /// With the specular transfer: the vertex areas of the current mesh, and every deposit so
-    /// far splatted onto it (after a refinement the deposits land on the finer leaves).
+    /// With the specular transfer: every deposit so far splatted afresh onto the current mesh
+    /// ([`SpecularReceivers::resplat`]; after a refinement the deposits land on the finer
+    /// leaves).
     fn resplat(&mut self) {
-        self.spec_stale = false;
-        let Some(spec) = &mut self.specular else {
-            return;
-        };
-        self.vertex_areas = specular::VertexAreas::new(&self.mesh);
-        let nv = self.mesh.vertices.len();
-        self.spec_in = vec![DVec3::ZERO; nv];
-        self.spec_focused = vec![DVec3::ZERO; nv];
-        Self::splat_both(
-            &self.mesh,
-            &self.vertex_areas,
-            &mut spec.deposits,
-            &mut self.scratch,
-            [&mut self.spec_in, &mut self.spec_focused],
-        );
-    }
-
-    /// Splats `deposits`' whole power and their focused part onto the vertices, adding them to
-    /// `into` (whole, focused).
-    fn splat_both(
-        mesh: &ElementMesh,
-        areas: &specular::VertexAreas,
-        deposits: &mut [Deposit],
-        scratch: &mut Vec<DVec3>,
-        into: [&mut Vec<DVec3>; 2],
-    ) {
-        let [whole, focused] = into;
-        specular::splat(mesh, areas, deposits, scratch, specular::power, whole);
-        specular::splat(mesh, areas, deposits, scratch, specular::focused, focused);
+        self.specular_stale = false;
+        if let Some(spec) = &mut self.specular {
+            spec.resplat(&self.mesh);
+        }
     }
 
     /// With the specular transfer: every leaf sends what its exitance changed by since it last
@@ -713,7 +667,7 @@ impl<'s> HierarchicalSolver<'s> {
             .mesh
             .leaves()
             .map(|n| {
-                let sent = specular::sent(&self.mesh, &self.spec_sent, n);
+                let sent = spec.sent(&self.mesh, n);
                 let [e, r] = self.exitance[n as usize];
                 (n, [e - sent[0], r - sent[1]])
             })
@@ -721,33 +675,23 @@ impl<'s> HierarchicalSolver<'s> {
         let emitted = luminance_f64(self.emitted).max(f64::MIN_POSITIVE);
         let key = hash(self.options.seed ^ hash(0x5bec_4e00_0000_0000 ^ self.iterations));
         let threshold = 0.1 * self.options.stop.unshot_fraction * emitted;
-        let Some((mut deposits, cast)) =
-            spec.shoot_changes(self.scene, &self.mesh, &changes, emitted, threshold, key)
+        let Some((mut deposits, cast)) = spec
+            .transfer
+            .shoot_changes(self.scene, &self.mesh, &changes, emitted, threshold, key)
         else {
             return;
         };
-        for &(n, d) in &changes {
-            let sent = specular::sent(&self.mesh, &self.spec_sent, n);
-            self.spec_sent[n as usize] = Some([sent[0] + d[0], sent[1] + d[1]]);
-        }
+        let spec = self.specular.as_mut().expect("the transfer shot");
+        spec.note_sent(&self.mesh, &changes);
         self.rays += cast;
-        Self::splat_both(
-            &self.mesh,
-            &self.vertex_areas,
-            &mut deposits,
-            &mut self.scratch,
-            [&mut self.spec_in, &mut self.spec_focused],
-        );
-        if let Some(spec) = &mut self.specular {
-            spec.rays += cast;
-            spec.deposits.extend(deposits);
-        }
+        spec.splat(&self.mesh, Some(&mut deposits));
+        spec.keep(deposits, cast);
     }
 
     /// With the specular transfer: rays it cast and deposits it made so far; `None` when the
     /// scene does not need it ([`specular::decide`]) or the options turned it off.
     pub fn specular_transfer(&self) -> Option<(u64, usize)> {
-        self.specular.as_ref().map(|s| (s.rays, s.deposits.len()))
+        self.specular.as_ref().map(SpecularReceivers::counts)
     }
 
     /// The links node `r` receives (they are sorted by receiver).
@@ -796,7 +740,9 @@ impl<'s> HierarchicalSolver<'s> {
             Kind::Cluster(_) => 0.0,
             Kind::Surface(n) => self.spread[n as usize],
         };
-        let mean_k = (f64::from(l.k[0]) + f64::from(l.k[1]) + f64::from(l.k[2])) / 3.0;
+        let mean_k =
+            (f64::from(l.transport[0]) + f64::from(l.transport[1]) + f64::from(l.transport[2]))
+                / 3.0;
         // Form-factor error at the source's mean exitance, plus the source's own departure
         // from uniform exitance carried at the link's mean form factor.
         self.rho_lum(l.receiver)
@@ -837,7 +783,7 @@ impl<'s> HierarchicalSolver<'s> {
         }
     }
 
-    /// What a link's source sends (emitted, reflected light), per unit of the link's `k`:
+    /// What a link's source sends (emitted, reflected light), per unit of the link's `transport`:
     /// a surface's area-averaged exitance (W/m^2), a cluster's radiant table entry toward
     /// the receiver (W).
     fn source_value(&self, l: &Link) -> [DVec3; 2] {
@@ -964,17 +910,17 @@ impl<'s> HierarchicalSolver<'s> {
                 let (a, _) = self.sample_point(
                     r,
                     [
-                        (f64::from(i) + unit(h)) / kf,
-                        (f64::from(j) + unit(hash(h))) / kf,
-                        unit(hash(h ^ 1)),
+                        (f64::from(i) + unit_f64(h)) / kf,
+                        (f64::from(j) + unit_f64(hash(h))) / kf,
+                        unit_f64(hash(h ^ 1)),
                     ],
                 );
                 let (b, leaf) = self.sample_point(
                     s,
                     [
-                        (f64::from(pi) + unit(hash(h ^ 2))) / kf,
-                        (f64::from(pj) + unit(hash(h ^ 3))) / kf,
-                        unit(hash(h ^ 4)),
+                        (f64::from(pi) + unit_f64(hash(h ^ 2))) / kf,
+                        (f64::from(pj) + unit_f64(hash(h ^ 3))) / kf,
+                        unit_f64(hash(h ^ 4)),
                     ],
                 );
                 let d = b.position - a.position;
@@ -1019,9 +965,9 @@ impl<'s> HierarchicalSolver<'s> {
                 let (b, leaf) = self.sample_point(
                     s,
                     [
-                        (fi + unit(h)) / kf,
-                        (fj + unit(hash(h))) / kf,
-                        unit(hash(h ^ 1)),
+                        (fi + unit_f64(h)) / kf,
+                        (fj + unit_f64(hash(h))) / kf,
+                        unit_f64(hash(h ^ 1)),
                     ],
                 );
                 if (b.position - from.position).dot(b.normal) >= 0.0 {
@@ -1174,10 +1120,10 @@ impl<'s> HierarchicalSolver<'s> {
             }
         };
         let mut e = Eval {
-            k,
+            transport: k,
             open: k,
             dir,
-            shift,
+            area_correction: shift,
             error,
             near: near_cluster,
             partial: false,
@@ -1196,10 +1142,11 @@ impl<'s> HierarchicalSolver<'s> {
         e.partial = vis < 1.0;
         // The light the receiver gets unoccluded: its area-averaged form factor (the corners
         // can all miss a source that the inside of a large element sees).
-        let average = ((e.k[0] + e.k[1] + e.k[2]) / 3.0 + e.shift).max(0.0);
+        let average =
+            ((e.transport[0] + e.transport[1] + e.transport[2]) / 3.0 + e.area_correction).max(0.0);
         e.error = e.error * vis + if e.partial { er.area * average } else { 0.0 };
-        e.k = e.k.map(|v| v * vis);
-        e.shift *= vis;
+        e.transport = e.transport.map(|v| v * vis);
+        e.area_correction *= vis;
         e
     }
 
@@ -1244,9 +1191,9 @@ impl<'s> HierarchicalSolver<'s> {
         let link = |e: &Eval| Link {
             receiver: r,
             source: s,
-            k: e.k.map(|v| v as f32),
+            transport: e.transport.map(|v| v as f32),
             dir: e.dir,
-            shift: e.shift as f32,
+            area_correction: e.area_correction as f32,
             error: e.error as f32,
             partial: e.partial,
         };
@@ -1255,22 +1202,23 @@ impl<'s> HierarchicalSolver<'s> {
         // rule). Such a link is confirmed with the full count before it is trusted. (A
         // cluster link's error is its whole transport already.)
         if let (Kind::Surface(_), Kind::Surface(_)) = (r.kind(), s.kind())
-            && !self.hurry
+            && !self.out_of_time
             && !e.partial
             && e.rays > 0
             && e.rays < u64::from(vis.max)
         {
-            let carried = self.ends(r).area * ((e.k[0] + e.k[1] + e.k[2]) / 3.0 + e.shift);
+            let carried = self.ends(r).area
+                * ((e.transport[0] + e.transport[1] + e.transport[2]) / 3.0 + e.area_correction);
             let doubt = Link {
                 error: (carried / (e.rays + 1) as f64) as f32,
                 ..link(&e)
             };
-            if self.link_error(&doubt) > self.eps {
+            if self.link_error(&doubt) > self.error_threshold {
                 e = self.evaluate(r, s, vis.max);
                 rays += e.rays;
             }
         }
-        if e.near || self.link_error(&link(&e)) > self.eps {
+        if e.near || self.link_error(&link(&e)) > self.error_threshold {
             let (sr, ss) = (self.splittable(r), self.splittable(s));
             let receiver_first = match (sr, ss) {
                 (false, false) => None,
@@ -1290,7 +1238,7 @@ impl<'s> HierarchicalSolver<'s> {
                 Some(false) if allow_split => return (Step::SplitSource(link(&e)), rays),
                 _ => {
                     // Nothing left to split: a finer visibility estimate is all that helps.
-                    if e.partial && vis.max > vis.min && e.error > 0.0 && !self.hurry {
+                    if e.partial && vis.max > vis.min && e.error > 0.0 && !self.out_of_time {
                         let more = self.evaluate(r, s, vis.max);
                         rays += more.rays;
                         e = more;
@@ -1303,11 +1251,12 @@ impl<'s> HierarchicalSolver<'s> {
         // visibility each, so that a shadow edge or an occluder standing on the element is
         // not smeared over the corners it spares.
         if let (true, false, Kind::Surface(p), Kind::Surface(_)) =
-            (e.partial, self.hurry, r.kind(), s.kind())
+            (e.partial, self.out_of_time, r.kind(), s.kind())
         {
             let (x, _) = self.receiving_points(p);
             let tri = self.mesh.nodes[p as usize].scene_triangle;
-            let total = (e.k[0] + e.k[1] + e.k[2]) / 3.0 + e.shift;
+            let total =
+                (e.transport[0] + e.transport[1] + e.transport[2]) / 3.0 + e.area_correction;
             let mut corners = e.open;
             for (c, k) in corners.iter_mut().enumerate() {
                 let from = self.scene.mesh.surface_point_at(tri, x[c].as_vec3());
@@ -1320,8 +1269,8 @@ impl<'s> HierarchicalSolver<'s> {
                 *k *= v;
                 rays += cast;
             }
-            e.k = corners;
-            e.shift = total - (corners[0] + corners[1] + corners[2]) / 3.0;
+            e.transport = corners;
+            e.area_correction = total - (corners[0] + corners[1] + corners[2]) / 3.0;
         }
         if e.carries_nothing() {
             return (Step::Drop, rays);
@@ -1333,7 +1282,7 @@ impl<'s> HierarchicalSolver<'s> {
         self.options
             .stop
             .time_budget
-            .is_some_and(|b| self.book.started.elapsed() >= b)
+            .is_some_and(|b| self.bookkeeping.started.elapsed() >= b)
     }
 
     /// Refines candidate pairs into links until every link is accurate enough, the nodes
@@ -1360,8 +1309,8 @@ impl<'s> HierarchicalSolver<'s> {
             let mut next = Vec::new();
             let mut next_parents: Vec<(Link, Piece)> = Vec::new();
             for batch in level.chunks(BATCH) {
-                self.hurry = self.deadline_passed();
-                let allow = !self.hurry
+                self.out_of_time = self.deadline_passed();
+                let allow = !self.out_of_time
                     && self.links.len() + level.len() < self.max_links
                     && self.mesh.nodes.len() < self.max_nodes;
                 // Past the budget, a split link none of whose pieces was decided comes back
@@ -1369,7 +1318,7 @@ impl<'s> HierarchicalSolver<'s> {
                 let mut todo = Vec::with_capacity(batch.len());
                 for &(r, s, p) in batch {
                     match parents.get_mut(p as usize) {
-                        Some((link, state)) if self.hurry && *state == Piece::Untouched => {
+                        Some((link, state)) if self.out_of_time && *state == Piece::Untouched => {
                             self.links.push(*link);
                             *state = Piece::Restored;
                         }
@@ -1445,7 +1394,7 @@ impl<'s> HierarchicalSolver<'s> {
         self.sort_links();
         // New leaves take their ancestors' irradiance (interpolated) until the next gather.
         self.push_pull();
-        self.book.refining += started.elapsed();
+        self.bookkeeping.refining += started.elapsed();
         self.links.len().saturating_sub(before)
     }
 
@@ -1477,7 +1426,7 @@ impl<'s> HierarchicalSolver<'s> {
             self.links.extend(l);
         }
         self.sort_links();
-        self.book.refining += started.elapsed();
+        self.bookkeeping.refining += started.elapsed();
         redone
     }
 
@@ -1495,10 +1444,10 @@ impl<'s> HierarchicalSolver<'s> {
     /// Re-checks every link against the oracle with the current radiosities; refines those
     /// whose error is now too large. Returns how many were refined.
     fn rerefine(&mut self) -> usize {
-        let eps = self.eps;
+        let error_threshold = self.error_threshold;
         let (keep, redo): (Vec<Link>, Vec<Link>) =
             std::mem::take(&mut self.links).into_iter().partition(|l| {
-                !(self.link_error(l) > eps
+                !(self.link_error(l) > error_threshold
                     && (self.splittable(l.receiver) || self.splittable(l.source)))
             });
         self.links = keep;
@@ -1542,7 +1491,7 @@ impl<'s> HierarchicalSolver<'s> {
                     let [be, br] = self.source_value(l);
                     if cluster {
                         // Arriving from the source's side: the opposite of `dir`.
-                        let k = f64::from(l.k[0]);
+                        let k = f64::from(l.transport[0]);
                         let toward = l.dir.opposite();
                         let u = toward
                             .parts()
@@ -1558,12 +1507,12 @@ impl<'s> HierarchicalSolver<'s> {
                         }
                         continue;
                     }
-                    for (c, &k) in l.k.iter().enumerate() {
+                    for (c, &k) in l.transport.iter().enumerate() {
                         let k = f64::from(k);
                         acc[0][c] += be * k;
                         acc[1][c] += br * k;
                     }
-                    let s = f64::from(l.shift);
+                    let s = f64::from(l.area_correction);
                     acc[0][3] += be * s;
                     acc[1][3] += br * s;
                 }
@@ -1592,7 +1541,7 @@ impl<'s> HierarchicalSolver<'s> {
                 }
             }
         }
-        if self.spec_stale {
+        if self.specular_stale {
             self.resplat();
         }
         let before = self.leaf_power();
@@ -1611,13 +1560,13 @@ impl<'s> HierarchicalSolver<'s> {
             absorbed += irr * a * (DVec3::ONE - self.tri_rho[node.scene_triangle as usize]);
         }
         self.residual = after - before;
-        self.book.energy.absorbed = absorbed;
-        self.book.energy.escaped = before - arrived;
-        self.book.energy.unshot = self.residual;
-        self.book.energy.emitted = self.emitted;
+        self.bookkeeping.energy.absorbed = absorbed;
+        self.bookkeeping.energy.escaped = before - arrived;
+        self.bookkeeping.energy.unshot = self.residual;
+        self.bookkeeping.energy.emitted = self.emitted;
         self.residual_fraction =
             self.residual.abs().element_sum() / self.emitted.element_sum().max(f64::MIN_POSITIVE);
-        self.book.note_imbalance();
+        self.bookkeeping.note_imbalance();
         self.iterations += 1;
     }
 
@@ -1713,12 +1662,16 @@ impl<'s> HierarchicalSolver<'s> {
                 // made since the last splat get theirs at the next gather).
                 let mut here = here;
                 for (k, &v) in node.vertices.iter().enumerate() {
-                    if let Some(e) = self.spec_in.get(v as usize) {
+                    if let Some(e) = self
+                        .specular
+                        .as_ref()
+                        .and_then(|s| s.received.get(v as usize))
+                    {
                         here[1][k] += *e;
                     }
                 }
                 // The light the leaf gets: its corners' linear interpolant plus the shifts of
-                // the links above it (see `Link::shift`).
+                // the links above it (see [`Link::area_correction`]).
                 let mean = |o: usize| (here[o][0] + here[o][1] + here[o][2]) / 3.0 + here[o][3];
                 let b = [self.tri_emission[t], self.tri_rho[t] * (mean(0) + mean(1))];
                 self.corners_in[n as usize] = here;
@@ -1782,8 +1735,8 @@ impl<'s> HierarchicalSolver<'s> {
                 return Finish::Cancelled;
             }
             if self.residual_fraction <= target {
-                let refined = if self.book.rounds < MAX_ROUNDS {
-                    self.book.rounds += 1;
+                let refined = if self.bookkeeping.rounds < MAX_ROUNDS {
+                    self.bookkeeping.rounds += 1;
                     self.rerefine()
                 } else {
                     0
@@ -1828,7 +1781,7 @@ impl<'s> HierarchicalSolver<'s> {
             rays: self.rays,
             elements: self.mesh.leaves().count(),
             vertices: self.mesh.vertices.len(),
-            ..self.book.progress(Method::Hierarchical)
+            ..self.bookkeeping.progress(Method::Hierarchical)
         }
     }
 
@@ -1845,8 +1798,7 @@ impl<'s> HierarchicalSolver<'s> {
             rho += self.tri_rho[node.scene_triangle as usize] * a;
             area += a;
         }
-        let mean_rho = rho / area;
-        self.residual.max(DVec3::ZERO) / area / (DVec3::ONE - mean_rho).max(DVec3::splat(1e-6))
+        ambient(self.residual.max(DVec3::ZERO), rho, area)
     }
 
     /// The current solution: per-vertex radiosity over the leaves, the area-weighted mean of
@@ -1903,7 +1855,7 @@ impl<'s> HierarchicalSolver<'s> {
                             // the source unoccluded (1 unless a later visibility estimate
                             // found some of it blocked).
                             let open: f64 = self.corner_form_factors(n, q).iter().sum();
-                            let k: f64 = l.k.iter().map(|&k| f64::from(k)).sum();
+                            let k: f64 = l.transport.iter().map(|&k| f64::from(k)).sum();
                             (open > 0.0).then(|| (*l, n, (k / open).clamp(0.0, 1.0)))
                         }));
                         stack.push((children[0], above.clone()));
@@ -1920,21 +1872,21 @@ impl<'s> HierarchicalSolver<'s> {
                         let sv = self.source_value(l);
                         for c in 0..3 {
                             let w = barycentric_2d(at.uv, node.uv[c]);
-                            let interpolated = f64::from(l.k[0]) * f64::from(w[0])
-                                + f64::from(l.k[1]) * f64::from(w[1])
-                                + f64::from(l.k[2]) * f64::from(w[2]);
+                            let interpolated = f64::from(l.transport[0]) * f64::from(w[0])
+                                + f64::from(l.transport[1]) * f64::from(w[1])
+                                + f64::from(l.transport[2]) * f64::from(w[2]);
                             let d = f[c] * vis - interpolated;
                             fix[0][c] += sv[0] * d;
                             fix[1][c] += sv[1] * d;
                         }
-                        fix[0][3] -= sv[0] * f64::from(l.shift);
-                        fix[1][3] -= sv[1] * f64::from(l.shift);
+                        fix[0][3] -= sv[0] * f64::from(l.area_correction);
+                        fix[1][3] -= sv[1] * f64::from(l.area_correction);
                     }
                     // The leaf's own links are exact at its corners already: no shift.
                     for l in received(n) {
                         let sv = self.source_value(l);
-                        fix[0][3] -= sv[0] * f64::from(l.shift);
-                        fix[1][3] -= sv[1] * f64::from(l.shift);
+                        fix[0][3] -= sv[0] * f64::from(l.area_correction);
+                        fix[1][3] -= sv[1] * f64::from(l.area_correction);
                     }
                     fixes.push((n, fix));
                 }
@@ -1965,7 +1917,7 @@ impl<'s> HierarchicalSolver<'s> {
             let [e, r] = corners[n as usize];
             for (k, &v) in node.vertices.iter().enumerate() {
                 // Corner values plus the links' shifts, so the displayed light is the light
-                // the leaf gets (see `Link::shift`).
+                // the leaf gets (see [`Link::area_correction`]).
                 sum[v as usize][0] += (e[k] + e[3]) * a;
                 sum[v as usize][1] += (r[k] + r[3]) * a;
                 weight[v as usize] += a;
@@ -1984,18 +1936,18 @@ impl<'s> HierarchicalSolver<'s> {
             let w = weight[v].max(f64::MIN_POSITIVE);
             let d = rho * sum[v][0] / w;
             let i = rho * sum[v][1] / w;
-            radiosity.push(to_f32(e + d + i));
-            direct.push(to_f32(d));
-            indirect.push(to_f32(i));
-            amb.push(to_f32(rho * ambient));
+            radiosity.push((e + d + i).as_vec3());
+            direct.push(d.as_vec3());
+            indirect.push(i.as_vec3());
+            amb.push((rho * ambient).as_vec3());
         }
         let solution = Solution::new(self.mesh.clone(), radiosity, direct, indirect, amb);
         if let Some(spec) = &self.specular {
             // Splatted afresh when the mesh changed since the last gather.
             let fresh;
-            let per_vertex = if self.spec_stale {
+            let per_vertex = if self.specular_stale {
                 let areas = specular::VertexAreas::new(&self.mesh);
-                let mut deposits = spec.deposits.clone();
+                let mut deposits = spec.transfer.deposits.clone();
                 let mut values = vec![DVec3::ZERO; nv];
                 let part = specular::focused;
                 specular::splat(
@@ -2009,14 +1961,14 @@ impl<'s> HierarchicalSolver<'s> {
                 fresh = values;
                 &fresh
             } else {
-                &self.spec_focused
+                &spec.focused
             };
             let focused = self
                 .mesh
                 .vertices
                 .iter()
                 .zip(per_vertex)
-                .map(|(vert, &f)| to_f32(self.tri_rho[vert.triangle as usize] * f))
+                .map(|(vert, &f)| (self.tri_rho[vert.triangle as usize] * f).as_vec3())
                 .collect();
             solution.with_focused_caustics(focused)
         } else {
@@ -2056,14 +2008,16 @@ impl<'s> HierarchicalSolver<'s> {
                 let back = self.evaluate(l.source, l.receiver, self.options.visibility.max);
                 let fwd = self.evaluate(l.receiver, l.source, self.options.visibility.max);
                 // Area-averaged form factors: the corners' mean plus the shift.
-                let average = |e: &Eval| (e.k[0] + e.k[1] + e.k[2]) / 3.0 + e.shift;
+                let average = |e: &Eval| {
+                    (e.transport[0] + e.transport[1] + e.transport[2]) / 3.0 + e.area_correction
+                };
                 (
                     self.ends(l.receiver).area * average(&fwd),
                     self.ends(l.source).area * average(&back),
                 )
             })
             .collect();
-        Residuals::from_samples(self.book.worst_imbalance, &sums, pairs)
+        Residuals::from_samples(self.bookkeeping.worst_imbalance, &sums, pairs)
     }
 
     /// The sum of the transport coefficients that reach `leaf` (its own links and its
@@ -2092,7 +2046,9 @@ impl<'s> HierarchicalSolver<'s> {
     /// cluster source sends its projected area toward the receiver, a cluster receiver spreads
     /// what it intercepts over its area.
     fn unit_transport(&self, l: &Link) -> f64 {
-        let mean = (f64::from(l.k[0]) + f64::from(l.k[1]) + f64::from(l.k[2])) / 3.0;
+        let mean =
+            (f64::from(l.transport[0]) + f64::from(l.transport[1]) + f64::from(l.transport[2]))
+                / 3.0;
         let sent = match l.source.kind() {
             Kind::Cluster(c) => l.dir.read(&self.projected[c as usize]),
             Kind::Surface(_) => 1.0,
@@ -2102,7 +2058,7 @@ impl<'s> HierarchicalSolver<'s> {
                 mean * sent * l.dir.opposite().read(&self.projected[c as usize])
                     / self.clusters.nodes[c as usize].area.max(f64::MIN_POSITIVE)
             }
-            Kind::Surface(_) => (mean + f64::from(l.shift)) * sent,
+            Kind::Surface(_) => (mean + f64::from(l.area_correction)) * sent,
         }
     }
 

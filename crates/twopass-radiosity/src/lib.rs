@@ -30,25 +30,32 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+mod ambient;
 pub mod cluster;
 mod direct;
 pub mod element;
+mod error;
 pub mod form_factor;
 mod hierarchical;
 mod mesh_error;
+mod options;
 mod progressive;
+mod report;
 mod solution;
 mod solver;
 pub mod specular;
+mod specular_receivers;
 
 pub use direct::{MAX_DENSE_VERTICES, dense_solve};
+pub use error::SolveError;
 pub use form_factor::VisibilityRays;
 pub use hierarchical::HierarchicalSolver;
 pub use mesh_error::{InvalidMesh, MeshPart};
-pub use progressive::{MAX_ELEMENTS, ProgressiveSolver};
-pub use solution::Solution;
-pub use solver::{
-    AdaptiveOptions, Energy, Finish, HierarchicalOptions, MAX_VISIBILITY_RAYS, Method, Options,
-    Residuals, SolveError, SolveProgress, Solver, Stop,
+pub use options::{
+    AdaptiveOptions, HierarchicalOptions, MAX_VISIBILITY_RAYS, Method, Options, SpecularOptions,
+    Stop,
 };
-pub use specular::SpecularOptions;
+pub use progressive::{MAX_ELEMENTS, ProgressiveSolver};
+pub use report::{Energy, Finish, Residuals, SolveProgress};
+pub use solution::Solution;
+pub use solver::Solver;

@@ -7,20 +7,21 @@ use std::ops::ControlFlow;
 use std::sync::atomic::{AtomicU8, Ordering};
 use std::time::Instant;
 
-use glam::{DVec3, Vec3};
+use glam::DVec3;
 use rayon::prelude::*;
 use twopass_brdf::Rgb;
 use twopass_brdf::colour::luminance_f64;
 use twopass_scene::{Scene, SurfacePoint};
 
+use crate::ambient::ambient;
 use crate::element::ElementMesh;
+use crate::error::SolveError;
 use crate::form_factor::{self, RECEIVER_INSET, hash};
+use crate::options::{AdaptiveOptions, Method, Options, check_common, participating};
+use crate::report::{Bookkeeping, Finish, Residuals, SolveProgress};
 use crate::solution::Solution;
-use crate::solver::{
-    AdaptiveOptions, Bookkeeping, Finish, Options, Residuals, SolveError, SolveProgress,
-    check_common, participating,
-};
-use crate::specular::{self, Deposit, Specular, focused, power};
+use crate::specular::Specular;
+use crate::specular_receivers::SpecularReceivers;
 
 /// Most patches or elements a solve meshes before adaptive subdivision (about 2 GB of mesh,
 /// form-factor rows and radiosities); smaller patch or element sizes are refused up front.
@@ -65,22 +66,9 @@ pub struct ProgressiveSolver<'s> {
     /// Per vertex: irradiance received from emitted and from reflected light, W/m^2.
     received_emit: Vec<DVec3>,
     received_refl: Vec<DVec3>,
-    /// The specular transfer, when the scene needs it ([`specular::decide`]).
-    specular: Option<Specular>,
-    /// Per vertex, with the specular transfer: irradiance that arrived through specular
-    /// surfaces (every deposit so far, splatted on the current mesh), W/m^2; and the area each
-    /// vertex stands for, with its leaves ([`specular::VertexAreas`]). Empty without it.
-    received_spec: Vec<DVec3>,
-    /// Per vertex, with the specular transfer: the part of `received_spec` that left an
-    /// emitter as emission and went through a refraction (the focused caustic), W/m^2.
-    received_focused: Vec<DVec3>,
-    /// Per element-mesh node, with the specular transfer: the exitance (emitted, reflected,
-    /// W/m^2) it has sent through the specular surfaces; `None` for nodes split off since
-    /// (they have their parent's, [`specular::sent`]).
-    spec_sent: Vec<Option<[DVec3; 2]>>,
-    vertex_areas: specular::VertexAreas,
-    /// A per-vertex buffer of zeros for the splats.
-    scratch: Vec<DVec3>,
+    /// The specular transfer and the light it brought to the vertices, when the scene needs
+    /// it ([`crate::specular::decide`]).
+    specular: Option<SpecularReceivers>,
     /// Per patch: unshot and shot radiosity, split by origin.
     unshot_emit: Vec<DVec3>,
     unshot_refl: Vec<DVec3>,
@@ -109,7 +97,7 @@ pub struct ProgressiveSolver<'s> {
     pair_clear: Vec<AtomicU8>,
     cached_bytes: usize,
     /// Rounds, time and power, kept as the other solver keeps them.
-    book: Bookkeeping,
+    bookkeeping: Bookkeeping,
     shots: u64,
     rays: u64,
 }
@@ -277,7 +265,8 @@ impl<'s> ProgressiveSolver<'s> {
         }
         let specular = options
             .specular
-            .and_then(|settings| Specular::new(scene, settings, &takes_part));
+            .and_then(|settings| Specular::new(scene, settings, &takes_part))
+            .map(SpecularReceivers::new);
         let started = Instant::now();
         let mut mesh = ElementMesh::new(scene, &takes_part);
         mesh.refine_to(patch_size);
@@ -295,11 +284,6 @@ impl<'s> ProgressiveSolver<'s> {
             received_emit: Vec::new(),
             received_refl: Vec::new(),
             specular,
-            received_focused: Vec::new(),
-            spec_sent: Vec::new(),
-            received_spec: Vec::new(),
-            vertex_areas: specular::VertexAreas::default(),
-            scratch: Vec::new(),
             unshot_emit: Vec::new(),
             unshot_refl: Vec::new(),
             shot_emit: Vec::new(),
@@ -312,7 +296,7 @@ impl<'s> ProgressiveSolver<'s> {
             weights: Vec::new(),
             pair_clear: Vec::new(),
             cached_bytes: 0,
-            book: Bookkeeping::new(started, started.elapsed()),
+            bookkeeping: Bookkeeping::new(started, started.elapsed()),
             shots: 0,
             rays: 0,
         };
@@ -338,8 +322,8 @@ impl<'s> ProgressiveSolver<'s> {
             s.pair_clear = (0..n * n).map(|_| AtomicU8::new(PAIR_UNKNOWN)).collect();
         }
         s.unshot_emit = (0..n).map(|p| s.patch_emission(p)).collect();
-        s.book.energy.emitted = (0..n).map(|p| s.unshot_emit[p] * s.patch_area(p)).sum();
-        s.book.energy.unshot = s.book.energy.emitted;
+        s.bookkeeping.energy.emitted = (0..n).map(|p| s.unshot_emit[p] * s.patch_area(p)).sum();
+        s.bookkeeping.energy.unshot = s.bookkeeping.energy.emitted;
         s.unshot_power = vec![0.0; n];
         for p in 0..n {
             s.note_unshot(p);
@@ -349,49 +333,29 @@ impl<'s> ProgressiveSolver<'s> {
         Ok(s)
     }
 
-    /// With the specular transfer: the vertex areas of the current mesh, and every deposit so
-    /// far splatted onto it (after a refinement the deposits land on the finer elements).
+    /// With the specular transfer: every deposit so far splatted afresh onto the current mesh
+    /// ([`SpecularReceivers::resplat`]).
     fn resplat(&mut self) {
-        let Some(spec) = &mut self.specular else {
-            return;
-        };
-        self.vertex_areas = specular::VertexAreas::new(&self.mesh);
-        self.spec_sent.resize(self.mesh.nodes.len(), None);
-        self.received_spec = vec![DVec3::ZERO; self.mesh.vertices.len()];
-        self.received_focused = vec![DVec3::ZERO; self.mesh.vertices.len()];
-        for (part, into) in [
-            (power as fn(&Deposit) -> Vec3, &mut self.received_spec),
-            (focused, &mut self.received_focused),
-        ] {
-            let (mesh, areas) = (&self.mesh, &self.vertex_areas);
-            specular::splat(
-                mesh,
-                areas,
-                &mut spec.deposits,
-                &mut self.scratch,
-                part,
-                into,
-            );
+        if let Some(spec) = &mut self.specular {
+            spec.resplat(&self.mesh);
         }
     }
 
     /// Irradiance received at vertex `v` from every path, W/m^2.
     fn received(&self, v: usize) -> DVec3 {
         let r = self.received_emit[v] + self.received_refl[v];
-        if self.specular.is_some() {
-            r + self.received_spec[v]
-        } else {
-            r
+        match &self.specular {
+            Some(spec) => r + spec.received[v],
+            None => r,
         }
     }
 
     /// Irradiance at vertex `v` from light reflected at least once or carried through specular
     /// surfaces (what shadow rays to the emitters do not find), W/m^2.
     fn received_indirect(&self, v: usize) -> DVec3 {
-        if self.specular.is_some() {
-            self.received_refl[v] + self.received_spec[v]
-        } else {
-            self.received_refl[v]
+        match &self.specular {
+            Some(spec) => self.received_refl[v] + spec.received[v],
+            None => self.received_refl[v],
         }
     }
 
@@ -415,49 +379,31 @@ impl<'s> ProgressiveSolver<'s> {
                 let node = &self.mesh.nodes[leaf as usize];
                 let e = mean(node, &|v| self.emission[v]);
                 let r = mean(node, &|v| self.rho[v] * self.received(v));
-                let sent = specular::sent(&self.mesh, &self.spec_sent, leaf);
+                let sent = spec.sent(&self.mesh, leaf);
                 (leaf, [e - sent[0], r - sent[1]])
             })
             .collect();
         let key = hash(self.options.seed ^ hash(0x5bec_0000_0000_0000 ^ self.shots) ^ p as u64);
-        let emitted = luminance_f64(self.book.energy.emitted);
-        let Some((mut deposits, rays)) =
-            spec.shoot_changes(self.scene, &self.mesh, &changes, emitted, 0.0, key)
+        let emitted = luminance_f64(self.bookkeeping.energy.emitted);
+        let Some((mut deposits, rays)) = spec
+            .transfer
+            .shoot_changes(self.scene, &self.mesh, &changes, emitted, 0.0, key)
         else {
             return DVec3::ZERO;
         };
-        for &(leaf, d) in &changes {
-            let sent = specular::sent(&self.mesh, &self.spec_sent, leaf);
-            self.spec_sent[leaf as usize] = Some([sent[0] + d[0], sent[1] + d[1]]);
-        }
+        let spec = self.specular.as_mut().expect("the transfer shot");
+        spec.note_sent(&self.mesh, &changes);
         self.rays += rays;
         if deposits.is_empty() {
-            if let Some(spec) = &mut self.specular {
-                spec.rays += rays;
-            }
+            spec.keep(deposits, rays);
             return DVec3::ZERO;
         }
         // Only the leaves around the vertices that received anything gain power: an element
         // receives its area times the mean of its vertices' irradiance.
-        let delta = specular::splat(
-            &self.mesh,
-            &self.vertex_areas,
-            &mut deposits,
-            &mut self.scratch,
-            power,
-            &mut self.received_spec,
-        );
-        specular::splat(
-            &self.mesh,
-            &self.vertex_areas,
-            &mut deposits,
-            &mut self.scratch,
-            focused,
-            &mut self.received_focused,
-        );
+        let delta = spec.splat(&self.mesh, Some(&mut deposits));
         let mut gains: Vec<(u32, DVec3)> = Vec::new();
         for &(v, e) in &delta {
-            for &leaf in &self.vertex_areas.leaves[v as usize] {
+            for &leaf in &spec.vertex_areas.leaves[v as usize] {
                 let node = &self.mesh.nodes[leaf as usize];
                 gains.push((node.patch, e * (f64::from(node.area) / 3.0)));
             }
@@ -471,22 +417,19 @@ impl<'s> ProgressiveSolver<'s> {
                 false
             }
         });
+        spec.keep(deposits, rays);
         let mut arrived = DVec3::ZERO;
         for (q, gained) in gains {
             arrived += gained;
             self.receive(q as usize, gained);
         }
-        if let Some(spec) = &mut self.specular {
-            spec.rays += rays;
-            spec.deposits.extend(deposits);
-        }
         arrived
     }
 
     /// With the specular transfer: rays it cast and deposits it made so far; `None` when the
-    /// scene does not need it ([`specular::decide`]) or the options turned it off.
+    /// scene does not need it ([`crate::specular::decide`]) or the options turned it off.
     pub fn specular_transfer(&self) -> Option<(u64, usize)> {
-        self.specular.as_ref().map(|s| (s.rays, s.deposits.len()))
+        self.specular.as_ref().map(SpecularReceivers::counts)
     }
 
     fn object_of_patch(&self, p: usize) -> u32 {
@@ -502,11 +445,11 @@ impl<'s> ProgressiveSolver<'s> {
     /// rest as unshot exitance.
     fn receive(&mut self, q: usize, gained: DVec3) {
         let rho = self.patch_rho(q);
-        self.book.energy.absorbed += gained * (DVec3::ONE - rho);
+        self.bookkeeping.energy.absorbed += gained * (DVec3::ONE - rho);
         let a = self.patch_area(q);
         self.unshot_refl[q] += gained * rho / a;
         self.note_unshot(q);
-        self.book.energy.unshot += gained * rho;
+        self.bookkeeping.energy.unshot += gained * rho;
     }
 
     /// Brings patch `p`'s entry of `unshot_power` up to date with its unshot radiosity.
@@ -861,15 +804,15 @@ impl<'s> ProgressiveSolver<'s> {
             arrived += self.shoot_specular(p);
         }
         let shot = (de + dr) * area;
-        self.book.energy.escaped += shot - arrived;
-        self.book.energy.unshot -= shot;
+        self.bookkeeping.energy.escaped += shot - arrived;
+        self.bookkeeping.energy.unshot -= shot;
         self.shot_emit[p] += de;
         self.shot_refl[p] += dr;
         self.unshot_emit[p] -= de;
         self.unshot_refl[p] -= dr;
         self.note_unshot(p);
         self.shots += 1;
-        self.book.note_imbalance();
+        self.bookkeeping.note_imbalance();
         true
     }
 
@@ -878,7 +821,7 @@ impl<'s> ProgressiveSolver<'s> {
         let unshot: f64 = self.unshot_power.iter().sum();
         unshot
             / self
-                .book
+                .bookkeeping
                 .energy
                 .emitted
                 .element_sum()
@@ -894,7 +837,7 @@ impl<'s> ProgressiveSolver<'s> {
             elements: self.elements.leaf.len(),
             vertices: self.mesh.vertices.len(),
             patches: self.mesh.patches.len(),
-            ..self.book.progress(crate::solver::Method::Progressive)
+            ..self.bookkeeping.progress(Method::Progressive)
         }
     }
 
@@ -910,7 +853,7 @@ impl<'s> ProgressiveSolver<'s> {
     pub fn refine(&mut self, adaptive: &AdaptiveOptions) -> usize {
         let started = Instant::now();
         let splits = self.refine_round(adaptive);
-        self.book.refining += started.elapsed();
+        self.bookkeeping.refining += started.elapsed();
         splits
     }
 
@@ -974,12 +917,12 @@ impl<'s> ProgressiveSolver<'s> {
             let reflected = reflected / self.patch_area(p);
             let new_unshot = reflected - self.shot_refl[p];
             let change = (new_unshot - self.unshot_refl[p]) * self.patch_area(p);
-            self.book.energy.unshot += change;
-            self.book.energy.remeshing -= change;
+            self.bookkeeping.energy.unshot += change;
+            self.bookkeeping.energy.remeshing -= change;
             self.unshot_refl[p] = new_unshot;
             self.note_unshot(p);
         }
-        self.book.rounds += 1;
+        self.bookkeeping.rounds += 1;
         splits
     }
 
@@ -1001,7 +944,7 @@ impl<'s> ProgressiveSolver<'s> {
             // as long as the shots so far: none is started past half the time budget.
             if stop
                 .time_budget
-                .is_some_and(|b| self.book.started.elapsed() * 2 >= b)
+                .is_some_and(|b| self.bookkeeping.started.elapsed() * 2 >= b)
             {
                 rounds_left = 0;
             }
@@ -1020,7 +963,7 @@ impl<'s> ProgressiveSolver<'s> {
             }
             if stop
                 .time_budget
-                .is_some_and(|b| self.book.started.elapsed() >= b)
+                .is_some_and(|b| self.bookkeeping.started.elapsed() >= b)
             {
                 return Finish::TimeBudget;
             }
@@ -1043,30 +986,28 @@ impl<'s> ProgressiveSolver<'s> {
             rho += self.patch_rho(p) * a;
             area += a;
         }
-        let mean_rho = rho / area;
-        unshot / area / (DVec3::ONE - mean_rho).max(DVec3::splat(1e-6))
+        ambient(unshot, rho, area)
     }
 
     /// The current solution, with the ambient term for display of a partial solve.
     pub fn solution(&self) -> Solution {
         let ambient = self.ambient();
         let n = self.mesh.vertices.len();
-        let to32 = |v: DVec3| Vec3::new(v.x as f32, v.y as f32, v.z as f32);
         let solution = Solution::new(
             self.mesh.clone(),
-            (0..n).map(|v| to32(self.radiosity(v))).collect(),
+            (0..n).map(|v| self.radiosity(v).as_vec3()).collect(),
             (0..n)
-                .map(|v| to32(self.rho[v] * self.received_emit[v]))
+                .map(|v| (self.rho[v] * self.received_emit[v]).as_vec3())
                 .collect(),
             (0..n)
-                .map(|v| to32(self.rho[v] * self.received_indirect(v)))
+                .map(|v| (self.rho[v] * self.received_indirect(v)).as_vec3())
                 .collect(),
-            (0..n).map(|v| to32(self.rho[v] * ambient)).collect(),
+            (0..n).map(|v| (self.rho[v] * ambient).as_vec3()).collect(),
         );
-        if self.specular.is_some() {
+        if let Some(spec) = &self.specular {
             solution.with_focused_caustics(
                 (0..n)
-                    .map(|v| to32(self.rho[v] * self.received_focused[v]))
+                    .map(|v| (self.rho[v] * spec.focused[v]).as_vec3())
                     .collect(),
             )
         } else {
@@ -1119,7 +1060,7 @@ impl<'s> ProgressiveSolver<'s> {
                 areas[q] * patch_ff(self, q, p),
             ));
         }
-        Residuals::from_samples(self.book.worst_imbalance, &sums, pairs)
+        Residuals::from_samples(self.bookkeeping.worst_imbalance, &sums, pairs)
     }
 
     /// Form factors of the given vertices to patch `p`: from the cache where the row is

@@ -25,37 +25,14 @@
 
 use glam::{DVec3, Vec2, Vec3};
 use rayon::prelude::*;
-use smart_default::SmartDefault;
 use twopass_brdf::colour::luminance_f64;
 use twopass_brdf::frame::Frame;
 use twopass_brdf::random::{SplitMix64, hash, unit_f32, unit_f64};
-
 use twopass_scene::targets::specular_objects;
 use twopass_scene::{Scene, SpecularTargets, SurfacePoint};
 
 use crate::element::ElementMesh;
-
-/// Settings of the specular transfer ([`crate::Options::specular`]).
-#[derive(SmartDefault, Debug, Clone, Copy, PartialEq, Eq)]
-pub struct SpecularOptions {
-    /// Rays a shot of the whole emitted power casts toward the specular objects (progressive
-    /// refinement; the hierarchical solver spreads as many over the leaves whose exitance grew
-    /// since it last shot, in proportion to that growth); a shot of a
-    /// fraction of it casts that fraction (at least [`SpecularOptions::MIN_RAYS`]), so every
-    /// ray carries about the same power. Rounded up to a square number per shot.
-    #[default(1 << 20)]
-    pub rays: u32,
-    /// Most delta bounces a ray follows (reflections and refractions) before it is dropped.
-    #[default(16)]
-    pub max_depth: u32,
-}
-
-impl SpecularOptions {
-    /// Fewest rays a shot casts toward the specular objects (a 4 x 4 grid).
-    pub const MIN_RAYS: u32 = 16;
-    /// Most rays one shot may cast (a 2048 x 2048 grid).
-    pub const MAX_RAYS: u32 = 1 << 22;
-}
+use crate::options::{SpecularOptions, participating};
 
 /// Probe rays cast from the specular surfaces by [`decide`].
 pub const PROBE_RAYS: u32 = 4096;
@@ -78,7 +55,7 @@ pub fn decide(scene: &Scene) -> (bool, String) {
     if scene.emitters.is_empty() {
         return (false, "nothing emits light".into());
     }
-    let takes_part = crate::solver::participating(scene);
+    let takes_part = participating(scene);
     let diffuse = |o: usize| {
         scene.materials[scene.objects[o].material as usize]
             .material

@@ -9,8 +9,8 @@ use std::time::Duration;
 
 use clap::{Args, ValueEnum};
 use twopass_radiosity::{
-    AdaptiveOptions, Finish, HierarchicalOptions, Method, Options, Solver, SpecularOptions, Stop,
-    VisibilityRays,
+    AdaptiveOptions, Finish, HierarchicalOptions, MAX_VISIBILITY_RAYS, Method, Options, Solver,
+    SpecularOptions, Stop, VisibilityRays,
 };
 use twopass_scene::Scene;
 
@@ -194,9 +194,6 @@ fn parse_rays(s: &str) -> Result<VisibilityRays, String> {
     }
     Ok(VisibilityRays { min, max })
 }
-
-/// Most shadow rays per visibility estimate (a 32 x 32 grid; 16 is the default).
-pub const MAX_VISIBILITY_RAYS: u32 = 1024;
 
 /// A fraction in [0, 1) (the unshot power at which to stop).
 pub fn parse_fraction(s: &str) -> Result<f64, String> {
