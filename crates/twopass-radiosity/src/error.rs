@@ -21,7 +21,7 @@ pub enum SolveError {
         what: String,
         /// Estimated bytes.
         bytes: u64,
-        /// [`Options::memory_limit`], bytes.
+        /// [`Options::memory_limit`](crate::options::Options::memory_limit), bytes.
         limit: u64,
     },
 }

@@ -132,7 +132,7 @@ pub struct SolveProgress {
     pub worst_imbalance: f64,
 }
 
-/// Consistency figures of a solve (see [`Solver::residuals`]). Serializable (serde derives, no
+/// Consistency figures of a solve (see [`Solver::residuals`](crate::solver::Solver::residuals)). Serializable (serde derives, no
 /// format here) so that the bake manifest records them field by field.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Residuals {
@@ -182,7 +182,7 @@ impl Residuals {
     }
 }
 
-/// Why [`Solver::run`] returned.
+/// Why [`Solver::run`](crate::solver::Solver::run) returned.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Finish {
     /// The convergence measure fell below the threshold.
