@@ -32,7 +32,6 @@
 
 mod ambient;
 pub mod cluster;
-mod direct;
 pub mod element;
 mod error;
 pub mod form_factor;
@@ -46,7 +45,6 @@ mod solver;
 pub mod specular;
 mod specular_receivers;
 
-pub use direct::{MAX_DENSE_VERTICES, dense_solve};
 pub use error::SolveError;
 pub use form_factor::VisibilityRays;
 pub use hierarchical::HierarchicalSolver;
@@ -55,7 +53,7 @@ pub use options::{
     AdaptiveOptions, HierarchicalOptions, MAX_VISIBILITY_RAYS, Method, Options, SpecularOptions,
     Stop,
 };
-pub use progressive::{MAX_ELEMENTS, ProgressiveSolver};
+pub use progressive::{MAX_DENSE_VERTICES, MAX_ELEMENTS, ProgressiveSolver, dense_solve};
 pub use report::{Energy, Finish, Residuals, SolveProgress};
 pub use solution::Solution;
 pub use solver::Solver;

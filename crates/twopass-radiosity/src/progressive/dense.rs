@@ -5,7 +5,7 @@
 use glam::DVec3;
 use nalgebra::{DMatrix, DVector};
 
-use crate::progressive::ProgressiveSolver;
+use super::state::ProgressiveSolver;
 
 /// Largest vertex count the dense solve accepts (the matrix is n^2 x 8 bytes: 512 MiB here).
 pub const MAX_DENSE_VERTICES: usize = 8192;
