@@ -5,12 +5,12 @@
 use glam::DVec3;
 use rayon::prelude::*;
 use twopass_brdf::colour::luminance_f64;
+use twopass_brdf::random::hash;
 
 use super::directions::{DIRECTIONS, EMPTY, Incoming, NOTHING, add_tables};
 use super::state::HierarchicalSolver;
 use crate::cluster::Kind;
 use crate::element::barycentric_2d;
-use crate::form_factor::hash;
 
 impl HierarchicalSolver<'_> {
     /// One Jacobi gather over every link, then push-pull. Updates the residual.

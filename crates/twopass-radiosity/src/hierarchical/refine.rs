@@ -5,11 +5,11 @@
 use std::time::Instant;
 
 use rayon::prelude::*;
+use twopass_brdf::random::hash;
 
 use super::link::{Eval, Link};
 use super::state::{BATCH, HierarchicalSolver};
 use crate::cluster::{Kind, NodeRef};
-use crate::form_factor::hash;
 
 /// What refinement does with a candidate pair.
 pub(super) enum Step {

@@ -4,12 +4,13 @@
 use std::f64::consts::PI;
 
 use glam::DVec3;
+use twopass_brdf::random::hash;
 
 use super::directions::Dir;
 use super::link::Eval;
 use super::state::{HierarchicalSolver, SEPARATION};
 use crate::cluster::{Kind, NodeRef};
-use crate::form_factor::{self, hash};
+use crate::form_factor;
 
 impl HierarchicalSolver<'_> {
     /// Unoccluded transport from surface node `q` to surface node `p`, per unit exitance of

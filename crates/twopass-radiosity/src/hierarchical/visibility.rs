@@ -2,12 +2,12 @@
 //! to a node, each ray weighted by the light it carries.
 
 use twopass_brdf::colour::luminance_f64;
+use twopass_brdf::random::hash;
 use twopass_brdf::random::unit_f64;
 use twopass_scene::SurfacePoint;
 
 use super::state::HierarchicalSolver;
 use crate::cluster::NodeRef;
-use crate::form_factor::hash;
 
 /// A random affine permutation `m -> (mult m + off) mod n` of `0..n` from hash `h`: `off`
 /// uniform in `0..n`, `mult` coprime to `n`.

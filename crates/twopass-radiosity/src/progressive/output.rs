@@ -3,12 +3,12 @@
 //! solve and the tests read.
 
 use glam::DVec3;
+use twopass_brdf::random::hash;
 use twopass_scene::Scene;
 
 use super::state::ProgressiveSolver;
 use crate::ambient::ambient;
 use crate::element::ElementMesh;
-use crate::form_factor::hash;
 use crate::options::Method;
 use crate::report::{Residuals, SolveProgress};
 use crate::solution::Solution;

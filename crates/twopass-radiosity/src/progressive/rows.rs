@@ -4,9 +4,10 @@
 
 use glam::DVec3;
 use rayon::prelude::*;
+use twopass_brdf::random::hash;
 
 use super::state::{PAIR_CLEAR, PAIR_UNKNOWN, ProgressiveSolver, ROW_BATCH};
-use crate::form_factor::{self, hash};
+use crate::form_factor;
 
 impl ProgressiveSolver<'_> {
     /// Per patch `q`, what it receives of a shot with form factors `row` (per vertex, to the

@@ -4,10 +4,10 @@
 
 use glam::DVec3;
 use twopass_brdf::colour::luminance_f64;
+use twopass_brdf::random::hash;
 
 use super::state::ProgressiveSolver;
 use crate::element::Node;
-use crate::form_factor::hash;
 
 impl ProgressiveSolver<'_> {
     /// Shoots the patch with the most unshot power. Returns `false` when none has any.
