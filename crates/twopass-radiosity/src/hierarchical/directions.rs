@@ -128,9 +128,8 @@ impl Incoming {
     /// it came from, not along the bin's own direction: a beam from `u` is split over the
     /// three bins around `u` (see [`Dir`]), and clamping the cosine to each of those bins'
     /// directions gives a surface nearly edge-on to `u` light from the bin on its side, up to
-    /// 20 degrees past its terminator. The spheres' sides that see only grazing light were
-    /// 7-17 % too bright that way (a 10k-triangle room against progressive refinement and a
-    /// path tracer). Along the mean direction one beam gives exactly `max(0, n . u)`.
+    /// 20 degrees past its terminator, too bright where only grazing light arrives. Along the
+    /// mean direction one beam gives exactly `max(0, n . u)`.
     pub(super) fn facing(&self, dirs: &[DVec3; DIRECTIONS], n: DVec3) -> [DVec3; 2] {
         let along: [f64; DIRECTIONS] = std::array::from_fn(|j| {
             let a = self.aim[j];

@@ -18,7 +18,7 @@ impl HierarchicalSolver<'_> {
         let links = &self.links;
         let receivers = &self.receivers;
         // A cluster's incoming light is boxed: most receivers are surfaces, and an unboxed
-        // table per receiver was the largest transient of a large solve.
+        // table per receiver would be the largest transient of a large solve.
         type Gathered = ([[DVec3; 4]; 2], Option<Box<Incoming>>);
         let sums: Vec<Gathered> = receivers
             .par_iter()

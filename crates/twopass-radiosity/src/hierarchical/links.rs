@@ -40,10 +40,9 @@ impl HierarchicalSolver<'_> {
     pub(super) fn link_error(&self, l: &Link) -> f64 {
         let mut e = self.source_value(l);
         // A piece of a source split in this refinement pass has sent nothing yet. Judged by
-        // that, a partly blocked link from a piece of an emitter looked harmless and was kept
-        // or dropped on a few rays, never refined around the shadow (a sphere 84 % hidden
-        // from the light got 0.13 of its direct light). Such a link is judged by what the
-        // piece's parent sent. Only partly blocked links: refining unblocked ones by it too
+        // that, a partly blocked link from a piece of an emitter would look harmless and be
+        // kept or dropped on a few rays, never refined around the shadow. Such a link is
+        // judged by what the piece's parent sent. Only partly blocked links: refining unblocked ones by it too
         // refines a closed room's creases to the smallest elements in the first pass.
         if let (true, Kind::Surface(n)) = (l.partial, l.source.kind())
             && n as usize >= self.settled

@@ -48,8 +48,6 @@ impl HierarchicalSolver<'_> {
         ambient(self.residual.max(DVec3::ZERO), rho, area)
     }
 
-    /// The current solution: per-vertex radiosity over the leaves, the area-weighted mean of
-    /// the leaves' corner values at each vertex.
     /// The light each leaf's corners show: [`Self::corners_in`] with every unblocked
     /// surface-to-surface link above the leaf evaluated again at the leaf's own corners (a
     /// final gather at the vertices through the link hierarchy).
@@ -61,9 +59,8 @@ impl HierarchicalSolver<'_> {
     /// across a crease that touches the receiver's corner gives that corner close to 1/2
     /// (the half-plane limit) whatever its size, while a point a little way along the crease
     /// gets far less from it. Interpolated, that value spreads along the whole edge, and the
-    /// links of every level above a crease vertex added up to 1.1-1.3 times its irradiance
-    /// (a closed cube's crease vertices showed 13 % too much radiosity once refinement
-    /// reached the smallest elements there). The sources linked above a receiver partition
+    /// links of every level above a crease vertex add up to more than its irradiance. The
+    /// sources linked above a receiver partition
     /// what it sees, so their exact point values at a vertex sum to its point irradiance.
     /// Those links show their point values and no shift; the leaf's power, and so the
     /// transport between leaves, is unchanged: only what the vertices show. Partly blocked

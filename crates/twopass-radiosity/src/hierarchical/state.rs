@@ -38,8 +38,7 @@ pub(super) const SEPARATION: f64 = 2.0;
 /// clearly in front of that surface's plane, or the form factor counts it as in the plane
 /// and gives 0 where the true value is near 1/2: with the smallest elements 200 times finer
 /// than the largest surfaces and the plane test at 1e-6 of the source's size, 2e-3 keeps a
-/// margin of about 2.5 (at 1e-5 a cube's edge vertices showed 10 % too little light once
-/// refinement reached the smallest elements there).
+/// margin of about 2.5.
 pub(super) const CORNER_INSET: f64 = 2e-3;
 
 /// Re-refinements with converged radiosities at most.

@@ -79,8 +79,7 @@ impl HierarchicalSolver<'_> {
             // would tie one part of the receiver to one part of the source for every link, and
             // a blocker between those parts would be seen by all of them or none: a bias that
             // only finer strata remove. With a random permutation each pair is uniform over
-            // both ends (the test's sphere 84 % hidden from the light: 0.13 of its direct
-            // light with the fixed pairing, 0.35 with this one alone).
+            // both ends.
             let n = u64::from(k * k);
             let (mult, off) = pairing(hash(seed ^ 0x9e37_79b9), n);
             for m in 0..n {

@@ -43,9 +43,7 @@ impl ProgressiveSolver<'_> {
         // A vertex's own shaft test costs about what one shadow ray does, and where its
         // patch's hull was tested and found blocked it rarely clears more: it pays only for
         // vertices whose hull was not tested (too few of them on their patch) and when it can
-        // spare several rays. On the final Cornell box mesh testing every vertex made the
-        // solve 1.09x slower at 4-16 rays a pair and 1.24x at one ray (`twopass bake
-        // --visibility-rays`); on coarse meshes, without hulls, it saves 4-6 %.
+        // spare several rays.
         let vertex_shafts = self.options.shaft_culling && self.options.visibility.coarse() > 1;
         const CHUNK: usize = 64;
         let mut row = vec![0.0f32; vertices.len()];

@@ -29,9 +29,8 @@ pub(super) const ROW_BATCH: usize = 1 << 22;
 pub(super) const PAIR_CACHE_MAX_PATCHES: usize = 4096;
 
 /// Fewest vertices of a row that must lie on a patch for [`ProgressiveSolver`] to test the shaft
-/// between that patch and the shooter: a hull test costs several vertex tests (the coarse
-/// preview mesh of the Cornell box has 2.3 vertices per patch and was slower with every
-/// pair tested), and a pair tested once is kept.
+/// between that patch and the shooter: a hull test costs several vertex tests, and a pair
+/// tested once is kept.
 pub(super) const HULL_MIN_VERTICES: u32 = 6;
 
 /// States of a pair of patches in [`ProgressiveSolver`]'s shaft cache.
