@@ -53,7 +53,7 @@ pub struct SourceTriangle {
     /// The mean of the corners, scene units.
     pub(super) centroid: DVec3,
     /// Largest distance of a corner from the centroid, scene units.
-    pub(super) reach: f64,
+    reach: f64,
 }
 
 impl SourceTriangle {

@@ -145,7 +145,7 @@ impl<'s> HierarchicalSolver<'s> {
 
     /// Each cluster's projected area toward the table directions (children come after their
     /// parent, so a reverse sweep sees every child first).
-    pub(super) fn project(&mut self) {
+    fn project(&mut self) {
         let mut projected = vec![[0.0f32; DIRECTIONS]; self.clusters.nodes.len()];
         let mut cones = vec![(DVec3::Z, 0.0); self.clusters.nodes.len()];
         for c in (0..self.clusters.nodes.len()).rev() {

@@ -33,8 +33,8 @@ pub(super) fn directions() -> [DVec3; DIRECTIONS] {
 /// 32 directions.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) struct Dir {
-    pub(super) bins: [u8; 3],
-    pub(super) w: [u8; 3],
+    bins: [u8; 3],
+    w: [u8; 3],
 }
 
 impl Dir {

@@ -117,7 +117,7 @@ impl HierarchicalSolver<'_> {
     }
 
     /// Power leaving all leaves, W per channel.
-    pub(super) fn leaf_power(&self) -> DVec3 {
+    fn leaf_power(&self) -> DVec3 {
         self.mesh
             .leaves()
             .map(|n| {
@@ -145,11 +145,7 @@ impl HierarchicalSolver<'_> {
 
     /// Returns the cluster's area-weighted exitance sum (W) and the range of its leaves'
     /// exitance luminance.
-    pub(super) fn push_cluster(
-        &mut self,
-        c: u32,
-        inherited: &Incoming,
-    ) -> ([DVec3; 2], (f64, f64)) {
+    fn push_cluster(&mut self, c: u32, inherited: &Incoming) -> ([DVec3; 2], (f64, f64)) {
         let here = inherited.add(&self.cluster_gathered[c as usize]);
         let mut radiant = EMPTY;
         let mut power = [DVec3::ZERO; 2];
@@ -199,11 +195,7 @@ impl HierarchicalSolver<'_> {
 
     /// Returns the surface node's area-weighted exitance sum (W) and the range of its leaves'
     /// exitance luminance.
-    pub(super) fn push_surface(
-        &mut self,
-        n: u32,
-        inherited: [[DVec3; 4]; 2],
-    ) -> ([DVec3; 2], (f64, f64)) {
+    fn push_surface(&mut self, n: u32, inherited: [[DVec3; 4]; 2]) -> ([DVec3; 2], (f64, f64)) {
         let node = self.mesh.nodes[n as usize];
         let g = self.gathered[n as usize];
         let here: [[DVec3; 4]; 2] =
@@ -265,7 +257,7 @@ impl HierarchicalSolver<'_> {
     /// With the specular transfer: every deposit so far splatted afresh onto the current mesh
     /// ([`SpecularReceivers::resplat`](crate::specular_receivers::SpecularReceivers::resplat); after a refinement the deposits land on the finer
     /// leaves).
-    pub(super) fn resplat(&mut self) {
+    fn resplat(&mut self) {
         self.specular_stale = false;
         if let Some(spec) = &mut self.specular {
             spec.resplat(&self.mesh);

@@ -165,7 +165,7 @@ impl HierarchicalSolver<'_> {
     }
 
     /// The leaf below surface node `n` that holds the point `uv` (triangle parameters).
-    pub(super) fn descend(&self, mut n: u32, uv: Vec2) -> u32 {
+    fn descend(&self, mut n: u32, uv: Vec2) -> u32 {
         while let Some([c0, c1]) = self.mesh.nodes[n as usize].children {
             // The first child is (a, m, c), cut from its sibling along m-c.
             let [a, m, c] = self.mesh.nodes[c0 as usize].uv;

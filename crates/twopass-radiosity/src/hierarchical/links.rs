@@ -27,7 +27,7 @@ impl HierarchicalSolver<'_> {
 
     /// The deepest ancestor of surface node `n` that took part in the last push-pull (`n`
     /// itself if it did).
-    pub(super) fn settled_ancestor(&self, n: u32) -> u32 {
+    fn settled_ancestor(&self, n: u32) -> u32 {
         let path = self.mesh.path_to(n);
         path.iter()
             .rev()

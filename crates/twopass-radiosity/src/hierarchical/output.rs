@@ -66,7 +66,7 @@ impl HierarchicalSolver<'_> {
     /// transport between leaves, is unchanged: only what the vertices show. Partly blocked
     /// links keep their per-corner visibility (the shadow edges) and cluster links their
     /// far-field values.
-    pub(super) fn display_corners(&self) -> Vec<[[DVec3; 4]; 2]> {
+    fn display_corners(&self) -> Vec<[[DVec3; 4]; 2]> {
         let mut out = self.corners_in.clone();
         if self.links.is_empty() {
             return out;
@@ -266,7 +266,7 @@ impl HierarchicalSolver<'_> {
 
     /// The sum of the transport coefficients that reach `leaf` (its own links and its
     /// ancestors', interpolated to it), averaged over its corners.
-    pub(super) fn row_sum(&self, leaf: u32) -> f64 {
+    fn row_sum(&self, leaf: u32) -> f64 {
         // Walk from the root to the leaf, summing the links of every node on the way.
         let path = self.mesh.path_to(leaf);
         let t = self.mesh.nodes[leaf as usize].scene_triangle;
@@ -289,7 +289,7 @@ impl HierarchicalSolver<'_> {
     /// A link's mean irradiance at its receiver per unit exitance of a uniform source: a
     /// cluster source sends its projected area toward the receiver, a cluster receiver spreads
     /// what it intercepts over its area.
-    pub(super) fn unit_transport(&self, l: &Link) -> f64 {
+    fn unit_transport(&self, l: &Link) -> f64 {
         let mean =
             (f64::from(l.transport[0]) + f64::from(l.transport[1]) + f64::from(l.transport[2]))
                 / 3.0;

@@ -12,7 +12,7 @@ use super::state::{BATCH, HierarchicalSolver};
 use crate::cluster::{Kind, NodeRef};
 
 /// What refinement does with a candidate pair.
-pub(super) enum Step {
+enum Step {
     Keep(Link),
     Drop,
     /// A cluster linked to itself: link every pair of its children.
@@ -23,7 +23,7 @@ pub(super) enum Step {
 
 /// What refinement has done with the pieces of a link it split.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(super) enum Piece {
+enum Piece {
     /// None decided yet.
     Untouched,
     /// At least one decided: the link is gone for good.
@@ -34,7 +34,7 @@ pub(super) enum Piece {
 
 impl HierarchicalSolver<'_> {
     /// What to do with the candidate link `s -> r` (pure: safe to run in parallel).
-    pub(super) fn decide(&self, r: NodeRef, s: NodeRef, allow_split: bool) -> (Step, u64) {
+    fn decide(&self, r: NodeRef, s: NodeRef, allow_split: bool) -> (Step, u64) {
         if r == s {
             return match r.kind() {
                 Kind::Cluster(_) => (Step::SelfPair(r), 0),

@@ -17,7 +17,7 @@ impl HierarchicalSolver<'_> {
     /// `q`: the point form factors at `p`'s seven receiving points (corners first), the shift
     /// (area average less the corners' mean) and the form-factor error estimate (per unit
     /// receiver area).
-    pub(super) fn surface_transport(&self, p: u32, q: u32) -> ([f64; 7], f64, f64) {
+    fn surface_transport(&self, p: u32, q: u32) -> ([f64; 7], f64, f64) {
         let (x, n) = self.receiving_points(p);
         let (source, ns) = self.source_polygon(q);
         let mut f = [0.0; 7];
@@ -54,7 +54,7 @@ impl HierarchicalSolver<'_> {
 
     /// Surface node `q` as a source of point form factors (its corners, prepared) and its scene
     /// triangle's unit normal.
-    pub(super) fn source_polygon(&self, q: u32) -> (form_factor::SourceTriangle, DVec3) {
+    fn source_polygon(&self, q: u32) -> (form_factor::SourceTriangle, DVec3) {
         let ns = self.scene.mesh.geometric_normals
             [self.mesh.nodes[q as usize].scene_triangle as usize]
             .as_dvec3();

@@ -11,8 +11,8 @@ use crate::cluster::NodeRef;
 
 /// A random affine permutation `m -> (mult m + off) mod n` of `0..n` from hash `h`: `off`
 /// uniform in `0..n`, `mult` coprime to `n`.
-pub(super) fn pairing(h: u64, n: u64) -> (u64, u64) {
-    pub(super) fn gcd(a: u64, b: u64) -> u64 {
+fn pairing(h: u64, n: u64) -> (u64, u64) {
+    fn gcd(a: u64, b: u64) -> u64 {
         if b == 0 { a } else { gcd(b, a % b) }
     }
     let n = n.max(1);
@@ -26,7 +26,7 @@ pub(super) fn pairing(h: u64, n: u64) -> (u64, u64) {
 /// The visible fraction from weighted ray counts `[geometric, geometric x source exitance]`:
 /// by the exitance-weighted sums when the source points sent anything, else by the geometric
 /// ones; 0 when no weight at all (every pair at a grazing angle).
-pub(super) fn weighted_fraction(seen: [f64; 2], all: [f64; 2]) -> f64 {
+fn weighted_fraction(seen: [f64; 2], all: [f64; 2]) -> f64 {
     if all[1] > 0.0 {
         (seen[1] / all[1]).clamp(0.0, 1.0)
     } else if all[0] > 0.0 {
@@ -43,7 +43,7 @@ impl HierarchicalSolver<'_> {
     /// the ends' size so that a pair of points at a shared edge does not take all the weight.
     /// Zero when the source point sends nothing yet (before the first gather); the caller then
     /// falls back to the geometric term alone.
-    pub(super) fn ray_weight(
+    fn ray_weight(
         &self,
         to: &SurfacePoint,
         from: &SurfacePoint,

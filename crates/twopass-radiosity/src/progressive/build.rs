@@ -173,12 +173,12 @@ impl<'s> ProgressiveSolver<'s> {
         Ok(s)
     }
 
-    pub(super) fn object_of_patch(&self, p: usize) -> u32 {
+    fn object_of_patch(&self, p: usize) -> u32 {
         let node = &self.mesh.nodes[self.mesh.patches[p] as usize];
         self.scene.mesh.triangle_object[node.scene_triangle as usize]
     }
 
-    pub(super) fn patch_emission(&self, p: usize) -> DVec3 {
+    fn patch_emission(&self, p: usize) -> DVec3 {
         self.scene.objects[self.object_of_patch(p) as usize]
             .emission
             .as_dvec3()

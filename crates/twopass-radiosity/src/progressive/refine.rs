@@ -21,7 +21,7 @@ impl ProgressiveSolver<'_> {
         splits
     }
 
-    pub(super) fn refine_round(&mut self, adaptive: &AdaptiveOptions) -> usize {
+    fn refine_round(&mut self, adaptive: &AdaptiveOptions) -> usize {
         let lum = luminance_f64;
         let (mut total, mut area) = (0.0, 0.0);
         let leaves: Vec<u32> = self.mesh.leaves().collect();

@@ -31,7 +31,7 @@ impl ProgressiveSolver<'_> {
     /// Form factors (with visibility) from every vertex in `vertices` to patch `p`, and the
     /// shadow rays cast. Parallel over vertices; each value depends only on (seed, vertex,
     /// patch), never on scheduling.
-    pub(super) fn form_factors(&self, p: usize, vertices: &[usize]) -> (Vec<f32>, u64) {
+    fn form_factors(&self, p: usize, vertices: &[usize]) -> (Vec<f32>, u64) {
         let node = self.mesh.nodes[self.mesh.patches[p] as usize];
         let shooter = form_factor::Shooter::new(
             self.scene,
@@ -134,7 +134,7 @@ impl ProgressiveSolver<'_> {
     }
 
     /// How many vertices the cached row of patch `p` covers (from vertex 0).
-    pub(super) fn cached_len(&self, p: usize) -> usize {
+    fn cached_len(&self, p: usize) -> usize {
         self.cache[p].as_ref().map_or(0, Vec::len)
     }
 
@@ -172,7 +172,7 @@ impl ProgressiveSolver<'_> {
     /// Appends `fresh` (the form factors of the vertices after the cached ones, and the rays
     /// they cast) to the row of patch `p`, caches the row while the cache has room, and
     /// returns it.
-    pub(super) fn extend_row(&mut self, p: usize, (fresh, rays): (Vec<f32>, u64)) -> Vec<f32> {
+    fn extend_row(&mut self, p: usize, (fresh, rays): (Vec<f32>, u64)) -> Vec<f32> {
         self.rays += rays;
         let have = self.cached_len(p);
         let mut row = self.cache[p].take().unwrap_or_default();

@@ -74,7 +74,7 @@ impl ProgressiveSolver<'_> {
 
     /// Patch `q` receives `gained` (W per channel): it absorbs `1 - rho` of it and keeps the
     /// rest as unshot exitance.
-    pub(super) fn receive(&mut self, q: usize, gained: DVec3) {
+    fn receive(&mut self, q: usize, gained: DVec3) {
         let rho = self.patch_rho(q);
         self.bookkeeping.energy.absorbed += gained * (DVec3::ONE - rho);
         let a = self.patch_area(q);
@@ -139,7 +139,7 @@ impl ProgressiveSolver<'_> {
     /// leaves it, not as the uniform patch), what lands is splatted onto the vertices and
     /// handed to the receiving patches as unshot reflected radiosity, as the form factors'
     /// transfer does. Returns the power that arrived (W per channel).
-    pub(super) fn shoot_specular(&mut self, p: usize) -> DVec3 {
+    fn shoot_specular(&mut self, p: usize) -> DVec3 {
         let Some(spec) = &self.specular else {
             return DVec3::ZERO;
         };
