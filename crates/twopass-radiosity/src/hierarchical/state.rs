@@ -50,8 +50,12 @@ pub(super) const MAX_ROUNDS: u32 = 6;
 pub struct HierarchicalSolver<'s> {
     pub(super) scene: &'s Scene,
     pub(super) options: Options,
+    /// The surface hierarchy: every participating triangle's bisection tree; its leaves are
+    /// the elements the solution is given on.
     pub(super) mesh: ElementMesh,
+    /// The cluster tree above the triangles.
     pub(super) clusters: Clusters,
+    /// Surface nodes are not split below this longest edge, scene units.
     pub(super) min_size: f32,
     /// Link error threshold, W (luminance, scene units).
     pub(super) error_threshold: f64,
@@ -74,11 +78,11 @@ pub struct HierarchicalSolver<'s> {
     pub(super) cluster_spread: Vec<f64>,
     /// Per surface leaf: irradiance at its corners after push (emitted, reflected light).
     pub(super) corners_in: Vec<[[DVec3; 4]; 2]>,
-    /// Per cluster: the same, one value per cluster.
     /// Per cluster: the flux density arriving from each table direction (from the cluster
     /// toward the sources), gathered by its own links; pushed down, each surface inside takes
     /// it by its orientation.
     pub(super) cluster_gathered: Vec<Incoming>,
+    /// Per cluster: its area-averaged exitance (emitted, reflected), W/m^2.
     pub(super) cluster_exitance: Vec<[DVec3; 2]>,
     /// Per cluster: its radiant intensity times pi toward each table direction, W: the sum
     /// over its triangles of exitance x area x clamped cosine. A cluster source sends this.
@@ -88,15 +92,20 @@ pub struct HierarchicalSolver<'s> {
     /// Per cluster: a cone (unit axis, half-angle in radians) holding the normals of every
     /// triangle inside, geometric and shading: what cannot face a node is never linked to it.
     pub(super) cones: Vec<(DVec3, f64)>,
+    /// The table directions (unit vectors, see [`super::directions::directions`]).
     pub(super) dirs: [DVec3; DIRECTIONS],
     /// Residual power of the last iteration per channel (signed), and its fraction.
     pub(super) residual: DVec3,
     pub(super) residual_fraction: f64,
+    /// Power the emitters send, W per channel.
     pub(super) emitted: DVec3,
     /// Rounds, time and power, kept as the other solver keeps them.
     pub(super) bookkeeping: Bookkeeping,
+    /// Gather iterations so far.
     pub(super) iterations: u64,
+    /// Shadow and specular-transfer rays cast so far.
     pub(super) rays: u64,
+    /// The initial linking (from the root linked to itself) is done.
     pub(super) linked: bool,
     /// Past the time budget: links still being decided get the first, coarse visibility
     /// estimate only (no confirmation, no finer count, no visibility per corner), so that the
@@ -105,6 +114,8 @@ pub struct HierarchicalSolver<'s> {
     /// The partly blocked links have had their visibility estimated again with the
     /// converged radiosities.
     pub(super) refreshed: bool,
+    /// Most links and surface nodes the memory limit leaves room for: refinement stops
+    /// splitting when either is reached.
     pub(super) max_links: usize,
     pub(super) max_nodes: usize,
     /// The specular transfer, when the scene needs it ([`crate::specular::decide`]): light the

@@ -33,11 +33,12 @@ pub(super) const PAIR_CACHE_MAX_PATCHES: usize = 4096;
 /// tested once is kept.
 pub(super) const HULL_MIN_VERTICES: u32 = 6;
 
-/// States of a pair of patches in [`ProgressiveSolver`]'s shaft cache.
+/// States of a pair of patches in [`ProgressiveSolver`]'s shaft cache: not tested yet,
+/// nothing can come between them, something may.
 pub(super) const PAIR_UNKNOWN: u8 = 0;
-
+/// See [`PAIR_UNKNOWN`].
 pub(super) const PAIR_CLEAR: u8 = 1;
-
+/// See [`PAIR_UNKNOWN`].
 pub(super) const PAIR_BLOCKED: u8 = 2;
 
 /// A progressive-refinement radiosity solve over a scene. Deterministic: the same options and
@@ -45,7 +46,9 @@ pub(super) const PAIR_BLOCKED: u8 = 2;
 pub struct ProgressiveSolver<'s> {
     pub(super) scene: &'s Scene,
     pub(super) options: Options,
+    /// Patches (the shooters) and their elements (the receivers).
     pub(super) mesh: ElementMesh,
+    /// Longest element edge before adaptive subdivision, scene units.
     pub(super) element_size: f32,
     /// Per vertex: reflectance, emitted exitance E = pi L_e.
     pub(super) rho: Vec<DVec3>,
@@ -87,9 +90,12 @@ pub struct ProgressiveSolver<'s> {
     /// ([`PAIR_UNKNOWN`], [`PAIR_CLEAR`], [`PAIR_BLOCKED`]); patches never change, and every
     /// refinement asks again for the new vertices. Empty otherwise.
     pub(super) pair_clear: Vec<AtomicU8>,
+    /// Bytes held by the cached rows and weights (at most [`Options::cache_bytes`]).
     pub(super) cached_bytes: usize,
     /// Rounds, time and power, kept as the other solver keeps them.
     pub(super) bookkeeping: Bookkeeping,
+    /// Shots so far.
     pub(super) shots: u64,
+    /// Shadow and specular-transfer rays cast so far.
     pub(super) rays: u64,
 }
