@@ -82,8 +82,9 @@ pub struct Options {
     /// hierarchical solver stops refining links when it reaches it.
     #[default(16 << 30)]
     pub memory_limit: u64,
-    /// Light carried through mirrors and glass onto diffuse surfaces (both solvers), or `None`
-    /// to treat specular objects as absorbers. It runs only where [`crate::specular::decide`] says the scene needs it.
+    /// Light carried through mirrors and glass onto diffuse surfaces (both solvers), or `None` to
+    /// treat specular objects as absorbers. It runs only where [`crate::specular::decide`] says the
+    /// scene needs it.
     #[default(Some(SpecularOptions::default()))]
     pub specular: Option<SpecularOptions>,
 }

@@ -132,8 +132,9 @@ pub struct SolveProgress {
     pub worst_imbalance: f64,
 }
 
-/// Consistency figures of a solve (see [`Solver::residuals`](crate::solver::Solver::residuals)). Serializable (serde derives, no
-/// format here) so that the bake manifest records them field by field.
+/// Consistency figures of a solve (see [`Solver::residuals`](crate::solver::Solver::residuals)).
+/// Serializable (serde derives, no format here) so that the bake manifest records them field by
+/// field.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Residuals {
     /// Largest relative energy imbalance seen after any shot.

@@ -40,8 +40,8 @@ impl<'s> Solver<'s> {
     /// The solution is usable whenever this returns.
     ///
     /// Each shot runs a parallel loop on rayon's global pool. Called from a thread outside the
-    /// pool, every loop is handed over and waited for, thousands of times; call it from inside the pool (`rayon::scope(|_| solver.run(..))`, as the CLI
-    /// does) to avoid that.
+    /// pool, every loop is handed over and waited for, thousands of times; call it from inside the
+    /// pool (`rayon::scope(|_| solver.run(..))`, as the CLI does) to avoid that.
     pub fn run(&mut self, mut observer: impl FnMut(&SolveProgress) -> ControlFlow<()>) -> Finish {
         match self {
             Self::Progressive(p) => p.run(|s| observer(&s.progress())),

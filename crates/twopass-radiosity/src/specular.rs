@@ -290,9 +290,9 @@ impl Specular {
         Some((deposits, cast))
     }
 
-    /// Traces the specular paths of one shot of `shooter` with `n` rays (the first
-    /// floor(sqrt(n))^2 stratified, the rest uniform), random stream keyed by `key`. Returns the deposits in ray order and the rays cast. Parallel
-    /// over rays; the result does not depend on scheduling.
+    /// Traces the specular paths of one shot of `shooter` with `n` rays (the first floor(sqrt(n))^2
+    /// stratified, the rest uniform), random stream keyed by `key`. Returns the deposits in ray
+    /// order and the rays cast. Parallel over rays; the result does not depend on scheduling.
     pub fn shoot(&self, scene: &Scene, shooter: &Shooter, n: u32, key: u64) -> (Vec<Deposit>, u64) {
         let Shooter {
             corners,

@@ -255,8 +255,8 @@ impl HierarchicalSolver<'_> {
     }
 
     /// With the specular transfer: every deposit so far splatted afresh onto the current mesh
-    /// ([`SpecularReceivers::resplat`](crate::specular_receivers::SpecularReceivers::resplat); after a refinement the deposits land on the finer
-    /// leaves).
+    /// ([`SpecularReceivers::resplat`](crate::specular_receivers::SpecularReceivers::resplat);
+    /// after a refinement the deposits land on the finer leaves).
     fn resplat(&mut self) {
         self.specular_stale = false;
         if let Some(spec) = &mut self.specular {
@@ -264,11 +264,12 @@ impl HierarchicalSolver<'_> {
         }
     }
 
-    /// With the specular transfer: every leaf sends what its exitance changed by since it last
-    /// sent through the specular surfaces ([`Specular::shoot_changes`](crate::specular::Specular::shoot_changes)); changes totalling
-    /// under a tenth of the stop's unshot fraction of the emitted power wait for the next
-    /// gather. The deposits are splatted onto the vertices as irradiance, which the next gather
-    /// adds to the leaves' reflected light.
+    /// With the specular transfer: every leaf sends what its exitance changed by since it last sent
+    /// through the specular surfaces
+    /// ([`Specular::shoot_changes`](crate::specular::Specular::shoot_changes)); changes totalling
+    /// under a tenth of the stop's unshot fraction of the emitted power wait for the next gather.
+    /// The deposits are splatted onto the vertices as irradiance, which the next gather adds to the
+    /// leaves' reflected light.
     pub(super) fn shoot_specular(&mut self) {
         let Some(spec) = &self.specular else {
             return;

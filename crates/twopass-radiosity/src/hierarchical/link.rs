@@ -23,9 +23,9 @@ pub(super) struct Link {
     /// Estimated error of the transport per unit source exitance luminance and receiver
     /// reflectance, as power: receiver area (scene units squared) times form-factor error.
     pub(super) error: f32,
-    /// Shadow rays found the pair partly or wholly blocked: its visibility depends on where
-    /// the source's light comes from, and is estimated again once the radiosities are known
-    /// (see [`HierarchicalSolver::refresh_visibility`](super::state::HierarchicalSolver::refresh_visibility)).
+    /// Shadow rays found the pair partly or wholly blocked: its visibility depends on where the
+    /// source's light comes from, and is estimated again once the radiosities are known (see
+    /// [`HierarchicalSolver::refresh_visibility`](super::state::HierarchicalSolver::refresh_visibility)).
     pub(super) partial: bool,
 }
 

@@ -39,11 +39,11 @@ impl HierarchicalSolver<'_> {
     /// The oracle: estimated error of a link's transport, as power (W, luminance).
     pub(super) fn link_error(&self, l: &Link) -> f64 {
         let mut e = self.source_value(l);
-        // A piece of a source split in this refinement pass has sent nothing yet. Judged by
-        // that, a partly blocked link from a piece of an emitter would look harmless and be
-        // kept or dropped on a few rays, never refined around the shadow. Such a link is
-        // judged by what the piece's parent sent. Only partly blocked links: refining unblocked ones by it too
-        // refines a closed room's creases to the smallest elements in the first pass.
+        // A piece of a source split in this refinement pass has sent nothing yet. Judged by that, a
+        // partly blocked link from a piece of an emitter would look harmless and be kept or dropped
+        // on a few rays, never refined around the shadow. Such a link is judged by what the piece's
+        // parent sent. Only partly blocked links: refining unblocked ones by it too refines a
+        // closed room's creases to the smallest elements in the first pass.
         if let (true, Kind::Surface(n)) = (l.partial, l.source.kind())
             && n as usize >= self.settled
         {

@@ -1,14 +1,16 @@
 //! Hierarchical radiosity with clustering (Hanrahan, Salzman & Aupperle 1991; Smits, Arvo &
 //! Greenberg 1994; Sillion 1994).
 //!
-//! The hierarchy: a cluster tree over the participating triangles ([`Clusters`](crate::cluster::Clusters)) above the
-//! triangles' bisection trees ([`ElementMesh`](crate::element::ElementMesh)). Light moves along **links** between pairs of
-//! nodes. Linking starts with the root linked to itself and refines a link, by splitting the
-//! larger end, while its estimated transport error (BF refinement: the source's radiosity
-//! times the link's form-factor error times the receiver's area and reflectance) exceeds
-//! [`HierarchicalOptions::link_tolerance`](crate::options::HierarchicalOptions::link_tolerance) of the emitted power, or while an end is a cluster too
-//! close to the other end for the far-field estimate. So distant groups exchange light through
-//! one link and the initial linking is not all-pairs.
+//! The hierarchy: a cluster tree over the participating triangles
+//! ([`Clusters`](crate::cluster::Clusters)) above the triangles' bisection trees
+//! ([`ElementMesh`](crate::element::ElementMesh)). Light moves along **links** between pairs of
+//! nodes. Linking starts with the root linked to itself and refines a link, by splitting the larger
+//! end, while its estimated transport error (BF refinement: the source's radiosity times the link's
+//! form-factor error times the receiver's area and reflectance) exceeds
+//! [`HierarchicalOptions::link_tolerance`](crate::options::HierarchicalOptions::link_tolerance) of
+//! the emitted power, or while an end is a cluster too close to the other end for the far-field
+//! estimate. So distant groups exchange light through one link and the initial linking is not
+//! all-pairs.
 //!
 //! Transport of a link, as irradiance at the receiver per unit exitance of the source:
 //! - surface to surface: the exact differential-area-to-polygon form factor (Lambert's contour

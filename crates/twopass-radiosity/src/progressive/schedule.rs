@@ -9,8 +9,8 @@ use crate::report::Finish;
 impl ProgressiveSolver<'_> {
     /// Runs the whole schedule: shooting, adaptive rounds (if enabled), shooting to the stop
     /// criteria. `observer` sees the solver after every shot: it can read
-    /// [`ProgressiveSolver::progress`], take an intermediate [`ProgressiveSolver::solution`] (with the
-    /// ambient term) or stop the solve early by returning `Break`; the solution is usable
+    /// [`ProgressiveSolver::progress`], take an intermediate [`ProgressiveSolver::solution`] (with
+    /// the ambient term) or stop the solve early by returning `Break`; the solution is usable
     /// whenever this returns.
     pub fn run(&mut self, mut observer: impl FnMut(&Self) -> ControlFlow<()>) -> Finish {
         let stop = self.options.stop;

@@ -134,11 +134,12 @@ impl ProgressiveSolver<'_> {
         self.emission[v] + self.rho[v] * self.received(v)
     }
 
-    /// The specular transfer of the shot of patch `p`: each of its elements sends what its
-    /// exitance changed by since it last sent ([`Specular::shoot_changes`](crate::specular::Specular::shoot_changes): from where the light
-    /// leaves it, not as the uniform patch), what lands is splatted onto the vertices and
-    /// handed to the receiving patches as unshot reflected radiosity, as the form factors'
-    /// transfer does. Returns the power that arrived (W per channel).
+    /// The specular transfer of the shot of patch `p`: each of its elements sends what its exitance
+    /// changed by since it last sent
+    /// ([`Specular::shoot_changes`](crate::specular::Specular::shoot_changes): from where the light
+    /// leaves it, not as the uniform patch), what lands is splatted onto the vertices and handed to
+    /// the receiving patches as unshot reflected radiosity, as the form factors' transfer does.
+    /// Returns the power that arrived (W per channel).
     fn shoot_specular(&mut self, p: usize) -> DVec3 {
         let Some(spec) = &self.specular else {
             return DVec3::ZERO;

@@ -82,8 +82,8 @@ pub struct ProgressiveSolver<'s> {
     /// Per patch: cached form factors (with visibility) to every vertex, once computed.
     pub(super) cache: Vec<Option<Vec<f32>>>,
     /// Per patch whose row is cached and that has shot on the current element mesh: its
-    /// [`ProgressiveSolver::arrival_weights`], kept beside the row (a patch shoots several times) and
-    /// dropped when the elements change.
+    /// [`ProgressiveSolver::arrival_weights`], kept beside the row (a patch shoots several times)
+    /// and dropped when the elements change.
     pub(super) weights: Vec<Option<Vec<f64>>>,
     /// Per pair of patches `(q, p)` at `q * n + p`, with shaft culling and at most
     /// [`PAIR_CACHE_MAX_PATCHES`] patches: whether the shaft between them is clear
