@@ -8,7 +8,7 @@ use std::ops::ControlFlow;
 
 use glam::{DVec3, Vec3};
 use twopass_radiosity::{
-    Finish, Hierarchical, HierarchicalSolver, Method, Options, SolveError, Solver, Stop,
+    Finish, HierarchicalOptions, HierarchicalSolver, Method, Options, SolveError, Solver, Stop,
 };
 use twopass_scene::{DiffuseRadiance, Scene, load};
 
@@ -66,9 +66,9 @@ fn furnace_converges_to_e_over_one_minus_rho() {
         let mut worst = Vec::new();
         for tolerance in [2e-5, 2e-6] {
             let o = Options {
-                hierarchical: Hierarchical {
+                hierarchical: HierarchicalOptions {
                     link_tolerance: tolerance,
-                    ..Hierarchical::default()
+                    ..HierarchicalOptions::default()
                 },
                 ..options(1e-6)
             };

@@ -6,7 +6,9 @@ use std::path::Path;
 
 use crate::closed_form::corner_form_factor;
 use glam::DVec3;
-use twopass_radiosity::{Adaptive, Options, Progressive, SolveError, Stop, dense_solve};
+use twopass_radiosity::{
+    AdaptiveOptions, Options, ProgressiveSolver, SolveError, Stop, dense_solve,
+};
 use twopass_scene::{DiffuseRadiance, Scene, load, load_toml};
 
 use crate::scene_path;
@@ -53,7 +55,7 @@ fn fixed_mesh(patch: f32, element: f32, unshot: f64) -> Options {
 }
 
 /// Runs progressive refinement to its stop criteria and checks the energy balance.
-pub(crate) fn run(solver: &mut Progressive<'_>) {
+pub(crate) fn run(solver: &mut ProgressiveSolver<'_>) {
     solver.run(|_| ControlFlow::Continue(()));
     let p = solver.progress();
     assert!(
@@ -64,7 +66,7 @@ pub(crate) fn run(solver: &mut Progressive<'_>) {
 }
 
 /// Area-weighted form factor from every patch of object `from` to all patches of object `to`.
-fn object_form_factor(solver: &mut Progressive<'_>, from: u32, to: u32) -> f64 {
+fn object_form_factor(solver: &mut ProgressiveSolver<'_>, from: u32, to: u32) -> f64 {
     let rows = solver.form_factor_rows();
     let weights = solver.patch_weights();
     let areas = solver.patch_areas();
@@ -117,7 +119,7 @@ fn parallel_and_perpendicular_squares_match_siegel_and_howell() {
     );
     let mut coarse = f64::NAN;
     for (k, element) in [None, Some(0.02)].into_iter().enumerate() {
-        let mut solver = Progressive::new(
+        let mut solver = ProgressiveSolver::new(
             &s,
             Options {
                 element_size: element,
@@ -161,7 +163,7 @@ fn parallel_and_perpendicular_squares_match_siegel_and_howell() {
         )),
         &m,
     );
-    let mut solver = Progressive::new(&s, Options::default()).unwrap();
+    let mut solver = ProgressiveSolver::new(&s, Options::default()).unwrap();
     let f = object_form_factor(&mut solver, 1, 0);
     assert!(
         (f - 0.200044).abs() < 5e-3 * 0.200044,
@@ -202,7 +204,7 @@ pub(crate) fn cube_lit(rho: f64, emission: impl Fn(usize) -> Option<f64>) -> Sce
 #[test]
 fn closed_cube_rows_sum_to_one() {
     let s = cube(0.5, 1.0);
-    let mut solver = Progressive::new(&s, Options::default()).unwrap();
+    let mut solver = ProgressiveSolver::new(&s, Options::default()).unwrap();
     let r = solver.residuals(10_000);
     assert!(
         (r.row_sum_min - 1.0).abs() < 5e-3 && (r.row_sum_max - 1.0).abs() < 5e-3,
@@ -214,7 +216,7 @@ fn closed_cube_rows_sum_to_one() {
 fn furnace_converges_to_e_over_one_minus_rho() {
     for rho in [0.0, 0.5, 0.9, 0.99] {
         let s = cube(rho, 1.0);
-        let mut solver = Progressive::new(&s, fixed_mesh(1.0, 0.5, 1e-6)).unwrap();
+        let mut solver = ProgressiveSolver::new(&s, fixed_mesh(1.0, 0.5, 1e-6)).unwrap();
         run(&mut solver);
         let expected = std::f64::consts::PI / (1.0 - rho); // E = pi L_e with L_e = 1
         for (v, b) in solver.vertex_radiosity().iter().enumerate() {
@@ -237,7 +239,7 @@ fn furnace_converges_to_e_over_one_minus_rho() {
 #[test]
 fn ambient_term_makes_partial_solutions_plausible() {
     let s = cube(0.9, 1.0);
-    let mut solver = Progressive::new(&s, fixed_mesh(1.0, 0.5, 0.3)).unwrap();
+    let mut solver = ProgressiveSolver::new(&s, fixed_mesh(1.0, 0.5, 0.3)).unwrap();
     run(&mut solver);
     let expected = std::f32::consts::PI / 0.1;
     let sol = solver.solution();
@@ -261,9 +263,9 @@ pub(crate) fn cornell_options(unshot: f64) -> Options {
     Options {
         patch_size: Some(150.0),
         element_size: Some(60.0),
-        adaptive: Some(Adaptive {
+        adaptive: Some(AdaptiveOptions {
             rounds: 1,
-            ..Adaptive::default()
+            ..AdaptiveOptions::default()
         }),
         stop: Stop {
             unshot_fraction: unshot,
@@ -286,7 +288,7 @@ fn relative_rms(a: &[DVec3], b: &[DVec3]) -> f64 {
 fn progressive_refinement_converges_to_the_dense_solve() {
     let (s, _) = load(scene_path("cornell-box.toml")).unwrap();
     for (unshot, bound) in [(1e-3, 1e-2), (1e-6, 1e-3)] {
-        let mut solver = Progressive::new(&s, cornell_options(unshot)).unwrap();
+        let mut solver = ProgressiveSolver::new(&s, cornell_options(unshot)).unwrap();
         run(&mut solver);
         assert!(solver.progress().unshot_fraction <= unshot);
         let dense = dense_solve(&mut solver).expect("small enough for the dense solve");
@@ -300,7 +302,7 @@ fn same_seed_same_solution_on_one_or_two_threads() {
     let (s, _) = load(scene_path("cornell-box.toml")).unwrap();
     let solve = |threads: usize| {
         crate::on_threads(threads, || {
-            let mut solver = Progressive::new(&s, cornell_options(1e-2)).unwrap();
+            let mut solver = ProgressiveSolver::new(&s, cornell_options(1e-2)).unwrap();
             run(&mut solver);
             solver.vertex_radiosity()
         })
@@ -316,7 +318,7 @@ fn same_seed_same_solution_on_one_or_two_threads() {
 #[test]
 fn cornell_box_lookup_is_continuous_and_finite() {
     let (s, _) = load(scene_path("cornell-box.toml")).unwrap();
-    let mut solver = Progressive::new(&s, cornell_options(1e-2)).unwrap();
+    let mut solver = ProgressiveSolver::new(&s, cornell_options(1e-2)).unwrap();
     run(&mut solver);
     let sol = solver.solution();
     // Walk across the floor's first triangle: no jumps bigger than the gradient allows.
@@ -374,7 +376,7 @@ fn emitters_from_1e_minus_6_to_1e6_scale_linearly() {
             )),
             &lambert("w", 0.7),
         );
-        let mut solver = Progressive::new(
+        let mut solver = ProgressiveSolver::new(
             &s,
             Options {
                 stop: Stop {
@@ -425,7 +427,7 @@ fn receiver_a_micron_from_the_shooter_stays_bounded() {
         )),
         &lambert("w", 0.5),
     );
-    let mut solver = Progressive::new(
+    let mut solver = ProgressiveSolver::new(
         &s,
         Options {
             adaptive: None,
@@ -466,7 +468,7 @@ fn coplanar_touching_patches_exchange_nothing() {
         )),
         &lambert("w", 0.5),
     );
-    let mut solver = Progressive::new(&s, Options::default()).unwrap();
+    let mut solver = ProgressiveSolver::new(&s, Options::default()).unwrap();
     run(&mut solver);
     let sol = solver.solution();
     for t in s.objects[1].triangles.clone() {
@@ -508,7 +510,7 @@ fn elements_of_very_different_sizes_side_by_side() {
         )),
         &lambert("w", 0.5),
     );
-    let mut solver = Progressive::new(&s, Options::default()).unwrap();
+    let mut solver = ProgressiveSolver::new(&s, Options::default()).unwrap();
     run(&mut solver);
     let sol = solver.solution();
     // The tiny quad sits below the light's corner: one bounce gives L = rho F E / pi with the
@@ -533,7 +535,7 @@ fn one_triangle_and_no_emitter() {
                 [[material]]\nname = \"w\"\ntype = \"lambert\"\ndiffuse = 0.5\n\
                 [[object]]\nname = \"t\"\nmaterial = \"w\"\nemission = 2\nshape = { type = \"polygon\", vertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0]] }\n";
     let (s, _) = load_toml(text, Path::new("one.toml")).unwrap();
-    let mut solver = Progressive::new(&s, Options::default()).unwrap();
+    let mut solver = ProgressiveSolver::new(&s, Options::default()).unwrap();
     run(&mut solver);
     let e = solver.progress().energy;
     assert!(
@@ -549,7 +551,7 @@ fn one_triangle_and_no_emitter() {
     let dark = text.replace("emission = 2\n", "");
     let (s, _) = load_toml(&dark, Path::new("dark.toml")).unwrap();
     assert_eq!(
-        Progressive::new(&s, Options::default()).err(),
+        ProgressiveSolver::new(&s, Options::default()).err(),
         Some(SolveError::NoEmitters)
     );
 }
@@ -557,7 +559,7 @@ fn one_triangle_and_no_emitter() {
 #[test]
 fn cancelled_solves_give_usable_intermediate_solutions() {
     let (s, _) = load(scene_path("cornell-box.toml")).unwrap();
-    let mut solver = Progressive::new(&s, cornell_options(1e-6)).unwrap();
+    let mut solver = ProgressiveSolver::new(&s, cornell_options(1e-6)).unwrap();
     let mut taken = None;
     let finish = solver.run(|solver| {
         if solver.progress().shots == 20 {
@@ -645,13 +647,13 @@ fn shadow_rays_from_a_room_s_creases_find_nothing() {
 fn cached_rows_and_arrival_weights_change_no_number() {
     let (s, _) = load(scene_path("cornell-box.toml")).unwrap();
     let solve = |cache_bytes: usize| {
-        let mut solver = Progressive::new(
+        let mut solver = ProgressiveSolver::new(
             &s,
             Options {
                 cache_bytes,
-                adaptive: Some(Adaptive {
+                adaptive: Some(AdaptiveOptions {
                     rounds: 2,
-                    ..Adaptive::default()
+                    ..AdaptiveOptions::default()
                 }),
                 ..cornell_options(1e-2)
             },
@@ -673,7 +675,7 @@ fn cached_rows_and_arrival_weights_change_no_number() {
 /// Solves `s` with `options` to its stop criteria: the vertex radiosities and the shadow rays
 /// cast.
 fn radiosity_and_rays(s: &Scene, options: Options) -> (Vec<DVec3>, u64) {
-    let mut solver = Progressive::new(s, options).unwrap();
+    let mut solver = ProgressiveSolver::new(s, options).unwrap();
     run(&mut solver);
     (solver.vertex_radiosity(), solver.progress().rays)
 }

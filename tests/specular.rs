@@ -9,7 +9,7 @@ use std::path::Path;
 use glam::DVec3;
 use twopass_radiosity::form_factor::point_to_polygon;
 use twopass_radiosity::specular::decide;
-use twopass_radiosity::{Options, Progressive, SpecularTransfer, Stop};
+use twopass_radiosity::{Options, ProgressiveSolver, SpecularOptions, Stop};
 use twopass_scene::{Scene, load, load_toml};
 
 use crate::radiosity::{CUBE_FACES, cornell_options, run};
@@ -17,7 +17,7 @@ use crate::{on_threads, scene_path};
 
 /// The radiosity tests' Cornell settings (150 mm patches, 60 mm elements, one adaptive
 /// round) to the unshot fraction `unshot`, with the specular transfer `specular`.
-fn coarse(specular: Option<SpecularTransfer>, unshot: f64) -> Options {
+fn coarse(specular: Option<SpecularOptions>, unshot: f64) -> Options {
     Options {
         specular,
         ..cornell_options(unshot)
@@ -36,13 +36,13 @@ fn all_diffuse_box_is_untouched_bit_for_bit() {
     assert!(why.contains("no mirror, conductor or dielectric"), "{why}");
     let options = |specular| coarse(specular, 1e-3);
     let solve = |specular| {
-        let mut solver = Progressive::new(&s, options(specular)).unwrap();
+        let mut solver = ProgressiveSolver::new(&s, options(specular)).unwrap();
         run(&mut solver);
         assert_eq!(solver.specular_transfer(), None);
         let p = solver.progress();
         (bits(&solver.vertex_radiosity()), p.rays, p.shots, p.energy)
     };
-    let with = solve(Some(SpecularTransfer::default()));
+    let with = solve(Some(SpecularOptions::default()));
     let without = solve(None);
     assert_eq!(with.0, without.0, "vertex radiosity differs");
     assert_eq!(
@@ -120,13 +120,13 @@ fn irradiance_through_a_mirror_is_the_mirrored_emitters_times_the_reflectance() 
             unshot_fraction: 1e-6,
             ..Stop::default()
         },
-        specular: Some(SpecularTransfer {
+        specular: Some(SpecularOptions {
             rays: 1 << 22,
-            ..SpecularTransfer::default()
+            ..SpecularOptions::default()
         }),
         ..Options::default()
     };
-    let mut solver = Progressive::new(&s, options.clone()).unwrap();
+    let mut solver = ProgressiveSolver::new(&s, options.clone()).unwrap();
     run(&mut solver);
     let (_, deposits) = solver.specular_transfer().expect("the transfer runs");
     let mesh = solver.mesh().clone();
@@ -201,7 +201,7 @@ fn irradiance_through_a_mirror_is_the_mirrored_emitters_times_the_reflectance() 
         );
     }
     // Without the transfer the receiver gets nothing at all: the mirror is an absorber.
-    let mut dark = Progressive::new(
+    let mut dark = ProgressiveSolver::new(
         &s,
         Options {
             specular: None,
@@ -239,7 +239,7 @@ fn mirror_furnace(rho: f64) -> Scene {
 }
 
 /// The mirror furnace's solve: to an unshot fraction of 1e-5, with the transfer `specular`.
-fn furnace_options(specular: Option<SpecularTransfer>) -> Options {
+fn furnace_options(specular: Option<SpecularOptions>) -> Options {
     Options {
         stop: Stop {
             unshot_fraction: 1e-5,
@@ -268,7 +268,7 @@ fn furnace_with_a_perfect_mirror_wall_stays_uniform() {
             adaptive: None,
             ..furnace_options(specular)
         };
-        let mut solver = Progressive::new(&s, options).unwrap();
+        let mut solver = ProgressiveSolver::new(&s, options).unwrap();
         run(&mut solver);
         let mesh = solver.mesh();
         let b = solver.vertex_radiosity();
@@ -291,9 +291,9 @@ fn furnace_with_a_perfect_mirror_wall_stays_uniform() {
             .fold(0.0, f64::max);
         (worst_wall, worst_vertex, solver.progress().energy)
     };
-    let (wall, vertex, e) = solve(Some(SpecularTransfer {
+    let (wall, vertex, e) = solve(Some(SpecularOptions {
         rays: 1 << 21,
-        ..SpecularTransfer::default()
+        ..SpecularOptions::default()
     }));
     let (dark_wall, dark_vertex, _) = solve(None);
     // The light through the mirror is about a fifth of what a wall receives (the form factor
@@ -334,15 +334,15 @@ fn spheres_balance_power_and_solve_alike_on_one_or_two_threads() {
             unshot_fraction: 1e-2,
             ..Stop::default()
         },
-        specular: Some(SpecularTransfer {
+        specular: Some(SpecularOptions {
             rays: 1 << 16,
-            ..SpecularTransfer::default()
+            ..SpecularOptions::default()
         }),
         ..Options::default()
     };
     let solve = |threads: usize| {
         on_threads(threads, || {
-            let mut solver = Progressive::new(&s, options.clone()).unwrap();
+            let mut solver = ProgressiveSolver::new(&s, options.clone()).unwrap();
             run(&mut solver);
             let (rays, deposits) = solver.specular_transfer().unwrap();
             assert!(rays > 0 && deposits > 0);
@@ -354,7 +354,7 @@ fn spheres_balance_power_and_solve_alike_on_one_or_two_threads() {
     assert_eq!(one.0, two.0, "one and two threads differ");
     // The room is open toward the camera, so light escapes; what the spheres used to swallow
     // (they take no part in the form factors) now reaches the walls: less escapes.
-    let mut dark = Progressive::new(
+    let mut dark = ProgressiveSolver::new(
         &s,
         Options {
             specular: None,
@@ -406,7 +406,7 @@ fn the_tracer_adds_no_light_through_glass_again() {
         (222.0 / 256.0, 238.0 / 256.0),
     );
     let caustic = |specular| {
-        let mut solver = Progressive::new(&s, options(specular)).unwrap();
+        let mut solver = ProgressiveSolver::new(&s, options(specular)).unwrap();
         run(&mut solver);
         let solution = solver.solution();
         let p = RenderProgress::new();
@@ -439,9 +439,9 @@ fn the_tracer_adds_no_light_through_glass_again() {
             region_mean(&hd.layers.composite(), x, y),
         )
     };
-    let (h, hd) = caustic(Some(SpecularTransfer {
+    let (h, hd) = caustic(Some(SpecularOptions {
         rays: 1 << 18,
-        ..SpecularTransfer::default()
+        ..SpecularOptions::default()
     }));
     let (dark, _) = caustic(None);
     assert!(
@@ -468,7 +468,7 @@ fn a_mirror_facing_no_diffuse_surface_is_not_modelled() {
         why.contains("mirror is lit by and seen from no diffuse surface"),
         "{why}"
     );
-    let solver = Progressive::new(&s, Options::default()).unwrap();
+    let solver = ProgressiveSolver::new(&s, Options::default()).unwrap();
     assert_eq!(solver.specular_transfer(), None);
     // The same mirror facing up is modelled (the scene of the closed-form test).
     assert!(decide(&mirror_scene([1.0; 3])).0);
@@ -485,12 +485,12 @@ fn per_pixel_caustics_replace_the_meshs_focused_light_once() {
         Reference, ReferenceSettings, RenderProgress, RenderSettings, WhittedSettings, render,
     };
     let (s, _) = load(scene_path("cornell-spheres.toml")).unwrap();
-    let mut solver = Progressive::new(
+    let mut solver = ProgressiveSolver::new(
         &s,
         coarse(
-            Some(SpecularTransfer {
+            Some(SpecularOptions {
                 rays: 1 << 18,
-                ..SpecularTransfer::default()
+                ..SpecularOptions::default()
             }),
             1e-2,
         ),
@@ -608,9 +608,9 @@ fn hierarchical_solver_carries_light_through_a_mirror_in_the_furnace() {
             .fold(0.0, f64::max);
         (worst, transfer)
     };
-    let (wall, transfer) = solve(Some(SpecularTransfer {
+    let (wall, transfer) = solve(Some(SpecularOptions {
         rays: 1 << 21,
-        ..SpecularTransfer::default()
+        ..SpecularOptions::default()
     }));
     let (rays, deposits) = transfer.expect("the transfer runs");
     assert!(
@@ -636,9 +636,9 @@ fn hierarchical_and_progressive_transfer_agree_on_the_spheres() {
     // threads.
     use twopass_radiosity::{HierarchicalSolver, Method, Solution};
     let (s, _) = load(scene_path("cornell-spheres.toml")).unwrap();
-    let transfer = Some(SpecularTransfer {
+    let transfer = Some(SpecularOptions {
         rays: 1 << 18,
-        ..SpecularTransfer::default()
+        ..SpecularOptions::default()
     });
     let progressive = |specular| {
         // Patches of 75 mm: the coarse tests' 150 mm patches shoot too coarsely for the mirror
@@ -648,7 +648,7 @@ fn hierarchical_and_progressive_transfer_agree_on_the_spheres() {
             element_size: Some(40.0),
             ..coarse(specular, 1e-3)
         };
-        let mut solver = Progressive::new(&s, options).unwrap();
+        let mut solver = ProgressiveSolver::new(&s, options).unwrap();
         run(&mut solver);
         wall_means(&solver.solution(), s.objects.len())
     };

@@ -58,7 +58,7 @@ pub struct SettingsRecord {
     pub specular_rays: Option<u32>,
 }
 
-/// Adaptive subdivision settings (see `Adaptive`).
+/// Adaptive subdivision settings (see `twopass_radiosity::AdaptiveOptions`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct AdaptiveRecord {
     /// Split when vertex luminances differ by more than this fraction of the mean.

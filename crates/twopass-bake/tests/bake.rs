@@ -110,7 +110,7 @@ fn focused_caustics_round_trip_through_the_bake_file() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell-spheres.toml");
     let (scene, _) = twopass_scene::load(&path).unwrap();
     let options = Options {
-        specular: Some(twopass_radiosity::SpecularTransfer {
+        specular: Some(twopass_radiosity::SpecularOptions {
             rays: 1 << 14,
             ..Default::default()
         }),

@@ -7,7 +7,7 @@ mod common;
 
 use std::ops::ControlFlow;
 
-use twopass_radiosity::{Options, Progressive, Stop, dense_solve};
+use twopass_radiosity::{Options, ProgressiveSolver, Stop, dense_solve};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (path, unshot) = common::scene_and_unshot()?;
@@ -19,7 +19,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         },
         ..Options::default()
     };
-    let mut solver = Progressive::new(&scene, options)?;
+    let mut solver = ProgressiveSolver::new(&scene, options)?;
     let start = solver.progress();
     println!(
         "{} patches, {} elements, {} vertices",

@@ -17,7 +17,7 @@ mod common;
 use std::time::Instant;
 
 use glam::Vec3;
-use twopass_radiosity::{Hierarchical, Method, Options, Solution, Solver, Stop};
+use twopass_radiosity::{HierarchicalOptions, Method, Options, Solution, Solver, Stop};
 use twopass_scene::DiffuseRadiance;
 
 fn solve(
@@ -27,7 +27,7 @@ fn solve(
 ) -> Result<Solution, Box<dyn std::error::Error>> {
     let options = Options {
         method,
-        hierarchical: Hierarchical {
+        hierarchical: HierarchicalOptions {
             link_tolerance: std::env::var("TOL").map_or(Ok(2e-5), |s| s.parse())?,
             min_element_size: std::env::var("MIN").ok().map(|s| s.parse()).transpose()?,
         },

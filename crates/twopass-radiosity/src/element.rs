@@ -9,6 +9,8 @@ use std::collections::HashMap;
 use glam::{DVec3, Vec2, Vec3};
 use twopass_scene::Scene;
 
+use crate::mesh_error::{InvalidMesh, MeshPart};
+
 /// A mesh vertex: where radiosity is computed and stored.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Vertex {
@@ -168,8 +170,7 @@ impl ElementMesh {
         nodes: Vec<Node>,
         roots: Vec<u32>,
         patches: Vec<u32>,
-    ) -> Result<Self, crate::InvalidMesh> {
-        use crate::{InvalidMesh, MeshPart};
+    ) -> Result<Self, InvalidMesh> {
         let bad = |part, index: usize, problem| Err(InvalidMesh::new(part, index, problem));
         let (n_v, n_n, n_t) = (vertices.len(), nodes.len(), roots.len());
         for (i, v) in vertices.iter().enumerate() {

@@ -2,7 +2,7 @@
 //! - progressive-refinement radiosity (Cohen, Chen, Wallace & Greenberg 1988) with exact
 //!   differential-area-to-polygon form factors and ray-traced visibility at the receiving
 //!   vertices (Wallace, Elmquist & Haines 1989), patch/element substructuring with conforming
-//!   adaptive subdivision (Cohen et al. 1986) and a dense reference solve ([`Progressive`]);
+//!   adaptive subdivision (Cohen et al. 1986) and a dense reference solve ([`ProgressiveSolver`]);
 //!   Each shot also carries the shooter's light through mirrors and glass to the diffuse
 //!   surfaces it lands on ([`specular`]: the paths L S+ D and D S+ D);
 //! - hierarchical radiosity with clustering (Hanrahan, Salzman & Aupperle 1991; Smits, Arvo &
@@ -30,25 +30,30 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+mod ambient;
 pub mod cluster;
-mod direct;
 pub mod element;
+mod error;
 pub mod form_factor;
 mod hierarchical;
 mod mesh_error;
+mod options;
 mod progressive;
+mod report;
 mod solution;
 mod solver;
 pub mod specular;
+mod specular_receivers;
 
-pub use direct::{MAX_DENSE_VERTICES, dense_solve};
+pub use error::SolveError;
 pub use form_factor::VisibilityRays;
 pub use hierarchical::HierarchicalSolver;
 pub use mesh_error::{InvalidMesh, MeshPart};
-pub use progressive::{MAX_ELEMENTS, Progressive};
-pub use solution::Solution;
-pub use solver::{
-    Adaptive, Energy, Finish, Hierarchical, MAX_VISIBILITY_RAYS, Method, Options, Residuals,
-    SolveError, SolveProgress, Solver, Stop,
+pub use options::{
+    AdaptiveOptions, HierarchicalOptions, MAX_VISIBILITY_RAYS, Method, Options, SpecularOptions,
+    Stop,
 };
-pub use specular::SpecularTransfer;
+pub use progressive::{MAX_DENSE_VERTICES, MAX_ELEMENTS, ProgressiveSolver, dense_solve};
+pub use report::{Energy, Finish, Residuals, SolveProgress};
+pub use solution::Solution;
+pub use solver::Solver;

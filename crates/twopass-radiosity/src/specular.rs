@@ -7,7 +7,7 @@
 //! take part). This module carries the rest: it traces rays from the shooter toward the
 //! specular objects, follows them through the delta lobes of `twopass-brdf`
 //! ([`twopass_brdf::delta::DeltaLobe::sample_flux`]: the power a refraction carries, not its
-//! radiance) up to [`SpecularTransfer::max_depth`] bounces, and hands back where they land on
+//! radiance) up to [`SpecularOptions::max_depth`] bounces, and hands back where they land on
 //! a surface that takes part in radiosity, with the power they carry. A ray whose first hit is
 //! not specular carries nothing here: that light is the form factors' (nothing is counted
 //! twice). The solver splats the landed power onto the element vertices as irradiance, so it
@@ -25,37 +25,14 @@
 
 use glam::{DVec3, Vec2, Vec3};
 use rayon::prelude::*;
-use smart_default::SmartDefault;
 use twopass_brdf::colour::luminance_f64;
 use twopass_brdf::frame::Frame;
 use twopass_brdf::random::{SplitMix64, hash, unit_f32, unit_f64};
-
 use twopass_scene::targets::specular_objects;
 use twopass_scene::{Scene, SpecularTargets, SurfacePoint};
 
 use crate::element::ElementMesh;
-
-/// Settings of the specular transfer ([`crate::Options::specular`]).
-#[derive(SmartDefault, Debug, Clone, Copy, PartialEq, Eq)]
-pub struct SpecularTransfer {
-    /// Rays a shot of the whole emitted power casts toward the specular objects (progressive
-    /// refinement; the hierarchical solver spreads as many over the leaves whose exitance grew
-    /// since it last shot, in proportion to that growth); a shot of a
-    /// fraction of it casts that fraction (at least [`SpecularTransfer::MIN_RAYS`]), so every
-    /// ray carries about the same power. Rounded up to a square number per shot.
-    #[default(1 << 20)]
-    pub rays: u32,
-    /// Most delta bounces a ray follows (reflections and refractions) before it is dropped.
-    #[default(16)]
-    pub max_depth: u32,
-}
-
-impl SpecularTransfer {
-    /// Fewest rays a shot casts toward the specular objects (a 4 x 4 grid).
-    pub const MIN_RAYS: u32 = 16;
-    /// Most rays one shot may cast (a 2048 x 2048 grid).
-    pub const MAX_RAYS: u32 = 1 << 22;
-}
+use crate::options::{SpecularOptions, participating};
 
 /// Probe rays cast from the specular surfaces by [`decide`].
 pub const PROBE_RAYS: u32 = 4096;
@@ -78,7 +55,7 @@ pub fn decide(scene: &Scene) -> (bool, String) {
     if scene.emitters.is_empty() {
         return (false, "nothing emits light".into());
     }
-    let takes_part = crate::solver::participating(scene);
+    let takes_part = participating(scene);
     let diffuse = |o: usize| {
         scene.materials[scene.objects[o].material as usize]
             .material
@@ -191,7 +168,7 @@ pub(crate) struct Shooter {
 /// be splatted again onto a refined mesh), and the rays cast.
 #[derive(Debug, Clone)]
 pub(crate) struct Specular {
-    settings: SpecularTransfer,
+    settings: SpecularOptions,
     targets: SpecularTargets,
     /// Per object: whether it takes part (receives deposits).
     takes_part: Vec<bool>,
@@ -203,7 +180,7 @@ pub(crate) struct Specular {
 
 impl Specular {
     /// The transfer for `scene`, or `None` when [`decide`] says it is not needed.
-    pub fn new(scene: &Scene, settings: SpecularTransfer, takes_part: &[bool]) -> Option<Self> {
+    pub fn new(scene: &Scene, settings: SpecularOptions, takes_part: &[bool]) -> Option<Self> {
         if settings.rays == 0 || !decide(scene).0 {
             return None;
         }
@@ -220,10 +197,10 @@ impl Specular {
     /// Sends the exitance changes of element-mesh leaves through the specular surfaces:
     /// `changes` holds, per leaf, its (emitted, reflected) exitance change since it last sent
     /// (W/m^2, either sign). The rays of a shot of the whole emitted power
-    /// ([`SpecularTransfer::rays`], `emitted` its luminance) are spread over the leaves in
+    /// ([`SpecularOptions::rays`], `emitted` its luminance) are spread over the leaves in
     /// proportion to the luminance of each change's magnitude times the leaf's area, by
     /// systematic sampling, so every ray carries the same share and the transfer is unbiased
-    /// whatever the leaf count (at least [`SpecularTransfer::MIN_RAYS`] in all); a decrease
+    /// whatever the leaf count (at least [`SpecularOptions::MIN_RAYS`] in all); a decrease
     /// is sent as negative power, so what a leaf has sent always equals its exitance. Leaves
     /// are shot where the light leaves them, not as the uniform patch they belong to: a caustic
     /// spot sends its light through the glass again from the spot. Returns `None` when the
@@ -248,8 +225,8 @@ impl Specular {
         let rays = (f64::from(self.settings.rays) * total / emitted.max(f64::MIN_POSITIVE))
             .ceil()
             .clamp(
-                f64::from(SpecularTransfer::MIN_RAYS),
-                16.0 * f64::from(SpecularTransfer::MAX_RAYS),
+                f64::from(SpecularOptions::MIN_RAYS),
+                16.0 * f64::from(SpecularOptions::MAX_RAYS),
             ) as u64;
         // Systematic sampling: ray j sits at (j + u) / rays of the cumulative change.
         let u = unit_f64(hash(key ^ 0x5eec_0515));
@@ -313,9 +290,9 @@ impl Specular {
         Some((deposits, cast))
     }
 
-    /// Traces the specular paths of one shot of `shooter` with `n` rays (the first
-    /// floor(sqrt(n))^2 stratified, the rest uniform), random stream keyed by `key`. Returns the deposits in ray order and the rays cast. Parallel
-    /// over rays; the result does not depend on scheduling.
+    /// Traces the specular paths of one shot of `shooter` with `n` rays (the first floor(sqrt(n))^2
+    /// stratified, the rest uniform), random stream keyed by `key`. Returns the deposits in ray
+    /// order and the rays cast. Parallel over rays; the result does not depend on scheduling.
     pub fn shoot(&self, scene: &Scene, shooter: &Shooter, n: u32, key: u64) -> (Vec<Deposit>, u64) {
         let Shooter {
             corners,

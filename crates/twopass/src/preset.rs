@@ -8,11 +8,12 @@
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
+use twopass_radiosity::MAX_VISIBILITY_RAYS;
 use twopass_trace::{AdaptiveSampling, RenderSettings, WhittedSettings};
 
 use crate::error::CliError;
 use crate::pipeline::{MAX_DEPTH, RenderMethod};
-use crate::solve::{MAX_VISIBILITY_RAYS, SolveArgs};
+use crate::solve::SolveArgs;
 
 /// The arguments a preset sets, which conflict with `--preset`.
 pub const PRESET_SETS: [&str; 12] = [

@@ -9,7 +9,8 @@ use std::time::Duration;
 
 use clap::{Args, ValueEnum};
 use twopass_radiosity::{
-    Adaptive, Finish, Hierarchical, Method, Options, Solver, SpecularTransfer, Stop, VisibilityRays,
+    AdaptiveOptions, Finish, HierarchicalOptions, MAX_VISIBILITY_RAYS, Method, Options, Solver,
+    SpecularOptions, Stop, VisibilityRays,
 };
 use twopass_scene::Scene;
 
@@ -50,7 +51,7 @@ pub struct SolveArgs {
     pub unshot: f64,
     /// Hierarchical solver: refine a link while its estimated transport error exceeds this
     /// fraction of the emitted power.
-    #[arg(long, default_value_t = Hierarchical::default().link_tolerance, value_name = "FRACTION")]
+    #[arg(long, default_value_t = HierarchicalOptions::default().link_tolerance, value_name = "FRACTION")]
     pub link_tolerance: f64,
     /// Stop after this many shots (progressive) or gather iterations (hierarchical).
     #[arg(long, value_name = "N")]
@@ -82,8 +83,8 @@ pub struct SolveArgs {
     /// diffuse surfaces; `info` says whether a scene has them): rays a shot of the whole
     /// emitted power traces through the specular surfaces, later shots in proportion to their
     /// power; 0 treats mirrors and glass as absorbers in the radiosity pass.
-    #[arg(long, value_name = "N", default_value_t = SpecularTransfer::default().rays,
-          value_parser = clap::value_parser!(u32).range(0..=i64::from(SpecularTransfer::MAX_RAYS)))]
+    #[arg(long, value_name = "N", default_value_t = SpecularOptions::default().rays,
+          value_parser = clap::value_parser!(u32).range(0..=i64::from(SpecularOptions::MAX_RAYS)))]
     pub specular_rays: u32,
 }
 
@@ -94,7 +95,7 @@ impl Default for SolveArgs {
         Self {
             solver: SolverChoice::Auto,
             unshot: Stop::default().unshot_fraction,
-            link_tolerance: Hierarchical::default().link_tolerance,
+            link_tolerance: HierarchicalOptions::default().link_tolerance,
             max_shots: None,
             time_budget: None,
             patch_size: None,
@@ -102,7 +103,7 @@ impl Default for SolveArgs {
             no_adaptive: false,
             visibility_rays: VisibilityRays::default(),
             no_shaft_culling: false,
-            specular_rays: SpecularTransfer::default().rays,
+            specular_rays: SpecularOptions::default().rays,
         }
     }
 }
@@ -139,7 +140,7 @@ impl SolveArgs {
         Options {
             patch_size: self.patch_size,
             element_size: self.element_size,
-            adaptive: (!self.no_adaptive).then(Adaptive::default),
+            adaptive: (!self.no_adaptive).then(AdaptiveOptions::default),
             visibility: self.visibility_rays,
             shaft_culling: !self.no_shaft_culling,
             stop: Stop {
@@ -149,14 +150,14 @@ impl SolveArgs {
             },
             seed,
             method: self.solver.method(),
-            hierarchical: Hierarchical {
+            hierarchical: HierarchicalOptions {
                 link_tolerance: self.link_tolerance,
-                ..Hierarchical::default()
+                ..HierarchicalOptions::default()
             },
             memory_limit: crate::context::memory_limit(),
-            specular: (self.specular_rays > 0).then(|| SpecularTransfer {
+            specular: (self.specular_rays > 0).then(|| SpecularOptions {
                 rays: self.specular_rays,
-                ..SpecularTransfer::default()
+                ..SpecularOptions::default()
             }),
             ..Options::default()
         }
@@ -193,9 +194,6 @@ fn parse_rays(s: &str) -> Result<VisibilityRays, String> {
     }
     Ok(VisibilityRays { min, max })
 }
-
-/// Most shadow rays per visibility estimate (a 32 x 32 grid; 16 is the default).
-pub const MAX_VISIBILITY_RAYS: u32 = 1024;
 
 /// A fraction in [0, 1) (the unshot power at which to stop).
 pub fn parse_fraction(s: &str) -> Result<f64, String> {

@@ -73,7 +73,7 @@ fn options_out_of_range_are_usage_errors() {
         ),
         (
             vec!["bake", s, "--visibility-rays", "4294967295,4294967295"],
-            vec!["--visibility-rays", "1024"],
+            vec!["--visibility-rays", "4096"],
         ),
         (
             vec!["bake", s, "--residual-samples", "4294967295"],

@@ -289,7 +289,7 @@ fn plot_scale(path: &std::path::Path, rows: &[ScaleRow]) -> Result<(), CliError>
 
 /// Solves the scene at each element count, or the generated scenes of `--generate`.
 pub fn run(args: &RadiosityArgs, ctx: &Context) -> Result<(), CliError> {
-    use twopass_radiosity::{Progressive, dense_solve};
+    use twopass_radiosity::{ProgressiveSolver, dense_solve};
     let Some(path) = &args.scene else {
         return radiosity_scale(args, ctx);
     };
@@ -302,10 +302,11 @@ pub fn run(args: &RadiosityArgs, ctx: &Context) -> Result<(), CliError> {
         let options = solve.options(ctx.seed);
         reset_peak_memory();
         let start = Instant::now();
-        let mut solver = Progressive::new(&scene, options).map_err(|source| CliError::Solve {
-            path: path.clone(),
-            source,
-        })?;
+        let mut solver =
+            ProgressiveSolver::new(&scene, options).map_err(|source| CliError::Solve {
+                path: path.clone(),
+                source,
+            })?;
         solver.run(|_| std::ops::ControlFlow::Continue(()));
         let seconds = start.elapsed().as_secs_f64();
         let p = solver.progress();

@@ -5,7 +5,7 @@
 use glam::DVec3;
 use nalgebra::{DMatrix, DVector};
 
-use crate::progressive::Progressive;
+use super::state::ProgressiveSolver;
 
 /// Largest vertex count the dense solve accepts (the matrix is n^2 x 8 bytes: 512 MiB here).
 pub const MAX_DENSE_VERTICES: usize = 8192;
@@ -13,7 +13,7 @@ pub const MAX_DENSE_VERTICES: usize = 8192;
 /// Solves the full radiosity system on the solver's current mesh. Returns per-vertex radiosity
 /// (W/m^2), or `None` when the mesh has more than [`MAX_DENSE_VERTICES`] vertices or the
 /// system is singular.
-pub fn dense_solve(solver: &mut Progressive<'_>) -> Option<Vec<DVec3>> {
+pub fn dense_solve(solver: &mut ProgressiveSolver<'_>) -> Option<Vec<DVec3>> {
     let n = solver.mesh().vertices.len();
     if n > MAX_DENSE_VERTICES {
         return None;

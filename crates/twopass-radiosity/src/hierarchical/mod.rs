@@ -1,0 +1,52 @@
+//! Hierarchical radiosity with clustering (Hanrahan, Salzman & Aupperle 1991; Smits, Arvo &
+//! Greenberg 1994; Sillion 1994).
+//!
+//! The hierarchy: a cluster tree over the participating triangles
+//! ([`Clusters`](crate::cluster::Clusters)) above the triangles' bisection trees
+//! ([`ElementMesh`](crate::element::ElementMesh)). Light moves along **links** between pairs of
+//! nodes. Linking starts with the root linked to itself and refines a link, by splitting the larger
+//! end, while its estimated transport error (BF refinement: the source's radiosity times the link's
+//! form-factor error times the receiver's area and reflectance) exceeds
+//! [`HierarchicalOptions::link_tolerance`](crate::options::HierarchicalOptions::link_tolerance) of
+//! the emitted power, or while an end is a cluster too close to the other end for the far-field
+//! estimate. So distant groups exchange light through one link and the initial linking is not
+//! all-pairs.
+//!
+//! Transport of a link, as irradiance at the receiver per unit exitance of the source:
+//! - surface to surface: the exact differential-area-to-polygon form factor (Lambert's contour
+//!   integral) at the receiver's three corners, so irradiance varies linearly over an element
+//!   and the leaves get per-vertex values; its error estimate is the spread of the form factor
+//!   over the corners and the centroid;
+//! - with a cluster at either end: the isotropic cluster (Sillion 1994): a cluster of area A
+//!   seen from any direction shows a projected area A / 4, as a closed convex object does;
+//!   its error estimate is the whole transport;
+//! - times the visible fraction of a few stratified shadow rays between the two ends; a
+//!   partially visible link counts its whole transport as error, so it is refined.
+//!
+//! Each gather iteration (Jacobi) sums every link's transport into its receiver, then
+//! **push-pull** moves irradiance down the hierarchy (linearly interpolated at surface nodes)
+//! and area-averaged radiosity back up. The convergence measure is the one progressive
+//! refinement stops on: the residual power, the change the last iteration made, over the
+//! emitted power. Links are re-refined with the converged radiosities (BF refinement needs B)
+//! until no link needs it. The leaves are the element mesh: bisection with conforming
+//! neighbour splits keeps it free of cracks and T-vertices.
+//!
+//! Light through mirrors and glass ([`crate::specular`]): after every gather the leaves whose
+//! exitance changed since they last sent send that change through the specular surfaces
+//! (`shoot_specular`); what lands is splatted onto the vertices and joins the leaves'
+//! reflected light at the next gather.
+
+mod build;
+mod directions;
+mod gather;
+mod geometry;
+mod link;
+mod links;
+mod output;
+mod refine;
+mod schedule;
+mod state;
+mod transport;
+mod visibility;
+
+pub use state::HierarchicalSolver;

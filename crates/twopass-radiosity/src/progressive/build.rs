@@ -1,0 +1,246 @@
+//! Setting up a progressive solve: the checks and memory estimates, the patch and element
+//! mesh, the per-vertex and per-patch arrays, and keeping them in step with the mesh.
+
+use std::sync::atomic::AtomicU8;
+use std::time::Instant;
+
+use glam::DVec3;
+use twopass_scene::Scene;
+
+use super::patch_elements::PatchElements;
+use super::state::{
+    BYTES_PER_ELEMENT, MAX_ELEMENTS, PAIR_CACHE_MAX_PATCHES, PAIR_UNKNOWN, ProgressiveSolver,
+};
+use crate::element::ElementMesh;
+use crate::error::SolveError;
+use crate::form_factor::RECEIVER_INSET;
+use crate::options::{Options, check_common, participating};
+use crate::report::Bookkeeping;
+use crate::specular::Specular;
+use crate::specular_receivers::SpecularReceivers;
+
+impl<'s> ProgressiveSolver<'s> {
+    /// Meshes the scene into patches and elements and sets up the emitters' unshot power.
+    /// Only objects that reflect diffusely or emit take part; others still cast shadows.
+    pub fn new(scene: &'s Scene, options: Options) -> Result<Self, SolveError> {
+        if scene.emitters.is_empty() {
+            return Err(SolveError::NoEmitters);
+        }
+        let diag = scene.bounds.diagonal();
+        let patch_size = options.patch_size.unwrap_or(diag / 8.0);
+        let element_size = options.element_size.unwrap_or(diag / 24.0).min(patch_size);
+        for (name, v) in [("patch_size", patch_size), ("element_size", element_size)] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(SolveError::Option {
+                    name,
+                    problem: format!("{v} must be finite and > 0 scene units"),
+                });
+            }
+        }
+        check_common(&options)?;
+        let takes_part = participating(scene);
+        if !takes_part.iter().any(|&t| t) {
+            return Err(SolveError::NothingTakesPart);
+        }
+        // Refinement to a size makes, per triangle, at least one element per sqrt(3)/4 size^2
+        // of area (the largest triangle whose longest edge is `size`), at least one per `size`
+        // along its longest edge (a sliver is cut across), and at least one: refuse up front
+        // what cannot fit rather than refine until memory runs out.
+        let part: Vec<(f64, f64)> = (0..scene.mesh.triangles.len() as u32)
+            .filter(|&t| takes_part[scene.mesh.triangle_object[t as usize] as usize])
+            .map(|t| {
+                let [a, b, c] = scene.mesh.corners(t);
+                let longest = (b - a).length().max((c - b).length()).max((a - c).length());
+                (f64::from(scene.mesh.areas[t as usize]), f64::from(longest))
+            })
+            .collect();
+        let part_area: f64 = part.iter().map(|p| p.0).sum();
+        for (name, v) in [("patch_size", patch_size), ("element_size", element_size)] {
+            let s = f64::from(v);
+            let at_least: f64 = part
+                .iter()
+                .map(|&(area, longest)| {
+                    (area / (3f64.sqrt() / 4.0 * s * s))
+                        .max((longest / s).ceil())
+                        .max(1.0)
+                })
+                .sum();
+            if at_least > MAX_ELEMENTS as f64 {
+                return Err(SolveError::Option {
+                    name,
+                    problem: format!(
+                        "{v} scene units would make at least {at_least:.3e} elements on {} \
+                         triangles ({part_area:.3e} units^2), more than the {MAX_ELEMENTS} a \
+                         solve holds; give a larger size",
+                        part.len()
+                    ),
+                });
+            }
+        }
+        // Bisection leaves of longest edge at most L have an area of L^2 / 8 or more: refuse
+        // up front a mesh that would not fit instead of refining until the allocator gives up.
+        let elements: f64 = scene
+            .mesh
+            .triangle_object
+            .iter()
+            .zip(&scene.mesh.areas)
+            .filter(|&(&o, _)| takes_part[o as usize])
+            .map(|(_, &a)| (8.0 * f64::from(a) / f64::from(element_size).powi(2)).max(1.0))
+            .sum();
+        let patches: f64 = scene
+            .mesh
+            .areas
+            .iter()
+            .map(|&a| (8.0 * f64::from(a) / f64::from(patch_size).powi(2)).max(1.0))
+            .sum();
+        let bytes = elements * BYTES_PER_ELEMENT
+            + (patches * elements * 2.0).min(options.cache_bytes as f64);
+        if bytes > options.memory_limit as f64 {
+            return Err(SolveError::TooLarge {
+                what: format!("about {elements:.3e} elements of {element_size} scene units"),
+                bytes: bytes.min(u64::MAX as f64) as u64,
+                limit: options.memory_limit,
+            });
+        }
+        let specular = options
+            .specular
+            .and_then(|settings| Specular::new(scene, settings, &takes_part))
+            .map(SpecularReceivers::new);
+        let started = Instant::now();
+        let mut mesh = ElementMesh::new(scene, &takes_part);
+        mesh.refine_to(patch_size);
+        mesh.mark_patches();
+        mesh.refine_to(element_size);
+        let mut s = Self {
+            scene,
+            options,
+            mesh,
+            element_size,
+            rho: Vec::new(),
+            emission: Vec::new(),
+            receiving: Vec::new(),
+            receivers: Vec::new(),
+            received_emit: Vec::new(),
+            received_refl: Vec::new(),
+            specular,
+            unshot_emit: Vec::new(),
+            unshot_refl: Vec::new(),
+            shot_emit: Vec::new(),
+            shot_refl: Vec::new(),
+            unshot_power: Vec::new(),
+            elements: PatchElements::default(),
+            patch_rho: Vec::new(),
+            patch_area: Vec::new(),
+            cache: Vec::new(),
+            weights: Vec::new(),
+            pair_clear: Vec::new(),
+            cached_bytes: 0,
+            bookkeeping: Bookkeeping::new(started, started.elapsed()),
+            shots: 0,
+            rays: 0,
+        };
+        s.sync_vertices();
+        let n = s.mesh.patches.len();
+        s.patch_area = (0..n)
+            .map(|p| f64::from(s.mesh.nodes[s.mesh.patches[p] as usize].area))
+            .collect();
+        s.patch_rho = (0..n)
+            .map(|p| {
+                let o = &scene.objects[s.object_of_patch(p) as usize];
+                scene.materials[o.material as usize]
+                    .material
+                    .diffuse_albedo()
+                    .as_dvec3()
+            })
+            .collect();
+        s.unshot_refl = vec![DVec3::ZERO; n];
+        s.shot_emit = vec![DVec3::ZERO; n];
+        s.shot_refl = vec![DVec3::ZERO; n];
+        s.cache = vec![None; n];
+        s.weights = vec![None; n];
+        if s.options.shaft_culling && s.options.occlusion && n <= PAIR_CACHE_MAX_PATCHES {
+            s.pair_clear = (0..n * n).map(|_| AtomicU8::new(PAIR_UNKNOWN)).collect();
+        }
+        s.unshot_emit = (0..n).map(|p| s.patch_emission(p)).collect();
+        s.bookkeeping.energy.emitted = (0..n).map(|p| s.unshot_emit[p] * s.patch_area(p)).sum();
+        s.bookkeeping.energy.unshot = s.bookkeeping.energy.emitted;
+        s.unshot_power = vec![0.0; n];
+        for p in 0..n {
+            s.note_unshot(p);
+        }
+        s.rebuild_patch_elements();
+        s.resplat();
+        Ok(s)
+    }
+
+    fn object_of_patch(&self, p: usize) -> u32 {
+        let node = &self.mesh.nodes[self.mesh.patches[p] as usize];
+        self.scene.mesh.triangle_object[node.scene_triangle as usize]
+    }
+
+    fn patch_emission(&self, p: usize) -> DVec3 {
+        self.scene.objects[self.object_of_patch(p) as usize]
+            .emission
+            .as_dvec3()
+            * std::f64::consts::PI
+    }
+
+    /// Extends the per-vertex arrays to new vertices (reflectance, emission; zero received).
+    pub(super) fn sync_vertices(&mut self) {
+        for v in self.rho.len()..self.mesh.vertices.len() {
+            let o = &self.scene.objects[self.mesh.vertices[v].object as usize];
+            self.rho.push(
+                self.scene.materials[o.material as usize]
+                    .material
+                    .diffuse_albedo()
+                    .as_dvec3(),
+            );
+            self.emission
+                .push(o.emission.as_dvec3() * std::f64::consts::PI);
+            let x = self.receiving_point(v);
+            self.receiving.push(x);
+            self.receivers.push(
+                self.scene
+                    .mesh
+                    .surface_point_at(self.mesh.vertices[v].triangle, x.as_vec3()),
+            );
+            self.received_emit.push(DVec3::ZERO);
+            self.received_refl.push(DVec3::ZERO);
+        }
+    }
+
+    /// Where vertex `v` receives, form factors and shadow rays alike: a hair inside its own
+    /// scene triangle ([`RECEIVER_INSET`] of the way to its centroid). A vertex on a junction
+    /// lies in the plane of the surface it meets, which it would see edge-on (F = 0), and half
+    /// of its shadow rays would start a rounding error behind that surface and find it
+    /// blocking; from inside its own surface it gets the limits both converge to.
+    pub(super) fn receiving_point(&self, v: usize) -> DVec3 {
+        let vert = &self.mesh.vertices[v];
+        let centroid = self
+            .scene
+            .mesh
+            .corners(vert.triangle)
+            .iter()
+            .map(|c| c.as_dvec3())
+            .sum::<DVec3>()
+            / 3.0;
+        vert.position.as_dvec3() + (centroid - vert.position.as_dvec3()) * RECEIVER_INSET
+    }
+
+    pub(super) fn rebuild_patch_elements(&mut self) {
+        self.elements = PatchElements::new(&self.mesh);
+        for w in &mut self.weights {
+            if let Some(w) = w.take() {
+                self.cached_bytes -= std::mem::size_of_val(w.as_slice());
+            }
+        }
+    }
+
+    /// With the specular transfer: every deposit so far splatted afresh onto the current mesh
+    /// ([`SpecularReceivers::resplat`]).
+    pub(super) fn resplat(&mut self) {
+        if let Some(spec) = &mut self.specular {
+            spec.resplat(&self.mesh);
+        }
+    }
+}
