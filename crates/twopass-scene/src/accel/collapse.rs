@@ -262,6 +262,8 @@ mod tests {
     use super::LEAF_SIZE;
     use crate::accel::wide::{HOT_BYTES, PacketNodeRays};
     use crate::accel::{Accel, Ray, TriangleHit};
+    use rand::Rng;
+
     use crate::workload::rng;
 
     /// Checks the subtree of node `node`: every child box contains its subtree's triangles,
@@ -363,15 +365,15 @@ mod tests {
     /// the plane z = 0).
     fn soup(count: usize, scale: f32, flat: bool, seed: u64) -> (Vec<Vec3>, Vec<[u32; 3]>) {
         let mut r = rng(seed);
-        let point = |r: &mut twopass_brdf::random::Pcg64Mcg| {
-            let z = if flat { 0.0 } else { r.next_f32() };
-            Vec3::new(r.next_f32(), r.next_f32(), z) * scale
+        let point = |r: &mut rand_pcg::Pcg64Mcg| {
+            let z = if flat { 0.0 } else { r.random::<f32>() };
+            Vec3::new(r.random::<f32>(), r.random::<f32>(), z) * scale
         };
         let mut positions = Vec::new();
         for _ in 0..count {
             let a = point(&mut r);
-            let size = 0.002 + 0.2 * r.next_f32().powi(4);
-            let corner = |r: &mut twopass_brdf::random::Pcg64Mcg| {
+            let size = 0.002 + 0.2 * r.random::<f32>().powi(4);
+            let corner = |r: &mut rand_pcg::Pcg64Mcg| {
                 let d = (point(r) - Vec3::splat(0.5 * scale)) * size;
                 a + if flat { d.with_z(0.0) } else { d }
             };
@@ -425,12 +427,16 @@ mod tests {
             let mut rays = Vec::new();
             let mut expected = Vec::new();
             for _ in 0..1000 {
-                let o = Vec3::new(r.next_f32(), r.next_f32(), r.next_f32() * 2.0 - 0.5) * scale;
-                let target = if triangles.is_empty() || r.next_f32() < 0.5 {
-                    Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) * scale
+                let o = Vec3::new(
+                    r.random::<f32>(),
+                    r.random::<f32>(),
+                    r.random::<f32>() * 2.0 - 0.5,
+                ) * scale;
+                let target = if triangles.is_empty() || r.random::<f32>() < 0.5 {
+                    Vec3::new(r.random::<f32>(), r.random::<f32>(), r.random::<f32>()) * scale
                 } else {
                     // Aimed at a vertex: watertightness at shared corners.
-                    positions[(r.next_u64() % positions.len() as u64) as usize]
+                    positions[(r.random::<u64>() % positions.len() as u64) as usize]
                 };
                 let d = target - o;
                 if d.length() == 0.0 {
@@ -535,13 +541,17 @@ mod tests {
                         match (x + y * w) % 7 {
                             // From an origin a little apart from the eye.
                             1 => {
-                                o += Vec3::new(r.next_f32(), r.next_f32(), r.next_f32())
-                                    * 1e-3
+                                o += Vec3::new(
+                                    r.random::<f32>(),
+                                    r.random::<f32>(),
+                                    r.random::<f32>(),
+                                ) * 1e-3
                                     * scale
                             }
                             // Aimed at a vertex.
                             3 if !positions.is_empty() => {
-                                let p = positions[(r.next_u64() % positions.len() as u64) as usize];
+                                let p = positions
+                                    [(r.random::<u64>() % positions.len() as u64) as usize];
                                 // In the octant of the ray it replaces, so that its packet
                                 // holds.
                                 if (p - eye).signum() == d.signum() {

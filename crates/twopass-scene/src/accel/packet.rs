@@ -351,6 +351,8 @@ mod tests {
 
     use super::{PacketRay, RayLanes, TriPacket};
     use crate::accel::triangle::ShearedRay;
+    use rand::Rng;
+
     use crate::workload::rng;
 
     /// Each triangle of a packet against eight rays in lanes gives, ray by ray, the very bits
@@ -396,18 +398,21 @@ mod tests {
                     let origin = if round % 2 == 0 {
                         eye
                     } else {
-                        eye + Vec3::new(r.next_f32() - 0.5, r.next_f32() - 0.5, r.next_f32())
-                            * 0.2
+                        eye + Vec3::new(
+                            r.random::<f32>() - 0.5,
+                            r.random::<f32>() - 0.5,
+                            r.random::<f32>(),
+                        ) * 0.2
                             * scale
                     };
                     let target: Vec3 = match (i + round) % 3 {
                         // A vertex, the midpoint of an edge, a random point.
-                        0 => vertices[(r.next_u64() % vertices.len() as u64) as usize].into(),
+                        0 => vertices[(r.random::<u64>() % vertices.len() as u64) as usize].into(),
                         1 => {
-                            let t = &tris[(r.next_u64() % tris.len() as u64) as usize];
+                            let t = &tris[(r.random::<u64>() % tris.len() as u64) as usize];
                             ((t[0] + t[1]) * 0.5).into()
                         }
-                        _ => (corner(r.next_f32(), r.next_f32())).into(),
+                        _ => (corner(r.random::<f32>(), r.random::<f32>())).into(),
                     };
                     (origin, target - origin)
                 });

@@ -1000,6 +1000,8 @@ mod stack_tests {
 
     use super::INLINE_STACK;
     use crate::accel::{Accel, Ray};
+    use rand::Rng;
+
     use crate::workload::rng;
 
     /// The unit cube split into 3 x 3 x 3 cells: a cluster of eight triangles in each cell but
@@ -1015,8 +1017,11 @@ mod stack_tests {
             for k in 1..27u32 {
                 let at = Vec3::new((k % 3) as f32, (k / 3 % 3) as f32, (k / 9) as f32) * cell;
                 for _ in 0..8 {
-                    let mut point =
-                        || at + Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) * cell * 0.8;
+                    let mut point = || {
+                        at + Vec3::new(r.random::<f32>(), r.random::<f32>(), r.random::<f32>())
+                            * cell
+                            * 0.8
+                    };
                     positions.extend([point(), point(), point()]);
                 }
             }
@@ -1068,12 +1073,13 @@ mod stack_tests {
             let mut r = rng(99);
             let mut rays = Vec::new();
             for _ in 0..2000 {
-                let origin = Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) * 1.4 - 0.2;
-                let target = if r.next_f32() < 0.5 {
+                let origin =
+                    Vec3::new(r.random::<f32>(), r.random::<f32>(), r.random::<f32>()) * 1.4 - 0.2;
+                let target = if r.random::<f32>() < 0.5 {
                     // Toward the deepest levels, near the corner the boxes nest in.
-                    Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) * 1e-3
+                    Vec3::new(r.random::<f32>(), r.random::<f32>(), r.random::<f32>()) * 1e-3
                 } else {
-                    positions[(r.next_u64() % positions.len() as u64) as usize]
+                    positions[(r.random::<u64>() % positions.len() as u64) as usize]
                 };
                 rays.push(Ray::new(origin, target - origin));
             }
