@@ -6,6 +6,8 @@ use std::path::PathBuf;
 
 use twopass_brdf::ParamError;
 
+use crate::camera::CameraProblem;
+
 /// A scene that cannot be loaded. Loading stops at the first error.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -242,56 +244,6 @@ pub enum SceneError {
         /// The error in the referenced file (it names that file).
         source: Box<SceneError>,
     },
-}
-
-/// What is wrong with a camera.
-#[derive(Debug, Clone, Copy, PartialEq)]
-#[non_exhaustive]
-pub enum CameraProblem {
-    /// `up` is parallel to the viewing direction (or zero), so the image has no orientation.
-    UpParallelToView,
-    /// `position` equals `look_at`, so there is no viewing direction.
-    NoViewDirection,
-    /// The vertical field of view (degrees) is not in (0, 180).
-    FieldOfView(f32),
-    /// The focal length or film size (mm) is not finite and > 0.
-    Lens(f32),
-    /// Both `fov_y` and `focal_length` were given.
-    FovAndFocalLength,
-    /// A position, target or up vector has a NaN or infinite component.
-    NonFinite,
-    /// The image would have more pixels than [`crate::Camera::MAX_PIXELS`] or a side longer
-    /// than [`crate::Camera::MAX_SIDE`].
-    Resolution {
-        /// Requested width, pixels.
-        width: u64,
-        /// Requested height, pixels.
-        height: u64,
-    },
-}
-
-impl fmt::Display for CameraProblem {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Self::UpParallelToView => write!(f, "`up` is zero or parallel to the view direction"),
-            Self::NoViewDirection => write!(f, "`position` equals `look_at`"),
-            Self::FieldOfView(v) => write!(f, "`fov_y` = {v} degrees must be in (0, 180)"),
-            Self::Lens(v) => write!(
-                f,
-                "focal length and film size must be finite and > 0 mm, got {v}"
-            ),
-            Self::FovAndFocalLength => write!(f, "give either `fov_y` or `focal_length`, not both"),
-            Self::NonFinite => write!(f, "a position or direction is not finite"),
-            Self::Resolution { width, height } => write!(
-                f,
-                "resolution {width} x {height} is out of range: each side must be 1 to {} pixels and the image at most {} pixels (8K UHD, 7680 x 4320, fits; a square at most {} x {})",
-                crate::Camera::MAX_SIDE,
-                crate::Camera::MAX_PIXELS,
-                crate::Camera::MAX_PIXELS_SQUARE,
-                crate::Camera::MAX_PIXELS_SQUARE
-            ),
-        }
-    }
 }
 
 fn line_suffix(line: Option<usize>) -> String {

@@ -14,7 +14,8 @@ use crate::camera::Camera;
 use crate::description::{
     CameraDesc, FresnelDesc, MaterialDesc, ObjectDesc, SceneFile, ShapeDesc, Triple, VERSION,
 };
-use crate::error::{CameraProblem, SceneError, Warning};
+use crate::camera::CameraProblem;
+use crate::error::{SceneError, Warning};
 use crate::input::{self, InputKind, LineIndex, ReadPolicy, printable};
 use crate::obj;
 use crate::scene::{Bounds, Mesh, Object, Scene, SceneMaterial};
@@ -233,7 +234,7 @@ fn load_bare_obj(path: &Path, policy: &ReadPolicy) -> Result<(Scene, Vec<Warning
         problem,
     })?;
     // A bare OBJ states no unit: metres, as the OBJ format's readers assume by default.
-    ld.finish(parts, camera, crate::Unit::Metre)
+    ld.finish(parts, camera, crate::unit::Unit::Metre)
 }
 
 /// What an object becomes before meshing: spheres wait for the scene's size.
@@ -774,7 +775,7 @@ impl Loader {
         mut self,
         parts: Vec<PlacedPart>,
         camera: Camera,
-        unit: crate::Unit,
+        unit: crate::unit::Unit,
     ) -> Result<(Scene, Vec<Warning>), SceneError> {
         let mut bounds = Bounds::EMPTY;
         for p in &parts {

@@ -9,7 +9,9 @@ use glam::{Vec2, Vec3};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 
-use crate::{Ray, Scene, SceneError, SurfacePoint, Warning};
+use crate::accel::{Ray, SurfacePoint};
+use crate::error::{SceneError, Warning};
+use crate::scene::Scene;
 
 /// The three kinds of query the passes cast.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -205,7 +207,7 @@ diffuse = [0.725, 0.71, 0.68]
 
 /// Loads the synthetic scene of [`synthetic_scene_toml`].
 pub fn synthetic_scene(triangles: usize, seed: u64) -> Result<(Scene, Vec<Warning>), SceneError> {
-    crate::load_toml(
+    crate::load::load_toml(
         &synthetic_scene_toml(triangles, seed),
         Path::new(&format!("synthetic-{triangles}.toml")),
     )
