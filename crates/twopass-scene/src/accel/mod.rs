@@ -4,18 +4,22 @@
 //! be offset safely (see [`SurfacePoint::spawn_origin`]).
 //!
 //! One job per module: [`ray`] (rays, surface points, origin offsetting), [`triangle`] (the
-//! watertight test), [`packet`] (four triangles per test), [`collapse`](mod@collapse) (the
-//! 8-wide tree from obvhs's binary one), [`wide`] (the nodes, the node test and the
-//! traversal), [`table`] (the nodes' and packets' memory, in huge pages); this file is the API:
+//! watertight test), [`quad`] (triangle quads: four triangles per test), [`collapse`](mod@collapse)
+//! (the 8-wide tree from obvhs's binary one), [`bvh`] (the 8-wide tree: its nodes, the node
+//! test, its layout and the walks), [`arena`] (the tree's memory, in huge pages, in 32-byte
+//! blocks), [`prefetch`](mod@prefetch), [`shaft`] (shaft culling); this file is the API:
 //! building, closest hit, any hit and the brute-force oracle.
 
+mod arena;
+mod bvh;
 mod collapse;
-mod packet;
+mod prefetch;
+mod quad;
 mod ray;
 mod shaft;
-mod table;
+#[cfg(test)]
+mod tests;
 mod triangle;
-mod wide;
 
 use std::time::{Duration, Instant};
 
@@ -24,25 +28,21 @@ use obvhs::{
     BvhBuildParams, aabb::Aabb, bvh2::reinsertion::ReinsertionOptimizer, ploc::PlocBuilder,
 };
 
+use bvh::{Bvh8, NodeRay, RayPacket};
 use collapse::collapse;
-use packet::{PacketRay, RayLanes, TriPacket};
+use quad::{QuadRay, RayLanes, TriangleQuad};
 pub(crate) use ray::SHADOW_EPSILON;
 pub use ray::{Ray, SurfacePoint};
 pub use shaft::SHAFT_TOLERANCE;
 use shaft::Shaft;
 pub(crate) use triangle::triangle_normal;
 use triangle::{AxisTriangle, ShearedRay};
-use wide::{NodeRay, PacketNodeRays, WideBvh};
 
-/// Size of the tree (nodes and packets, bytes) up to which [`Accel::closest_many`] and
+/// Size of the tree (nodes and quads, bytes) up to which [`Accel::closest_many`] and
 /// [`Accel::any_hit_many`] walk rays that are not coherent one after another: such a tree
 /// stays largely in the last-level cache, where interleaving has few misses to overlap and
-/// only costs. Measured on an AMD EPYC (Zen 3, 32 MiB L3), interleaved against one after
-/// another in one process, incoherent / occlusion rays of the generated rooms: 0.83 / 0.77 on
-/// a 6.4 MB tree (102k triangles), 1.15 / 0.96 on 19 MB (300k), 1.29 / 1.18 on 31 MB
-/// (500k), 1.51 / 1.40 on 63 MB (1M); on the Cornell box's three nodes it cost 12-18 %. The
-/// crossover depends on the machine: on the 2-vCPU Ice Lake Xeon of earlier measurements
-/// interleaving gained 1.17 / 1.11 already on 102k triangles, where it loses here.
+/// only costs. Interleaving pays only when the tree is larger than the last-level cache, so
+/// the best threshold depends on the machine; this one is of the order of a server's L3.
 pub const INTERLEAVE_MIN_BYTES: usize = 16 << 20;
 
 /// Angle between two neighbouring rays' directions, radians, within which
@@ -58,9 +58,9 @@ pub const COHERENT_ORIGINS: f32 = 1e-3;
 /// The nearest hit a closest-hit walk has found so far (its `t` is the walk's `t_max`).
 #[derive(Clone, Copy)]
 struct Nearest {
-    /// Where its packet starts in the tree's arena.
-    packet: u32,
-    /// Its lane in the packet.
+    /// Where its quad starts in the tree's arena.
+    quad: u32,
+    /// Its lane in the quad.
     lane: usize,
     /// Scene triangle index.
     id: u32,
@@ -86,16 +86,16 @@ pub struct TriangleHit {
 /// collapsed into 8-wide nodes with leaves of up to four triangles) with the queries every
 /// pass uses.
 pub struct Accel {
-    /// The tree: its nodes, and one packet per leaf (the leaf's triangles, at most four, in its
+    /// The tree: its nodes, and one quad per leaf (the leaf's triangles, at most four, in its
     /// first lanes) right after the node that leads to it.
-    bvh: WideBvh,
+    bvh: Bvh8,
     build_time: Duration,
 }
 
 impl std::fmt::Debug for Accel {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Accel")
-            .field("packets", &self.bvh.packets)
+            .field("quads", &self.bvh.quads)
             .field("nodes", &self.bvh.nodes)
             .field("build_time", &self.build_time)
             .finish()
@@ -115,7 +115,7 @@ impl Accel {
     /// sizes and collapse costs do not (the 8-wide collapse chooses leaves of up to four
     /// triangles by its own costs).
     pub fn build_with(positions: &[Vec3], triangles: &[[u32; 3]], params: BvhBuildParams) -> Self {
-        Self::build_laid_out(positions, triangles, params, wide::HOT_BYTES)
+        Self::build_laid_out(positions, triangles, params, bvh::HOT_BYTES)
     }
 
     /// [`Accel::build_with`], the tree's top levels stored first as far as they fit in
@@ -132,7 +132,7 @@ impl Accel {
             .map(|t| t.map(|i| Vec3A::from(positions[i as usize])))
             .collect();
         // Each triangle's exact bounds: the node test allows for its own rounding
-        // (`wide::FAR_SLACK`), so boxes need no padding.
+        // (`FAR_SLACK` of `bvh/node.rs`), so boxes need no padding.
         let boxes: Vec<Aabb> = corners
             .iter()
             .map(|c| Aabb {
@@ -140,9 +140,9 @@ impl Accel {
                 max: c[0].max(c[1]).max(c[2]),
             })
             .collect();
-        let mut packets = Vec::new();
+        let mut quads = Vec::new();
         let bvh = if boxes.is_empty() {
-            WideBvh::new(Vec::new(), &[], hot_bytes)
+            Bvh8::new(Vec::new(), &[], hot_bytes)
         } else {
             let mut bvh2 = PlocBuilder::with_capacity(boxes.len()).build(
                 params.ploc_search_distance,
@@ -154,10 +154,10 @@ impl Accel {
             ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
             let nodes = collapse(&bvh2, |leaf| {
                 let tris: Vec<[Vec3A; 3]> = leaf.iter().map(|&i| corners[i as usize]).collect();
-                packets.push(TriPacket::new(&tris, leaf));
-                (packets.len() - 1) as u32
+                quads.push(TriangleQuad::new(&tris, leaf));
+                (quads.len() - 1) as u32
             });
-            WideBvh::new(nodes, &packets, hot_bytes)
+            Bvh8::new(nodes, &quads, hot_bytes)
         };
         Self {
             bvh,
@@ -175,13 +175,13 @@ impl Accel {
         self.bvh.nodes
     }
 
-    /// Number of triangle packets (up to four triangles each; a leaf's, or several leaves' of
+    /// Number of triangle quads (up to four triangles each; a leaf's, or several leaves' of
     /// one node).
-    pub fn packet_count(&self) -> usize {
-        self.bvh.packets
+    pub fn quad_count(&self) -> usize {
+        self.bvh.quads
     }
 
-    /// Memory of the tree (its nodes and triangle packets), bytes.
+    /// Memory of the tree (its nodes and triangle quads), bytes.
     pub fn bytes(&self) -> usize {
         self.bvh.bytes()
     }
@@ -190,7 +190,7 @@ impl Accel {
     /// edge or vertex that triangles share), the one with the smallest triangle index, as
     /// [`Accel::closest_brute_force`] finds, whatever order the walk meets them in.
     pub fn closest(&self, origin: Vec3, direction: Vec3, t_max: f32) -> Option<TriangleHit> {
-        let sheared = PacketRay::new(&ShearedRay::new(origin, direction));
+        let sheared = QuadRay::new(&ShearedRay::new(origin, direction));
         let ray = NodeRay::new(origin, direction);
         let mut best = None;
         let mut t_max = t_max;
@@ -207,34 +207,34 @@ impl Accel {
         best.map(|b| self.hit(b, t_max))
     }
 
-    /// Tests lanes `lanes` of packet `p` against `ray` (up to [`search_bound`]) and keeps in
-    /// `best` (its `t` is `t_max`) the nearer of it and the packet's nearest hit, at equal `t`
+    /// Tests lanes `lanes` of quad `p` against `ray` (up to [`search_bound`]) and keeps in
+    /// `best` (its `t` is `t_max`) the nearer of it and the quad's nearest hit, at equal `t`
     /// the one with the smaller triangle index ([`keep_nearer`]).
     #[inline(always)]
     fn nearer(
         &self,
-        ray: &PacketRay,
+        ray: &QuadRay,
         p: u32,
         lanes: u32,
         t_max: &mut f32,
         best: &mut Option<Nearest>,
     ) {
-        let packet = self.bvh.arena.packet(p);
-        let hits = ray.intersect(packet, lanes, search_bound(*t_max, best));
+        let quad = self.bvh.arena.quad(p);
+        let hits = ray.intersect(quad, lanes, search_bound(*t_max, best));
         if hits.mask == 0 {
             return;
         }
-        let lane = hits.nearest(&packet.ids);
-        let id = packet.ids[lane];
+        let lane = hits.nearest(&quad.ids);
+        let id = quad.ids[lane];
         keep_nearer(best, t_max, hits.t_of(lane), id, || Nearest {
-            packet: p,
+            quad: p,
             lane,
             id,
             barycentric: hits.barycentric(lane),
         });
     }
 
-    /// [`Accel::nearer`] for each ray `rays` (bits) of a packet against lanes `lanes` of packet
+    /// [`Accel::nearer`] for each ray `rays` (bits) of a packet against lanes `lanes` of quad
     /// `p`, tested one triangle at a time against all those rays at once ([`RayLanes`]). Each
     /// triangle is tested against each ray as [`Accel::nearer`] would test it (with a bound
     /// of the ray's `t_max`, a few ulps beyond once it has a hit), each hit bit for bit the
@@ -249,21 +249,20 @@ impl Accel {
         t_max: &mut [f32; 8],
         best: &mut [Option<Nearest>; 8],
     ) {
-        let packet = self.bvh.arena.packet(p);
+        let quad = self.bvh.arena.quad(p);
         let mut tris = lanes;
         while tris != 0 {
             let lane = tris.trailing_zeros() as usize;
             tris &= tris - 1;
-            let bound =
-                ::wide::f32x8::new(std::array::from_fn(|i| search_bound(t_max[i], &best[i])));
-            let hits = in_lanes.intersect(packet, lane, rays, bound);
-            let id = packet.ids[lane];
+            let bound = wide::f32x8::new(std::array::from_fn(|i| search_bound(t_max[i], &best[i])));
+            let hits = in_lanes.intersect(quad, lane, rays, bound);
+            let id = quad.ids[lane];
             let mut found = hits.mask;
             while found != 0 {
                 let i = found.trailing_zeros() as usize;
                 found &= found - 1;
                 keep_nearer(&mut best[i], &mut t_max[i], hits.t_of(i), id, || Nearest {
-                    packet: p,
+                    quad: p,
                     lane,
                     id,
                     barycentric: hits.barycentric(i),
@@ -272,10 +271,10 @@ impl Accel {
         }
     }
 
-    /// What an interleaved walk starts ray `r` with: the ray as the node and packet tests see
+    /// What an interleaved walk starts ray `r` with: the ray as the node and quad tests see
     /// it, its `t_max`, and `found`, what it has found so far.
-    fn walk_start<F>(r: &Ray, found: F) -> (NodeRay, f32, (PacketRay, F)) {
-        let sheared = PacketRay::new(&ShearedRay::new(r.origin, r.direction));
+    fn walk_start<F>(r: &Ray, found: F) -> (NodeRay, f32, (QuadRay, F)) {
+        let sheared = QuadRay::new(&ShearedRay::new(r.origin, r.direction));
         (
             NodeRay::new(r.origin, r.direction),
             r.t_max,
@@ -285,10 +284,10 @@ impl Accel {
 
     /// The hit `best` at `t`.
     fn hit(&self, best: Nearest, t: f32) -> TriangleHit {
-        let packet = self.bvh.arena.packet(best.packet);
-        // The packet's coordinates as plain arrays: `Vec4`'s index by a variable lane is a
+        let quad = self.bvh.arena.quad(best.quad);
+        // The quad's coordinates as plain arrays: `Vec4`'s index by a variable lane is a
         // jump table, an indirect branch per coordinate.
-        let v: &[[[f32; 4]; 3]; 3] = bytemuck::cast_ref(&packet.v);
+        let v: &[[[f32; 4]; 3]; 3] = bytemuck::cast_ref(&quad.v);
         let lane = best.lane & 3;
         TriangleHit {
             triangle: best.id,
@@ -300,7 +299,7 @@ impl Accel {
 
     /// Whether anything is hit with `0 < t < t_max`; stops at the first hit found.
     pub fn any_hit(&self, origin: Vec3, direction: Vec3, t_max: f32) -> bool {
-        let sheared = PacketRay::new(&ShearedRay::new(origin, direction));
+        let sheared = QuadRay::new(&ShearedRay::new(origin, direction));
         let ray = NodeRay::new(origin, direction);
         let mut hit = false;
         let mut t_max = t_max;
@@ -311,7 +310,7 @@ impl Accel {
             #[inline(always)]
             |p, lanes, t_max| {
                 hit = sheared
-                    .intersect(self.bvh.arena.packet(p as u32), lanes, *t_max)
+                    .intersect(self.bvh.arena.quad(p as u32), lanes, *t_max)
                     .mask
                     != 0;
                 hit
@@ -324,11 +323,9 @@ impl Accel {
     /// (neighbours within [`COHERENT_ANGLE`] and [`COHERENT_ORIGINS`] of each other, such as
     /// camera rays in pixel order) are walked eight at a time as one packet, which tests each
     /// node once for all eight and a leaf that many of them reach once per triangle for all
-    /// of them (1.16x and 1.24x faster than one ray after another for camera rays on a million
-    /// triangles, 1.30x on 102k, in one process). Other rays, where the tree is larger than
+    /// of them. Other rays, where the tree is larger than
     /// [`INTERLEAVE_MIN_BYTES`], are walked several at a time, interleaved, so that one ray's
-    /// cache misses overlap another's work: about 1.6x faster than one ray after another for
-    /// incoherent rays on a million triangles. A smaller tree stays in the cache, where
+    /// cache misses overlap another's work. A smaller tree stays in the cache, where
     /// interleaving would only cost, so there they are walked one after another.
     ///
     /// # Panics
@@ -352,25 +349,25 @@ impl Accel {
     }
 
     /// [`Accel::closest_many`]'s walk of coherent rays: eight neighbours at a time as one
-    /// packet ([`WideBvh::walk_packet`]), or one after another where a packet's rays differ
+    /// packet ([`Bvh8::walk_packet`]), or one after another where a packet's rays differ
     /// in direction octant or one of them is not finite.
     fn closest_packets(&self, rays: &[Ray], hits: &mut [Option<TriangleHit>]) {
         let mut stack = Vec::new();
         // Each packet's rays as the triangle tests see them, written in place packet after
-        // packet (an array made anew per packet was copied, a kilobyte per packet).
-        let mut sheared: [PacketRay; 8] =
-            std::array::from_fn(|_| PacketRay::new(&ShearedRay::new(Vec3::ZERO, Vec3::Z)));
+        // packet (an array made anew per packet would be copied, a kilobyte per packet).
+        let mut sheared: [QuadRay; 8] =
+            std::array::from_fn(|_| QuadRay::new(&ShearedRay::new(Vec3::ZERO, Vec3::Z)));
         for (rays, hits) in rays.chunks(8).zip(hits.chunks_mut(8)) {
             let n = rays.len();
             let ray = |i: usize| &rays[i.min(n - 1)];
             let origins: [Vec3; 8] = std::array::from_fn(|i| ray(i).origin);
             let directions: [Vec3; 8] = std::array::from_fn(|i| ray(i).direction);
-            let Some(packet) = PacketNodeRays::new(&origins[..n], &directions[..n]) else {
+            let Some(packet) = RayPacket::new(&origins[..n], &directions[..n]) else {
                 self.closest_each(rays, hits);
                 continue;
             };
             for (i, s) in sheared.iter_mut().enumerate() {
-                *s = PacketRay::new(&ShearedRay::new(ray(i).origin, ray(i).direction));
+                *s = QuadRay::new(&ShearedRay::new(ray(i).origin, ray(i).direction));
             }
             let mut t_max: [f32; 8] = std::array::from_fn(|i| ray(i).t_max);
             let mut best: [Option<Nearest>; 8] = [None; 8];
@@ -382,9 +379,7 @@ impl Accel {
                 #[inline(always)]
                 |mut rays, p, lanes, t_max| match &in_lanes {
                     // More than twice as many rays as triangles: each triangle against all
-                    // the rays at once (camera rays on the generated 1M room, in one process
-                    // against one test per ray: 1.05 / 1.09 / 1.05 from more than one / two
-                    // / three times as many rays, 0.92 from two rays up).
+                    // the rays at once (with fewer rays, one test per ray costs less).
                     Some(in_lanes) if rays.count_ones() > 2 * lanes.count_ones() => {
                         self.nearer_in_lanes(in_lanes, rays, p, lanes, t_max, &mut best)
                     }
@@ -413,8 +408,7 @@ impl Accel {
     /// within [`COHERENT_ORIGINS`] of the scene's diagonal of the ray before them, in a
     /// direction within [`COHERENT_ANGLE`] of it: camera rays in pixel order, say. Such rays
     /// walk the same nodes one after another, which then stay in the cache, so interleaving
-    /// them only costs (0.89x on a million triangles, 0.78x on 102k, against one ray after
-    /// another); [`Accel::closest_many`] walks them as packets instead.
+    /// them only costs; [`Accel::closest_many`] walks them as packets instead.
     fn coherent(&self, rays: &[Ray]) -> bool {
         let Some((lo, hi)) = self.bvh.bounds() else {
             return false;
@@ -450,7 +444,7 @@ impl Accel {
 
     /// [`Accel::any_hit`] for many rays: `blocked[i]` for ray `i`, the same answers, walked
     /// as [`Accel::closest_many`] walks its rays (interleaved on large trees unless the rays
-    /// are coherent: about 1.6x faster on a million triangles).
+    /// are coherent).
     ///
     /// # Panics
     /// When `blocked` and `rays` differ in length.
@@ -474,7 +468,7 @@ impl Accel {
             #[inline(always)]
             |(sheared, hit), p, lanes, t_max| {
                 *hit = sheared
-                    .intersect(self.bvh.arena.packet(p), lanes, *t_max)
+                    .intersect(self.bvh.arena.quad(p), lanes, *t_max)
                     .mask
                     != 0;
                 *hit
@@ -496,7 +490,7 @@ impl Accel {
         let shaft = Shaft::new(apex, apex_normal, base);
         !self.bvh.any_leaf(
             |node| shaft.overlap(node),
-            |p, lanes| shaft.may_block(self.bvh.arena.packet(p as u32), lanes),
+            |p, lanes| shaft.may_block(self.bvh.arena.quad(p as u32), lanes),
         )
     }
 
@@ -514,7 +508,7 @@ impl Accel {
         };
         !self.bvh.any_leaf(
             |node| shaft.overlap(node),
-            |p, lanes| shaft.may_block(self.bvh.arena.packet(p as u32), lanes),
+            |p, lanes| shaft.may_block(self.bvh.arena.quad(p as u32), lanes),
         )
     }
 
@@ -581,114 +575,5 @@ fn keep_nearer(
     if best.is_none_or(|b| t < *t_max || (t == *t_max && id < b.id)) {
         *t_max = t;
         *best = Some(found());
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The one-add form is `next_up` four times over on every distance a hit can have: from
-    /// the smallest subnormal through the largest float to infinity.
-    #[test]
-    fn four_ulps_up_is_next_up_four_times() {
-        let steps = |t: f32| t.next_up().next_up().next_up().next_up();
-        let mut cases = vec![
-            f32::MIN_POSITIVE,
-            f32::MAX,
-            f32::MAX.next_down(),
-            f32::MAX.next_down().next_down().next_down().next_down(),
-            f32::INFINITY,
-            f32::from_bits(1),
-            f32::from_bits(0x007f_ffff),
-        ];
-        let mut bits = 1u32;
-        while bits < 0x7f80_0000 {
-            cases.push(f32::from_bits(bits));
-            bits += 0x1357;
-        }
-        for t in cases {
-            assert_eq!(four_ulps_up(t).to_bits(), steps(t).to_bits(), "{t:e}");
-        }
-    }
-
-    /// Two triangles forming the unit square in the plane z = 0.
-    fn square() -> (Vec<Vec3>, Vec<[u32; 3]>) {
-        let p = vec![
-            Vec3::new(0.0, 0.0, 0.0),
-            Vec3::new(1.0, 0.0, 0.0),
-            Vec3::new(1.0, 1.0, 0.0),
-            Vec3::new(0.0, 1.0, 0.0),
-        ];
-        (p, vec![[0, 1, 2], [0, 2, 3]])
-    }
-
-    #[test]
-    fn camera_rays_are_coherent_and_bounces_and_shadow_rays_are_not() {
-        let scene = crate::workload::synthetic_scene(10_000, 0)
-            .expect("scene")
-            .0;
-        let accel = scene.accel();
-        // The scene's extent, which the origins' distance is measured against: the root's
-        // children's boxes are the exact bounds of the triangles.
-        let corners = scene.mesh.triangles.iter().flatten();
-        let points = corners.map(|&i| scene.mesh.positions[i as usize]);
-        let (lo, hi) = points.fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
-            (lo.min(p), hi.max(p))
-        });
-        assert_eq!(accel.bvh.bounds(), Some((lo, hi)));
-        assert!(accel.coherent(&crate::workload::camera_rays(&scene)));
-        assert!(!accel.coherent(&crate::workload::incoherent_rays(&scene, 1024, 1)));
-        let shadow: Vec<Ray> = crate::workload::occlusion_pairs(&scene, 1024, 2)
-            .iter()
-            .map(|(a, b)| crate::Scene::segment_between(a, b))
-            .collect();
-        assert!(!accel.coherent(&shadow));
-        // Rays from one point in random directions (a point light's) and parallel rays from
-        // scattered origins (a directional light's) are not either.
-        let spread = crate::workload::incoherent_rays(&scene, 1024, 3);
-        let from_one_point: Vec<Ray> = spread
-            .iter()
-            .map(|r| Ray::new(spread[0].origin, r.direction))
-            .collect();
-        assert!(!accel.coherent(&from_one_point));
-        let parallel: Vec<Ray> = spread
-            .iter()
-            .map(|r| Ray::new(r.origin, spread[0].direction))
-            .collect();
-        assert!(!accel.coherent(&parallel));
-        assert!(!accel.coherent(&[]));
-    }
-
-    #[test]
-    fn hits_very_close_to_the_origin_with_long_directions() {
-        let (p, t) = square();
-        let accel = Accel::build(&p, &t);
-        // 1e-3 units away along a direction of length 1000: t = 1e-6.
-        let origin = Vec3::new(0.3, 0.6, 1e-3);
-        let dir = Vec3::new(0.0, 0.0, -1000.0);
-        let hit = accel.closest(origin, dir, f32::INFINITY).expect("hit");
-        assert_eq!(hit.triangle, 1);
-        assert!((hit.t - 1e-6).abs() < 1e-9);
-        assert!(accel.any_hit(origin, dir, 1.0));
-        assert!(!accel.any_hit(origin, dir, 0.5e-6));
-    }
-
-    #[test]
-    fn axis_aligned_rays_with_negative_zeros_hit() {
-        let (p, t) = square();
-        let accel = Accel::build(&p, &t);
-        for (o, d) in [
-            (Vec3::new(0.25, 0.5, 2.0), -Vec3::Z),
-            (Vec3::new(0.25, 0.5, -2.0), Vec3::new(-0.0, -0.0, 1.0)),
-            // Exactly through the shared diagonal.
-            (Vec3::new(0.5, 0.5, 2.0), -Vec3::Z),
-        ] {
-            let hit = accel.closest(o, d, f32::INFINITY).expect("hit");
-            assert!((hit.t - 2.0).abs() < 1e-6);
-            assert!(accel.any_hit(o, d, f32::INFINITY));
-            let b = hit.barycentric;
-            assert!((b[0] + b[1] + b[2] - 1.0).abs() < 1e-6);
-        }
     }
 }
