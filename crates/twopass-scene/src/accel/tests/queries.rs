@@ -3,7 +3,8 @@
 
 use glam::Vec3;
 
-use crate::accel::{Accel, four_ulps_up};
+use crate::accel::Accel;
+use crate::accel::hit::four_ulps_up;
 
 /// The one-add form is `next_up` four times over on every distance a hit can have: from
 /// the smallest subnormal through the largest float to infinity.
