@@ -18,9 +18,10 @@ const _: () = assert!(std::mem::size_of::<TriangleQuad>() == 32 * QUAD_BLOCKS);
 const _: () = assert!(std::mem::align_of::<TriangleQuad>() <= std::mem::align_of::<Block32>());
 
 /// A triangle quad: up to four triangles (one BVH leaf, or several leaves of one node) stored
-/// for a one-ray, four-triangle watertight test: `v[axis][vertex]` holds that coordinate of that vertex for the four triangles (lanes),
-/// `ids[lane]` the scene index of the triangle. Lanes past the leaf's triangles are zero, name
-/// no triangle (`u32::MAX`) and are never enabled.
+/// for a one-ray, four-triangle watertight test: `v[axis][vertex]` holds that coordinate of
+/// that vertex for the four triangles (lanes), `ids[lane]` the scene index of the triangle.
+/// Lanes past the leaf's triangles are zero, name no triangle (`u32::MAX`) and are never
+/// enabled.
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub(super) struct TriangleQuad {
