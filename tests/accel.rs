@@ -1,25 +1,32 @@
 //! The BVH answers exactly what testing every triangle answers; spawned rays never re-hit their
 //! own surface; rays cannot slip between the triangles of a closed mesh.
 
-use glam::Vec3;
-use twopass_brdf::random::Pcg64Mcg;
+use glam::{Vec2, Vec3};
+use rand::Rng;
+use rand_pcg::Pcg64Mcg;
 use twopass_scene::workload::{self, rng};
 use twopass_scene::{Accel, Ray, Scene, load, load_toml};
 
 use crate::scene_path;
 
+/// A uniform point in [0, 1)^2, x drawn first.
+fn random_vec2(r: &mut Pcg64Mcg) -> Vec2 {
+    let x = r.random::<f32>();
+    Vec2::new(x, r.random::<f32>())
+}
+
 /// Random directions, uniform on the sphere.
 fn random_dir(r: &mut Pcg64Mcg) -> Vec3 {
-    let z = 2.0 * r.next_f32() - 1.0;
-    let phi = std::f32::consts::TAU * r.next_f32();
+    let z = 2.0 * r.random::<f32>() - 1.0;
+    let phi = std::f32::consts::TAU * r.random::<f32>();
     let s = (1.0 - z * z).max(0.0).sqrt();
     Vec3::new(s * phi.cos(), s * phi.sin(), z)
 }
 
 /// A uniform random point in the box from `lo` to `hi` (x, y, z drawn in that order).
 fn point_in(lo: Vec3, hi: Vec3, r: &mut Pcg64Mcg) -> Vec3 {
-    let (x, y) = (r.next_f32(), r.next_f32());
-    lo + (hi - lo) * Vec3::new(x, y, r.next_f32())
+    let (x, y) = (r.random::<f32>(), r.random::<f32>());
+    lo + (hi - lo) * Vec3::new(x, y, r.random::<f32>())
 }
 
 /// Rays of every awkward kind: random in the bounds, leaving surfaces, and aimed exactly at
@@ -43,9 +50,9 @@ fn awkward_rays(scene: &Scene, n: usize, seed: u64) -> Vec<Ray> {
     }
     let m = &scene.mesh;
     for _ in 0..n {
-        let t = m.triangles[r.below(m.triangles.len() as u32) as usize];
+        let t = m.triangles[r.random_range(0..m.triangles.len() as u32) as usize];
         let [a, b] = [t[0], t[1]].map(|i| m.positions[i as usize]);
-        let target = if r.next_bool() { a } else { (a + b) * 0.5 };
+        let target = if r.random::<bool>() { a } else { (a + b) * 0.5 };
         let o = point_in(lo, hi, &mut r);
         if (target - o).length() > 1e-3 {
             rays.push(Ray::new(o, (target - o).normalize()));
@@ -155,8 +162,8 @@ fn spawned_rays_never_rehit_their_own_surface() {
         na.dot(nb).abs() > 1.0 - 1e-6 && (na.dot(pb - pa)).abs() < 1e-3
     };
     for i in 0..20_000 {
-        let t = r.below(m.triangles.len() as u32);
-        let p = m.sample_triangle(t, r.next_vec2());
+        let t = r.random_range(0..m.triangles.len() as u32);
+        let p = m.sample_triangle(t, random_vec2(&mut r));
         // Both sides, including directions within a hair of the surface.
         let mut d = random_dir(&mut r);
         if i % 4 == 0 {
@@ -175,7 +182,7 @@ fn spawned_rays_never_rehit_their_own_surface() {
             );
         }
         // A point on a surface sees itself unoccluded.
-        let q = m.sample_triangle(t, r.next_vec2());
+        let q = m.sample_triangle(t, random_vec2(&mut r));
         assert!(
             !scene.occluded_between(&p, &q),
             "ray {i}: point to point on one triangle {t} is occluded"
@@ -212,7 +219,7 @@ fn rays_from_inside_a_closed_mesh_never_escape() {
     let (scene, targets) = icosphere_targets(4);
     let mut r = rng(9);
     for (i, target) in targets.iter().enumerate() {
-        let o = SPHERE_CENTRE + random_dir(&mut r) * r.next_f32() * 0.5;
+        let o = SPHERE_CENTRE + random_dir(&mut r) * r.random::<f32>() * 0.5;
         let d = (*target - o).normalize();
         assert!(
             scene.intersect(&Ray::new(o, d)).is_some(),
@@ -246,7 +253,7 @@ fn batch_queries_equal_single_queries() {
 /// A point strictly inside scene triangle `t` (every barycentric at least 0.05): away from the
 /// triangle's edges and so from any crease.
 fn interior_point(scene: &Scene, t: u32, r: &mut Pcg64Mcg) -> twopass_scene::SurfacePoint {
-    let (a, b) = (0.1 + 0.8 * r.next_f32(), r.next_f32());
+    let (a, b) = (0.1 + 0.8 * r.random::<f32>(), r.random::<f32>());
     let (b1, b2) = (a * (1.0 - b) * 0.875 + 0.05, a * b * 0.875 + 0.05);
     scene.mesh.surface_point(t, [1.0 - b1 - b2, b1, b2])
 }
@@ -274,7 +281,7 @@ fn fair_share(scene: usize, clear: u32, pairs: u32) {
 
 /// A uniform point of triangle `p`.
 fn point_in_triangle(p: [Vec3; 3], r: &mut Pcg64Mcg) -> Vec3 {
-    let (u, v) = (r.next_f32(), r.next_f32());
+    let (u, v) = (r.random::<f32>(), r.random::<f32>());
     let (u, v) = if u + v > 1.0 {
         (1.0 - u, 1.0 - v)
     } else {
@@ -294,8 +301,8 @@ fn shaft_clear_never_hides_a_blocker() {
         let n = scene.mesh.triangles.len() as u32;
         let (mut clear, mut pairs) = (0, 0);
         for _ in 0..4000 {
-            let from = interior_point(scene, r.below(n), &mut r);
-            let t = r.below(n);
+            let from = interior_point(scene, r.random_range(0..n), &mut r);
+            let t = r.random_range(0..n);
             let base = [0, 1, 2].map(|_| interior_point(scene, t, &mut r).position);
             let centre = (base[0] + base[1] + base[2]) / 3.0;
             if t == from.triangle || (centre - from.position).dot(from.normal) <= 0.0 {
@@ -337,7 +344,7 @@ fn shaft_clear_between_never_hides_a_blocker() {
         let n = scene.mesh.triangles.len() as u32;
         let (mut clear, mut pairs) = (0, 0);
         for _ in 0..3000 {
-            let (s, t) = (r.below(n), r.below(n));
+            let (s, t) = (r.random_range(0..n), r.random_range(0..n));
             let part =
                 |t: u32, r: &mut Pcg64Mcg| [0, 1, 2].map(|_| interior_point(scene, t, r).position);
             let (a, b) = (part(s, &mut r), part(t, &mut r));

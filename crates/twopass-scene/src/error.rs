@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use twopass_brdf::ParamError;
 
-pub use crate::camera::CameraProblem;
+use crate::camera::CameraProblem;
 
 /// A scene that cannot be loaded. Loading stops at the first error.
 #[derive(Debug, thiserror::Error)]

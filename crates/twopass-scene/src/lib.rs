@@ -43,8 +43,8 @@ pub use accel::{
     Accel, COHERENT_ANGLE, COHERENT_ORIGINS, INTERLEAVE_MIN_BYTES, Ray, SHAFT_TOLERANCE,
     SurfacePoint, TriangleHit,
 };
-pub use camera::Camera;
-pub use error::{CameraProblem, SceneError, Warning};
+pub use camera::{Camera, CameraProblem};
+pub use error::{SceneError, Warning};
 pub use input::{
     MAX_MTL_BYTES, MAX_OBJ_BYTES, MAX_SCENE_BYTES, ReadPolicy, printable, read_bounded,
 };

@@ -207,7 +207,7 @@ pub struct Scene {
     /// The file it was loaded from.
     pub path: PathBuf,
     /// The length unit of every position (the scene file's `unit`; metres for a bare OBJ).
-    pub unit: crate::Unit,
+    pub unit: crate::unit::Unit,
     /// All geometry.
     pub mesh: Mesh,
     /// The material table.
@@ -227,7 +227,7 @@ impl Scene {
     /// Assembles a scene from validated parts and builds its BVH.
     pub(crate) fn assemble(
         path: PathBuf,
-        unit: crate::Unit,
+        unit: crate::unit::Unit,
         mesh: Mesh,
         materials: Vec<SceneMaterial>,
         objects: Vec<Object>,

@@ -8,7 +8,7 @@
 
 use glam::{DVec3, Vec2};
 
-use crate::Scene;
+use crate::scene::Scene;
 
 /// A bounding sphere of a specular object.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -6,9 +6,12 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use glam::{Vec2, Vec3};
-use twopass_brdf::random::Pcg64Mcg;
+use rand::{Rng, SeedableRng};
+use rand_pcg::Pcg64Mcg;
 
-use crate::{Ray, Scene, SceneError, SurfacePoint, Warning};
+use crate::accel::{Ray, SurfacePoint};
+use crate::error::{SceneError, Warning};
+use crate::scene::Scene;
 
 /// The three kinds of query the passes cast.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -22,9 +25,7 @@ pub enum QueryKind {
     Occlusion,
 }
 
-/// A pseudo-random generator seeded from `seed` (the same seed, the same workload; the
-/// stream `rand_pcg`'s `Pcg64Mcg::seed_from_u64` gave, so the workloads of the published
-/// figures are unchanged).
+/// A pseudo-random generator seeded from `seed`: the same seed, the same workload.
 pub fn rng(seed: u64) -> Pcg64Mcg {
     Pcg64Mcg::seed_from_u64(seed)
 }
@@ -36,6 +37,12 @@ pub fn camera_rays(scene: &Scene) -> Vec<Ray> {
         .flat_map(|y| (0..c.width).map(move |x| Vec2::new(x as f32 + 0.5, y as f32 + 0.5)))
         .map(|p| Ray::new(c.position, c.direction(p)))
         .collect()
+}
+
+/// A uniform point in [0, 1)^2, x drawn first.
+fn random_vec2(r: &mut Pcg64Mcg) -> Vec2 {
+    let x = r.random::<f32>();
+    Vec2::new(x, r.random::<f32>())
 }
 
 /// Cumulative triangle areas, for area-weighted surface sampling.
@@ -53,9 +60,9 @@ fn area_cdf(scene: &Scene) -> Vec<f64> {
 }
 
 fn sample_surface(scene: &Scene, cdf: &[f64], r: &mut Pcg64Mcg) -> SurfacePoint {
-    let target = r.next_f64() * cdf.last().copied().unwrap_or(0.0);
+    let target = r.random::<f64>() * cdf.last().copied().unwrap_or(0.0);
     let t = cdf.partition_point(|&c| c <= target).min(cdf.len() - 1) as u32;
-    scene.mesh.sample_triangle(t, r.next_vec2())
+    scene.mesh.sample_triangle(t, random_vec2(r))
 }
 
 /// A cosine-distributed unit direction about unit `n` (Malley's method).
@@ -74,7 +81,7 @@ pub fn incoherent_rays(scene: &Scene, count: usize, seed: u64) -> Vec<Ray> {
     (0..count)
         .map(|_| {
             let p = sample_surface(scene, &cdf, &mut r);
-            let d = cosine_direction(p.normal, r.next_vec2());
+            let d = cosine_direction(p.normal, random_vec2(&mut r));
             Ray::new(p.spawn_origin(d), d)
         })
         .collect()
@@ -94,7 +101,7 @@ pub fn occlusion_pairs(
         .map(|_| {
             let a = sample_surface(scene, &cdf, &mut r);
             let b = if total > 0.0 {
-                let mut x = r.next_f32() * total;
+                let mut x = r.random::<f32>() * total;
                 let e = scene
                     .emitters
                     .iter()
@@ -103,7 +110,7 @@ pub fn occlusion_pairs(
                         x < 0.0
                     })
                     .unwrap_or(&scene.emitters[scene.emitters.len() - 1]);
-                e.sample(scene, r.next_f32(), r.next_vec2())
+                e.sample(scene, r.random::<f32>(), random_vec2(&mut r))
             } else {
                 sample_surface(scene, &cdf, &mut r)
             };
@@ -181,13 +188,13 @@ diffuse = [0.725, 0.71, 0.68]
             (i / per_axis) % per_axis,
             i / (per_axis * per_axis),
         );
-        let jitter = |r: &mut Pcg64Mcg| (r.next_f32() - 0.5) * 0.3 * cell;
+        let jitter = |r: &mut Pcg64Mcg| (r.random::<f32>() - 0.5) * 0.3 * cell;
         let c = Vec3::new(
             8.0 + cell * (x as f32 + 0.5) + jitter(&mut r),
             4.0 + cell * (y as f32 + 0.5) * 0.98 + jitter(&mut r),
             8.0 + cell * (z as f32 + 0.5) + jitter(&mut r),
         );
-        let radius = cell * (0.15 + 0.2 * r.next_f32());
+        let radius = cell * (0.15 + 0.2 * r.random::<f32>());
         s.push('\n');
         let shape = format!(
             "{{ type = \"sphere\", center = [{}, {}, {}], radius = {radius}, subdivisions = 4 }}",
@@ -200,7 +207,7 @@ diffuse = [0.725, 0.71, 0.68]
 
 /// Loads the synthetic scene of [`synthetic_scene_toml`].
 pub fn synthetic_scene(triangles: usize, seed: u64) -> Result<(Scene, Vec<Warning>), SceneError> {
-    crate::load_toml(
+    crate::load::load_toml(
         &synthetic_scene_toml(triangles, seed),
         Path::new(&format!("synthetic-{triangles}.toml")),
     )

@@ -264,6 +264,8 @@ fn prepared_point_to_polygon(
 
 #[cfg(test)]
 mod tests {
+    use rand::{Rng, SeedableRng};
+
     use super::*;
 
     fn square(z: f64, half: f64) -> Vec<DVec3> {
@@ -392,11 +394,11 @@ mod tests {
     /// it (clipped).
     #[test]
     fn four_lanes_agree_with_the_scalar_evaluation() {
-        let mut r = twopass_brdf::random::Pcg64Mcg::seed_from_u64(7);
+        let mut r = rand_pcg::Pcg64Mcg::seed_from_u64(7);
         let mut lanes_of = [0usize; 3];
         for scale in [1e-4, 1.0, 1e5] {
             for _ in 0..2000 {
-                let mut u = || r.next_f64();
+                let mut u = || r.random::<f64>();
                 let corners = [0, 1, 2].map(|_| DVec3::new(u(), u(), u()) * scale);
                 let source = SourceTriangle::new(corners);
                 let ns = (corners[1] - corners[0])

@@ -15,8 +15,8 @@
 
 use glam::{Vec3, Vec4};
 
-use super::packet::TriPacket;
-use super::wide::WideNode;
+use super::bvh::Node8;
+use super::quad::TriangleQuad;
 
 /// Relative tolerance of the shaft test (of the largest coordinate of the tetrahedron): the
 /// tetrahedron's faces move out by this much, and a triangle must be this far from the
@@ -189,7 +189,7 @@ impl<const PLANES: usize, const CORNERS: usize> Shaft<PLANES, CORNERS> {
 
     /// The children of `node` whose boxes may reach into the shaft (bit `c` for child `c`).
     #[inline(always)]
-    pub(super) fn overlap(&self, node: &WideNode) -> u32 {
+    pub(super) fn overlap(&self, node: &Node8) -> u32 {
         let b = &node.bounds;
         let mut mask = 0u32;
         for half in 0..2 {
@@ -213,11 +213,11 @@ impl<const PLANES: usize, const CORNERS: usize> Shaft<PLANES, CORNERS> {
         mask
     }
 
-    /// Whether any enabled lane (bits of `lanes`) of `packet` may block a segment inside the
+    /// Whether any enabled lane (bits of `lanes`) of `quad` may block a segment inside the
     /// shaft.
     #[inline(always)]
-    pub(super) fn may_block(&self, packet: &TriPacket, lanes: u32) -> bool {
-        let v = &packet.v;
+    pub(super) fn may_block(&self, quad: &TriangleQuad, lanes: u32) -> bool {
+        let v = &quad.v;
         let p = |vertex: usize| [v[0][vertex], v[1][vertex], v[2][vertex]];
         let (a, b, c) = (p(0), p(1), p(2));
         let zero = Vec4::ZERO;

@@ -342,7 +342,7 @@ pub fn run(args: &RaysArgs, ctx: &Context) -> Result<(), CliError> {
         threads: rayon::current_num_threads(),
         bvh_build_ms: builds[2],
         bvh_nodes: scene.accel().node_count(),
-        bvh_packets: scene.accel().packet_count(),
+        bvh_packets: scene.accel().quad_count(),
         bvh_mib: scene.accel().bytes() as f64 / f64::from(1 << 20),
         rows,
     };

@@ -1,29 +1,38 @@
-//! The watertight test on four triangles at once (one ray, four lanes), bit for bit the
-//! operations of the scalar test in [`super::triangle`], and on one triangle against up to
-//! eight rays at once (rays in lanes, [`RayLanes`]), bit for bit the four-triangle test's.
+//! Triangle quads, the BVH's leaves: up to four triangles stored for the watertight test on
+//! all four at once (one ray, four lanes), bit for bit the operations of the scalar test in
+//! `triangle.rs`, and on one triangle against up to eight rays at once (rays in lanes,
+//! [`RayLanes`]), bit for bit the four-triangle test's.
 
 use glam::{Vec3A, Vec4};
 use wide::f32x8;
 
+use super::arena::{Arena, Block32};
+use super::prefetch::prefetch;
 use super::ray::gamma;
-use super::table::prefetch;
 use super::triangle::ShearedRay;
 
-/// Up to four triangles (one BVH leaf) stored for a one-ray, four-triangle watertight
-/// test: `v[axis][vertex]` holds that coordinate of that vertex for the four triangles (lanes),
-/// `ids[lane]` the scene index of the triangle. Lanes past the leaf's triangles are zero, name
-/// no triangle (`u32::MAX`) and are never enabled.
+/// Blocks of one [`TriangleQuad`] (160 bytes: three cache lines wherever it starts on a block).
+pub(super) const QUAD_BLOCKS: usize = 5;
+
+const _: () = assert!(std::mem::size_of::<TriangleQuad>() == 32 * QUAD_BLOCKS);
+const _: () = assert!(std::mem::align_of::<TriangleQuad>() <= std::mem::align_of::<Block32>());
+
+/// A triangle quad: up to four triangles (one BVH leaf, or several leaves of one node) stored
+/// for a one-ray, four-triangle watertight test: `v[axis][vertex]` holds that coordinate of
+/// that vertex for the four triangles (lanes), `ids[lane]` the scene index of the triangle.
+/// Lanes past the leaf's triangles are zero, name no triangle (`u32::MAX`) and are never
+/// enabled.
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
-pub(super) struct TriPacket {
+pub(super) struct TriangleQuad {
     pub(super) v: [[Vec4; 3]; 3],
     /// Scene triangle indices, beside the vertices: a hit's index is read from (or next to)
     /// the cache lines its test just loaded, not from a table of its own.
     pub(super) ids: [u32; 4],
 }
 
-impl TriPacket {
-    /// The packet of triangles `ids` with corners `tris` (at most four).
+impl TriangleQuad {
+    /// The quad of triangles `ids` with corners `tris` (at most four).
     pub(super) fn new(tris: &[[Vec3A; 3]], ids: &[u32]) -> Self {
         let mut v = [[[0.0f32; 4]; 3]; 3];
         for (lane, t) in tris.iter().enumerate() {
@@ -39,12 +48,20 @@ impl TriPacket {
         }
     }
 
-    /// Starts loading the packet's three cache lines (160 bytes from a 32-byte boundary).
+    /// Starts loading the quad's three cache lines (160 bytes from a 32-byte boundary).
     #[inline(always)]
     pub(super) fn prefetch(&self) {
         prefetch(&self.v[0][0]);
         prefetch(&self.v[1][1]);
         prefetch(&self.v[2][2]);
+    }
+}
+
+impl Arena {
+    /// The quad at block `at`.
+    #[inline(always)]
+    pub(super) fn quad(&self, at: u32) -> &TriangleQuad {
+        self.item::<TriangleQuad, QUAD_BLOCKS>(at)
     }
 }
 
@@ -123,7 +140,7 @@ lanes!(f32x8, f32x8, to_bitmask, lt => simd_lt, gt => simd_gt, le => simd_le, ge
 
 /// What a watertight test ([`solve`]) finds, per lane: `t`, the three edge functions and
 /// `1 / det` to form barycentrics from, and the lanes that hit. Lanes are triangles of a
-/// [`TriPacket`] for one ray ([`PacketHits`]) or rays for one triangle ([`LaneHits`]).
+/// [`TriangleQuad`] for one ray ([`QuadHits`]) or rays for one triangle ([`LaneHits`]).
 pub(super) struct Hits<L> {
     pub(super) t: L,
     pub(super) e: [L; 3],
@@ -131,8 +148,8 @@ pub(super) struct Hits<L> {
     pub(super) mask: u32,
 }
 
-/// The hits of one ray against a [`TriPacket`]'s four triangles ([`PacketRay::intersect`]).
-pub(super) type PacketHits = Hits<Vec4>;
+/// The hits of one ray against a [`TriangleQuad`]'s four triangles ([`QuadRay::intersect`]).
+pub(super) type QuadHits = Hits<Vec4>;
 
 /// The hits of up to eight rays against one triangle ([`RayLanes::intersect`]).
 pub(super) type LaneHits = Hits<f32x8>;
@@ -240,9 +257,9 @@ fn t_error<L: Lanes>(px: [L; 3], py: [L; 3], pz: [L; 3], e: [L; 3], inv_det: L) 
         * inv_det.abs()
 }
 
-impl PacketHits {
+impl QuadHits {
     /// The lane with the smallest `t` among the hits (there must be one), and of lanes at
-    /// equal `t` the one with the smallest triangle index (`ids`, the packet's), so that the
+    /// equal `t` the one with the smallest triangle index (`ids`, the quad's), so that the
     /// answer does not depend on the order a walk meets triangles in.
     pub(super) fn nearest(&self, ids: &[u32; 4]) -> usize {
         // As an array: `Vec4`'s index by a variable lane is a jump table. The `& 3` only
@@ -261,14 +278,14 @@ impl PacketHits {
     }
 }
 
-/// The ray splatted for [`TriPacket`] tests: the [`ShearedRay`] in four lanes.
-pub(super) struct PacketRay {
+/// The ray splatted for [`TriangleQuad`] tests: the [`ShearedRay`] in four lanes.
+pub(super) struct QuadRay {
     pub(super) k: [usize; 3],
     pub(super) origin: [Vec4; 3],
     pub(super) shear: [Vec4; 3],
 }
 
-impl PacketRay {
+impl QuadRay {
     pub(super) fn new(r: &ShearedRay) -> Self {
         Self {
             k: r.k,
@@ -277,15 +294,15 @@ impl PacketRay {
         }
     }
 
-    /// [`ShearedRay::intersect`] on the enabled lanes (bits of `lanes`) of a packet: every lane
+    /// [`ShearedRay::intersect`] on the enabled lanes (bits of `lanes`) of a quad: every lane
     /// goes through exactly the scalar test's operations in the same order (no fused
     /// multiply-add), so results agree bit for bit with it, watertightness included.
     #[inline(always)]
-    pub(super) fn intersect(&self, packet: &TriPacket, lanes: u32, t_max: f32) -> PacketHits {
+    pub(super) fn intersect(&self, quad: &TriangleQuad, lanes: u32, t_max: f32) -> QuadHits {
         let [kx, ky, kz] = self.k;
         let [sx, sy, sz] = self.shear;
         let [ox, oy, oz] = self.origin;
-        let (vx, vy, vz) = (&packet.v[kx], &packet.v[ky], &packet.v[kz]);
+        let (vx, vy, vz) = (&quad.v[kx], &quad.v[ky], &quad.v[kz]);
         let pz = [vz[0] - oz, vz[1] - oz, vz[2] - oz];
         let px = [0, 1, 2].map(|i| (vx[i] - ox) + sx * pz[i]);
         let py = [0, 1, 2].map(|i| (vy[i] - oy) + sy * pz[i]);
@@ -307,13 +324,12 @@ pub(super) struct RayLanes {
 impl RayLanes {
     /// The rays `rays` in lanes (lane `i` ray `i`), or `None` when their axis permutations
     /// differ.
-    pub(super) fn new(rays: &[PacketRay; 8]) -> Option<Self> {
+    pub(super) fn new(rays: &[QuadRay; 8]) -> Option<Self> {
         let k = rays[0].k;
         if rays.iter().any(|r| r.k != k) {
             return None;
         }
-        let lanes =
-            |f: &dyn Fn(&PacketRay) -> f32| f32x8::new(std::array::from_fn(|i| f(&rays[i])));
+        let lanes = |f: &dyn Fn(&QuadRay) -> f32| f32x8::new(std::array::from_fn(|i| f(&rays[i])));
         Some(Self {
             k,
             origin: [0, 1, 2].map(|a| lanes(&|r| r.origin[a].x)),
@@ -321,14 +337,14 @@ impl RayLanes {
         })
     }
 
-    /// [`PacketRay::intersect`] of triangle `tri` of `packet` against the rays in `lanes`
+    /// [`QuadRay::intersect`] of triangle `tri` of `quad` against the rays in `lanes`
     /// (bits), each against its own bound (`bound`, lane by lane): every lane goes through
     /// exactly the operations that test applies to that ray and triangle, in the same order,
     /// so each answer agrees with it bit for bit.
     #[inline(always)]
     pub(super) fn intersect(
         &self,
-        packet: &TriPacket,
+        quad: &TriangleQuad,
         tri: usize,
         lanes: u32,
         bound: f32x8,
@@ -336,7 +352,7 @@ impl RayLanes {
         let [kx, ky, kz] = self.k;
         let [sx, sy, sz] = self.shear;
         let [ox, oy, oz] = self.origin;
-        let v = |axis: usize, vertex: usize| f32x8::splat(packet.v[axis][vertex][tri]);
+        let v = |axis: usize, vertex: usize| f32x8::splat(quad.v[axis][vertex][tri]);
         let pz = [0, 1, 2].map(|i| v(kz, i) - oz);
         let px = [0, 1, 2].map(|i| (v(kx, i) - ox) + sx * pz[i]);
         let py = [0, 1, 2].map(|i| (v(ky, i) - oy) + sy * pz[i]);
@@ -349,11 +365,13 @@ mod tests {
     use glam::{Vec3, Vec3A};
     use wide::f32x8;
 
-    use super::{PacketRay, RayLanes, TriPacket};
-    use crate::accel::triangle::ShearedRay;
-    use crate::workload::rng;
+    use rand::{Rng, SeedableRng};
+    use rand_pcg::Pcg64Mcg;
 
-    /// Each triangle of a packet against eight rays in lanes gives, ray by ray, the very bits
+    use super::{QuadRay, RayLanes, TriangleQuad};
+    use crate::accel::triangle::ShearedRay;
+
+    /// Each triangle of a quad against eight rays in lanes gives, ray by ray, the very bits
     /// of the four-triangle test for that ray (hit or miss, `t`, barycentrics): on a grid of
     /// triangles sharing edges and vertices, with rays aimed at its vertices and edge
     /// midpoints (decided in f64 on the edge) and at random points, from one eye and from
@@ -361,7 +379,7 @@ mod tests {
     /// around it, at 1e-4, 1 and 1e5 units.
     #[test]
     fn rays_in_lanes_agree_with_the_four_triangle_test() {
-        let mut r = rng(91);
+        let mut r = Pcg64Mcg::seed_from_u64(91);
         let mut on_edge = 0;
         let mut hits = 0;
         for scale in [1e-4f32, 1.0, 1e5] {
@@ -382,11 +400,11 @@ mod tests {
                     tris.push([a, c, d]);
                 }
             }
-            let packets: Vec<TriPacket> = tris
+            let quads: Vec<TriangleQuad> = tris
                 .chunks(4)
                 .enumerate()
                 .map(|(i, t)| {
-                    TriPacket::new(t, &[0, 1, 2, 3].map(|l| (4 * i + l) as u32)[..t.len()])
+                    TriangleQuad::new(t, &[0, 1, 2, 3].map(|l| (4 * i + l) as u32)[..t.len()])
                 })
                 .collect();
             let vertices: Vec<Vec3A> = tris.iter().flatten().copied().collect();
@@ -396,30 +414,33 @@ mod tests {
                     let origin = if round % 2 == 0 {
                         eye
                     } else {
-                        eye + Vec3::new(r.next_f32() - 0.5, r.next_f32() - 0.5, r.next_f32())
-                            * 0.2
+                        eye + Vec3::new(
+                            r.random::<f32>() - 0.5,
+                            r.random::<f32>() - 0.5,
+                            r.random::<f32>(),
+                        ) * 0.2
                             * scale
                     };
                     let target: Vec3 = match (i + round) % 3 {
                         // A vertex, the midpoint of an edge, a random point.
-                        0 => vertices[(r.next_u64() % vertices.len() as u64) as usize].into(),
+                        0 => vertices[(r.random::<u64>() % vertices.len() as u64) as usize].into(),
                         1 => {
-                            let t = &tris[(r.next_u64() % tris.len() as u64) as usize];
+                            let t = &tris[(r.random::<u64>() % tris.len() as u64) as usize];
                             ((t[0] + t[1]) * 0.5).into()
                         }
-                        _ => (corner(r.next_f32(), r.next_f32())).into(),
+                        _ => (corner(r.random::<f32>(), r.random::<f32>())).into(),
                     };
                     (origin, target - origin)
                 });
-                let one: [PacketRay; 8] = rays.map(|(o, d)| PacketRay::new(&ShearedRay::new(o, d)));
+                let one: [QuadRay; 8] = rays.map(|(o, d)| QuadRay::new(&ShearedRay::new(o, d)));
                 let Some(in_lanes) = RayLanes::new(&one) else {
                     continue;
                 };
-                for packet in &packets {
+                for quad in &quads {
                     for tri in 0..4 {
                         let first = one
                             .each_ref()
-                            .map(|ray| ray.intersect(packet, 1 << tri, f32::INFINITY));
+                            .map(|ray| ray.intersect(quad, 1 << tri, f32::INFINITY));
                         let t_hit = first
                             .each_ref()
                             .map(|h| if h.mask != 0 { h.t_of(tri) } else { 1.0 });
@@ -430,9 +451,9 @@ mod tests {
                             t_hit.map(f32::next_down),
                             t_hit.map(|t| t.next_up().next_up().next_up().next_up()),
                         ] {
-                            let lanes = in_lanes.intersect(packet, tri, 0xff, f32x8::new(bound));
+                            let lanes = in_lanes.intersect(quad, tri, 0xff, f32x8::new(bound));
                             for (i, ray) in one.iter().enumerate() {
-                                let h = ray.intersect(packet, 1 << tri, bound[i]);
+                                let h = ray.intersect(quad, 1 << tri, bound[i]);
                                 let hit = h.mask != 0;
                                 assert_eq!(hit, lanes.mask & (1 << i) != 0, "ray {i} tri {tri}");
                                 if hit {

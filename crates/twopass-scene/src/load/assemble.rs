@@ -1,0 +1,275 @@
+//! Assembling the scene: every part meshed (spheres from the scene's size), transformed and
+//! checked, degenerate triangles dropped, the accelerator built over the result.
+
+use glam::Vec3;
+use twopass_brdf::Rgb;
+
+use super::loader::{
+    Geometry, Loader, MAX_COORDINATE, MAX_EMITTED_POWER, MAX_TRIANGLES, PlacedPart,
+    SPHERE_TOLERANCE, in_range,
+};
+use crate::accel::triangle_normal;
+use crate::camera::Camera;
+use crate::error::{SceneError, Warning};
+use crate::input::printable;
+use crate::scene::{Bounds, Mesh, Object, Scene};
+use crate::shape::{self, ShapeMesh};
+use crate::transform::Transform;
+
+impl Loader {
+    /// Meshes the parts (spheres from the scene's size), validates the triangles, builds the scene.
+    pub(super) fn finish(
+        mut self,
+        parts: Vec<PlacedPart>,
+        camera: Camera,
+        unit: crate::unit::Unit,
+    ) -> Result<(Scene, Vec<Warning>), SceneError> {
+        let mut bounds = Bounds::EMPTY;
+        for p in &parts {
+            match &p.part.geometry {
+                Geometry::Mesh(m) => {
+                    for q in &m.positions {
+                        bounds = bounds.grow(p.transform.point(*q));
+                    }
+                }
+                Geometry::Sphere { center, radius, .. } => {
+                    for corner in 0..8 {
+                        let s = Vec3::new(
+                            if corner & 1 == 0 { -1.0 } else { 1.0 },
+                            if corner & 2 == 0 { -1.0 } else { 1.0 },
+                            if corner & 4 == 0 { -1.0 } else { 1.0 },
+                        );
+                        let q = p.transform.point(*center + s * *radius);
+                        if !q.to_array().into_iter().all(in_range) {
+                            return Err(SceneError::Range {
+                                path: self.path.clone(),
+                                line: p.part.line,
+                                object: p.part.name.clone(),
+                                problem: format!(
+                                    "the sphere reaches {q} in the world, outside the supported range of +-{MAX_COORDINATE:e} scene units"
+                                ),
+                            });
+                        }
+                        bounds = bounds.grow(q);
+                    }
+                }
+            }
+        }
+        let tolerance = SPHERE_TOLERANCE * bounds.diagonal();
+        // Each sphere's icosphere level, from its world radius (at most the largest axis scale
+        // times the radius) unless given; level l has 20 * 4^l triangles. The whole scene's
+        // count is checked before any sphere is built.
+        let levels: Vec<Option<u32>> =
+            parts
+                .iter()
+                .map(|p| match &p.part.geometry {
+                    Geometry::Mesh(_) => None,
+                    Geometry::Sphere {
+                        radius,
+                        subdivisions,
+                        ..
+                    } => {
+                        let scale = p.transform.matrix.to_scale_rotation_translation().0;
+                        let world_radius = radius * scale.abs().max_element();
+                        Some(subdivisions.unwrap_or_else(|| {
+                            shape::sphere_subdivisions_for(world_radius, tolerance)
+                        }))
+                    }
+                })
+                .collect();
+        let triangles: u64 = parts
+            .iter()
+            .zip(&levels)
+            .map(|(p, level)| match (&p.part.geometry, level) {
+                (Geometry::Mesh(m), _) => m.triangles.len() as u64,
+                (_, Some(l)) => 20u64 << (2 * l),
+                (_, None) => 0,
+            })
+            .sum();
+        if triangles > MAX_TRIANGLES {
+            return Err(SceneError::Input {
+                path: self.path.clone(),
+                problem: format!(
+                    "the scene would have {triangles} triangles, more than the {MAX_TRIANGLES} loaded at most (give fewer spheres or lower their `subdivisions`)"
+                ),
+            });
+        }
+        let mut mesh = Mesh::default();
+        let mut objects = Vec::with_capacity(parts.len());
+        for (PlacedPart { part, transform }, level) in parts.into_iter().zip(levels) {
+            let local = match part.geometry {
+                Geometry::Mesh(m) => m,
+                Geometry::Sphere { center, radius, .. } => {
+                    shape::sphere(center, radius, level.unwrap_or(0)).map_err(|p| {
+                        SceneError::Shape {
+                            path: self.path.clone(),
+                            line: part.line.unwrap_or(1),
+                            object: part.name.clone(),
+                            problem: p,
+                        }
+                    })?
+                }
+            };
+            self.push(
+                &mut mesh,
+                &mut objects,
+                part.name,
+                part.line,
+                local,
+                &transform,
+                part.material,
+                part.emission,
+            )?;
+        }
+        if mesh.triangles.is_empty() {
+            return Err(SceneError::EmptyScene { path: self.path });
+        }
+        if objects
+            .iter()
+            .all(|o: &Object| o.emission.max_element() <= 0.0)
+        {
+            self.warnings.push(Warning::NoEmitters {
+                path: self.path.clone(),
+            });
+        }
+        Ok((
+            Scene::assemble(self.path, unit, mesh, self.materials, objects, camera),
+            self.warnings,
+        ))
+    }
+
+    /// Appends one object: transforms it, checks every number, drops degenerate triangles.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn push(
+        &mut self,
+        mesh: &mut Mesh,
+        objects: &mut Vec<Object>,
+        name: String,
+        line: Option<usize>,
+        local: ShapeMesh,
+        transform: &Transform,
+        material: u32,
+        emission: Rgb,
+    ) -> Result<(), SceneError> {
+        let base = mesh.positions.len() as u32;
+        let tri_start = mesh.triangles.len() as u32;
+        for (index, p) in local.positions.iter().enumerate() {
+            let q = transform.point(*p);
+            if let Some(value) = p
+                .to_array()
+                .into_iter()
+                .chain(q.to_array())
+                .find(|c| !c.is_finite())
+            {
+                return Err(SceneError::NonFinite {
+                    path: self.path.clone(),
+                    line,
+                    object: name,
+                    what: "vertex",
+                    index,
+                    value,
+                });
+            }
+            if !q.to_array().into_iter().all(in_range) {
+                return Err(SceneError::Range {
+                    path: self.path.clone(),
+                    line,
+                    object: name,
+                    problem: format!(
+                        "vertex {index} lands at {q} in the world, outside the supported range of +-{MAX_COORDINATE:e} scene units"
+                    ),
+                });
+            }
+            mesh.positions.push(q);
+        }
+        let normal_base = mesh.normals.len() as u32;
+        let smooth = !local.normal_indices.is_empty();
+        mesh.normals
+            .extend(local.normals.iter().map(|n| transform.normal(*n)));
+        let object = objects.len() as u32;
+        let uv_base = mesh.texcoords.len() as u32;
+        let has_uv = local.texcoord_indices.len() == local.triangles.len();
+        if has_uv {
+            mesh.texcoords.extend_from_slice(&local.texcoords);
+        }
+        let (mut dropped, mut first) = (0, 0);
+        for (i, tri) in local.triangles.iter().enumerate() {
+            let mut t = tri.map(|v| v + base);
+            let mut nt = if smooth {
+                local.normal_indices[i].map(|n| n + normal_base)
+            } else {
+                [0; 3]
+            };
+            let mut uv = has_uv.then(|| local.texcoord_indices[i].map(|k| k + uv_base));
+            if transform.flips {
+                t.swap(1, 2);
+                nt.swap(1, 2);
+                if let Some(uv) = &mut uv {
+                    uv.swap(1, 2);
+                }
+            }
+            let Some((twice_area, n)) = triangle_normal(t.map(|v| mesh.positions[v as usize]))
+            else {
+                if dropped == 0 {
+                    first = i;
+                }
+                dropped += 1;
+                continue;
+            };
+            let n = n.as_vec3();
+            if !smooth {
+                nt = [mesh.normals.len() as u32; 3];
+                mesh.normals.push(n);
+            }
+            mesh.triangles.push(t);
+            mesh.normal_indices.push(nt);
+            mesh.texcoord_indices.push(uv);
+            mesh.geometric_normals.push(n);
+            mesh.areas.push((0.5 * twice_area) as f32);
+            mesh.triangle_object.push(object);
+        }
+        let kept = mesh.triangles.len() as u32 - tri_start;
+        if kept == 0 {
+            return Err(SceneError::DegenerateObject {
+                path: self.path.clone(),
+                line,
+                object: name,
+                triangles: local.triangles.len(),
+            });
+        }
+        if dropped > 0 {
+            self.warnings.push(Warning::DegenerateTriangles {
+                path: self.path.clone(),
+                object: name.clone(),
+                dropped,
+                first,
+            });
+        }
+        // The power this object emits, pi * L_e * area, must stay far inside f32.
+        if emission.max_element() > 0.0 {
+            let area: f64 = mesh.areas[tri_start as usize..]
+                .iter()
+                .map(|&a| f64::from(a))
+                .sum();
+            let power = f64::from(emission.max_element()) * std::f64::consts::PI * area;
+            if power.is_nan() || power > MAX_EMITTED_POWER {
+                return Err(SceneError::Range {
+                    path: self.path.clone(),
+                    line,
+                    object: name,
+                    problem: format!(
+                        "emitted power pi * L_e * area = {power:e} W (scene units) exceeds the {MAX_EMITTED_POWER:e} W the renderers represent; lower the emission or the scene's scale"
+                    ),
+                });
+            }
+        }
+        objects.push(Object {
+            name: printable(&name),
+            material,
+            emission,
+            triangles: tri_start..tri_start + kept,
+            vertices: base..mesh.positions.len() as u32,
+        });
+        Ok(())
+    }
+}

@@ -1,0 +1,212 @@
+//! The entry points: a scene file (TOML) or a bare OBJ read from disk or given as text, read
+//! within a [`ReadPolicy`]'s bounds and handed to the [`Loader`].
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use glam::Vec3;
+use twopass_brdf::Rgb;
+
+use super::loader::{Geometry, Loader, Part, PlacedPart, check_range, unknown_key_offset};
+use crate::camera::Camera;
+use crate::description::{SceneFile, VERSION};
+use crate::error::{SceneError, Warning};
+use crate::input::{self, InputKind, LineIndex, ReadPolicy};
+use crate::obj;
+use crate::scene::{Bounds, Scene};
+use crate::transform::Transform;
+
+/// Loads a scene: a `.toml` scene file, or a bare `.obj` mesh (framed by a default camera, with
+/// its MTL materials or a default grey). Returns the scene and the recoverable problems found.
+/// Any path the scene names is read (see [`load_with`] to confine reads).
+pub fn load(path: impl AsRef<Path>) -> Result<(Scene, Vec<Warning>), SceneError> {
+    load_with(path, &ReadPolicy::unconfined())
+}
+
+/// [`load`] under a [`ReadPolicy`]: with [`ReadPolicy::confined`], meshes and material
+/// libraries outside the scene's folder are refused.
+pub fn load_with(
+    path: impl AsRef<Path>,
+    policy: &ReadPolicy,
+) -> Result<(Scene, Vec<Warning>), SceneError> {
+    let path = path.as_ref();
+    match path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .as_deref()
+    {
+        Some("toml") => {
+            let text = input::read_text(path, InputKind::Scene, policy)?;
+            load_toml_with(&text, path, policy)
+        }
+        Some("obj") => load_bare_obj(path, policy),
+        _ => Err(SceneError::UnsupportedFormat {
+            path: path.to_owned(),
+        }),
+    }
+}
+
+/// Loads a TOML scene from `text`, as if read from `path` (relative mesh paths resolve against
+/// its folder; errors name it).
+pub fn load_toml(text: &str, path: &Path) -> Result<(Scene, Vec<Warning>), SceneError> {
+    load_toml_with(text, path, &ReadPolicy::unconfined())
+}
+
+/// [`load_toml`] under a [`ReadPolicy`] for the meshes and libraries the scene names.
+pub fn load_toml_with(
+    text: &str,
+    path: &Path,
+    policy: &ReadPolicy,
+) -> Result<(Scene, Vec<Warning>), SceneError> {
+    let lines = LineIndex::new(text);
+    let file: SceneFile = toml::from_str(text).map_err(|e| {
+        let start = e.span().map_or(0, |s| s.start);
+        let start = unknown_key_offset(text, start, e.message()).unwrap_or(start);
+        let (line, column) = lines.line_col(start);
+        SceneError::Toml {
+            path: path.to_owned(),
+            line,
+            column,
+            message: e.message().to_owned(),
+        }
+    })?;
+    if file.version != VERSION {
+        return Err(SceneError::Version {
+            path: path.to_owned(),
+            found: file.version,
+            supported: VERSION,
+        });
+    }
+    let mut ld = Loader {
+        path: path.to_owned(),
+        lines,
+        policy: policy.clone(),
+        warnings: Vec::new(),
+        materials: Vec::new(),
+        material_ids: HashMap::new(),
+        used: Vec::new(),
+    };
+    let mut material_lines = Vec::new();
+    for m in &file.materials {
+        let line = ld.line(m);
+        let name = m.get_ref().name().to_owned();
+        if ld.material_ids.contains_key(&name) {
+            return Err(SceneError::DuplicateName {
+                path: ld.path.clone(),
+                line,
+                kind: "material",
+                name,
+            });
+        }
+        let material = ld.material(m.get_ref(), line)?;
+        ld.add_material(name, material);
+        material_lines.push(line);
+    }
+    let mut parts = Vec::new();
+    let mut names = HashMap::new();
+    for o in &file.objects {
+        let line = ld.line(o);
+        if names.insert(o.get_ref().name.clone(), line).is_some() {
+            return Err(SceneError::DuplicateName {
+                path: ld.path.clone(),
+                line,
+                kind: "object",
+                name: o.get_ref().name.clone(),
+            });
+        }
+        ld.object(o.get_ref(), line, &mut parts)?;
+    }
+    for (i, line) in material_lines.into_iter().enumerate() {
+        if !ld.used[i] {
+            ld.warnings.push(Warning::UnusedMaterial {
+                path: ld.path.clone(),
+                line,
+                material: ld.materials[i].name.clone(),
+            });
+        }
+    }
+    let camera = ld.camera(&file.camera)?;
+    ld.finish(parts, camera, file.unit)
+}
+
+fn load_bare_obj(path: &Path, policy: &ReadPolicy) -> Result<(Scene, Vec<Warning>), SceneError> {
+    let mut ld = Loader {
+        path: path.to_owned(),
+        lines: LineIndex::new(""),
+        policy: policy.clone(),
+        warnings: Vec::new(),
+        materials: Vec::new(),
+        material_ids: HashMap::new(),
+        used: Vec::new(),
+    };
+    let file = obj::load(path, policy)?;
+    let materials = match &file.materials {
+        Ok(m) => ld.mtl_materials(m, &file.origins, path)?,
+        Err(_) => Vec::new(),
+    };
+    if let Some(mtl) = &file.missing_mtl {
+        ld.warnings.push(Warning::MissingMtl {
+            path: path.to_owned(),
+            mtl: Some(mtl.clone()),
+        });
+    }
+    for m in &file.models {
+        check_range(path, None, &m.name, &m.mesh.positions)?;
+    }
+    let mut parts = Vec::new();
+    let mut seen: HashMap<String, usize> = HashMap::new();
+    for m in file.models {
+        let (material, emission) = match m.material.and_then(|i| materials.get(i)) {
+            Some(&(id, e)) => (id, e),
+            None => (ld.default_material(), Rgb::ZERO),
+        };
+        let count = seen.entry(m.name.clone()).or_default();
+        *count += 1;
+        let name = if *count == 1 {
+            m.name
+        } else {
+            format!("{}#{}", m.name, count)
+        };
+        parts.push(PlacedPart {
+            part: Part {
+                name,
+                line: None,
+                geometry: Geometry::Mesh(m.mesh),
+                material,
+                emission,
+            },
+            transform: Transform::default(),
+        });
+    }
+    // Frame the bounds: look down -z at the centre from far enough to see the bounding sphere.
+    let bounds = parts
+        .iter()
+        .fold(Bounds::EMPTY, |b, p| match &p.part.geometry {
+            Geometry::Mesh(m) => m.positions.iter().fold(b, |b, q| b.grow(*q)),
+            Geometry::Sphere { .. } => b,
+        });
+    let fov_y = 40f32.to_radians();
+    let radius = (bounds.diagonal() * 0.5).max(f32::MIN_POSITIVE);
+    let distance = radius / (fov_y * 0.5).sin() * 1.1;
+    let center = if bounds.diagonal() > 0.0 {
+        bounds.center()
+    } else {
+        Vec3::ZERO
+    };
+    let camera = Camera::look_at(
+        center + Vec3::Z * distance,
+        center,
+        Vec3::Y,
+        fov_y,
+        512,
+        512,
+    )
+    .map_err(|problem| SceneError::Camera {
+        path: path.to_owned(),
+        line: None,
+        problem,
+    })?;
+    // A bare OBJ states no unit: metres, as the OBJ format's readers assume by default.
+    ld.finish(parts, camera, crate::unit::Unit::Metre)
+}

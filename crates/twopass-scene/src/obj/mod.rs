@@ -1,0 +1,15 @@
+//! Wavefront OBJ + MTL through tobj, with the file and line context tobj does not give, and
+//! the mapping of MTL materials onto ours.
+
+mod lines;
+mod material;
+mod model;
+mod mtl;
+mod read;
+mod scan;
+#[cfg(test)]
+mod tests;
+
+pub(crate) use material::convert_material;
+pub(crate) use model::MtlOrigin;
+pub(crate) use read::load;

@@ -1,0 +1,180 @@
+//! Reading an OBJ file and its MTL libraries through tobj, within the read policy's bounds,
+//! with the file and line context tobj does not give.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use glam::Vec3;
+
+use super::lines::{find_bad_line, find_non_finite_line, first_non_finite, triples};
+use super::model::{MtlLib, ObjFile, ObjModel};
+use super::mtl::load_mtl;
+use super::scan::scan;
+use crate::error::SceneError;
+use crate::input::{self, InputKind, ReadPolicy};
+use crate::shape::ShapeMesh;
+
+pub(crate) fn load(path: &Path, policy: &ReadPolicy) -> Result<ObjFile, SceneError> {
+    let text = input::read_text(path, InputKind::Obj, policy)?;
+    // An empty parent joins to the bare name, which is how the user wrote it.
+    let dir = path.parent().unwrap_or(Path::new(""));
+    // The libraries, in the order tobj asks for them (it takes the rest of the line as one
+    // file name).
+    let mut libs: Vec<MtlLib> = Vec::new();
+    let mut mtllibs = Vec::new();
+    let mut missing_mtl = None;
+    for line in text.lines() {
+        let Some(rest) = line.trim_start().strip_prefix("mtllib") else {
+            continue;
+        };
+        if !rest.starts_with(char::is_whitespace) {
+            continue;
+        }
+        let written = line.split_once(' ').unwrap_or_default().1.trim().to_owned();
+        let mtl_path = dir.join(&written);
+        mtllibs.push(mtl_path.clone());
+        let lib = match load_mtl(&mtl_path, policy)? {
+            Some((result, origins)) => MtlLib {
+                written,
+                result,
+                origins,
+            },
+            None => {
+                missing_mtl.get_or_insert(mtl_path);
+                MtlLib {
+                    written,
+                    result: Err(tobj::LoadError::OpenFileFailed),
+                    origins: Vec::new(),
+                }
+            }
+        };
+        libs.push(lib);
+    }
+    // The merged name -> index map, as tobj builds it (later libraries win).
+    let mut material_map: HashMap<String, usize> = HashMap::new();
+    let mut origins = Vec::new();
+    for lib in &libs {
+        if let Ok((mats, map)) = &lib.result {
+            let offset = origins.len();
+            for (name, i) in map {
+                material_map.insert(name.clone(), i + offset);
+            }
+            origins.extend(lib.origins.iter().cloned());
+            debug_assert_eq!(mats.len(), lib.origins.len());
+        }
+    }
+    let scanned = scan(&text, path, &material_map, &mtllibs)?;
+
+    let opts = tobj::LoadOptions {
+        triangulate: true,
+        single_index: false,
+        ignore_points: true,
+        ignore_lines: true,
+    };
+    let loader = |p: &Path| -> tobj::MTLLoadResult {
+        libs.iter()
+            .find(|l| Path::new(&l.written) == p)
+            .map_or(Err(tobj::LoadError::OpenFileFailed), |l| l.result.clone())
+    };
+    let (models, materials) =
+        tobj::load_obj_buf(&mut std::io::Cursor::new(text.as_bytes()), &opts, loader).map_err(
+            |source| SceneError::Obj {
+                path: path.to_owned(),
+                line: find_bad_line(&text, source),
+                source,
+            },
+        )?;
+    // tobj's models in order, empty ones (a trailing `g`, lines only) left out as the scan
+    // does; when the two disagree, no group gets smooth normals rather than wrong ones.
+    let models: Vec<tobj::Model> = models
+        .into_iter()
+        .filter(|m| !m.mesh.indices.is_empty())
+        .collect();
+    let agree = models.len() == scanned.len()
+        && models
+            .iter()
+            .zip(&scanned)
+            .all(|(m, s)| m.mesh.indices.len() == 3 * s.triangles);
+    let mut out = Vec::with_capacity(models.len());
+    for (k, m) in models.into_iter().enumerate() {
+        let mesh = &m.mesh;
+        let positions: Vec<Vec3> = mesh
+            .positions
+            .chunks_exact(3)
+            .map(Vec3::from_slice)
+            .collect();
+        // The first non-finite vector of a list read from `keyword` lines, as an error.
+        let finite = |vectors: &[Vec3], keyword: &str, what| match first_non_finite(vectors) {
+            Some((index, value)) => Err(SceneError::NonFinite {
+                path: path.to_owned(),
+                line: find_non_finite_line(&text, keyword),
+                object: m.name.clone(),
+                what,
+                index,
+                value,
+            }),
+            None => Ok(()),
+        };
+        finite(&positions, "v", "vertex")?;
+        let normals: Vec<Vec3> = mesh.normals.chunks_exact(3).map(Vec3::from_slice).collect();
+        finite(&normals, "vn", "normal")?;
+        let triangles = triples(&mesh.indices);
+        // Normals are used only when every corner of the group names one (tobj invents the
+        // missing ones); zero-length ones fall back to flat.
+        let smooth = agree
+            && scanned[k].all_normals
+            && !normals.is_empty()
+            && mesh.normal_indices.len() == mesh.indices.len()
+            && normals.iter().all(|n| n.length_squared() > 0.0);
+        let (normals, normal_indices) = if smooth {
+            (
+                normals.iter().map(|n| n.normalize()).collect(),
+                triples(&mesh.normal_indices),
+            )
+        } else {
+            (Vec::new(), Vec::new())
+        };
+        // Texture coordinates (OBJ `vt`, v up) are kept only when every corner of the group
+        // names one and all are finite: the lightmap bake may take them as its atlas.
+        let texcoords: Vec<glam::Vec2> = mesh
+            .texcoords
+            .chunks_exact(2)
+            .map(glam::Vec2::from_slice)
+            .collect();
+        let keep_uv = scanned.get(k).is_some_and(|s| s.all_texcoords)
+            && !texcoords.is_empty()
+            && mesh.texcoord_indices.len() == mesh.indices.len()
+            && texcoords.iter().all(|t| t.is_finite());
+        let (texcoords, texcoord_indices) = if keep_uv {
+            (texcoords, triples(&mesh.texcoord_indices))
+        } else {
+            (Vec::new(), Vec::new())
+        };
+        out.push(ObjModel {
+            name: m.name,
+            mesh: ShapeMesh {
+                positions,
+                triangles,
+                normals,
+                normal_indices,
+                texcoords,
+                texcoord_indices,
+            },
+            material: mesh.material_id,
+            usemtl: scanned.get(k).and_then(|s| s.usemtl.clone()),
+        });
+    }
+    if out.is_empty() {
+        return Err(SceneError::Input {
+            path: path.to_owned(),
+            problem: "the OBJ has no faces (`f` statements with 3 or more corners)".into(),
+        });
+    }
+    Ok(ObjFile {
+        models: out,
+        materials,
+        origins,
+        mtllibs,
+        missing_mtl,
+    })
+}
