@@ -44,10 +44,9 @@ use twopass_scene::{DiffuseRadiance, Scene};
 use crate::colour::ColorMapping;
 use crate::error::BakeError;
 use crate::gltf::{Attribute, GlbBuilder};
+use crate::weld::SharedVertices;
 
-/// Two triangles sharing an edge are in one chart when the cosine between their geometric
-/// normals is at least this (about 0.8 degrees).
-pub const COPLANAR_COS: f32 = 0.9999;
+pub use crate::weld::COPLANAR_COS;
 
 /// Largest lightmap side, texels: 8192 x 8192 RGB f32 is 805 MB in memory.
 pub const MAX_LIGHTMAP_SIDE: u32 = 8192;
@@ -601,7 +600,7 @@ fn encode_lightmap_glb(
     });
     let size = Vec2::new(layout.width as f32, layout.height as f32);
     for object in &scene.objects {
-        let mut shared = crate::vertex::SharedVertices::default();
+        let mut shared = SharedVertices::default();
         let (mut positions, mut normals, mut uvs, mut indices) =
             (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for t in object.triangles.clone() {
