@@ -33,8 +33,10 @@ use smart_default::SmartDefault;
 use twopass_brdf::{BrdfSample, Material, Rgb, SampleKind};
 use twopass_scene::{Hit, Ray, Scene, SurfacePoint};
 
+use crate::counters::Tally;
+use crate::emitters::EmitterChoice;
 use crate::film::{Layer, Radiance};
-use crate::integrator::{EmitterChoice, Integrator, SampleState, Shading, Tally};
+use crate::integrator::{Integrator, SampleState, Shading};
 use crate::light_tracing::{CausticScope, LightTracer, LightTracingSettings};
 use crate::sampler::Sampler;
 
