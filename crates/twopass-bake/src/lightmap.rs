@@ -51,16 +51,31 @@ pub use crate::weld::COPLANAR_COS;
 /// Largest lightmap side, texels: 8192 x 8192 RGB f32 is 805 MB in memory.
 pub const MAX_LIGHTMAP_SIDE: u32 = 8192;
 
+/// Texels along the scene's bounding-box diagonal when no texel size is given: the texel edge
+/// is then the diagonal over this.
+pub const TEXELS_PER_DIAGONAL: f32 = 200.0;
+
 /// How to lay out and fill a lightmap.
 #[derive(SmartDefault, Debug, Clone, Copy, PartialEq)]
 pub struct LightmapSettings {
-    /// Edge of one texel on the surface, scene units (finite, > 0).
-    #[default(1.0)]
-    pub texel_size: f32,
+    /// Edge of one texel on the surface, scene units (finite, > 0); `None`: the scene's
+    /// bounding-box diagonal over [`TEXELS_PER_DIAGONAL`].
+    #[default(None)]
+    pub texel_size: Option<f32>,
     /// Border around every chart, texels, filled by dilation (at least 1; 2 keeps bilinear
     /// filtering and the first mip level inside the chart).
     #[default(2)]
     pub padding: u32,
+}
+
+/// [`LightmapSettings`] resolved for one scene: the texel size given or derived, the padding
+/// at least 1.
+#[derive(Debug, Clone, Copy)]
+struct Resolved {
+    /// Edge of one texel on the surface, scene units.
+    texel_size: f32,
+    /// Border around every chart, texels (at least 1).
+    padding: u32,
 }
 
 /// A baked lightmap and the user-mesh glTF that shows it.
@@ -70,6 +85,9 @@ pub struct Lightmap {
     pub width: u32,
     /// Height, texels.
     pub height: u32,
+    /// Edge of one texel on the surface, scene units: the settings' or the one derived from
+    /// the scene's size.
+    pub texel_size: f32,
     /// Linear radiance per texel, W/(m^2 sr) per RGB channel, row-major, top row first (UV
     /// (0, 0) is the top-left corner, as glTF has it).
     pub radiance: Image,
@@ -142,7 +160,7 @@ struct ObjectMesh {
 
 /// The generated layout: every object unwrapped into charts and all packed into one atlas
 /// page by [`uvunwrap`]; one region, since the charts lie `2 padding` texels apart.
-fn generated_layout(scene: &Scene, s: &LightmapSettings, why: String) -> Result<Layout, BakeError> {
+fn generated_layout(scene: &Scene, s: &Resolved, why: String) -> Result<Layout, BakeError> {
     let m = &scene.mesh;
     let too_big = |detail: String| BakeError::Encode {
         path: PathBuf::from("lightmap"),
@@ -232,7 +250,7 @@ fn generated_layout(scene: &Scene, s: &LightmapSettings, why: String) -> Result<
 /// The layout of the scene's own texture coordinates, or why they cannot serve. The atlas is
 /// square, with as many texels as the surface area holds at `texel_size` spread over the
 /// coordinates' own area; OBJ's v points up, the atlas's y down.
-fn scene_layout(scene: &Scene, s: &LightmapSettings) -> Result<Layout, String> {
+fn scene_layout(scene: &Scene, s: &Resolved) -> Result<Layout, String> {
     let m = &scene.mesh;
     let mut uv = Vec::with_capacity(m.triangles.len());
     for (t, idx) in m.texcoord_indices.iter().enumerate() {
@@ -504,9 +522,11 @@ pub fn bake_lightmap(
     settings: &LightmapSettings,
     mapping: ColorMapping,
 ) -> Result<Lightmap, BakeError> {
-    let s = LightmapSettings {
+    let s = Resolved {
+        texel_size: settings
+            .texel_size
+            .unwrap_or(scene.bounds.diagonal() / TEXELS_PER_DIAGONAL),
         padding: settings.padding.max(1),
-        ..*settings
     };
     if !(s.texel_size.is_finite() && s.texel_size > 0.0) {
         return Err(BakeError::Encode {
@@ -560,6 +580,7 @@ pub fn bake_lightmap(
     Ok(Lightmap {
         width,
         height,
+        texel_size: s.texel_size,
         radiance: image,
         charts: layout.charts,
         covered_texels,
@@ -573,7 +594,7 @@ pub fn bake_lightmap(
 fn encode_lightmap_glb(
     scene: &Scene,
     layout: &Layout,
-    s: &LightmapSettings,
+    s: &Resolved,
     png: &[u8],
     mapping: ColorMapping,
 ) -> Result<Vec<u8>, BakeError> {

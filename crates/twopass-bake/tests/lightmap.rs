@@ -22,7 +22,7 @@ fn baked() -> &'static (Scene, Solution, Lightmap) {
     BAKED.get_or_init(|| {
         let (scene, solution) = cornell(60.0);
         let settings = LightmapSettings {
-            texel_size: TEXEL,
+            texel_size: Some(TEXEL),
             padding: 2,
         };
         let lm =
@@ -271,7 +271,7 @@ fn bake_obj(scene: &Scene) -> Lightmap {
     solver.run(|_| std::ops::ControlFlow::Continue(()));
     let solution = solver.solution();
     let settings = LightmapSettings {
-        texel_size: 0.01,
+        texel_size: Some(0.01),
         padding: 2,
     };
     bake_lightmap(&solution, scene, &settings, ColorMapping::auto(&solution)).unwrap()
@@ -330,7 +330,7 @@ fn curved_surfaces_unwrap_into_few_charts_that_carry_their_power() {
     let (scene, solution) = solved("scenes/cornell-spheres.toml", 60.0);
     let texel = 2.0;
     let settings = LightmapSettings {
-        texel_size: texel,
+        texel_size: Some(texel),
         padding: 2,
     };
     let lm = bake_lightmap(&solution, &scene, &settings, ColorMapping::auto(&solution)).unwrap();

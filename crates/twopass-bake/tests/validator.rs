@@ -98,7 +98,7 @@ fn element_mesh_and_per_vertex_glbs_pass_the_khronos_validator() {
 fn lightmap_glb_passes_the_khronos_validator() {
     let (scene, solution) = solved();
     let settings = twopass_bake::LightmapSettings {
-        texel_size: 10.0,
+        texel_size: Some(10.0),
         padding: 2,
     };
     let lm = bake::bake_lightmap(solution, scene, &settings, ColorMapping::auto(solution)).unwrap();
