@@ -10,9 +10,7 @@ use std::process::Command;
 
 use twopass_bake::{ColorMapping, LightmapSettings, bake_lightmap};
 
-mod common;
-
-use common::{cornell, repo};
+use crate::common::{cornell, repo};
 
 #[test]
 fn blender_imports_the_lightmap_glb_at_real_size_with_its_lightmap() {

@@ -10,9 +10,7 @@ use twopass_bake::lightmap::{AtlasSource, Lightmap, LightmapSettings, bake_light
 use twopass_bake::{self as bake, ColorMapping};
 use twopass_radiosity::{Options, Solution, Solver};
 
-mod common;
-
-use common::{cornell, solved};
+use crate::common::{cornell, solved};
 use twopass_scene::Scene;
 
 const TEXEL: f32 = 5.0;
@@ -29,6 +27,16 @@ fn baked() -> &'static (Scene, Solution, Lightmap) {
             bake_lightmap(&solution, &scene, &settings, ColorMapping::auto(&solution)).unwrap();
         (scene, solution, lm)
     })
+}
+
+#[test]
+fn the_texel_size_is_the_given_one_or_the_scene_diagonal_over_200() {
+    let (scene, solution, given) = baked();
+    assert_eq!(given.texel_size, TEXEL);
+    let settings = LightmapSettings::default();
+    assert_eq!(settings.texel_size, None);
+    let derived = bake_lightmap(solution, scene, &settings, ColorMapping::auto(solution)).unwrap();
+    assert_eq!(derived.texel_size, scene.bounds.diagonal() / 200.0);
 }
 
 /// Every triangle of the `.glb`: object name, positions (m) and TEXCOORD_1 (texels).

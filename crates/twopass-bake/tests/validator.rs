@@ -12,9 +12,7 @@ use twopass_bake::{self as bake, BakeError, ColorMapping, Glb};
 use twopass_radiosity::Solution;
 use twopass_scene::Scene;
 
-mod common;
-
-use common::{cornell, repo};
+use crate::common::{cornell, repo};
 
 /// The Cornell box, solved coarsely (the validator checks structure, not accuracy).
 fn solved() -> &'static (Scene, Solution) {
