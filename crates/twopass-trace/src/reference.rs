@@ -26,7 +26,8 @@
 //! paths to a light tracing pass ([`crate::light_tracing`], scope
 //! [`crate::light_tracing::CausticScope::All`], one light path per camera sample), which the
 //! render loop adds to the image: each path is counted once, by the strategy that finds it
-//! easily. A scene without a delta surface has no such path and renders exactly as before.
+//! easily. A scene without a delta surface has no such path and renders exactly as with
+//! [`Caustics::PathTracing`].
 
 use glam::Vec3;
 use smart_default::SmartDefault;
