@@ -42,7 +42,8 @@
 //! crate encodes, decodes, reads and writes. Modules, one job each: [`error`], [`fingerprint`],
 //! [`format`](mod@format) (the bake file), [`colour`] (radiance to `COLOR_0`), [`gltf`],
 //! [`lightmap`], [`lightmap_read`] (a lightmap bake read back as diffuse light), [`vertex`] (the per-vertex bake on the scene's own mesh), [`ply`],
-//! [`manifest`].
+//! [`manifest`]; the private `weld` gives the per-vertex bake and the lightmap their output
+//! vertices (one per scene position and shading normal).
 //!
 //! ```no_run
 //! use twopass_radiosity::{Options, Solver};
@@ -70,6 +71,7 @@ pub mod lightmap_read;
 pub mod manifest;
 pub mod ply;
 pub mod vertex;
+mod weld;
 
 pub use colour::{AUTO_EXPOSURE_PERCENTILE, ColorMapping, RadianceParts};
 pub use error::{BakeError, BakeProblem};

@@ -102,7 +102,7 @@ pub fn read_lightmap_glb(glb: &Path, scene: &Scene) -> Result<LightmapRadiance, 
         path: path.to_owned(),
         problem: BakeProblem::Lightmap(message),
     };
-    let bytes = twopass_scene::read_bounded(glb, crate::MAX_BAKE_BYTES)
+    let bytes = twopass_scene::read_bounded(glb, crate::format::MAX_BAKE_BYTES)
         .map_err(|e| BakeError::io(glb, e))?;
     let gltf = ::gltf::Gltf::from_slice(&bytes)
         .map_err(|e| invalid(glb, format!("not a glTF binary: {e}")))?;

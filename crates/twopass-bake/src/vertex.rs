@@ -1,8 +1,6 @@
 //! The per-vertex bake on the scene's own mesh: the solution sampled at the user's vertices
 //! (not the element mesh's), for engines that take vertex colours on the asset they ship.
 
-use std::collections::HashMap;
-
 use glam::Vec3;
 use twopass_brdf::Rgb;
 use twopass_radiosity::Solution;
@@ -11,39 +9,7 @@ use twopass_scene::Scene;
 use crate::colour::{ColorMapping, RadianceParts};
 use crate::error::BakeError;
 use crate::gltf::{Glb, GlbBuilder, unlit_vertex_colour_material};
-
-/// Output vertices of the scene mesh: one per scene position and shading normal, where
-/// normals closer than [`COPLANAR_COS`](crate::lightmap::COPLANAR_COS) count as one (a
-/// polygon's triangles each have their own normal, equal up to rounding or the polygon's
-/// slight non-planarity), within one group (an object, or a chart of one).
-#[derive(Default)]
-pub(crate) struct SharedVertices {
-    by_position: HashMap<(u32, u32), Vec<(Vec3, u32)>>,
-}
-
-impl SharedVertices {
-    /// The output vertex of scene position `position` with normal `normal` in group `group`,
-    /// and whether it is new (then numbered `next`).
-    pub(crate) fn get(
-        &mut self,
-        group: u32,
-        position: u32,
-        normal: Vec3,
-        next: u32,
-    ) -> (u32, bool) {
-        let list = self.by_position.entry((group, position)).or_default();
-        match list
-            .iter()
-            .find(|(n, _)| n.dot(normal) >= crate::lightmap::COPLANAR_COS)
-        {
-            Some(&(_, v)) => (v, false),
-            None => {
-                list.push((normal, next));
-                (next, true)
-            }
-        }
-    }
-}
+use crate::weld::SharedVertices;
 
 /// The radiance parts at barycentrics `b` of scene triangle `t`, interpolated on the element
 /// mesh (zero where the triangle takes no part in the solve).
@@ -75,7 +41,7 @@ fn parts_at(solution: &Solution, parts: &RadianceParts, t: u32, b: [f32; 3]) -> 
 /// `NORMAL` (the scene's shading normals), `COLOR_0` (`mapping`, clipped for display) and the
 /// HDR radiance with its parts as [`HDR_ATTRIBUTES`](crate::HDR_ATTRIBUTES) (W/(m^2 sr)), under the unlit material of
 /// [`encode_glb`](crate::encode_glb). A vertex is one scene position with one shading normal
-/// (normals within [`COPLANAR_COS`](crate::lightmap::COPLANAR_COS) count as one); its value is the mean, over the triangles that use it, of the element mesh's
+/// (normals within [`COPLANAR_COS`](crate::weld::COPLANAR_COS) count as one); its value is the mean, over the triangles that use it, of the element mesh's
 /// interpolated value at that corner (equal on a smooth surface, different across a crease
 /// only when the corner's triangles lie on different patches). A user vertex carries one
 /// value, so light that changes inside a large triangle (a shadow on a wall of two triangles)

@@ -10,9 +10,7 @@ use std::process::Command;
 
 use twopass_bake::{ColorMapping, LightmapSettings, bake_lightmap};
 
-mod common;
-
-use common::{cornell, repo};
+use crate::common::{cornell, repo};
 
 #[test]
 fn blender_imports_the_lightmap_glb_at_real_size_with_its_lightmap() {
@@ -29,7 +27,7 @@ fn blender_imports_the_lightmap_glb_at_real_size_with_its_lightmap() {
     }
     let (scene, solution) = cornell(100.0);
     let settings = LightmapSettings {
-        texel_size: 5.0,
+        texel_size: Some(5.0),
         padding: 2,
     };
     let lm = bake_lightmap(&solution, &scene, &settings, ColorMapping::auto(&solution)).unwrap();

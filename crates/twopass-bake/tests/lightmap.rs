@@ -10,9 +10,7 @@ use twopass_bake::lightmap::{AtlasSource, Lightmap, LightmapSettings, bake_light
 use twopass_bake::{self as bake, ColorMapping};
 use twopass_radiosity::{Options, Solution, Solver};
 
-mod common;
-
-use common::{cornell, solved};
+use crate::common::{cornell, solved};
 use twopass_scene::Scene;
 
 const TEXEL: f32 = 5.0;
@@ -22,13 +20,23 @@ fn baked() -> &'static (Scene, Solution, Lightmap) {
     BAKED.get_or_init(|| {
         let (scene, solution) = cornell(60.0);
         let settings = LightmapSettings {
-            texel_size: TEXEL,
+            texel_size: Some(TEXEL),
             padding: 2,
         };
         let lm =
             bake_lightmap(&solution, &scene, &settings, ColorMapping::auto(&solution)).unwrap();
         (scene, solution, lm)
     })
+}
+
+#[test]
+fn the_texel_size_is_the_given_one_or_the_scene_diagonal_over_200() {
+    let (scene, solution, given) = baked();
+    assert_eq!(given.texel_size, TEXEL);
+    let settings = LightmapSettings::default();
+    assert_eq!(settings.texel_size, None);
+    let derived = bake_lightmap(solution, scene, &settings, ColorMapping::auto(solution)).unwrap();
+    assert_eq!(derived.texel_size, scene.bounds.diagonal() / 200.0);
 }
 
 /// Every triangle of the `.glb`: object name, positions (m) and TEXCOORD_1 (texels).
@@ -271,7 +279,7 @@ fn bake_obj(scene: &Scene) -> Lightmap {
     solver.run(|_| std::ops::ControlFlow::Continue(()));
     let solution = solver.solution();
     let settings = LightmapSettings {
-        texel_size: 0.01,
+        texel_size: Some(0.01),
         padding: 2,
     };
     bake_lightmap(&solution, scene, &settings, ColorMapping::auto(&solution)).unwrap()
@@ -330,7 +338,7 @@ fn curved_surfaces_unwrap_into_few_charts_that_carry_their_power() {
     let (scene, solution) = solved("scenes/cornell-spheres.toml", 60.0);
     let texel = 2.0;
     let settings = LightmapSettings {
-        texel_size: texel,
+        texel_size: Some(texel),
         padding: 2,
     };
     let lm = bake_lightmap(&solution, &scene, &settings, ColorMapping::auto(&solution)).unwrap();

@@ -12,9 +12,7 @@ use twopass_bake::{self as bake, BakeError, ColorMapping, Glb};
 use twopass_radiosity::Solution;
 use twopass_scene::Scene;
 
-mod common;
-
-use common::{cornell, repo};
+use crate::common::{cornell, repo};
 
 /// The Cornell box, solved coarsely (the validator checks structure, not accuracy).
 fn solved() -> &'static (Scene, Solution) {
@@ -98,7 +96,7 @@ fn element_mesh_and_per_vertex_glbs_pass_the_khronos_validator() {
 fn lightmap_glb_passes_the_khronos_validator() {
     let (scene, solution) = solved();
     let settings = twopass_bake::LightmapSettings {
-        texel_size: 10.0,
+        texel_size: Some(10.0),
         padding: 2,
     };
     let lm = bake::bake_lightmap(solution, scene, &settings, ColorMapping::auto(solution)).unwrap();

@@ -4,9 +4,8 @@
 
 use glam::Vec3;
 use twopass_bake::{self as bake, ColorMapping, RadianceParts};
-mod common;
 
-use common::cornell;
+use crate::common::cornell;
 
 #[test]
 fn vertex_glb_holds_the_element_values_at_the_users_vertices() {

@@ -28,7 +28,7 @@
 use twopass_scene::{DiffuseRadiance, Scene};
 
 use crate::diffuse::DiffuseSource;
-use crate::integrator::Lights;
+use crate::emitters::Lights;
 use crate::light_tracing::{CausticScope, LightTracer, LightTracingSettings};
 use crate::whitted::{Whitted, WhittedSettings};
 

@@ -29,7 +29,9 @@
 //! # Ok::<(), twopass_scene::SceneError>(())
 //! ```
 
+pub mod counters;
 pub mod diffuse;
+pub mod emitters;
 pub mod film;
 pub mod hybrid;
 pub mod integrator;
@@ -41,11 +43,13 @@ pub mod whitted;
 
 pub use film::{Layer, LayerImages, Radiance};
 pub use render::{
-    AdaptiveSampling, BUDGET_FLOOR, BUDGET_SMOOTHING, RenderOutput, RenderProgress, RenderSettings,
-    RenderStats, SampleBudget, render, render_budgeted,
+    AdaptiveSampling, BUDGET_FLOOR, BUDGET_SMOOTHING, RenderOutput, RenderSettings, RenderStats,
+    SampleBudget, render, render_budgeted,
 };
 
-pub use integrator::{Integrator, Lights, SampleState, Tally};
+pub use counters::{RenderProgress, Tally};
+pub use emitters::Lights;
+pub use integrator::{Integrator, SampleState};
 pub use light_tracing::{CausticScope, LightImage, LightTracer, LightTracingSettings};
 pub use reference::{Caustics, Reference, ReferenceSettings};
 pub use sampler::Sampler;

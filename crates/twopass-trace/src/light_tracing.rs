@@ -48,9 +48,9 @@ use twopass_brdf::Rgb;
 use twopass_brdf::frame::Frame;
 use twopass_scene::{Camera, Hit, Scene, SpecularTargets};
 
+use crate::counters::{RenderProgress, Tally};
+use crate::emitters::EmitterChoice;
 use crate::film::{Layer, LayerImages};
-use crate::integrator::{EmitterChoice, Tally};
-use crate::render::RenderProgress;
 use crate::sampler::Sampler;
 
 /// Which light paths the light tracer counts (see the module documentation).

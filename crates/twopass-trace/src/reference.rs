@@ -26,15 +26,18 @@
 //! paths to a light tracing pass ([`crate::light_tracing`], scope
 //! [`crate::light_tracing::CausticScope::All`], one light path per camera sample), which the
 //! render loop adds to the image: each path is counted once, by the strategy that finds it
-//! easily. A scene without a delta surface has no such path and renders exactly as before.
+//! easily. A scene without a delta surface has no such path and renders exactly as with
+//! [`Caustics::PathTracing`].
 
 use glam::Vec3;
 use smart_default::SmartDefault;
 use twopass_brdf::{BrdfSample, Material, Rgb, SampleKind};
 use twopass_scene::{Hit, Ray, Scene, SurfacePoint};
 
+use crate::counters::Tally;
+use crate::emitters::EmitterChoice;
 use crate::film::{Layer, Radiance};
-use crate::integrator::{EmitterChoice, Integrator, SampleState, Shading, Tally};
+use crate::integrator::{Integrator, SampleState, Shading};
 use crate::light_tracing::{CausticScope, LightTracer, LightTracingSettings};
 use crate::sampler::Sampler;
 

@@ -4,7 +4,6 @@
 //! supersampling within each pixel (box filter), progress through an atomic counter that another
 //! thread may read, and non-finite samples counted and dropped, never written to a layer.
 
-use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
 use glam::Vec2;
@@ -16,8 +15,10 @@ use twopass_scene::{Camera, Ray, Scene};
 
 use twopass_image::Image;
 
+pub use crate::counters::RenderProgress;
+use crate::counters::Tally;
 use crate::film::{LayerImages, Radiance};
-use crate::integrator::{Integrator, SampleState, Tally};
+use crate::integrator::{Integrator, SampleState};
 use crate::sampler::{Sampler, stratum};
 
 /// Sampling settings of a render.
@@ -178,47 +179,6 @@ impl SampleBudget {
 fn contrast(lo: f32, hi: f32) -> f32 {
     let sum = hi + lo;
     if sum > 0.0 { (hi - lo) / sum } else { 0.0 }
-}
-
-/// Progress of a render, readable from any thread while it runs (for a progress bar).
-#[derive(Debug, Default)]
-pub struct RenderProgress {
-    done: AtomicU64,
-    total: AtomicU64,
-}
-
-impl RenderProgress {
-    /// A counter at zero.
-    pub fn new() -> Self {
-        Self::default()
-    }
-
-    /// Work finished so far, in pixels (a light tracing pass counts as many units as the
-    /// image has pixels).
-    pub fn done(&self) -> u64 {
-        self.done.load(Ordering::Relaxed)
-    }
-
-    /// Work of the whole render, in pixels (twice the image's pixels when the integrator adds
-    /// a light tracing pass; 0 before it starts).
-    pub fn total(&self) -> u64 {
-        self.total.load(Ordering::Relaxed)
-    }
-
-    /// Adds `units` to the work done.
-    pub(crate) fn add_done(&self, units: u64) {
-        self.done.fetch_add(units, Ordering::Relaxed);
-    }
-
-    /// Fraction finished, in [0, 1] (0 before the render starts).
-    pub fn fraction(&self) -> f64 {
-        let t = self.total();
-        if t == 0 {
-            0.0
-        } else {
-            self.done() as f64 / t as f64
-        }
-    }
 }
 
 /// What a render measured.
@@ -459,8 +419,7 @@ fn render_with(
         })
         .filter(|a| a.base < spp && budget.is_none());
     let passes = 1 + u64::from(light.is_some()) + u64::from(adaptive.is_some());
-    progress.done.store(0, Ordering::Relaxed);
-    progress.total.store(passes * pixels, Ordering::Relaxed);
+    progress.start(passes * pixels);
 
     let tiles: Vec<(u32, u32)> = (0..height.div_ceil(tile))
         .flat_map(|ty| (0..width.div_ceil(tile)).map(move |tx| (tx * tile, ty * tile)))

@@ -20,11 +20,11 @@ use smart_default::SmartDefault;
 use twopass_brdf::Rgb;
 use twopass_scene::{Ray, Scene};
 
+use crate::counters::Tally;
 use crate::diffuse::DiffuseSource;
+use crate::emitters::Lights;
 use crate::film::{Layer, Radiance};
-use crate::integrator::{
-    Integrator, Lights, SampleState, Shading, Tally, direct_light, trace_from,
-};
+use crate::integrator::{Integrator, SampleState, Shading, direct_light, trace_from};
 use crate::light_tracing::LightTracer;
 use crate::sampler::Sampler;
 

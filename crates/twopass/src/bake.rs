@@ -235,7 +235,7 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
     if args.lightmap {
         let started = Instant::now();
         let settings = bake::LightmapSettings {
-            texel_size: args.texel_size.unwrap_or(scene.bounds.diagonal() / 200.0),
+            texel_size: args.texel_size,
             ..bake::LightmapSettings::default()
         };
         let lm = bake::bake_lightmap(&solution, &scene, &settings, mapping)?;
@@ -250,7 +250,7 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
             });
         }
         manifest.lightmap = Some(bake::LightmapRecord {
-            texel_size: settings.texel_size,
+            texel_size: lm.texel_size,
             padding: settings.padding,
             width: lm.width,
             height: lm.height,

@@ -1,9 +1,9 @@
 //! `twopass bake` as scripts drive it: the files it writes, a manifest whose numbers are the
 //! solver's, and clear failures (no emitter, unwritable output, bad options).
 
-mod common;
+use crate::common;
 
-use common::{cli, repo, twopass};
+use crate::common::{cli, repo, twopass};
 
 use std::path::PathBuf;
 

@@ -1,8 +1,8 @@
 //! The command line as scripts drive it: exit codes, messages on stderr, JSON on stdout.
 
-mod common;
+use crate::common;
 
-use common::{BOX, SPHERES, cli, repo, twopass};
+use crate::common::{BOX, SPHERES, cli, repo, twopass};
 
 #[test]
 fn info_json_describes_the_cornell_box() {

@@ -1,8 +1,8 @@
 //! `twopass compare`: the report's numbers are recomputed from the EXRs it wrote.
 
-mod common;
+use crate::common;
 
-use common::{BOX, SPHERES, cli, repo};
+use crate::common::{BOX, SPHERES, cli, repo};
 
 use std::path::Path;
 

@@ -1,9 +1,9 @@
 //! `twopass bake --lightmap` and `--format vertex-glb`: the files, each listed in the manifest with its size and
 //! CRC-32, and `--texel-size` only with `--lightmap`.
 
-mod common;
+use crate::common;
 
-use common::{cli, repo};
+use crate::common::{cli, repo};
 
 #[test]
 fn lightmap_bake_writes_its_files_into_the_manifest() {

@@ -3,11 +3,9 @@
 //! baked from renders, and a lightmap of another scene, a missing EXR or hybrid-direct are
 //! refused with the file named.
 
-mod common;
-
 use std::path::Path;
 
-use common::{BOX, SPHERES, assert_ok, bake_cornell_lightmap, cli, repo};
+use crate::common::{BOX, SPHERES, assert_ok, bake_cornell_lightmap, cli, repo};
 use twopass_composite::metric::compare;
 use twopass_composite::tonemap::ToneMap;
 use twopass_composite::write::read_exr;

@@ -2,11 +2,11 @@
 //! with exit code 2 for an option and 1 for an input, a message naming the problem, and never
 //! a panic (101), an abort (134) or unbounded work.
 
-mod common;
+use crate::common;
 
 use std::process::{Command, Stdio};
 
-use common::{repo, twopass};
+use crate::common::{repo, twopass};
 
 /// Runs `twopass args` and checks its exit code and that stderr holds every one of `words`.
 fn expect(args: &[&str], code: i32, words: &[&str]) {

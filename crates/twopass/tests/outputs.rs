@@ -1,11 +1,11 @@
 //! Multi-file outputs stay consistent or visibly incomplete, and what a killed run left
 //! behind is cleaned up (issue 12).
 
-mod common;
+use crate::common;
 
 use std::time::{Duration, SystemTime};
 
-use common::{bake_box, render_box};
+use crate::common::{bake_box, render_box};
 use twopass_bake::Manifest;
 
 /// A coarse radiosity mesh solved loosely: seconds, not minutes.

@@ -11,12 +11,10 @@
 //! `view` line needs three.js (`npm ci --prefix crates/twopass/view`): without it the line is
 //! skipped with a note, unless `CI` is set.
 
-mod common;
-
 use std::path::Path;
 use std::process::Command;
 
-use common::repo;
+use crate::common::repo;
 
 /// How one command is made small: the flags added (each unless the line sets it already) and,
 /// for list-valued flags whose README values take minutes, the values run instead.

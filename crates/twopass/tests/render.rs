@@ -1,8 +1,8 @@
 //! `twopass render`: every method writes a multi-layer EXR whose layers sum to the image.
 
-mod common;
+use crate::common;
 
-use common::{cli, render_box, repo};
+use crate::common::{cli, render_box, repo};
 
 use std::path::{Path, PathBuf};
 

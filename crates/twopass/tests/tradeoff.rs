@@ -1,8 +1,8 @@
 //! `twopass bench tradeoff`: the front, the presets and the cache, checked from its own report.
 
-mod common;
+use crate::common;
 
-use common::{cli, repo, twopass};
+use crate::common::{cli, repo, twopass};
 
 use std::path::Path;
 

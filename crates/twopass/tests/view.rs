@@ -6,8 +6,6 @@
 //! With `CI` set, a missing `chromium` or a missing three.js (`npm ci --prefix
 //! crates/twopass/view`) fails the test (`.ci/run` installs both); elsewhere it prints a note.
 
-mod common;
-
 use std::io::{BufRead, BufReader, Write};
 use std::net::TcpListener;
 use std::path::{Path, PathBuf};
@@ -15,7 +13,7 @@ use std::process::Command;
 use std::sync::{Arc, Condvar, Mutex};
 use std::time::Duration;
 
-use common::{assert_ok, bake_cornell_lightmap, cli, repo, twopass};
+use crate::common::{assert_ok, bake_cornell_lightmap, cli, repo, twopass};
 
 /// Skips (with a note) or, in CI, fails when a tool the test needs is missing.
 fn missing(what: &str) -> bool {

@@ -1,8 +1,6 @@
-//! What the bake crate's test binaries share: the repository root and the Cornell box solved
+//! What the bake crate's tests share: the repository root and the Cornell box solved
 //! coarsely by progressive refinement (the bake tests check formats and sampling, not the
 //! solver's accuracy).
-
-#![allow(dead_code)] // each test binary uses its own part
 
 use std::path::{Path, PathBuf};
 

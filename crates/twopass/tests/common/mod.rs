@@ -1,6 +1,4 @@
 //! Helpers every CLI test file shares: repository paths and running the binary as CI does.
-// Each test file is its own crate and uses only some of these.
-#![allow(dead_code)]
 
 use std::ffi::{OsStr, OsString};
 use std::path::{Path, PathBuf};

@@ -1,5 +1,11 @@
 //! The Pareto front of measured (time, error) points and the presets derived from it.
 
+use super::args::PRESET_NAMES;
+use super::report::{Reach, SweepRow};
+use super::sweep::{RunSpec, SolveSpec};
+use crate::pipeline::RenderMethod;
+use crate::preset::Preset;
+
 /// Indices of the points no other point beats on both time and error (ties in both keep the
 /// first), sorted by time. A point is dominated when another is no slower and no less accurate
 /// and strictly better in one of the two. Points with a non-finite coordinate are never on it.
@@ -57,6 +63,92 @@ pub fn time_to_reach(points: &[(f64, f64)], target: f64) -> Option<(f64, bool)> 
         }
     }
     None
+}
+
+/// The (time, error) point of each row.
+fn points(rows: &[SweepRow]) -> Vec<(f64, f64)> {
+    rows.iter().map(|r| (r.total_seconds, r.rel_rmse)).collect()
+}
+
+/// Marks the global front and each method's own front.
+pub(super) fn mark_fronts(rows: &mut [SweepRow]) {
+    for i in pareto_front(&points(rows)) {
+        rows[i].pareto = true;
+    }
+    let names: Vec<&'static str> = rows.iter().map(|r| r.method).collect();
+    for name in names
+        .iter()
+        .copied()
+        .collect::<std::collections::BTreeSet<_>>()
+    {
+        let idx: Vec<usize> = (0..rows.len()).filter(|&i| names[i] == name).collect();
+        let pts: Vec<(f64, f64)> = idx
+            .iter()
+            .map(|&i| (rows[i].total_seconds, rows[i].rel_rmse))
+            .collect();
+        for j in pareto_front(&pts) {
+            rows[idx[j]].method_pareto = true;
+        }
+    }
+}
+
+/// The presets: for each target, the cheapest run reaching it.
+pub(super) fn derive_presets(
+    rows: &[SweepRow],
+    runs: &[RunSpec],
+    solves: &[SolveSpec],
+    targets: &[f64],
+) -> Vec<Preset> {
+    let pts = points(rows);
+    PRESET_NAMES
+        .iter()
+        .zip(targets)
+        .filter_map(|(name, &target)| {
+            let (i, reached) = cheapest_reaching(&pts, target)?;
+            Some(Preset {
+                name: (*name).to_owned(),
+                target_rel_rmse: target,
+                reached,
+                measured_rel_rmse: rows[i].rel_rmse,
+                measured_seconds: rows[i].total_seconds,
+                method: runs[i].method,
+                render: runs[i].render,
+                radiosity: runs[i].solve.map(|s| solves[s].knobs),
+            })
+        })
+        .collect()
+}
+
+/// Time to reach each target, per method, with the ratio to the path tracer's.
+pub(super) fn reach_table(
+    rows: &[SweepRow],
+    methods: &[RenderMethod],
+    targets: &[f64],
+) -> Vec<Reach> {
+    let curve = |name: &str| -> Vec<(f64, f64)> {
+        rows.iter()
+            .filter(|r| r.method == name)
+            .map(|r| (r.total_seconds, r.rel_rmse))
+            .collect()
+    };
+    let mut out = Vec::new();
+    for &target in targets {
+        let pt = time_to_reach(&curve(RenderMethod::Reference.name()), target);
+        for m in methods {
+            let reached = time_to_reach(&curve(m.name()), target);
+            out.push(Reach {
+                method: m.name(),
+                target_rel_rmse: target,
+                seconds: reached.map(|r| r.0),
+                interpolated: reached.is_some_and(|r| r.1),
+                ratio_to_path_tracer: match (reached, pt) {
+                    (Some(a), Some(b)) => Some(a.0 / b.0),
+                    _ => None,
+                },
+            });
+        }
+    }
+    out
 }
 
 #[cfg(test)]

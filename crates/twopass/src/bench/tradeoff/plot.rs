@@ -7,7 +7,7 @@ use std::path::Path;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use super::SweepRow;
+use super::report::SweepRow;
 use crate::error::CliError;
 use crate::figure::{self, FONT, draw_error};
 use crate::preset::Preset;

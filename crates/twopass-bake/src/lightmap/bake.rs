@@ -1,0 +1,113 @@
+//! The bake: the settings resolved for the scene, the atlas laid out, every region filled in
+//! parallel, and the lightmap encoded as EXR, PNG and `.glb`.
+
+use std::path::{Path, PathBuf};
+
+use rayon::prelude::*;
+use twopass_brdf::Rgb;
+use twopass_composite::tonemap::{quantize, srgb_encode};
+use twopass_composite::{Image, Rgb8Image};
+use twopass_scene::{DiffuseRadiance, Scene};
+
+use super::fill::fill_region;
+use super::glb::{PNG_FORMULA, encode_lightmap_glb};
+use super::layout::{generated_layout, scene_layout};
+use super::settings::{Lightmap, LightmapSettings, Resolved, TEXELS_PER_DIAGONAL};
+use crate::colour::ColorMapping;
+use crate::error::BakeError;
+
+/// Bakes `solution` (anything that gives diffuse radiance on the scene's triangles) into a
+/// lightmap over the scene's own triangles, and encodes it: the HDR EXR, the LDR PNG (with
+/// `mapping`) and a `.glb` of the scene's triangles (not the element mesh) whose `TEXCOORD_1`
+/// addresses the lightmap.
+///
+/// The atlas is the scene's own texture coordinates (an OBJ's `vt`) when every triangle has
+/// them, they lie in [0, 1] and no two triangles overlap (then the atlas is square, sized so
+/// that a texel covers `texel_size` x `texel_size` scene units on average); otherwise
+/// generated charts ([`AtlasSource`](super::settings::AtlasSource) says which, and why).
+///
+/// The `.glb` has one mesh and node per object (named after it), `POSITION` in metres,
+/// `NORMAL` (the scene's shading normals), `TEXCOORD_1` (and `TEXCOORD_0`, the same atlas:
+/// glTF wants sets numbered from 0), and one material: black base colour, metallic 0,
+/// roughness 1, and the PNG as `emissiveTexture` with `texCoord` 1 (emissive factor 1); its
+/// `asset.extras.twopass` say how the PNG encodes radiance (`exposure`) and where the scene's
+/// camera is ([`CameraRecord`](super::glb::CameraRecord)). Any
+/// glTF viewer then shows the baked light as the surface's emission without relighting it;
+/// engines with a lightmap slot take the same texture on UV set 1 (README, "Bakes for
+/// engines"). A vertex is written once per position, shading normal (normals within
+/// [`COPLANAR_COS`](crate::lightmap::COPLANAR_COS) count as one) and chart or texture coordinate, so UV seams and creases
+/// split vertices and nothing else does.
+pub fn bake_lightmap(
+    radiance: &dyn DiffuseRadiance,
+    scene: &Scene,
+    settings: &LightmapSettings,
+    mapping: ColorMapping,
+) -> Result<Lightmap, BakeError> {
+    let s = Resolved {
+        texel_size: settings
+            .texel_size
+            .unwrap_or(scene.bounds.diagonal() / TEXELS_PER_DIAGONAL),
+        padding: settings.padding.max(1),
+    };
+    if !(s.texel_size.is_finite() && s.texel_size > 0.0) {
+        return Err(BakeError::Encode {
+            path: PathBuf::from("lightmap"),
+            message: format!("texel size {} must be finite and > 0", s.texel_size),
+        });
+    }
+    let layout = match scene_layout(scene, &s) {
+        Ok(layout) => layout,
+        Err(why) => generated_layout(scene, &s, why)?,
+    };
+    let (width, height) = (layout.width, layout.height);
+    let filled: Vec<(Vec<Rgb>, Vec<bool>, usize)> = layout
+        .regions
+        .par_iter()
+        .map(|r| fill_region(r, &layout, radiance, s.padding))
+        .collect();
+    let mut image = Image::new(width, height);
+    let mut covered_texels = 0;
+    for (r, (value, mask, covered)) in layout.regions.iter().zip(&filled) {
+        covered_texels += covered;
+        let [w, h] = r.size;
+        for y in 0..h {
+            for x in 0..w {
+                let i = (y * w + x) as usize;
+                if mask[i] {
+                    let j = ((r.at[1] + y) * width + r.at[0] + x) as usize;
+                    image.pixels_mut()[j] = value[i];
+                }
+            }
+        }
+    }
+    let encode_err = |e: twopass_composite::CompositeError| BakeError::Encode {
+        path: PathBuf::from("lightmap"),
+        message: e.to_string(),
+    };
+    let exr = twopass_composite::write::encode_exr_image(Path::new("lightmap.exr"), &image)
+        .map_err(encode_err)?;
+    let ldr = Rgb8Image::from_fn(width, height, |x, y| {
+        let (c, _) = mapping.color(image.pixels()[(y * width + x) as usize]);
+        c.to_array().map(|v| quantize(srgb_encode(v)))
+    });
+    let description = format!(
+        "twopass lightmap: {PNG_FORMULA}; exposure {:e}",
+        mapping.exposure
+    );
+    let png =
+        twopass_composite::write::encode_png(Path::new("lightmap.png"), &ldr, Some(&description))
+            .map_err(encode_err)?;
+    let glb = encode_lightmap_glb(scene, &layout, &s, &png, mapping)?;
+    Ok(Lightmap {
+        width,
+        height,
+        texel_size: s.texel_size,
+        radiance: image,
+        charts: layout.charts,
+        covered_texels,
+        atlas: layout.source,
+        glb,
+        exr,
+        png,
+    })
+}

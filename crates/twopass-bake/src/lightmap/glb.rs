@@ -1,0 +1,172 @@
+//! The lightmap `.glb`: the scene's own triangles with the atlas on `TEXCOORD_1`, the PNG as
+//! emissive texture, and the extras that say how to read it back as radiance and where the
+//! scene's camera is.
+
+use glam::{Vec2, Vec3};
+use gltf_json as json;
+use serde::Serialize;
+use twopass_scene::Scene;
+
+use super::layout::Layout;
+use super::settings::Resolved;
+use crate::colour::ColorMapping;
+use crate::error::BakeError;
+use crate::gltf::{Attribute, GlbBuilder};
+use crate::weld::SharedVertices;
+
+/// The asset extras of a lightmap `.glb`: how to read its texture back as radiance.
+#[derive(Serialize)]
+struct LightmapExtras<'a> {
+    twopass: LightmapExtrasBody<'a>,
+}
+
+#[derive(Serialize)]
+struct LightmapExtrasBody<'a> {
+    lightmap: &'static str,
+    texcoord: u32,
+    atlas: &'a str,
+    exposure: f32,
+    radiance_unit: &'static str,
+    texel_size: f32,
+    texel_size_unit: &'static str,
+    padding_texels: u32,
+    position_unit: &'static str,
+    scene_unit: &'static str,
+    metres_per_scene_unit: f64,
+    scene: &'a str,
+    camera: CameraRecord,
+}
+
+/// The scene's camera as the lightmap `.glb` records it (`asset.extras.twopass.camera`), so
+/// a viewer (the page of `twopass view`) can show the bake from the view twopass renders.
+/// Positions in metres, in the `.glb`'s frame.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct CameraRecord {
+    /// Eye position, metres.
+    pub position: [f32; 3],
+    /// The point looked at, metres: on the viewing axis, as far along it as the centre of
+    /// the scene's bounding box (the point a viewer orbits around).
+    pub target: [f32; 3],
+    /// Unit image-up direction.
+    pub up: [f32; 3],
+    /// Vertical field of view, degrees.
+    pub vertical_fov_degrees: f32,
+    /// The scene's image width, pixels.
+    pub width: u32,
+    /// The scene's image height, pixels.
+    pub height: u32,
+}
+
+impl CameraRecord {
+    /// The record of `scene`'s camera.
+    pub fn of(scene: &Scene) -> Self {
+        let c = &scene.camera;
+        let m = scene.unit.metres();
+        let centre = (scene.bounds.min + scene.bounds.max) * 0.5;
+        let along = c.forward.dot(centre - c.position).max(f32::EPSILON);
+        let metres = |p: Vec3| (p.as_dvec3() * m).as_vec3().to_array();
+        Self {
+            position: metres(c.position),
+            target: metres(c.position + c.forward * along),
+            up: c.up.to_array(),
+            vertical_fov_degrees: c.fov_y.to_degrees(),
+            width: c.width,
+            height: c.height,
+        }
+    }
+}
+
+/// How the lightmap PNG encodes radiance, as recorded in the `.glb`.
+pub const PNG_FORMULA: &str = "sRGB-encoded 8-bit of min(1, exposure * L), L the radiance \
+     leaving the surface in W/(m^2 sr); the HDR values are in the .exr beside the .glb";
+
+/// The lightmap `.glb` of `scene` on `layout` with `png` embedded (see [`bake_lightmap`]).
+///
+/// [`bake_lightmap`]: super::bake_lightmap
+pub(super) fn encode_lightmap_glb(
+    scene: &Scene,
+    layout: &Layout,
+    s: &Resolved,
+    png: &[u8],
+    mapping: ColorMapping,
+) -> Result<Vec<u8>, BakeError> {
+    let m = &scene.mesh;
+    let to_metres = scene.unit.metres();
+    let mut b = GlbBuilder::new();
+    let texture = b.png_texture("twopass lightmap", png);
+    let material = b.root.push(json::Material {
+        name: Some("twopass lightmap (emissive, TEXCOORD_1)".into()),
+        pbr_metallic_roughness: json::material::PbrMetallicRoughness {
+            base_color_factor: json::material::PbrBaseColorFactor([0.0, 0.0, 0.0, 1.0]),
+            metallic_factor: json::material::StrengthFactor(0.0),
+            roughness_factor: json::material::StrengthFactor(1.0),
+            ..Default::default()
+        },
+        emissive_texture: Some(json::texture::Info {
+            index: texture,
+            tex_coord: 1,
+            extensions: None,
+            extras: None,
+        }),
+        emissive_factor: json::material::EmissiveFactor([1.0; 3]),
+        ..Default::default()
+    });
+    let size = Vec2::new(layout.width as f32, layout.height as f32);
+    for object in &scene.objects {
+        let mut shared = SharedVertices::default();
+        let (mut positions, mut normals, mut uvs, mut indices) =
+            (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        for t in object.triangles.clone() {
+            let tri = m.triangles[t as usize];
+            let nrm = m.normal_indices[t as usize];
+            for k in 0..3 {
+                let normal = m.normals[nrm[k] as usize];
+                let group = layout.groups[t as usize][k];
+                let (v, new) = shared.get(group, tri[k], normal, positions.len() as u32);
+                if new {
+                    let p = m.positions[tri[k] as usize];
+                    positions.push((p.as_dvec3() * to_metres).as_vec3());
+                    normals.push(normal);
+                    uvs.push(layout.corners[t as usize][k] / size);
+                }
+                indices.push(v);
+            }
+        }
+        if indices.is_empty() {
+            continue;
+        }
+        use json::mesh::Semantic as S;
+        b.mesh(
+            &object.name,
+            &[
+                Attribute::Vec3(S::Positions, &positions),
+                Attribute::Vec3(S::Normals, &normals),
+                // glTF requires TEXCOORD_n to be continuous from 0; set 0 is the same atlas.
+                Attribute::Vec2(S::TexCoords(0), &uvs),
+                Attribute::Vec2(S::TexCoords(1), &uvs),
+            ],
+            &indices,
+            material,
+        );
+    }
+    let scene_name = scene.path.display().to_string();
+    let atlas = layout.source.describe();
+    let extras = LightmapExtras {
+        twopass: LightmapExtrasBody {
+            lightmap: PNG_FORMULA,
+            texcoord: 1,
+            atlas: &atlas,
+            exposure: mapping.exposure,
+            radiance_unit: "W/(m^2 sr)",
+            texel_size: s.texel_size,
+            texel_size_unit: scene.unit.symbol(),
+            padding_texels: s.padding,
+            position_unit: "m",
+            scene_unit: scene.unit.symbol(),
+            metres_per_scene_unit: to_metres,
+            scene: &scene_name,
+            camera: CameraRecord::of(scene),
+        },
+    };
+    b.finish(&scene_name, &extras)
+}

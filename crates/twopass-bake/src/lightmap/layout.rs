@@ -1,0 +1,239 @@
+//! The atlas: the scene's own texture coordinates when they can serve, else charts generated
+//! by [`uvunwrap`] and packed into one page, at one texel per `texel_size` scene units.
+
+use std::collections::HashMap;
+use std::path::PathBuf;
+
+use glam::Vec2;
+use twopass_scene::Scene;
+
+use super::settings::{AtlasSource, Resolved};
+use crate::error::BakeError;
+
+/// Largest lightmap side, texels: 8192 x 8192 RGB f32 is 805 MB in memory.
+pub const MAX_LIGHTMAP_SIDE: u32 = 8192;
+
+/// Largest ratio between a triangle's share of its chart's atlas area and its share of the
+/// chart's surface area that the unwrapper accepts before it splits the chart.
+pub const MAX_AREA_DISTORTION: f32 = 2.0;
+
+/// A lightmap's layout: the atlas size, each triangle's corners in the atlas (texels, y
+/// down), the rectangles filled and dilated separately, and per corner the group that keeps
+/// vertices apart in the `.glb` (a chart, or a texture-coordinate index).
+pub(super) struct Layout {
+    /// Charts in the atlas (one for the scene's own coordinates).
+    pub(super) charts: usize,
+    pub(super) width: u32,
+    pub(super) height: u32,
+    pub(super) corners: Vec<[Vec2; 3]>,
+    pub(super) regions: Vec<Region>,
+    pub(super) groups: Vec<[u32; 3]>,
+    pub(super) source: AtlasSource,
+}
+
+/// A rectangle of the atlas with the triangles inside it.
+pub(super) struct Region {
+    pub(super) at: [u32; 2],
+    pub(super) size: [u32; 2],
+    pub(super) triangles: Vec<u32>,
+}
+
+/// One object as the unwrapper takes it: its own vertex list and indices, and the scene
+/// triangle behind each of its triangles.
+struct ObjectMesh {
+    positions: Vec<[f32; 3]>,
+    indices: Vec<u32>,
+    triangles: Vec<u32>,
+}
+
+/// The generated layout: every object unwrapped into charts and all packed into one atlas
+/// page by [`uvunwrap`]; one region, since the charts lie `2 padding` texels apart.
+pub(super) fn generated_layout(
+    scene: &Scene,
+    s: &Resolved,
+    why: String,
+) -> Result<Layout, BakeError> {
+    let m = &scene.mesh;
+    let too_big = |detail: String| BakeError::Encode {
+        path: PathBuf::from("lightmap"),
+        message: detail,
+    };
+    // One input mesh per object, its triangles in scene order.
+    let inputs: Vec<ObjectMesh> = scene
+        .objects
+        .iter()
+        .map(|o| {
+            let mut index = HashMap::new();
+            let (mut positions, mut indices, mut triangles) = (Vec::new(), Vec::new(), Vec::new());
+            for t in o.triangles.clone() {
+                triangles.push(t);
+                for v in m.triangles[t as usize] {
+                    let k = *index.entry(v).or_insert_with(|| {
+                        positions.push(m.positions[v as usize].to_array());
+                        positions.len() as u32 - 1
+                    });
+                    indices.push(k);
+                }
+            }
+            ObjectMesh {
+                positions,
+                indices,
+                triangles,
+            }
+        })
+        .collect();
+    let meshes: Vec<uvunwrap::MeshInput<'_>> = inputs
+        .iter()
+        .map(|o| uvunwrap::MeshInput::new(&o.positions, &o.indices))
+        .collect();
+    let options = uvunwrap::Options {
+        density: uvunwrap::Density::Fixed {
+            texels_per_unit: 1.0 / s.texel_size,
+            page_size: None,
+        },
+        padding: s.padding,
+        max_area_distortion: MAX_AREA_DISTORTION,
+        ..uvunwrap::Options::default()
+    };
+    let atlas = uvunwrap::generate(&meshes, &options)
+        .map_err(|e| too_big(format!("the UV unwrap failed: {e}")))?;
+    if atlas.page_count > 1 || atlas.width > MAX_LIGHTMAP_SIDE || atlas.height > MAX_LIGHTMAP_SIDE {
+        return Err(too_big(format!(
+            "the charts need more than {MAX_LIGHTMAP_SIDE} x {MAX_LIGHTMAP_SIDE} texels at a \
+             texel size of {} scene units; choose a larger texel size",
+            s.texel_size
+        )));
+    }
+    let (width, height) = (atlas.width.max(1), atlas.height.max(1));
+    let size = Vec2::new(width as f32, height as f32);
+    let mut corners = vec![[Vec2::ZERO; 3]; m.triangles.len()];
+    let mut groups = vec![[0; 3]; m.triangles.len()];
+    let mut chart_ids: HashMap<(usize, u32), u32> = HashMap::new();
+    let mut all = Vec::with_capacity(m.triangles.len());
+    for (o, (out, input)) in atlas.meshes.iter().zip(&inputs).enumerate() {
+        for (k, &t) in input.triangles.iter().enumerate() {
+            let vs: [&uvunwrap::OutputVertex; 3] =
+                std::array::from_fn(|c| &out.vertices[out.indices[3 * k + c] as usize]);
+            corners[t as usize] = vs.map(|v| Vec2::from(v.uv) * size);
+            groups[t as usize] = vs.map(|v| {
+                let next = chart_ids.len() as u32;
+                *chart_ids
+                    .entry((o, v.chart.unwrap_or(u32::MAX)))
+                    .or_insert(next)
+            });
+            all.push(t);
+        }
+    }
+    Ok(Layout {
+        charts: chart_ids.len(),
+        width,
+        height,
+        corners,
+        regions: vec![Region {
+            at: [0, 0],
+            size: [width, height],
+            triangles: all,
+        }],
+        groups,
+        source: AtlasSource::Generated(why),
+    })
+}
+
+/// The layout of the scene's own texture coordinates, or why they cannot serve. The atlas is
+/// square, with as many texels as the surface area holds at `texel_size` spread over the
+/// coordinates' own area; OBJ's v points up, the atlas's y down.
+pub(super) fn scene_layout(scene: &Scene, s: &Resolved) -> Result<Layout, String> {
+    let m = &scene.mesh;
+    let mut uv = Vec::with_capacity(m.triangles.len());
+    for (t, idx) in m.texcoord_indices.iter().enumerate() {
+        let Some(idx) = idx else {
+            return Err(format!(
+                "object `{}` has no texture coordinates",
+                scene.objects[m.triangle_object[t] as usize].name
+            ));
+        };
+        let q = idx.map(|k| m.texcoords[k as usize]);
+        if q.iter()
+            .any(|p| !(0.0..=1.0).contains(&p.x) || !(0.0..=1.0).contains(&p.y))
+        {
+            return Err(format!(
+                "object `{}` has texture coordinates outside [0, 1]",
+                scene.objects[m.triangle_object[t] as usize].name
+            ));
+        }
+        uv.push(q);
+    }
+    if uv.is_empty() {
+        return Err("the scene has no triangles".to_owned());
+    }
+    let uv_area: f64 = uv
+        .iter()
+        .map(|q| f64::from((q[1] - q[0]).perp_dot(q[2] - q[0]).abs()) / 2.0)
+        .sum();
+    if uv_area <= 0.0 {
+        return Err("the texture coordinates cover no area".to_owned());
+    }
+    let texels = scene.total_area() / f64::from(s.texel_size).powi(2) / uv_area;
+    let side = (texels.sqrt().ceil() as u32).max(4).next_multiple_of(4);
+    if side > MAX_LIGHTMAP_SIDE {
+        return Err(format!(
+            "they would need {side} x {side} texels at this texel size"
+        ));
+    }
+    let size = Vec2::splat(side as f32);
+    let corners: Vec<[Vec2; 3]> = uv
+        .iter()
+        .map(|q| q.map(|p| Vec2::new(p.x, 1.0 - p.y) * size))
+        .collect();
+    // Overlap: no texel centre strictly inside two triangles (a shared edge is no overlap).
+    let mut owner = vec![u32::MAX; (side * side) as usize];
+    for (t, c) in corners.iter().enumerate() {
+        let [a, b, d] = *c;
+        let det = (b - a).perp_dot(d - a);
+        if det.abs() <= f32::MIN_POSITIVE {
+            return Err(format!(
+                "object `{}` has a triangle of zero area in texture space",
+                scene.objects[m.triangle_object[t] as usize].name
+            ));
+        }
+        let lo = a.min(b).min(d).floor().max(Vec2::ZERO);
+        let hi = a.max(b).max(d).ceil().min(size);
+        for y in lo.y as u32..hi.y as u32 {
+            for x in lo.x as u32..hi.x as u32 {
+                let p = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+                let w1 = (p - a).perp_dot(d - a) / det;
+                let w2 = (b - a).perp_dot(p - a) / det;
+                if w1 > 1e-4 && w2 > 1e-4 && 1.0 - w1 - w2 > 1e-4 {
+                    let i = (y * side + x) as usize;
+                    if owner[i] != u32::MAX {
+                        let name = |t: usize| &scene.objects[m.triangle_object[t] as usize].name;
+                        return Err(format!(
+                            "texture coordinates overlap (objects `{}` and `{}`)",
+                            name(owner[i] as usize),
+                            name(t)
+                        ));
+                    }
+                    owner[i] = t as u32;
+                }
+            }
+        }
+    }
+    let groups = m
+        .texcoord_indices
+        .iter()
+        .map(|i| i.unwrap_or([0; 3]))
+        .collect();
+    Ok(Layout {
+        charts: 1,
+        width: side,
+        height: side,
+        corners,
+        regions: vec![Region {
+            at: [0, 0],
+            size: [side, side],
+            triangles: (0..m.triangles.len() as u32).collect(),
+        }],
+        groups,
+        source: AtlasSource::Scene,
+    })
+}

@@ -1,0 +1,10 @@
+//! The bake crate's tests, one binary (one link step): formats read back with independent
+//! readers, and the lightmap checked against the solution, through the helpers of `common`.
+
+mod common;
+
+mod bake;
+mod blender;
+mod lightmap;
+mod validator;
+mod vertex;

@@ -1,0 +1,16 @@
+//! The command line's tests, one binary (one link step): each module drives the built
+//! `twopass` as scripts do, through the helpers of `common`.
+
+mod common;
+
+mod bake;
+mod cli;
+mod compare;
+mod lightmap;
+mod lightmap_render;
+mod limits;
+mod outputs;
+mod readme;
+mod render;
+mod tradeoff;
+mod view;
