@@ -543,8 +543,10 @@ fn import_graph(files: &BTreeMap<ModPath, String>) -> BTreeMap<ModPath, BTreeSet
                 let end = tail
                     .find(|ch: char| !(ch.is_alphanumeric() || ch == '_' || ch == ':'))
                     .unwrap_or(tail.len());
-                if !before.is_some_and(|b| b.is_alphanumeric() || b == '_') {
-                    paths.push(tail[..end].to_owned());
+                // A bare `crate::` opens a grouped `use` whose paths the use tree gives.
+                let path = &tail[..end];
+                if path != "crate::" && !before.is_some_and(|b| b.is_alphanumeric() || b == '_') {
+                    paths.push(path.to_owned());
                 }
                 rest = &tail[end.max(1)..];
             }
@@ -685,7 +687,10 @@ fn the_file_checks_fire_on_counter_examples() {
         count(&[
             ("", "mod a;\nmod b;\n"),
             ("a", "use crate::b::B;\npub struct A;\n"),
-            ("b", "pub struct B;\nfn f() -> crate::a::A { crate::a::A }\n"),
+            (
+                "b",
+                "pub struct B;\nfn f() -> crate::a::A { crate::a::A }\n"
+            ),
         ]),
         1
     );
@@ -704,20 +709,21 @@ fn the_file_checks_fire_on_counter_examples() {
             ("", "mod a;\nmod b;\nmod c;\npub use c::C;\n"),
             ("a", "use crate::{C, b::{self, B as Bee}};\npub struct A;\n"),
             ("b", "pub struct B;\n"),
-            (
-                "c",
-                "use crate::{\n    a::A,\n};\npub struct C;\n"
-            ),
+            ("c", "use crate::{\n    a::A,\n};\npub struct C;\n"),
         ]),
         1
     );
     // The same names without a circle: a re-export is followed to the file that defines the
-    // name, so using `crate::A` from a sibling does not point at the root.
+    // name, so using `crate::A` from a sibling, alone or in a group over several lines, does not
+    // point at the root.
     assert_eq!(
         count(&[
             ("", "mod a;\nmod b;\npub use a::A;\npub use b::B;\n"),
             ("a", "pub struct A;\n"),
-            ("b", "use crate::A;\nuse super::a;\npub struct B(A);\n"),
+            (
+                "b",
+                "use crate::{\n    A,\n};\nuse super::a;\npub struct B(A);\n"
+            ),
         ]),
         0
     );
@@ -725,7 +731,10 @@ fn the_file_checks_fire_on_counter_examples() {
     assert_eq!(
         count(&[
             ("", "mod a;\nmod b;\n"),
-            ("a", "use crate::b::B;\n/// Unlike `crate::a::A`.\npub struct A;\n"),
+            (
+                "a",
+                "use crate::b::B;\n/// Unlike `crate::a::A`.\npub struct A;\n"
+            ),
             (
                 "b",
                 "use twopass_scene::a::A;\n// crate::a::A\npub struct B;\n#[cfg(test)]\nmod \

@@ -400,7 +400,7 @@ fn the_tracer_adds_no_light_through_glass_again() {
         ..RenderSettings::default()
     };
     // The caustic on the floor, to the camera's right of the glass sphere's foot (the
-    // regions of the README's measurement, as fractions of the image).
+    // regions of docs/benchmarks.md's specular-transfer figures, as fractions of the image).
     let (x, y) = (
         (150.0 / 256.0, 186.0 / 256.0),
         (222.0 / 256.0, 238.0 / 256.0),

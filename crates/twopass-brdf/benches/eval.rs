@@ -1,6 +1,6 @@
 //! Evaluations per second of each reflection model (criterion). Each iteration evaluates one
 //! BRDF on 1024 precomputed direction pairs, so the figures compare the models' arithmetic,
-//! not the random-number generator. Report them as ratios to Lambert (README).
+//! not the random-number generator. Report them as ratios to Lambert (docs/benchmarks.md).
 
 use std::hint::black_box;
 

@@ -18,9 +18,10 @@ use glam::{Vec2, Vec3};
 use crate::beckmann::Beckmann;
 use crate::colour::mean;
 use crate::frame::{COS_FLOOR, half_vector, reflect_about_half, reflected_pdf, symmetric_dot};
+use crate::fresnel::{self, FresnelModel};
 use crate::interface::{Glossy, impl_brdf_via_glossy};
 use crate::param::{check_diffuse, check_sum, check_unit};
-use crate::{ComplexIor, FresnelModel, ParamError, Rgb, fresnel, v_cavity};
+use crate::{ComplexIor, ParamError, Rgb, v_cavity};
 
 /// The Cook-Torrance BRDF.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -11,6 +11,16 @@ use glam::Vec3;
 
 use crate::{ComplexIor, Rgb};
 
+/// Which Fresnel reflectance a Cook-Torrance lobe evaluates.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum FresnelModel {
+    /// Exact unpolarized Fresnel for a complex index, (R_s + R_p) / 2.
+    #[default]
+    Exact,
+    /// Schlick's approximation from the normal-incidence reflectance of the same index.
+    Schlick,
+}
+
 #[derive(Debug, Clone, Copy)]
 struct C {
     re: f64,

@@ -68,9 +68,7 @@ pub mod v_cavity;
 
 pub use colour::Rgb;
 pub use error::ParamError;
+pub use fresnel::FresnelModel;
 pub use ior::ComplexIor;
-pub use material::{
-    BlinnPhongParams, CookTorranceParams, FresnelModel, Lobe, Material, PhongParams,
-};
+pub use material::{BlinnPhongParams, CookTorranceParams, Lobe, Material, PhongParams};
 pub use model::{Brdf, BrdfModel, BrdfSample, SampleKind};
-

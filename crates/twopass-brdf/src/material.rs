@@ -6,12 +6,14 @@ use glam::{Vec2, Vec3};
 use crate::blinn_phong::BlinnPhong;
 use crate::cook_torrance::CookTorrance;
 use crate::delta::DeltaLobe;
+use crate::fresnel::FresnelModel;
 use crate::interface::{Brdf, BrdfSample};
 use crate::lambert::Lambert;
 use crate::model::BrdfModel;
 use crate::modified_phong::ModifiedPhong;
 use crate::param::{check_diffuse, check_exponent, check_sum, check_unit};
 use crate::phong::Phong;
+use crate::phong::PhongShading;
 use crate::{ComplexIor, ParamError, Rgb};
 
 /// Parameters of a Phong material (Phong 1975), as published or normalized.
@@ -41,16 +43,6 @@ pub struct BlinnPhongParams {
     pub exponent: f32,
     /// `false`: the classic shading form; `true`: the normalized, reciprocal form.
     pub normalized: bool,
-}
-
-/// Which Fresnel reflectance a Cook-Torrance lobe evaluates.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum FresnelModel {
-    /// Exact unpolarized Fresnel for a complex index, (R_s + R_p) / 2.
-    #[default]
-    Exact,
-    /// Schlick's approximation from the normal-incidence reflectance of the same index.
-    Schlick,
 }
 
 /// Parameters of a Cook-Torrance material (Cook & Torrance 1981).
@@ -405,6 +397,27 @@ impl Material {
         match self.model() {
             Some(m) if self.delta().is_none() => m.pdf(wo, wi),
             _ => 0.0,
+        }
+    }
+}
+
+// Read from a material here, beside `Material`, as the material builds every model: the models'
+// files then need not know the material type (no import circle between them).
+impl PhongShading {
+    /// The shading terms of a material: its k_a, rho / pi, and for a Phong lobe (published or
+    /// normalized) its k_s and n as written; for other materials k_s = 0.
+    pub fn from_material(m: &Material) -> Self {
+        let (specular, exponent) = match m.lobe() {
+            Some(Lobe::Phong {
+                specular, exponent, ..
+            }) => (*specular, *exponent),
+            _ => (Rgb::ZERO, 0.0),
+        };
+        Self {
+            ambient: m.ambient(),
+            diffuse: m.diffuse_albedo() * std::f32::consts::FRAC_1_PI,
+            specular,
+            exponent,
         }
     }
 }

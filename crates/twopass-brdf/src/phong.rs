@@ -22,7 +22,7 @@ use crate::frame::{COS_FLOOR, Frame, both_above, pow_one_minus, reflect};
 use crate::interface::{Glossy, impl_brdf_via_glossy};
 use crate::param::{check_diffuse, check_exponent, check_unit};
 use crate::sample::square_to_phong_lobe;
-use crate::{Material, ParamError, Rgb};
+use crate::{ParamError, Rgb};
 
 /// 1 - cos alpha = |wi - R(wo)|^2 / 2, without cancellation near the mirror direction and
 /// bit-identical under swapping the arguments.
@@ -137,23 +137,6 @@ pub struct PhongShading {
 }
 
 impl PhongShading {
-    /// The shading terms of a material: its k_a, rho / pi, and for a Phong lobe (published or
-    /// normalized) its k_s and n as written; for other materials k_s = 0.
-    pub fn from_material(m: &Material) -> Self {
-        let (specular, exponent) = match m.lobe() {
-            Some(crate::Lobe::Phong {
-                specular, exponent, ..
-            }) => (*specular, *exponent),
-            _ => (Rgb::ZERO, 0.0),
-        };
-        Self {
-            ambient: m.ambient(),
-            diffuse: m.diffuse_albedo() * std::f32::consts::FRAC_1_PI,
-            specular,
-            exponent,
-        }
-    }
-
     /// The ambient term I_amb k_a.
     pub fn ambient_term(&self, i_amb: Rgb) -> Rgb {
         i_amb * self.ambient

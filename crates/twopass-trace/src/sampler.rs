@@ -8,8 +8,8 @@
 //! samples of one pixel then fill every dimension evenly (the first 2^k points of each
 //! dimension pair form a net) instead of clumping as independent numbers do, while every
 //! single point stays uniform over the unit cube, so each estimate stays unbiased; neighbouring
-//! pixels stay independent. On the Cornell box the path tracer's relative RMSE at 256 spp
-//! falls from 3.01 % to 2.21 % (README, "The path tracer against Mitsuba 3, per sample").
+//! pixels stay independent, and the error at a given sample count falls (measured in
+//! docs/benchmarks.md, "The path tracer against Mitsuba 3").
 //! Past the sequence's 256 dimensions (paths of more than about 36 bounces) or 2^16 samples
 //! of a pixel, and for [`Sampler::next_u64`], the numbers come from SplitMix64 (Steele, Lea &
 //! Flood 2014, [`twopass_brdf::random`], the workspace's one home of random streams) over a
