@@ -30,9 +30,9 @@ use crate::pipeline::{
 pub struct CompareArgs {
     /// Scene file (.toml) or mesh (.obj).
     pub scene: PathBuf,
-    /// Draft quality: 256 pixels wide, few samples, a coarse radiosity mesh (the Cornell box
-    /// finishes in well under a minute on 2 cores). Without it: 512 wide, 16 samples per pixel,
-    /// 4096 for the reference, the default radiosity mesh solved to 1e-4.
+    /// Draft quality: 256 pixels wide, few samples, a coarse radiosity mesh. Without it: 512
+    /// wide, 16 samples per pixel, 4096 for the reference, the default radiosity mesh solved to
+    /// 1e-4.
     #[arg(long)]
     pub quick: bool,
     /// Samples per pixel of the reference path tracer (overrides the preset).
