@@ -1,5 +1,6 @@
 //! The bake crate's tests, one binary (one link step): formats read back with independent
-//! readers, and the lightmap checked against the solution, through the helpers of `common`.
+//! readers, and the lightmap checked against the solution, through the shared functions in
+//! `common`.
 
 mod common;
 

@@ -10,8 +10,8 @@ use twopass_brdf::frame::Frame;
 use twopass_brdf::{Material, Rgb};
 use twopass_scene::{Hit, Ray, Scene};
 
-pub use crate::counters::Tally;
-pub use crate::emitters::{EmitterChoice, Lights};
+use crate::counters::Tally;
+use crate::emitters::Lights;
 use crate::film::Radiance;
 use crate::sampler::{Sampler, stratum};
 

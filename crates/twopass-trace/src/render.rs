@@ -15,7 +15,7 @@ use twopass_scene::{Camera, Ray, Scene};
 
 use twopass_image::Image;
 
-pub use crate::counters::RenderProgress;
+use crate::counters::RenderProgress;
 use crate::counters::Tally;
 use crate::film::{LayerImages, Radiance};
 use crate::integrator::{Integrator, SampleState};

@@ -1,5 +1,5 @@
 //! The command line's tests, one binary (one link step): each module drives the built
-//! `twopass` as scripts do, through the helpers of `common`.
+//! `twopass` as scripts do, through the shared functions in `common`.
 
 mod common;
 
