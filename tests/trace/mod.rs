@@ -8,5 +8,6 @@ mod caustics;
 mod common;
 mod determinism;
 mod furnace;
+mod gather;
 mod hybrid;
 mod optics;

@@ -65,6 +65,7 @@ pub mod colour;
 pub mod error;
 pub mod fingerprint;
 pub mod format;
+pub mod gathered;
 pub mod gltf;
 pub mod lightmap;
 pub mod lightmap_read;
@@ -77,16 +78,19 @@ pub use colour::{AUTO_EXPOSURE_PERCENTILE, ColorMapping, RadianceParts};
 pub use error::{BakeError, BakeProblem};
 pub use fingerprint::{Fingerprint, geometry_fingerprint, lighting_fingerprint, scene_fingerprint};
 pub use format::{BAKE_FORMAT_VERSION, MAX_BAKE_BYTES, decode_bake, encode_bake, read_bake};
+pub use gathered::{ELEMENT_KEYS, gathered_solution};
 pub use gltf::{Glb, HDR_ATTRIBUTES, encode_glb};
-pub use lightmap::{AtlasSource, CameraRecord, Lightmap, LightmapSettings, bake_lightmap};
+pub use lightmap::{
+    AtlasSource, CameraRecord, Lightmap, LightmapSettings, TexelSource, bake_lightmap,
+};
 pub use lightmap_read::{LightmapRadiance, lightmap_exr_path, read_lightmap_glb};
 pub use manifest::{
-    AdaptiveRecord, ColorRecord, CountsRecord, EnergyRecord, FileRecord, LightmapRecord,
-    MANIFEST_VERSION, Manifest, ResidualsRecord, SettingsRecord, TimingsRecord,
+    AdaptiveRecord, ColorRecord, CountsRecord, EnergyRecord, FileRecord, GatherRecord,
+    LightmapRecord, MANIFEST_VERSION, Manifest, ResidualsRecord, SettingsRecord, TimingsRecord,
 };
 pub use ply::{display_colour, encode_ply};
 pub use twopass_radiosity::{InvalidMesh, MeshPart};
-pub use vertex::encode_vertex_glb;
+pub use vertex::{VERTEX_KEYS, encode_vertex_glb};
 
 /// Writes `bytes` to `path` atomically (the workspace's one atomic write,
 /// [`twopass_composite::write::write_atomic`]), as a [`BakeError`] on failure.

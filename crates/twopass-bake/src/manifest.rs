@@ -252,6 +252,38 @@ pub struct LightmapRecord {
     pub png: String,
     /// Time to lay out, fill and encode the lightmap, seconds.
     pub seconds: f64,
+    /// The final gather that filled the texels, or `None` when they show the solution.
+    #[serde(default)]
+    pub gather: Option<GatherRecord>,
+}
+
+/// The settings and cost of a final gather, as the manifest records them.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GatherRecord {
+    /// Shadow rays per point over all emitters.
+    pub shadow_rays_per_point: u32,
+    /// Gather rays of a point's first batch.
+    pub min_rays: u32,
+    /// Most gather rays of one point.
+    pub max_rays: u32,
+    /// Relative standard error of the indirect luminance at which a point stops.
+    pub target_error: f32,
+    /// Most mirror and glass bounces of a gather ray.
+    pub max_depth: u32,
+    /// Seed of every point's random sequence.
+    pub seed: u64,
+    /// How the indirect part was denoised.
+    pub filter: String,
+    /// Closest-hit rays traced.
+    pub rays: u64,
+    /// Shadow rays traced.
+    pub shadow_rays: u64,
+    /// Rays (both kinds) per second of the gather.
+    pub rays_per_second: f64,
+    /// Points (texels and vertices) that showed the solution instead because the time budget
+    /// ran out before their gather.
+    #[serde(default)]
+    pub late_points: u64,
 }
 
 fn seconds(d: Duration) -> f64 {

@@ -6,10 +6,18 @@ use twopass_brdf::Rgb;
 use twopass_radiosity::Solution;
 use twopass_scene::Scene;
 
+use rayon::prelude::*;
+use twopass_scene::{RadianceEstimate, RadianceEstimator};
+
 use crate::colour::{ColorMapping, RadianceParts};
 use crate::error::BakeError;
 use crate::gltf::{Glb, GlbBuilder, unlit_vertex_colour_material};
 use crate::weld::SharedVertices;
+
+/// The first key of the vertices' gather sequences: lightmap texels take the keys from 0
+/// (their index in the atlas, below 2^26), vertices this and up, so the two never share a
+/// sequence.
+pub const VERTEX_KEYS: u64 = 1 << 40;
 
 /// The radiance parts at barycentrics `b` of scene triangle `t`, interpolated on the element
 /// mesh (zero where the triangle takes no part in the solve).
@@ -46,10 +54,15 @@ fn parts_at(solution: &Solution, parts: &RadianceParts, t: u32, b: [f32; 3]) -> 
 /// only when the corner's triangles lie on different patches). A user vertex carries one
 /// value, so light that changes inside a large triangle (a shadow on a wall of two triangles)
 /// is lost: that is what the lightmap ([`bake_lightmap`](crate::bake_lightmap)) is for.
+///
+/// With `gather`, each vertex's value is instead a final gather at the vertex (at the corner
+/// of the first of its triangles, keyed by [`VERTEX_KEYS`] plus the vertex's index in the
+/// file), so light that the element mesh blurs or misses reaches the vertex as it is there.
 pub fn encode_vertex_glb(
     solution: &Solution,
     scene: &Scene,
     mapping: ColorMapping,
+    gather: Option<&dyn RadianceEstimator>,
 ) -> Result<Glb, BakeError> {
     let m = &scene.mesh;
     let parts = RadianceParts::of(solution);
@@ -66,6 +79,8 @@ pub fn encode_vertex_glb(
             Vec::new(),
             Vec::new(),
         );
+        // Per vertex: the first triangle corner that uses it, where a gather looks.
+        let mut first: Vec<(u32, [f32; 3])> = Vec::new();
         for t in object.triangles.clone() {
             let (tri, nrm) = (m.triangles[t as usize], m.normal_indices[t as usize]);
             for k in 0..3 {
@@ -80,6 +95,9 @@ pub fn encode_vertex_glb(
                 }
                 let mut corner = [0.0; 3];
                 corner[k] = 1.0;
+                if new {
+                    first.push((t, corner));
+                }
                 let value = parts_at(solution, &parts, t, corner);
                 for (s, x) in sums[v as usize].iter_mut().zip(value) {
                     *s += x;
@@ -97,7 +115,22 @@ pub fn encode_vertex_glb(
                 .map(|(s, &n)| s[i] / n as f32)
                 .collect()
         };
-        let (radiance, direct, indirect) = (mean(0), mean(1), mean(2));
+        let (radiance, direct, indirect) = match gather {
+            None => (mean(0), mean(1), mean(2)),
+            Some(g) => {
+                let base = VERTEX_KEYS + n_vertices as u64;
+                let e: Vec<RadianceEstimate> = first
+                    .par_iter()
+                    .enumerate()
+                    .map(|(i, &(t, b))| g.estimate(t, b, base + i as u64))
+                    .collect();
+                (
+                    e.iter().map(RadianceEstimate::total).collect(),
+                    e.iter().map(|e| e.direct).collect(),
+                    e.iter().map(|e| e.indirect).collect(),
+                )
+            }
+        };
         let colours = mapping.colors(&radiance, &mut clamped_vertices);
         b.vertex_radiance_mesh(
             &object.name,

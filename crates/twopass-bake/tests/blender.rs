@@ -8,7 +8,7 @@
 
 use std::process::Command;
 
-use twopass_bake::{ColorMapping, LightmapSettings, bake_lightmap};
+use twopass_bake::{ColorMapping, LightmapSettings, TexelSource, bake_lightmap};
 
 use crate::common::{cornell, repo};
 
@@ -30,7 +30,13 @@ fn blender_imports_the_lightmap_glb_at_real_size_with_its_lightmap() {
         texel_size: Some(5.0),
         padding: 2,
     };
-    let lm = bake_lightmap(&solution, &scene, &settings, ColorMapping::auto(&solution)).unwrap();
+    let lm = bake_lightmap(
+        TexelSource::Solution(&solution),
+        &scene,
+        &settings,
+        ColorMapping::auto(&solution),
+    )
+    .unwrap();
     let dir = tempfile::tempdir().unwrap();
     let glb = dir.path().join("cornell-box.lightmap.glb");
     std::fs::write(&glb, &lm.glb).unwrap();

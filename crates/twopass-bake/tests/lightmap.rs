@@ -6,7 +6,7 @@
 use std::sync::OnceLock;
 
 use glam::{DVec2, Vec2, Vec3};
-use twopass_bake::lightmap::{AtlasSource, Lightmap, LightmapSettings, bake_lightmap};
+use twopass_bake::lightmap::{AtlasSource, Lightmap, LightmapSettings, TexelSource, bake_lightmap};
 use twopass_bake::{self as bake, ColorMapping};
 use twopass_radiosity::{Options, Solution, Solver};
 
@@ -23,8 +23,13 @@ fn baked() -> &'static (Scene, Solution, Lightmap) {
             texel_size: Some(TEXEL),
             padding: 2,
         };
-        let lm =
-            bake_lightmap(&solution, &scene, &settings, ColorMapping::auto(&solution)).unwrap();
+        let lm = bake_lightmap(
+            TexelSource::Solution(&solution),
+            &scene,
+            &settings,
+            ColorMapping::auto(&solution),
+        )
+        .unwrap();
         (scene, solution, lm)
     })
 }
@@ -35,7 +40,13 @@ fn the_texel_size_is_the_given_one_or_the_scene_diagonal_over_200() {
     assert_eq!(given.texel_size, TEXEL);
     let settings = LightmapSettings::default();
     assert_eq!(settings.texel_size, None);
-    let derived = bake_lightmap(solution, scene, &settings, ColorMapping::auto(solution)).unwrap();
+    let derived = bake_lightmap(
+        TexelSource::Solution(solution),
+        scene,
+        &settings,
+        ColorMapping::auto(solution),
+    )
+    .unwrap();
     assert_eq!(derived.texel_size, scene.bounds.diagonal() / 200.0);
 }
 
@@ -282,7 +293,13 @@ fn bake_obj(scene: &Scene) -> Lightmap {
         texel_size: Some(0.01),
         padding: 2,
     };
-    bake_lightmap(&solution, scene, &settings, ColorMapping::auto(&solution)).unwrap()
+    bake_lightmap(
+        TexelSource::Solution(&solution),
+        scene,
+        &settings,
+        ColorMapping::auto(&solution),
+    )
+    .unwrap()
 }
 
 #[test]
@@ -341,7 +358,13 @@ fn curved_surfaces_unwrap_into_few_charts_that_carry_their_power() {
         texel_size: Some(texel),
         padding: 2,
     };
-    let lm = bake_lightmap(&solution, &scene, &settings, ColorMapping::auto(&solution)).unwrap();
+    let lm = bake_lightmap(
+        TexelSource::Solution(&solution),
+        &scene,
+        &settings,
+        ColorMapping::auto(&solution),
+    )
+    .unwrap();
     assert!(
         lm.charts * 100 < scene.mesh.triangles.len(),
         "{} charts for {} triangles",

@@ -99,7 +99,13 @@ fn lightmap_glb_passes_the_khronos_validator() {
         texel_size: Some(10.0),
         padding: 2,
     };
-    let lm = bake::bake_lightmap(solution, scene, &settings, ColorMapping::auto(solution)).unwrap();
+    let lm = bake::bake_lightmap(
+        bake::TexelSource::Solution(solution),
+        scene,
+        &settings,
+        ColorMapping::auto(solution),
+    )
+    .unwrap();
     if let Some(report) = assert_valid("cornell-box.lightmap.glb", &lm.glb) {
         assert_eq!(report["info"]["hasTextures"], true, "{report}");
         assert_eq!(report["info"]["maxUVs"], 2, "{report}");

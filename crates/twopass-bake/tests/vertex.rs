@@ -11,7 +11,7 @@ use crate::common::cornell;
 fn vertex_glb_holds_the_element_values_at_the_users_vertices() {
     let (scene, solution) = cornell(80.0);
     let mapping = ColorMapping::auto(&solution);
-    let glb = bake::encode_vertex_glb(&solution, &scene, mapping).unwrap();
+    let glb = bake::encode_vertex_glb(&solution, &scene, mapping, None).unwrap();
     let parts = RadianceParts::of(&solution);
     let mesh = solution.mesh();
 

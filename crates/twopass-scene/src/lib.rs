@@ -52,7 +52,7 @@ pub use load::{
     MAX_COORDINATE, MAX_EMITTED_POWER, MAX_TRIANGLES, SPHERE_TOLERANCE, load, load_toml,
     load_toml_with, load_with,
 };
-pub use radiance::DiffuseRadiance;
+pub use radiance::{DiffuseRadiance, RadianceEstimate, RadianceEstimator};
 pub use scene::{Bounds, Emitter, Hit, Mesh, Object, Scene, SceneMaterial};
 pub use targets::SpecularTargets;
 pub use transform::Transform;

@@ -33,3 +33,43 @@ pub trait DiffuseRadiance: Sync {
         Rgb::ZERO
     }
 }
+
+/// Diffuse light leaving one surface point, estimated there (a final gather) rather than read
+/// from a precomputed solution: what a bake fills its lightmap texels and vertices with.
+/// `twopass_trace::gather::Gatherer` implements it over a [`DiffuseRadiance`] solution.
+pub trait RadianceEstimator: Sync {
+    /// The estimate at barycentrics `barycentric` of triangle `triangle`, toward any direction
+    /// on its front side. `key` names the point's random sequence: the same key, the same
+    /// estimate, whichever thread or process computes it and whatever else it computes.
+    fn estimate(&self, triangle: u32, barycentric: [f32; 3], key: u64) -> RadianceEstimate;
+}
+
+/// One point's estimate of [`RadianceEstimator::estimate`]: radiance in W/(m^2 sr) per
+/// channel, split into its parts (emission + direct + indirect = the total).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct RadianceEstimate {
+    /// Emitted radiance L_e of the surface's front side.
+    pub emitted: Rgb,
+    /// Light reflected once from the emitters (what shadow rays find).
+    pub direct: Rgb,
+    /// Every other reflected diffuse light (two or more bounces, through mirrors and glass).
+    pub indirect: Rgb,
+    /// Standard error of `indirect`'s luminance, W/(m^2 sr): the noise left in it.
+    pub indirect_error: f32,
+    /// Of the gather rays that hit a surface, the fraction whose first hit was the back of an
+    /// opaque surface, in [0, 1]: near 1 for a point inside a closed object (a lightmap
+    /// texel whose centre lies where another object intersects its surface), whose value is
+    /// meaningless and must not be shown.
+    pub back_faces: f32,
+    /// Closest-hit rays traced for the estimate.
+    pub rays: u64,
+    /// Occlusion (shadow) rays traced for the estimate.
+    pub shadow_rays: u64,
+}
+
+impl RadianceEstimate {
+    /// Emission + direct + indirect, W/(m^2 sr).
+    pub fn total(&self) -> Rgb {
+        self.emitted + self.direct + self.indirect
+    }
+}

@@ -117,44 +117,82 @@ pub fn direct_light(
     if !s.hit.front_face {
         return out;
     }
+    for e in 0..scene.emitters.len() {
+        let part = emitter_light(scene, lights, s, e, grid, sampler, tally, &brdf);
+        out[0] += part[0];
+        out[1] += part[1];
+    }
+    out
+}
+
+/// The irradiance (W/m^2 per channel) that emitter `e` (index into `Scene::emitters`) sends to
+/// the front of the shading point, with `grid` x `grid` stratified shadow rays: the estimator
+/// of [`direct_light`] for one emitter with the BRDF replaced by 1, so that the cosine at the
+/// shading point is the shading normal's (for a final gather, which multiplies by rho / pi).
+pub fn irradiance_from(
+    scene: &Scene,
+    lights: &Lights,
+    s: &Shading<'_>,
+    e: usize,
+    grid: u32,
+    sampler: &mut Sampler,
+    tally: &mut Tally,
+) -> Rgb {
+    if !s.hit.front_face {
+        return Rgb::ZERO;
+    }
+    emitter_light(scene, lights, s, e, grid, sampler, tally, &|_| {
+        [Rgb::ONE, Rgb::ZERO]
+    })[0]
+}
+
+/// [`direct_light`]'s estimator for emitter `e` alone.
+#[allow(clippy::too_many_arguments)]
+fn emitter_light(
+    scene: &Scene,
+    lights: &Lights,
+    s: &Shading<'_>,
+    e: usize,
+    grid: u32,
+    sampler: &mut Sampler,
+    tally: &mut Tally,
+    brdf: &impl Fn(Vec3) -> [Rgb; 2],
+) -> [Rgb; 2] {
+    let emitter = &scene.emitters[e];
     let k = grid.max(1);
     let n = k * k;
     let x = s.hit.point;
-    for (e, emitter) in scene.emitters.iter().enumerate() {
-        let mut sum = [Rgb::ZERO; 2];
-        for i in 0..n {
-            let y = lights.sample(scene, e, stratum(i, k, sampler.next_2d()));
-            let d = y.position - x.position;
-            let dist2 = d.length_squared();
-            if dist2 <= 0.0 {
-                continue;
-            }
-            let wi = d / dist2.sqrt();
-            let cos_y = -wi.dot(y.normal);
-            if cos_y <= 0.0 || wi.dot(x.normal) <= 0.0 {
-                continue;
-            }
-            let wl = s.frame.to_local(wi);
-            if wl.z <= 0.0 {
-                continue;
-            }
-            let f = brdf(wl);
-            if f[0].max_element() <= 0.0 && f[1].max_element() <= 0.0 {
-                continue;
-            }
-            tally.shadow_rays += 1;
-            if scene.occluded_between(&x, &y) {
-                continue;
-            }
-            let g = wl.z * cos_y / dist2;
-            sum[0] += f[0] * g;
-            sum[1] += f[1] * g;
+    let mut sum = [Rgb::ZERO; 2];
+    for i in 0..n {
+        let y = lights.sample(scene, e, stratum(i, k, sampler.next_2d()));
+        let d = y.position - x.position;
+        let dist2 = d.length_squared();
+        if dist2 <= 0.0 {
+            continue;
         }
-        let scale = emitter.radiance * (emitter.area / n as f32);
-        out[0] += sum[0] * scale;
-        out[1] += sum[1] * scale;
+        let wi = d / dist2.sqrt();
+        let cos_y = -wi.dot(y.normal);
+        if cos_y <= 0.0 || wi.dot(x.normal) <= 0.0 {
+            continue;
+        }
+        let wl = s.frame.to_local(wi);
+        if wl.z <= 0.0 {
+            continue;
+        }
+        let f = brdf(wl);
+        if f[0].max_element() <= 0.0 && f[1].max_element() <= 0.0 {
+            continue;
+        }
+        tally.shadow_rays += 1;
+        if scene.occluded_between(&x, &y) {
+            continue;
+        }
+        let g = wl.z * cos_y / dist2;
+        sum[0] += f[0] * g;
+        sum[1] += f[1] * g;
     }
-    out
+    let scale = emitter.radiance * (emitter.area / n as f32);
+    [sum[0] * scale, sum[1] * scale]
 }
 
 /// The closest hit along a ray leaving the shading point in world direction `direction`,

@@ -33,6 +33,7 @@ pub mod counters;
 pub mod diffuse;
 pub mod emitters;
 pub mod film;
+pub mod gather;
 pub mod hybrid;
 pub mod integrator;
 pub mod light_tracing;

@@ -13,8 +13,12 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use clap::{Args, ValueEnum};
-use twopass_bake::{self as bake, ColorMapping, ColorRecord, FileRecord, Manifest};
+use twopass_bake::{
+    self as bake, ColorMapping, ColorRecord, FileRecord, GatherRecord, Manifest, TexelSource,
+};
 use twopass_radiosity::{Options, Solver, Stop};
+use twopass_scene::RadianceEstimator;
+use twopass_trace::gather::{GatherSettings, Gatherer};
 
 use crate::args::{checked, positive_finite};
 use crate::context::Context;
@@ -87,9 +91,60 @@ pub struct BakeArgs {
     /// Lightmap texel edge on the surface, scene units [default: scene diagonal / 200].
     #[arg(long, value_name = "LENGTH", value_parser = parse_length, requires = "lightmap")]
     pub texel_size: Option<f32>,
+    /// The final gather of the lightmap's texels: `off` (each texel shows the solution
+    /// interpolated there), `auto` (a gather of 64 to 256 rays per texel, adaptive, over the
+    /// solution, plus 64 shadow rays) or N (at most N gather rays per texel, 1 to 65536).
+    #[arg(long, default_value = "auto", value_name = "off|auto|N", value_parser = parse_gather)]
+    pub gather: Gather,
     /// Vertices and patch pairs sampled for the residual report.
     #[arg(long, default_value_t = 200, value_name = "N", value_parser = parse_residual_samples)]
     pub residual_samples: usize,
+}
+
+/// The final gather a bake runs (`--gather`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Gather {
+    /// No gather: texels show the solution.
+    Off,
+    /// The library's default gather.
+    Auto,
+    /// At most this many gather rays per texel.
+    Rays(u32),
+}
+
+impl Gather {
+    /// The gather's settings, `None` when off.
+    fn settings(self, seed: u64) -> Option<GatherSettings> {
+        let default = GatherSettings {
+            seed,
+            ..GatherSettings::default()
+        };
+        match self {
+            Self::Off => None,
+            Self::Auto => Some(default),
+            Self::Rays(n) => Some(GatherSettings {
+                min_rays: default.min_rays.min(n),
+                max_rays: n,
+                ..default
+            }),
+        }
+    }
+}
+
+/// Most gather rays per texel `--gather` accepts.
+const MAX_GATHER_RAYS: u32 = 65_536;
+
+fn parse_gather(s: &str) -> Result<Gather, String> {
+    match s {
+        "off" => Ok(Gather::Off),
+        "auto" => Ok(Gather::Auto),
+        _ => checked(
+            s,
+            |n: &u32| (1..=MAX_GATHER_RAYS).contains(n),
+            &format!("must be off, auto or a ray count from 1 to {MAX_GATHER_RAYS}"),
+        )
+        .map(Gather::Rays),
+    }
 }
 
 /// Most vertices and patch pairs the residual report samples.
@@ -133,12 +188,19 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
     // `--time-budget` bounds the whole process: what loading took is spent, and a tenth (at
     // most 2 s) is kept for the residual report and the files.
     let reserve = |total: Duration| (total / 10).min(Duration::from_secs(2));
+    // A bake that gathers gives the solve half of what is left and the gather the rest.
+    let gathers = args.gather != Gather::Off
+        && (args.lightmap
+            || args.format.contains(&Format::VertexGlb)
+            || matches!(args.gather, Gather::Rays(_)));
+    let solve_share = if gathers { 2 } else { 1 };
     let solve_options = Options {
         stop: Stop {
             time_budget: options.stop.time_budget.map(|total| {
                 total
                     .saturating_sub(started.elapsed())
                     .saturating_sub(reserve(total))
+                    / solve_share
             }),
             ..options.stop
         },
@@ -165,6 +227,22 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
     let residuals = solver.residuals(samples);
     let residuals_time = residuals_started.elapsed();
     let solution = solver.solution();
+    // The final gather over the solution, ending where the time budget (less the reserve for
+    // the files) does.
+    let gatherer = args.gather.settings(ctx.seed).filter(|_| gathers).map(|g| {
+        let gatherer = Gatherer::new(&scene, &solution, g);
+        match options.stop.time_budget {
+            Some(total) => gatherer.with_deadline(started + total.saturating_sub(reserve(total))),
+            None => gatherer,
+        }
+    });
+    let estimator = gatherer.as_ref().map(|g| g as &dyn RadianceEstimator);
+    // The element-mesh outputs are gathered only when a ray count is given.
+    let gathered_elements = match (estimator, args.gather) {
+        (Some(g), Gather::Rays(_)) => Some(bake::gathered_solution(&solution, &scene, g)),
+        _ => None,
+    };
+    let shown = gathered_elements.as_ref().unwrap_or(&solution);
     let mut manifest = Manifest::new(
         &scene,
         &options,
@@ -197,7 +275,7 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
     // One display mapping for every output's clipped colour (.glb COLOR_0, .ply red green blue).
     let (mapping, mode) = match args.exposure {
         Some(exposure) => (ColorMapping { exposure }, "fixed"),
-        None => (ColorMapping::auto(&solution), "auto"),
+        None => (ColorMapping::auto(shown), "auto"),
     };
     // What the manifest says of the mapping, with the vertices a .glb clipped.
     let color_record = |clamped_vertices| ColorRecord {
@@ -210,14 +288,14 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
         let path = dir.join(format!("{stem}.{}", format.extension()));
         let bytes = match format {
             Format::Glb => {
-                let glb = bake::encode_glb(&solution, &scene, mapping)?;
+                let glb = bake::encode_glb(shown, &scene, mapping)?;
                 manifest.color = Some(color_record(glb.clamped_vertices));
                 glb.bytes
             }
-            Format::Ply => bake::encode_ply(&solution, &scene, mapping)?,
-            Format::Bake => bake::encode_bake(&solution, &scene)?,
+            Format::Ply => bake::encode_ply(shown, &scene, mapping)?,
+            Format::Bake => bake::encode_bake(shown, &scene)?,
             Format::VertexGlb => {
-                let glb = bake::encode_vertex_glb(&solution, &scene, mapping)?;
+                let glb = bake::encode_vertex_glb(&solution, &scene, mapping, estimator)?;
                 if manifest.color.is_none() {
                     manifest.color = Some(color_record(glb.clamped_vertices));
                 }
@@ -238,7 +316,12 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
             texel_size: args.texel_size,
             ..bake::LightmapSettings::default()
         };
-        let lm = bake::bake_lightmap(&solution, &scene, &settings, mapping)?;
+        let source = match estimator {
+            Some(g) => TexelSource::Gather(g),
+            None => TexelSource::Solution(&solution),
+        };
+        let lm = bake::bake_lightmap(source, &scene, &settings, mapping)?;
+        let seconds = started.elapsed().as_secs_f64();
         for (ext, bytes) in [("glb", &lm.glb), ("exr", &lm.exr), ("png", &lm.png)] {
             let path = dir.join(format!("{stem}.lightmap.{ext}"));
             bake::write_atomic(&path, bytes)?;
@@ -258,7 +341,23 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
             atlas: lm.atlas.describe(),
             covered_texels: lm.covered_texels,
             png: bake::lightmap::PNG_FORMULA.into(),
-            seconds: started.elapsed().as_secs_f64(),
+            seconds,
+            gather: gatherer.as_ref().map(|gatherer| {
+                let g = gatherer.settings();
+                GatherRecord {
+                    shadow_rays_per_point: g.shadow_rays,
+                    min_rays: g.min_rays,
+                    max_rays: g.max_rays,
+                    target_error: g.target_error,
+                    max_depth: g.max_depth,
+                    seed: g.seed,
+                    filter: bake::lightmap::FILTER.into(),
+                    rays: lm.rays,
+                    shadow_rays: lm.shadow_rays,
+                    rays_per_second: (lm.rays + lm.shadow_rays) as f64 / seconds.max(1e-9),
+                    late_points: gatherer.late_points(),
+                }
+            }),
         });
     }
     manifest.timings.writing_s = writing_started.elapsed().as_secs_f64();
@@ -337,6 +436,18 @@ fn print_summary(m: &Manifest, manifest_path: &Path) -> Result<(), CliError> {
             lm.charts,
             lm.seconds
         );
+        if let Some(g) = &lm.gather {
+            outln!(
+                "  final gather: {} to {} rays and {} shadow rays per texel; {:.3e} rays, \
+                 {:.3e} shadow rays, {:.3e} rays/s",
+                g.min_rays,
+                g.max_rays,
+                g.shadow_rays_per_point,
+                g.rays as f64,
+                g.shadow_rays as f64,
+                g.rays_per_second
+            );
+        }
     }
     for f in &m.files {
         outln!("  wrote {} ({} bytes)", f.path.display(), f.bytes);

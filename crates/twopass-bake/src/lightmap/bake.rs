@@ -4,20 +4,20 @@
 use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
-use twopass_brdf::Rgb;
 use twopass_composite::tonemap::{quantize, srgb_encode};
 use twopass_composite::{Image, Rgb8Image};
-use twopass_scene::{DiffuseRadiance, Scene};
+use twopass_scene::Scene;
 
-use super::fill::fill_region;
+use super::fill::{RegionTexels, TexelSource, fill_region};
 use super::glb::{PNG_FORMULA, encode_lightmap_glb};
 use super::layout::{generated_layout, scene_layout};
 use super::settings::{Lightmap, LightmapSettings, Resolved, TEXELS_PER_DIAGONAL};
 use crate::colour::ColorMapping;
 use crate::error::BakeError;
 
-/// Bakes `solution` (anything that gives diffuse radiance on the scene's triangles) into a
-/// lightmap over the scene's own triangles, and encodes it: the HDR EXR, the LDR PNG (with
+/// Bakes the light of `source` (a solution's diffuse radiance interpolated per texel, or a
+/// final gather per texel: [`TexelSource`]) into a lightmap over the scene's own triangles,
+/// and encodes it: the HDR EXR, the LDR PNG (with
 /// `mapping`) and a `.glb` of the scene's triangles (not the element mesh) whose `TEXCOORD_1`
 /// addresses the lightmap.
 ///
@@ -38,7 +38,7 @@ use crate::error::BakeError;
 /// [`COPLANAR_COS`](crate::lightmap::COPLANAR_COS) count as one) and chart or texture coordinate, so UV seams and creases
 /// split vertices and nothing else does.
 pub fn bake_lightmap(
-    radiance: &dyn DiffuseRadiance,
+    source: TexelSource<'_>,
     scene: &Scene,
     settings: &LightmapSettings,
     mapping: ColorMapping,
@@ -60,15 +60,18 @@ pub fn bake_lightmap(
         Err(why) => generated_layout(scene, &s, why)?,
     };
     let (width, height) = (layout.width, layout.height);
-    let filled: Vec<(Vec<Rgb>, Vec<bool>, usize)> = layout
+    let filled: Vec<RegionTexels> = layout
         .regions
         .par_iter()
-        .map(|r| fill_region(r, &layout, radiance, s.padding))
+        .map(|r| fill_region(r, &layout, scene, source, &s))
         .collect();
     let mut image = Image::new(width, height);
-    let mut covered_texels = 0;
-    for (r, (value, mask, covered)) in layout.regions.iter().zip(&filled) {
-        covered_texels += covered;
+    let (mut covered_texels, mut rays, mut shadow_rays) = (0, 0, 0);
+    for (r, texels) in layout.regions.iter().zip(&filled) {
+        let (value, mask) = (&texels.value, &texels.filled);
+        covered_texels += texels.covered;
+        rays += texels.rays;
+        shadow_rays += texels.shadow_rays;
         let [w, h] = r.size;
         for y in 0..h {
             for x in 0..w {
@@ -105,6 +108,8 @@ pub fn bake_lightmap(
         radiance: image,
         charts: layout.charts,
         covered_texels,
+        rays,
+        shadow_rays,
         atlas: layout.source,
         glb,
         exr,

@@ -1,25 +1,62 @@
-//! The texels of one atlas region: the solution's radiance at every texel centre on a
-//! triangle, then the padding filled by dilation within the chart.
+//! The texels of one atlas region: which triangle covers each texel centre, the light there
+//! (the solution's radiance, or a final gather's estimate with its indirect part denoised in
+//! atlas space), then the padding filled by dilation within the chart.
 
-use glam::Vec2;
+use glam::{Vec2, Vec3};
+use rayon::prelude::*;
 use twopass_brdf::Rgb;
-use twopass_scene::DiffuseRadiance;
+use twopass_scene::{DiffuseRadiance, RadianceEstimate, RadianceEstimator, Scene};
 
+use super::filter::{Guide, denoise};
 use super::layout::{Layout, Region};
+use super::settings::{AtlasSource, Resolved};
 
-/// One region's texels (its rectangle, row-major), which of them hold a value, and how many
-/// texel centres lie on a triangle.
-pub(super) fn fill_region(
-    region: &Region,
-    layout: &Layout,
-    radiance: &dyn DiffuseRadiance,
-    padding: u32,
-) -> (Vec<Rgb>, Vec<bool>, usize) {
+/// Where the texels' light comes from.
+#[derive(Clone, Copy)]
+pub enum TexelSource<'a> {
+    /// A solution's radiance interpolated at each texel centre.
+    Solution(&'a dyn DiffuseRadiance),
+    /// A final gather at each texel centre ([`RadianceEstimator`]), its indirect part
+    /// denoised by an edge-aware filter in atlas space.
+    Gather(&'a dyn RadianceEstimator),
+}
+
+/// One region's texels (its rectangle, row-major), which of them hold a value, how many
+/// texel centres lie on a triangle, and the rays a gather traced.
+pub(super) struct RegionTexels {
+    pub(super) value: Vec<Rgb>,
+    pub(super) filled: Vec<bool>,
+    pub(super) covered: usize,
+    pub(super) rays: u64,
+    pub(super) shadow_rays: u64,
+}
+
+/// A texel centre on a triangle: its index in the region, the triangle and the barycentrics.
+#[derive(Clone, Copy)]
+struct Sample {
+    texel: u32,
+    triangle: u32,
+    barycentric: [f32; 3],
+}
+
+/// Most back-face hits among a gathered texel's gather rays (as a fraction of those that hit
+/// something) for the texel to count: above it, the texel centre lies inside another object
+/// (where the two intersect) and its light is meaningless, so the texel is left empty and
+/// dilation gives it its valid neighbours' light, as Unity's "backface tolerance" does
+/// (which by default needs 90 % front-face hits).
+pub const MAX_BACK_FACES: f32 = 0.1;
+
+/// Texel centres per rayon job of the gather: enough to amortise the job, small enough to
+/// balance texels of very different cost.
+const GATHER_CHUNK: usize = 64;
+
+/// The texel centres of `region` that lie on its triangles (the last triangle drawn owns a
+/// texel on a shared edge), and for every triangle that covers no texel centre (a sliver), its
+/// centroid's texel if no other triangle owns it.
+fn rasterize(region: &Region, layout: &Layout) -> Vec<Sample> {
     let [w, h] = region.size;
-    let mut value = vec![Rgb::ZERO; (w * h) as usize];
-    let mut filled = vec![false; (w * h) as usize];
+    let mut owner: Vec<Option<(u32, [f32; 3])>> = vec![None; (w * h) as usize];
     let origin = Vec2::new(region.at[0] as f32, region.at[1] as f32);
-    let mut covered = 0;
     for &t in &region.triangles {
         let [a, b, c] = layout.corners[t as usize].map(|p| p - origin);
         let det = (b - a).perp_dot(c - a);
@@ -33,33 +70,136 @@ pub(super) fn fill_region(
         };
         let lo = a.min(b).min(c).floor().max(Vec2::ZERO);
         let hi = a.max(b).max(c).ceil().min(Vec2::new(w as f32, h as f32));
+        let mut any = false;
         for y in lo.y as u32..hi.y as u32 {
             for x in lo.x as u32..hi.x as u32 {
                 let bary = weights(Vec2::new(x as f32 + 0.5, y as f32 + 0.5));
                 if bary.iter().all(|&k| k >= -1e-5) {
-                    let i = (y * w + x) as usize;
-                    covered += usize::from(!filled[i]);
-                    value[i] = radiance.radiance(t, bary.map(|k| k.max(0.0)));
-                    filled[i] = true;
+                    owner[(y * w + x) as usize] = Some((t, bary.map(|k| k.max(0.0))));
+                    any = true;
                 }
             }
         }
-        // A sliver may cover no texel centre: its centroid's texel still gets its light.
-        let centroid = ((a + b + c) / 3.0).max(Vec2::ZERO);
-        let (x, y) = (
-            (centroid.x as u32).min(w - 1),
-            (centroid.y as u32).min(h - 1),
-        );
-        let i = (y * w + x) as usize;
-        if !filled[i] {
-            value[i] = radiance.radiance(t, [1.0 / 3.0; 3]);
-            filled[i] = true;
-            covered += 1;
+        if !any {
+            // A sliver may cover no texel centre: its centroid's texel still gets its light.
+            let centroid = ((a + b + c) / 3.0).max(Vec2::ZERO);
+            let (x, y) = (
+                (centroid.x as u32).min(w - 1),
+                (centroid.y as u32).min(h - 1),
+            );
+            let i = (y * w + x) as usize;
+            if owner[i].is_none() {
+                owner[i] = Some((t, [1.0 / 3.0; 3]));
+            }
         }
     }
-    // Dilation: each pass gives every empty texel the mean of its filled 8-neighbours.
-    for _ in 0..padding {
-        let (before_v, before_f) = (value.clone(), filled.clone());
+    owner
+        .iter()
+        .enumerate()
+        .filter_map(|(i, o)| {
+            o.map(|(triangle, barycentric)| Sample {
+                texel: i as u32,
+                triangle,
+                barycentric,
+            })
+        })
+        .collect()
+}
+
+/// Fills one region: every covered texel from `source`, then `s.padding` rings of dilation.
+/// A gathered texel's random sequence is keyed by its index in the whole atlas
+/// (`atlas_width`), so it does not depend on how the atlas is split into regions or parts.
+pub(super) fn fill_region(
+    region: &Region,
+    layout: &Layout,
+    scene: &Scene,
+    source: TexelSource<'_>,
+    s: &Resolved,
+) -> RegionTexels {
+    let [w, h] = region.size;
+    let samples = rasterize(region, layout);
+    let covered = samples.len();
+    let mut value = vec![Rgb::ZERO; (w * h) as usize];
+    let mut filled = vec![false; (w * h) as usize];
+    let (mut rays, mut shadow_rays) = (0, 0);
+    match source {
+        TexelSource::Solution(radiance) => {
+            let values: Vec<Rgb> = samples
+                .par_iter()
+                .map(|p| radiance.radiance(p.triangle, p.barycentric))
+                .collect();
+            for (p, v) in samples.iter().zip(values) {
+                value[p.texel as usize] = v;
+                filled[p.texel as usize] = true;
+            }
+        }
+        TexelSource::Gather(estimator) => {
+            let key = |texel: u32| {
+                let (x, y) = (region.at[0] + texel % w, region.at[1] + texel / w);
+                u64::from(y) * u64::from(layout.width) + u64::from(x)
+            };
+            let estimates: Vec<RadianceEstimate> = samples
+                .par_iter()
+                .with_min_len(GATHER_CHUNK)
+                .map(|p| estimator.estimate(p.triangle, p.barycentric, key(p.texel)))
+                .collect();
+            rays = estimates.iter().map(|e| e.rays).sum();
+            shadow_rays = estimates.iter().map(|e| e.shadow_rays).sum();
+            let chart = |t: u32| match layout.source {
+                AtlasSource::Generated(_) => layout.groups[t as usize][0],
+                AtlasSource::Scene => scene.mesh.triangle_object[t as usize],
+            };
+            // Texels inside another object take no part.
+            let (samples, estimates): (Vec<Sample>, Vec<RadianceEstimate>) = samples
+                .into_iter()
+                .zip(estimates)
+                .filter(|(_, e)| e.back_faces <= MAX_BACK_FACES)
+                .unzip();
+            let guides: Vec<Guide> = samples
+                .iter()
+                .zip(&estimates)
+                .map(|(p, e)| Guide {
+                    texel: p.texel,
+                    position: scene.mesh.surface_point(p.triangle, p.barycentric).position,
+                    normal: shading_normal(scene, p.triangle, p.barycentric),
+                    chart: chart(p.triangle),
+                    object: scene.mesh.triangle_object[p.triangle as usize],
+                    error: e.indirect_error,
+                })
+                .collect();
+            let indirect: Vec<Rgb> = estimates.iter().map(|e| e.indirect).collect();
+            let indirect = denoise(&guides, &indirect, [w, h], s.texel_size);
+            for ((p, e), ind) in samples.iter().zip(&estimates).zip(indirect) {
+                value[p.texel as usize] = e.emitted + e.direct + ind;
+                filled[p.texel as usize] = true;
+            }
+        }
+    }
+    dilate(&mut value, &mut filled, [w, h], s.padding);
+    RegionTexels {
+        value,
+        filled,
+        covered,
+        rays,
+        shadow_rays,
+    }
+}
+
+/// The unit shading normal of triangle `t` at `b`, on its front side.
+fn shading_normal(scene: &Scene, t: u32, b: [f32; 3]) -> Vec3 {
+    let n = scene.mesh.shading_normal(t, b);
+    if n.dot(scene.mesh.geometric_normals[t as usize]) < 0.0 {
+        -n
+    } else {
+        n
+    }
+}
+
+/// Dilation: each of `rings` passes gives every empty texel the mean of its filled
+/// 8-neighbours.
+fn dilate(value: &mut [Rgb], filled: &mut [bool], [w, h]: [u32; 2], rings: u32) {
+    for _ in 0..rings {
+        let (before_v, before_f) = (value.to_vec(), filled.to_vec());
         for y in 0..h {
             for x in 0..w {
                 let i = (y * w + x) as usize;
@@ -87,5 +227,4 @@ pub(super) fn fill_region(
             }
         }
     }
-    (value, filled, covered)
 }

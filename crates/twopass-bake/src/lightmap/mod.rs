@@ -34,12 +34,15 @@
 
 mod bake;
 mod fill;
+mod filter;
 mod glb;
 mod layout;
 mod settings;
 
 pub use crate::weld::COPLANAR_COS;
 pub use bake::bake_lightmap;
+pub use fill::TexelSource;
+pub use filter::FILTER;
 pub use glb::{CameraRecord, PNG_FORMULA};
 pub use layout::{MAX_AREA_DISTORTION, MAX_LIGHTMAP_SIDE};
 pub use settings::{AtlasSource, Lightmap, LightmapSettings, TEXELS_PER_DIAGONAL};

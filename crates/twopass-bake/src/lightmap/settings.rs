@@ -48,6 +48,10 @@ pub struct Lightmap {
     pub charts: usize,
     /// Texels whose centre lies on a triangle (the rest are padding, dilated or empty).
     pub covered_texels: usize,
+    /// Closest-hit rays a final gather traced (0 without one).
+    pub rays: u64,
+    /// Shadow rays a final gather traced (0 without one).
+    pub shadow_rays: u64,
     /// Where the texture coordinates come from.
     pub atlas: AtlasSource,
     /// The scene's triangles with `TEXCOORD_1` into the atlas, as a `.glb` embedding the PNG.

@@ -1,0 +1,397 @@
+//! The final gather over a radiosity solution (the classic second pass of two-pass methods:
+//! Chen et al. 1991; what Bakery and Unity's and Godot's lightmappers do per texel): at one
+//! surface point, the direct light from every emitter by stratified shadow rays, plus the
+//! indirect light by one bounce of gather rays that read the solution where they land. The
+//! solution supplies every further bounce smoothly and cheaply; its blockiness and its errors
+//! in the direct light never reach the point, and its errors in the indirect light reach it
+//! scaled by the reflectance and averaged over the hemisphere.
+//!
+//! **No double counting.** The point's radiance is L_e + rho / pi (E_direct + E_gather):
+//! - E_direct: light leaving the front of an emitter and reaching the point unoccluded
+//!   ([`crate::integrator::direct_light`]; mirrors and glass occlude shadow rays);
+//! - E_gather: the gather rays. Where one lands on a diffuse surface first it takes the
+//!   solution's radiance there less the emission (the shadow rays counted that); where it
+//!   lands on a mirror or glass, it follows the delta path (one branch chosen by its weight)
+//!   and takes the whole solution's radiance, emission included, where the path ends on a
+//!   diffuse surface (no shadow ray found that light: light focused by glass, L S+ D, reaches
+//!   the point this way, noisily but in full).
+//!
+//! The point's own value in the solution is not used at all.
+//!
+//! **Sampling.** Gather rays are cosine-distributed about the shading normal (importance
+//! sampling of the cosine in E = integral of L cos), dimensions 0 and 1 of one Owen-scrambled
+//! Sobol point per ray ([`Sampler`], keyed by (seed, point key, ray)); a delta path takes its
+//! branch choices from the following dimensions. Rays below the geometric surface carry
+//! nothing. The count adapts per point: batches of [`GatherSettings::min_rays`], doubled until
+//! the standard error of the indirect luminance is below [`GatherSettings::target_error`] of
+//! the point's total or [`GatherSettings::max_rays`] is reached. Everything depends on the
+//! point's key and the settings only, so an estimate is the same whichever thread or process
+//! computes it, and a bake split into parts merges bit for bit.
+
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Instant;
+
+use glam::{Vec2, Vec3};
+use smart_default::SmartDefault;
+use twopass_brdf::Rgb;
+use twopass_brdf::colour::luminance;
+use twopass_scene::workload::cosine_direction;
+use twopass_scene::{DiffuseRadiance, Hit, RadianceEstimate, RadianceEstimator, Scene};
+
+use crate::counters::Tally;
+use crate::emitters::Lights;
+use crate::integrator::{Shading, irradiance_from};
+use crate::sampler::Sampler;
+
+/// Stream separating a point's shadow-ray numbers from its gather rays' (the gather rays use
+/// sample indices 0, 1, ... of the point's Sobol sequence; the shadow rays a sequence of their
+/// own).
+const DIRECT_STREAM: u64 = 0x5eed_d1ec_7000_0001;
+
+/// What a gather ray hit first.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum FirstHit {
+    /// Nothing (or it left below the geometric surface).
+    Nothing,
+    /// The front of a surface, or glass (two-sided).
+    Front,
+    /// The back of an opaque closed surface: the ray left from inside a closed object.
+    Back,
+}
+
+/// Per object of `scene`: whether its surface is closed, every edge (its two end positions,
+/// bit for bit) shared by exactly two of its triangles.
+fn closed_objects(scene: &Scene) -> Vec<bool> {
+    use std::collections::HashMap;
+    let m = &scene.mesh;
+    let key = |v: u32| m.positions[v as usize].to_array().map(f32::to_bits);
+    scene
+        .objects
+        .iter()
+        .map(|o| {
+            let mut edges: HashMap<([u32; 3], [u32; 3]), u32> = HashMap::new();
+            for t in o.triangles.clone() {
+                let [a, b, c] = m.triangles[t as usize];
+                for (p, q) in [(a, b), (b, c), (c, a)] {
+                    let (p, q) = (key(p), key(q));
+                    *edges.entry((p.min(q), p.max(q))).or_default() += 1;
+                }
+            }
+            !edges.is_empty() && edges.values().all(|&n| n == 2)
+        })
+        .collect()
+}
+
+/// How a final gather samples each point.
+#[derive(SmartDefault, Debug, Clone, Copy, PartialEq)]
+pub struct GatherSettings {
+    /// Shadow rays per point over all emitters, each emitter getting a stratified k x k grid
+    /// with k^2 about its share of the emitted power times this (at least 1 x 1).
+    #[default(64)]
+    pub shadow_rays: u32,
+    /// Gather rays of the first batch (at least 1); each further batch doubles the count.
+    #[default(64)]
+    pub min_rays: u32,
+    /// Most gather rays for one point (at least `min_rays`).
+    #[default(256)]
+    pub max_rays: u32,
+    /// A point stops adding gather rays once the standard error of its indirect luminance is
+    /// at most this fraction of its total luminance (0: always `max_rays`).
+    #[default(0.02)]
+    pub target_error: f32,
+    /// Most mirror and glass bounces a gather ray follows.
+    #[default(8)]
+    pub max_depth: u32,
+    /// Seed of every point's random sequence.
+    #[default(0)]
+    pub seed: u64,
+}
+
+/// The final gather over one solution of one scene.
+pub struct Gatherer<'a> {
+    scene: &'a Scene,
+    solution: &'a dyn DiffuseRadiance,
+    lights: Lights,
+    /// Shadow-ray grid side per emitter.
+    grids: Vec<u32>,
+    /// Past this instant, points take the solution's value instead of a gather (a time budget).
+    deadline: Option<Instant>,
+    /// Points that took the solution's value because the deadline had passed.
+    late: AtomicU64,
+    /// Per object: whether its surface is closed (every edge, by position, shared by exactly
+    /// two of its triangles), so that only a point inside it can see its back.
+    closed: Vec<bool>,
+    settings: GatherSettings,
+}
+
+impl std::fmt::Debug for Gatherer<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Gatherer")
+            .field("grids", &self.grids)
+            .field("settings", &self.settings)
+            .finish_non_exhaustive()
+    }
+}
+
+impl<'a> Gatherer<'a> {
+    /// A gather over `solution` (which supplies the radiance where gather rays land) on
+    /// `scene`.
+    pub fn new(
+        scene: &'a Scene,
+        solution: &'a dyn DiffuseRadiance,
+        settings: GatherSettings,
+    ) -> Self {
+        let powers: Vec<f64> = scene
+            .emitters
+            .iter()
+            .map(|e| f64::from(luminance(e.power)).max(0.0))
+            .collect();
+        let total: f64 = powers.iter().sum();
+        let n = powers.len().max(1) as f64;
+        let grids = powers
+            .iter()
+            .map(|&p| {
+                let share = if total > 0.0 { p / total } else { 1.0 / n };
+                let k = (share * f64::from(settings.shadow_rays)).sqrt().round();
+                (k as u32).max(1)
+            })
+            .collect();
+        Self {
+            scene,
+            solution,
+            lights: Lights::new(scene),
+            grids,
+            closed: closed_objects(scene),
+            deadline: None,
+            late: AtomicU64::new(0),
+            settings: GatherSettings {
+                min_rays: settings.min_rays.max(1),
+                max_rays: settings.max_rays.max(settings.min_rays.max(1)),
+                ..settings
+            },
+        }
+    }
+
+    /// The same gather, ending at `deadline`: a point estimated after it takes the solution's
+    /// value there (split into its parts as the solution splits it) instead of a gather, so a
+    /// bake keeps its time budget and its output stays complete ([`Gatherer::late_points`]
+    /// counts them). The result then depends on the machine's speed.
+    pub fn with_deadline(mut self, deadline: Instant) -> Self {
+        self.deadline = Some(deadline);
+        self
+    }
+
+    /// Points that took the solution's value because the deadline had passed.
+    pub fn late_points(&self) -> u64 {
+        self.late.load(Ordering::Relaxed)
+    }
+
+    /// The settings in force (counts raised to their floors).
+    pub fn settings(&self) -> GatherSettings {
+        self.settings
+    }
+
+    /// The shading context of a point on the front of triangle `t`, seen along its shading
+    /// normal.
+    fn shading_at(&self, t: u32, b: [f32; 3]) -> Shading<'a> {
+        let scene = self.scene;
+        let point = scene.mesh.surface_point(t, b);
+        let mut shading_normal = scene.mesh.shading_normal(t, b);
+        if shading_normal.dot(point.normal) < 0.0 {
+            shading_normal = -shading_normal;
+        }
+        let object = scene.mesh.triangle_object[t as usize];
+        let hit = Hit {
+            t: 0.0,
+            point,
+            barycentric: b,
+            shading_normal,
+            front_face: true,
+            object,
+            material: scene.objects[object as usize].material,
+        };
+        Shading::new(scene, hit, -shading_normal)
+    }
+
+    /// Radiance arriving along one gather ray leaving `s` in the cosine-distributed
+    /// direction of `u` (the direct part excluded), W/(m^2 sr), and what the ray hit first.
+    fn gather_ray(
+        &self,
+        s: &Shading<'_>,
+        u: Vec2,
+        sampler: &mut Sampler,
+        tally: &mut Tally,
+    ) -> (Rgb, FirstHit) {
+        let scene = self.scene;
+        let dir = cosine_direction(s.hit.shading_normal, u);
+        if dir.dot(s.hit.point.normal) <= 0.0 {
+            return (Rgb::ZERO, FirstHit::Nothing);
+        }
+        tally.rays += 1;
+        let Some(hit) = scene.intersect_from(&s.hit.point, dir) else {
+            return (Rgb::ZERO, FirstHit::Nothing);
+        };
+        let here = Shading::new(scene, hit, dir);
+        let first = if here.hit.front_face
+            || here.is_dielectric()
+            || !self.closed[here.hit.object as usize]
+        {
+            FirstHit::Front
+        } else {
+            FirstHit::Back
+        };
+        // The first landing: the shadow rays counted its emission.
+        let mut l = Rgb::ZERO;
+        if here.hit.front_face {
+            let solved = self
+                .solution
+                .radiance(here.hit.point.triangle, here.hit.barycentric);
+            l = (solved - here.emitted).max(Rgb::ZERO);
+        }
+        if let Some(lobe) = here.material.delta()
+            && self.settings.max_depth > 0
+            && here.scatters()
+            && let Some(bs) = lobe.sample(here.wo, sampler.next_2d())
+        {
+            let next = here.frame.to_world(bs.wi).normalize();
+            tally.rays += 1;
+            if let Some(h) = scene.intersect_from(&here.hit.point, next) {
+                l += bs.weight * self.follow(h, next, 1, sampler, tally);
+            }
+        }
+        (l, first)
+    }
+
+    /// Radiance arriving along a delta path from its hit `hit` (reached along `dir`,
+    /// `depth` delta bounces in), W/(m^2 sr): the solution where it ends, emission included.
+    fn follow(
+        &self,
+        hit: Hit,
+        dir: Vec3,
+        depth: u32,
+        sampler: &mut Sampler,
+        tally: &mut Tally,
+    ) -> Rgb {
+        let scene = self.scene;
+        let (mut hit, mut dir, mut depth, mut throughput) = (hit, dir, depth, Rgb::ONE);
+        let mut sum = Rgb::ZERO;
+        loop {
+            let here = Shading::new(scene, hit, dir);
+            if here.hit.front_face {
+                sum += throughput
+                    * self
+                        .solution
+                        .radiance(here.hit.point.triangle, here.hit.barycentric);
+            }
+            let Some(lobe) = here.material.delta() else {
+                return sum;
+            };
+            if depth >= self.settings.max_depth || !here.scatters() {
+                return sum;
+            }
+            let Some(bs) = lobe.sample(here.wo, sampler.next_2d()) else {
+                return sum;
+            };
+            let next = here.frame.to_world(bs.wi).normalize();
+            tally.rays += 1;
+            let Some(h) = scene.intersect_from(&here.hit.point, next) else {
+                return sum;
+            };
+            throughput *= bs.weight;
+            if throughput.max_element() <= 0.0 {
+                return sum;
+            }
+            hit = h;
+            dir = next;
+            depth += 1;
+        }
+    }
+}
+
+impl RadianceEstimator for Gatherer<'_> {
+    fn estimate(&self, triangle: u32, barycentric: [f32; 3], key: u64) -> RadianceEstimate {
+        if self.deadline.is_some_and(|d| Instant::now() >= d) {
+            self.late.fetch_add(1, Ordering::Relaxed);
+            let object = self.scene.mesh.triangle_object[triangle as usize];
+            let emitted = self.scene.objects[object as usize].emission;
+            let total = self.solution.radiance(triangle, barycentric);
+            let indirect = self.solution.indirect_radiance(triangle, barycentric);
+            return RadianceEstimate {
+                emitted,
+                direct: (total - indirect - emitted).max(Rgb::ZERO),
+                indirect,
+                ..RadianceEstimate::default()
+            };
+        }
+        let s = self.shading_at(triangle, barycentric);
+        let mut tally = Tally::default();
+        let rho = s.material.diffuse_albedo();
+        let emitted = s.emitted;
+        if !s.material.reflects_diffusely() {
+            return RadianceEstimate {
+                emitted,
+                ..RadianceEstimate::default()
+            };
+        }
+        // Direct irradiance E (W/m^2): the BRDF slot carries 1, so the estimator's sum is E.
+        let mut direct_sampler = Sampler::new(self.settings.seed ^ DIRECT_STREAM, key, 0);
+        let mut irradiance = Rgb::ZERO;
+        for (e, &k) in self.grids.iter().enumerate() {
+            irradiance += irradiance_from(
+                self.scene,
+                &self.lights,
+                &s,
+                e,
+                k,
+                &mut direct_sampler,
+                &mut tally,
+            );
+        }
+        let direct = rho * irradiance * std::f32::consts::FRAC_1_PI;
+
+        // Indirect: cosine-weighted gather rays, E = pi mean(L), so rho / pi E = rho mean(L).
+        let (mut sum, mut sum_y, mut sum_y2) = (Rgb::ZERO, 0.0f64, 0.0f64);
+        let mut n = 0u32;
+        let (mut hits, mut backs) = (0u32, 0u32);
+        let mut batch = self.settings.min_rays;
+        loop {
+            for i in n..n + batch {
+                let mut sampler = Sampler::new(self.settings.seed, key, u64::from(i));
+                let u = sampler.next_2d();
+                let (l, first) = self.gather_ray(&s, u, &mut sampler, &mut tally);
+                hits += u32::from(first != FirstHit::Nothing);
+                backs += u32::from(first == FirstHit::Back);
+                if !l.is_finite() {
+                    continue;
+                }
+                sum += l;
+                let y = f64::from(luminance(rho * l));
+                sum_y += y;
+                sum_y2 += y * y;
+            }
+            n += batch;
+            let mean = sum_y / f64::from(n);
+            let variance = (sum_y2 / f64::from(n) - mean * mean).max(0.0) / f64::from(n.max(2) - 1);
+            let error = variance.sqrt();
+            let total = mean + f64::from(luminance(direct + emitted));
+            if n >= self.settings.max_rays || error <= f64::from(self.settings.target_error) * total
+            {
+                let indirect = rho * sum / n as f32;
+                return RadianceEstimate {
+                    emitted,
+                    direct,
+                    indirect,
+                    indirect_error: error as f32,
+                    back_faces: if hits > 0 {
+                        backs as f32 / hits as f32
+                    } else {
+                        0.0
+                    },
+                    rays: tally.rays,
+                    shadow_rays: tally.shadow_rays,
+                };
+            }
+            batch = n.min(self.settings.max_rays - n);
+        }
+    }
+}
