@@ -12,6 +12,7 @@ mod hierarchical;
 mod radiosity;
 mod scenes;
 mod specular;
+mod terminator;
 mod trace;
 
 /// A scene under the repository's `scenes/`.

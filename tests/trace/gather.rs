@@ -223,7 +223,11 @@ fn a_mirror_passes_the_whole_solution_times_its_reflectance() {
         "indirect {got} vs rho R F = {exact} (sigma {sigma})"
     );
     assert_eq!(e.emitted, Rgb::ONE, "the floor's own emission");
-    assert_eq!(e.direct, Rgb::ZERO, "mirrors occlude shadow rays; the floor cannot see itself");
+    assert_eq!(
+        e.direct,
+        Rgb::ZERO,
+        "mirrors occlude shadow rays; the floor cannot see itself"
+    );
 }
 
 #[test]
