@@ -7,6 +7,7 @@ mod architecture;
 mod bad_input;
 mod closed_form;
 mod fuzz;
+mod gathered_bake;
 mod hardening;
 mod hierarchical;
 mod radiosity;
