@@ -228,6 +228,29 @@ impl<'a> Gatherer<'a> {
             return (Rgb::ZERO, FirstHit::Nothing);
         }
         tally.rays += 1;
+        let origin = s.hit.point.spawn_origin(dir);
+        let Some(h) = scene.accel().closest(origin, dir, f32::INFINITY) else {
+            return (Rgb::ZERO, FirstHit::Nothing);
+        };
+        // Most rays land on a surface without a delta lobe: read the solution there without
+        // building the full hit (shading normal, error bounds, frame).
+        let object = scene.mesh.triangle_object[h.triangle as usize] as usize;
+        let material = &scene.materials[scene.objects[object].material as usize].material;
+        if material.delta().is_none() {
+            let front = dir.dot(scene.mesh.geometric_normals[h.triangle as usize]) < 0.0;
+            if !front {
+                let first = if self.closed[object] {
+                    FirstHit::Back
+                } else {
+                    FirstHit::Front
+                };
+                return (Rgb::ZERO, first);
+            }
+            let solved = self.solution.radiance(h.triangle, h.barycentric);
+            let l = (solved - scene.objects[object].emission).max(Rgb::ZERO);
+            return (l, FirstHit::Front);
+        }
+        // A mirror or glass: the same query again, with the full hit to continue from.
         let Some(hit) = scene.intersect_from(&s.hit.point, dir) else {
             return (Rgb::ZERO, FirstHit::Nothing);
         };

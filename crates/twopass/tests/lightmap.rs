@@ -1,5 +1,6 @@
 //! `twopass bake --lightmap` and `--format vertex-glb`: the files, each listed in the manifest with its size and
-//! CRC-32, and `--texel-size` only with `--lightmap`.
+//! CRC-32, the final gather's record, `--gather`'s values, and `--texel-size` only with
+//! `--lightmap`.
 
 use crate::common;
 
@@ -49,6 +50,45 @@ fn lightmap_bake_writes_its_files_into_the_manifest() {
         "{lm}"
     );
     assert!(dir.join("cornell-box.lightmap.png").exists());
+    // The default final gather ran and says what it did.
+    let g = &lm["gather"];
+    assert_eq!(g["min_rays"], 64, "{g}");
+    assert_eq!(g["max_rays"], 256, "{g}");
+    assert!(g["rays"].as_u64().unwrap() >= 64 * 5 * 54 * 54, "{g}");
+    assert!(g["shadow_rays"].as_u64().unwrap() > 0, "{g}");
+    assert_eq!(g["late_points"], 0, "{g}");
+}
+
+#[test]
+fn gather_takes_off_auto_or_a_ray_count() {
+    let out_dir = tempfile::tempdir().unwrap();
+    let dir = out_dir.path();
+    let off = common::bake_box(dir)
+        .words("--format bake --lightmap --texel-size 20 --gather off")
+        .words("--element-size 100 --unshot 1e-2 --json")
+        .run();
+    assert!(common::ok_json(&off)["lightmap"]["gather"].is_null());
+    let sixteen = common::bake_box(dir)
+        .words("--format bake --lightmap --texel-size 20 --gather 16")
+        .words("--element-size 100 --unshot 1e-2 --json")
+        .run();
+    let g = &common::ok_json(&sixteen)["lightmap"]["gather"];
+    assert_eq!(
+        (g["min_rays"].as_u64(), g["max_rays"].as_u64()),
+        (Some(16), Some(16)),
+        "{g}"
+    );
+    let scene = repo("scenes/cornell-box.toml");
+    for bad in ["0", "-3", "65537", "many", "1.5"] {
+        let out = cli("bake")
+            .arg(&scene)
+            .words("--lightmap")
+            .arg(format!("--gather={bad}"))
+            .run();
+        common::assert_exit(&out, 2);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("--gather"), "{bad}: {err}");
+    }
 }
 
 #[test]
