@@ -99,3 +99,24 @@ fn texel_size_needs_lightmap() {
         common::assert_exit(&out, 2);
     }
 }
+
+#[test]
+fn a_gather_ends_at_the_time_budget_with_every_texel_filled() {
+    // A 2 mm lightmap of the box is about 400,000 texels: minutes of gathering. Under a 3 s
+    // budget the gather stops where the budget does, the late texels show the solution, and the
+    // manifest counts them.
+    let out_dir = tempfile::tempdir().unwrap();
+    let dir = out_dir.path();
+    let out = common::bake_box(dir)
+        .words("--format bake --lightmap --texel-size 2 --time-budget 3 --json")
+        .run();
+    let manifest = common::ok_json(&out);
+    let lm = &manifest["lightmap"];
+    let late = lm["gather"]["late_points"].as_u64().unwrap();
+    let covered = lm["covered_texels"].as_u64().unwrap();
+    assert!(late > 0 && late < covered, "{late} of {covered} late");
+    // The budget bounds the process; writing a 400,000-texel set after it takes well under the
+    // slack allowed here.
+    let total = manifest["timings"]["total_s"].as_f64().unwrap();
+    assert!(total < 3.0 + 5.0, "{total} s");
+}
