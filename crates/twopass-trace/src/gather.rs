@@ -39,7 +39,7 @@ use twopass_scene::workload::cosine_direction;
 use twopass_scene::{DiffuseRadiance, Hit, RadianceEstimate, RadianceEstimator, Scene};
 
 use crate::counters::Tally;
-use crate::emitters::Lights;
+use crate::emitters::{EmitterChoice, Lights};
 use crate::integrator::{Shading, irradiance_from};
 use crate::sampler::Sampler;
 
@@ -102,10 +102,22 @@ pub struct GatherSettings {
     /// Most mirror and glass bounces a gather ray follows.
     #[default(8)]
     pub max_depth: u32,
+    /// Hits closer than this (scene units) take one more bounce instead of the solution's
+    /// value: a shadow ray from the hit and one more cosine-distributed ray that reads the
+    /// solution. Near the point, an element of the solution fills much of the hemisphere and
+    /// its error would reach the point whole (a concave corner, a contact); farther away the
+    /// same error is averaged over many elements. `None`: the scene's bounding-box diagonal
+    /// over [`NEAR_PER_DIAGONAL`] (the radiosity pass's default element edge); 0: never.
+    #[default(None)]
+    pub near_distance: Option<f32>,
     /// Seed of every point's random sequence.
     #[default(0)]
     pub seed: u64,
 }
+
+/// The default [`GatherSettings::near_distance`] is the scene's diagonal over this: the
+/// default element edge of the radiosity pass, the scale of the solution's blockiness.
+pub const NEAR_PER_DIAGONAL: f32 = 24.0;
 
 /// The final gather over one solution of one scene.
 pub struct Gatherer<'a> {
@@ -114,6 +126,10 @@ pub struct Gatherer<'a> {
     lights: Lights,
     /// Shadow-ray grid side per emitter.
     grids: Vec<u32>,
+    /// Emitter choice by power, for the one shadow ray of a near hit's extra bounce.
+    choice: EmitterChoice,
+    /// Hits closer than this take one more bounce (scene units).
+    near: f32,
     /// Past this instant, points take the solution's value instead of a gather (a time budget).
     deadline: Option<Instant>,
     /// Points that took the solution's value because the deadline had passed.
@@ -161,6 +177,11 @@ impl<'a> Gatherer<'a> {
             solution,
             lights: Lights::new(scene),
             grids,
+            choice: EmitterChoice::new(scene),
+            near: settings
+                .near_distance
+                .unwrap_or(scene.bounds.diagonal() / NEAR_PER_DIAGONAL)
+                .max(0.0),
             closed: closed_objects(scene),
             deadline: None,
             late: AtomicU64::new(0),
@@ -246,6 +267,12 @@ impl<'a> Gatherer<'a> {
                 };
                 return (Rgb::ZERO, first);
             }
+            if h.t < self.near && material.reflects_diffusely() {
+                return (
+                    self.near_bounce(h.triangle, h.barycentric, dir, sampler, tally),
+                    FirstHit::Front,
+                );
+            }
             let solved = self.solution.radiance(h.triangle, h.barycentric);
             let l = (solved - scene.objects[object].emission).max(Rgb::ZERO);
             return (l, FirstHit::Front);
@@ -283,6 +310,61 @@ impl<'a> Gatherer<'a> {
             }
         }
         (l, first)
+    }
+
+    /// The diffuse light a near hit (triangle `t` at `b`, reached along `dir`) reflects
+    /// toward the point, without its emission (the point's shadow rays counted that) and
+    /// estimated by one more bounce: one shadow ray to an emitter chosen by power, and one
+    /// cosine-distributed ray whose landing gives the solution's radiance less its emission.
+    fn near_bounce(
+        &self,
+        t: u32,
+        b: [f32; 3],
+        dir: Vec3,
+        sampler: &mut Sampler,
+        tally: &mut Tally,
+    ) -> Rgb {
+        let scene = self.scene;
+        let point = scene.mesh.surface_point(t, b);
+        let mut normal = scene.mesh.shading_normal(t, b);
+        if normal.dot(point.normal) < 0.0 {
+            normal = -normal;
+        }
+        let object = scene.mesh.triangle_object[t as usize];
+        let hit = Hit {
+            t: 0.0,
+            point,
+            barycentric: b,
+            shading_normal: normal,
+            front_face: true,
+            object,
+            material: scene.objects[object as usize].material,
+        };
+        let here = Shading::new(scene, hit, dir);
+        let rho = here.material.diffuse_albedo();
+        let mut irradiance = Rgb::ZERO;
+        if !scene.emitters.is_empty() {
+            let e = self.choice.pick(sampler.next_f32());
+            let p = self.choice.probability(e);
+            if p > 0.0 {
+                irradiance += irradiance_from(scene, &self.lights, &here, e, 1, sampler, tally) / p;
+            }
+        }
+        let bounce = cosine_direction(normal, sampler.next_2d());
+        if bounce.dot(point.normal) > 0.0 {
+            tally.rays += 1;
+            let origin = point.spawn_origin(bounce);
+            if let Some(h) = scene.accel().closest(origin, bounce, f32::INFINITY)
+                && bounce.dot(scene.mesh.geometric_normals[h.triangle as usize]) < 0.0
+            {
+                let landed = scene.mesh.triangle_object[h.triangle as usize] as usize;
+                let solved = self.solution.radiance(h.triangle, h.barycentric);
+                // E = pi mean(L) under cosine sampling.
+                irradiance +=
+                    (solved - scene.objects[landed].emission).max(Rgb::ZERO) * std::f32::consts::PI;
+            }
+        }
+        rho * irradiance * std::f32::consts::FRAC_1_PI
     }
 
     /// Radiance arriving along a delta path from its hit `hit` (reached along `dir`,
