@@ -29,7 +29,9 @@ enum Light {
     Surface(Corners),
 }
 
-/// A node just entered.
+/// A node just entered. (An open node is moved once, into the walk's stack: boxing it would
+/// cost an allocation per node and gather.)
+#[allow(clippy::large_enum_variant)]
 enum Entered {
     /// An inner node: its children come next.
     Open(Open),
