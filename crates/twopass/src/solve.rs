@@ -208,14 +208,17 @@ pub fn parse_fraction(s: &str) -> Result<f64, String> {
 /// A link tolerance: finite and at least [`MIN_LINK_TOLERANCE`] (below it the refinement
 /// grows toward every pair of the smallest elements for errors under f32's rounding).
 pub(crate) fn parse_link_tolerance(s: &str) -> Result<f64, String> {
-    checked(
-        s,
-        |x: &f64| x.is_finite() && *x >= MIN_LINK_TOLERANCE,
-        &format!(
-            "must be finite and at least {MIN_LINK_TOLERANCE:e} (f32's precision: a smaller \
-             link error is below the rounding of what is compared)"
-        ),
-    )
+    let x: f64 = s
+        .parse()
+        .map_err(|e: std::num::ParseFloatError| e.to_string())?;
+    if x.is_finite() && x >= MIN_LINK_TOLERANCE {
+        return Ok(x);
+    }
+    // In exponent form: a subnormal written out in full is hundreds of digits.
+    Err(format!(
+        "{x:e} must be finite and at least {MIN_LINK_TOLERANCE:e} (f32's precision: a \
+         smaller link error is below the rounding of what is compared)"
+    ))
 }
 
 /// A length in scene units: finite and > 0 (whether it fits the scene is checked by the
