@@ -521,3 +521,22 @@ fn a_floor_of_coincident_copies_bakes_hierarchically() {
         &["dropped 4999 triangle(s) that repeat another of the object exactly"],
     );
 }
+
+/// Issue 43, findings 1 and 2: 10^5 coincident triangles, each an object of its own (so none
+/// is dropped as a copy), load and get their BVH at once (copies of one box are built as
+/// one and expanded into a balanced subtree; the tie between them made PLOC quadratic).
+#[test]
+fn a_hundred_thousand_coincident_triangles_load() {
+    let tmp = tempfile::tempdir().unwrap();
+    let obj = tmp.path().join("copies.obj");
+    let mut text = String::from("v 0 0 0\nv 1 0 0\nv 0 0 -1\n");
+    for i in 0..100_000 {
+        text.push_str(&format!("o c{i}\nf 1 2 3\n"));
+    }
+    std::fs::write(&obj, text).unwrap();
+    let out = twopass(&["info", obj.to_str().unwrap()]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}");
+    assert!(stdout.contains("100000 triangles"), "{stdout}");
+    assert!(stdout.contains("100000 objects"), "{stdout}");
+}
