@@ -6,6 +6,7 @@
 
 use glam::Vec3;
 use twopass_brdf::{ComplexIor, FresnelModel, Lobe};
+use twopass_composite::Image;
 use twopass_scene::Scene;
 
 /// Which scene fingerprint a bake file disagrees with.
@@ -166,5 +167,22 @@ pub fn scene_fingerprint(scene: &Scene) -> u64 {
     h.f32(c.fov_y);
     h.u32(c.width);
     h.u32(c.height);
+    h.0
+}
+
+/// Name of the EXR header attribute that holds [`lightmap_fingerprint`] of the lightmap's
+/// texels (also in the `.glb`'s `asset.extras.twopass.exr_fingerprint`), as 16 hex digits.
+pub const LIGHTMAP_FINGERPRINT: &str = "twopassLightmapFingerprint";
+
+/// Fingerprint of a lightmap's texels: its size and every value, as bit patterns. Written into
+/// both the lightmap `.glb` and its EXR, so that an EXR is read only beside the `.glb` of its
+/// own bake (an atlas of the same size from another bake holds other charts' texels).
+pub fn lightmap_fingerprint(image: &Image) -> u64 {
+    let mut h = Fnv::new();
+    h.u32(image.width());
+    h.u32(image.height());
+    for p in image.pixels() {
+        h.vec3(*p);
+    }
     h.0
 }

@@ -76,7 +76,10 @@ mod weld;
 
 pub use colour::{AUTO_EXPOSURE_PERCENTILE, ColorMapping, RadianceParts};
 pub use error::{BakeError, BakeProblem};
-pub use fingerprint::{Fingerprint, geometry_fingerprint, lighting_fingerprint, scene_fingerprint};
+pub use fingerprint::{
+    Fingerprint, LIGHTMAP_FINGERPRINT, geometry_fingerprint, lighting_fingerprint,
+    lightmap_fingerprint, scene_fingerprint,
+};
 pub use format::{BAKE_FORMAT_VERSION, MAX_BAKE_BYTES, decode_bake, encode_bake, read_bake};
 pub use gathered::{ELEMENT_KEYS, gathered_solution};
 pub use gltf::{Glb, HDR_ATTRIBUTES, encode_glb};

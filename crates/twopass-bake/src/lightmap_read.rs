@@ -8,8 +8,9 @@
 //!
 //! The HDR EXR is read, not the PNG embedded in the `.glb`: the PNG is 8-bit sRGB of
 //! `min(1, exposure * L)`, which clips the light source and quantizes the dark corners, so it
-//! cannot reproduce the radiance a renderer needs. The embedded PNG's size is checked against
-//! the EXR's, so an EXR from another bake is refused.
+//! cannot reproduce the radiance a renderer needs. The EXR's header is read first: its size must
+//! be the embedded PNG's and its fingerprint ([`lightmap_fingerprint`]) the one the `.glb`
+//! records, so an EXR from another bake is refused before a pixel is decoded.
 
 use std::path::{Path, PathBuf};
 
@@ -19,6 +20,7 @@ use twopass_composite::Image;
 use twopass_scene::{DiffuseRadiance, Scene};
 
 use crate::error::{BakeError, BakeProblem};
+use crate::fingerprint::{LIGHTMAP_FINGERPRINT, lightmap_fingerprint};
 
 /// Diffuse radiance read from a lightmap bake: the lightmap sampled at each scene triangle's
 /// `TEXCOORD_1`.
@@ -224,8 +226,55 @@ pub fn read_lightmap_glb(glb: &Path, scene: &Scene) -> Result<LightmapRadiance, 
         }
     }
     let exr = lightmap_exr_path(glb);
-    let image = twopass_composite::write::read_exr(&exr)
-        .map_err(|e| invalid(&exr, format!("the HDR lightmap of {}: {e}", glb.display())))?;
+    let of_glb = |e: twopass_composite::CompositeError| {
+        invalid(&exr, format!("the HDR lightmap of {}: {e}", glb.display()))
+    };
+    // The header first: its size against the `.glb`'s atlas and its fingerprint against the
+    // `.glb`'s, before a pixel is decoded (a ZIP EXR of a few megabytes can declare a
+    // 20,000 x 20,000 image that takes gigabytes to decode).
+    let header = twopass_composite::write::read_exr_header(&exr).map_err(of_glb)?;
+    if header.sizes != [(u64::from(width), u64::from(height))] {
+        let sizes: Vec<String> = header
+            .sizes
+            .iter()
+            .map(|(w, h)| format!("{w} x {h}"))
+            .collect();
+        return Err(invalid(
+            &exr,
+            format!(
+                "{} texels, the lightmap in {} has {width} x {height}: from another bake; \
+                 bake again",
+                sizes.join(" and "),
+                glb.display()
+            ),
+        ));
+    }
+    let recorded = glb_fingerprint(&gltf);
+    let found = header.text.get(LIGHTMAP_FINGERPRINT).cloned();
+    if recorded != found {
+        return Err(invalid(
+            &exr,
+            format!(
+                "lightmap fingerprint {}, but {} records {}: the EXR of another bake; bake again",
+                found.as_deref().unwrap_or("(none)"),
+                glb.display(),
+                recorded.as_deref().unwrap_or("(none)")
+            ),
+        ));
+    }
+    let image = twopass_composite::write::read_exr(&exr).map_err(of_glb)?;
+    if let Some(recorded) = &recorded
+        && format!("{:016x}", lightmap_fingerprint(&image)) != *recorded
+    {
+        return Err(invalid(
+            &exr,
+            format!(
+                "the texels do not match the fingerprint {recorded} it and {} record: \
+                 changed after the bake; bake again",
+                glb.display()
+            ),
+        ));
+    }
     if (image.width(), image.height()) != (width, height) {
         return Err(invalid(
             &exr,
@@ -246,6 +295,16 @@ pub fn read_lightmap_glb(glb: &Path, scene: &Scene) -> Result<LightmapRadiance, 
         image,
         exr,
     })
+}
+
+/// The fingerprint of its EXR a lightmap `.glb` records (`asset.extras.twopass.exr_fingerprint`),
+/// if any (bakes before it was recorded have none).
+fn glb_fingerprint(gltf: &::gltf::Gltf) -> Option<String> {
+    let raw = gltf.document.as_json().asset.extras.as_ref()?;
+    let value: serde_json::Value = serde_json::from_str(raw.get()).ok()?;
+    value["twopass"]["exr_fingerprint"]
+        .as_str()
+        .map(str::to_owned)
 }
 
 /// Width and height from a PNG's header (`IHDR`, the first chunk), or `None`.

@@ -69,12 +69,12 @@ fn refuse_non_finite(path: &Path, layer: &str, image: &Image) -> Result<()> {
 }
 
 /// Encodes one EXR part holding every `(prefix, image)`: channels `prefix.R/G/B`, or `R/G/B`
-/// for an empty prefix, with `metadata` (if any) as header attributes and the `software`
+/// for an empty prefix, with `metadata` (name, value) as text header attributes and the `software`
 /// attribute always. All images have one size (checked by the callers).
 fn encode_exr(
     path: &Path,
     parts: &[(&str, &Image)],
-    metadata: Option<&RenderMetadata>,
+    metadata: &[(&str, String)],
 ) -> Result<Vec<u8>> {
     let Some((_, first)) = parts.first() else {
         return Err(CompositeError::Empty {
@@ -122,13 +122,11 @@ fn encode_exr(
         )?),
         ..ex::LayerAttributes::default()
     };
-    if let Some(m) = metadata {
-        for (name, value) in m.attributes() {
-            attributes.other.insert(
-                text(name, name)?,
-                exr::meta::attribute::AttributeValue::Text(text(&value, name)?),
-            );
-        }
+    for (name, value) in metadata {
+        attributes.other.insert(
+            text(name, name)?,
+            exr::meta::attribute::AttributeValue::Text(text(value, name)?),
+        );
     }
     let layer = ex::Layer::new(
         ex::Vec2(w as usize, h as usize),
@@ -152,7 +150,60 @@ fn encode_exr(
 /// Encodes one linear image as EXR bytes with channels `R`, `G`, `B` (32-bit float); `path`
 /// only names the file in errors.
 pub fn encode_exr_image(path: &Path, image: &Image) -> Result<Vec<u8>> {
-    encode_exr(path, &[("", image)], None)
+    encode_exr(path, &[("", image)], &[])
+}
+
+/// [`encode_exr_image`] with `attributes` (name, value) as text attributes in the header,
+/// which [`read_exr_header`] reads back.
+pub fn encode_exr_image_with(
+    path: &Path,
+    image: &Image,
+    attributes: &[(&str, String)],
+) -> Result<Vec<u8>> {
+    encode_exr(path, &[("", image)], attributes)
+}
+
+/// What an EXR's header says, read without decoding a pixel.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ExrHeader {
+    /// Each part's size (width, height), pixels: what decoding it would allocate.
+    pub sizes: Vec<(u64, u64)>,
+    /// The first part's text attributes, by name.
+    pub text: std::collections::BTreeMap<String, String>,
+}
+
+/// Reads an EXR's header only: the parts' sizes and the first part's text attributes, so a
+/// caller can refuse a file (a size it does not expect: a decompression bomb of a few
+/// megabytes can declare gigapixels) before any pixel is decoded.
+pub fn read_exr_header(path: &Path) -> Result<ExrHeader> {
+    check_regular(path)?;
+    let meta =
+        exr::meta::MetaData::read_from_file(path, false).map_err(|source| CompositeError::Exr {
+            path: path.to_path_buf(),
+            source,
+        })?;
+    let sizes = meta
+        .headers
+        .iter()
+        .map(|h| (h.layer_size.0 as u64, h.layer_size.1 as u64))
+        .collect();
+    let text = meta
+        .headers
+        .first()
+        .map(|h| {
+            h.own_attributes
+                .other
+                .iter()
+                .filter_map(|(k, v)| match v {
+                    exr::meta::attribute::AttributeValue::Text(t) => {
+                        Some((k.to_string(), t.to_string()))
+                    }
+                    _ => None,
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    Ok(ExrHeader { sizes, text })
 }
 
 /// Writes one linear image as an EXR with channels `R`, `G`, `B` (32-bit float), atomically.
@@ -189,7 +240,8 @@ pub fn encode_exr_layers(
     };
     let mut parts: Vec<(&str, &Image)> = vec![("", top)];
     parts.extend(layers.iter());
-    encode_exr(path, &parts, metadata)
+    let attributes = metadata.map_or_else(Vec::new, |m| m.attributes().to_vec());
+    encode_exr(path, &parts, &attributes)
 }
 
 /// Writes every layer into one EXR, atomically: the final image as plain `R`, `G`, `B` and
@@ -210,7 +262,25 @@ pub fn write_exr_render(path: &Path, layers: &Layers, metadata: &RenderMetadata)
 /// One channel read: full name, width, height, samples.
 type Channel = (String, u32, u32, Vec<f32>);
 
+/// Refuses `path` unless it is a regular file, before anything opens it: opening a FIFO
+/// blocks until a writer comes, which may be never, and a device never ends. (`metadata`
+/// follows symbolic links, as opening does.)
+fn check_regular(path: &Path) -> Result<()> {
+    let io = |source| CompositeError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    if std::fs::metadata(path).map_err(io)?.is_file() {
+        return Ok(());
+    }
+    Err(io(std::io::Error::new(
+        std::io::ErrorKind::InvalidInput,
+        "not a regular file (a device, pipe or directory is not read as one)",
+    )))
+}
+
 fn read_channels(path: &Path) -> Result<Vec<Channel>> {
+    check_regular(path)?;
     let image = ex::read()
         .no_deep_data()
         .largest_resolution_level()

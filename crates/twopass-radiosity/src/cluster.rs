@@ -15,6 +15,7 @@ use glam::{DVec3, Vec3A};
 use obvhs::BvhBuildParams;
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::builder::build_bvh2;
+use twopass_scene::build_coincident;
 
 use crate::element::ElementMesh;
 
@@ -131,7 +132,11 @@ impl Clusters {
             max_prims_per_leaf: 1,
             ..BvhBuildParams::medium_build()
         };
-        let bvh = build_bvh2(&boxes, params, &mut Duration::default());
+        // Copies of one box (coincident triangles) are built as one and expanded into a
+        // balanced subtree: PLOC alone chains them, one level per copy.
+        let bvh = build_coincident(&boxes, |boxes| {
+            build_bvh2(boxes, params, &mut Duration::default())
+        });
         // Depth-first, children before parents are finished: an explicit stack of
         // (bvh node, cluster slot) so deep trees cannot overflow the call stack.
         enum Step {

@@ -50,8 +50,8 @@ pub use form_factor::VisibilityRays;
 pub use hierarchical::HierarchicalSolver;
 pub use mesh_error::{InvalidMesh, MeshPart};
 pub use options::{
-    AdaptiveOptions, HierarchicalOptions, MAX_VISIBILITY_RAYS, Method, Options, SpecularOptions,
-    Stop,
+    AdaptiveOptions, HierarchicalOptions, MAX_VISIBILITY_RAYS, MIN_LINK_TOLERANCE, Method, Options,
+    SpecularOptions, Stop,
 };
 pub use progressive::{MAX_DENSE_VERTICES, MAX_ELEMENTS, ProgressiveSolver, dense_solve};
 pub use report::{Energy, Finish, Residuals, SolveProgress};

@@ -89,11 +89,20 @@ pub struct Options {
     pub specular: Option<SpecularOptions>,
 }
 
+/// Smallest [`HierarchicalOptions::link_tolerance`]: f32's relative precision (`f32::EPSILON`,
+/// about 1.2e-7). A link's transport and error are stored as f32 and summed into its
+/// receiver in f32 steps, so an error below this fraction of the emitted power is below the
+/// rounding of the very quantities the oracle compares: refining for it changes nothing the
+/// solution can show, while the links grow toward every pair of the smallest elements
+/// (quadratic in their number, without end in practice).
+pub const MIN_LINK_TOLERANCE: f64 = f32::EPSILON as f64;
+
 /// Settings of the hierarchical solver.
 #[derive(SmartDefault, Debug, Clone, Copy, PartialEq)]
 pub struct HierarchicalOptions {
     /// A link is refined while its estimated transport error, in power, exceeds this fraction
-    /// of the emitted power (luminance), default 2e-5: the BF refinement oracle.
+    /// of the emitted power (luminance), default 2e-5: the BF refinement oracle. At least
+    /// [`MIN_LINK_TOLERANCE`].
     #[default(2e-5)]
     pub link_tolerance: f64,
     /// Elements are not split below this longest edge, scene units; default the scene's

@@ -265,6 +265,20 @@ pub enum Warning {
         /// Index (within the object) of the first one dropped.
         first: usize,
     },
+    /// Exact copies of another triangle of the same object (the same three corners in the
+    /// same cyclic order) were dropped.
+    DuplicateTriangles {
+        /// The scene or OBJ file.
+        path: PathBuf,
+        /// The object.
+        object: String,
+        /// How many were dropped.
+        dropped: usize,
+        /// Index (within the object) of the first one dropped.
+        first: usize,
+        /// Index (within the object) of the triangle it copies.
+        original: usize,
+    },
     /// A bare OBJ's MTL library is missing or broken; its faces get the default grey.
     MissingMtl {
         /// The OBJ file.
@@ -330,6 +344,17 @@ impl fmt::Display for Warning {
             } => write!(
                 f,
                 "{}: object `{object}`: dropped {dropped} degenerate (zero-area) triangle(s), the first is triangle {first}",
+                path.display()
+            ),
+            Self::DuplicateTriangles {
+                path,
+                object,
+                dropped,
+                first,
+                original,
+            } => write!(
+                f,
+                "{}: object `{object}`: dropped {dropped} triangle(s) that repeat another of the object exactly (same corners, same winding), the first is triangle {first}, a copy of triangle {original}",
                 path.display()
             ),
             Self::MissingMtl { path, mtl } => write!(

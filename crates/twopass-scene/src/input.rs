@@ -56,6 +56,9 @@ impl ReadPolicy {
     }
 }
 
+/// Why a file that is not a regular file is refused (the message [`read_bounded`] gives).
+const NOT_REGULAR: &str = "not a regular file (a device, pipe or directory is not read as one)";
+
 /// Reads `path` whole if it is a regular file of at most `limit` bytes. Anything else (a
 /// device such as `/dev/zero`, a pipe, a directory, a larger file, a file that grows past the
 /// limit while it is read) is an error of kind [`std::io::ErrorKind::InvalidInput`] that says
@@ -63,12 +66,17 @@ impl ReadPolicy {
 /// (scenes, meshes, libraries, bakes, manifests, presets) goes through it.
 pub fn read_bounded(path: &Path, limit: u64) -> std::io::Result<Vec<u8>> {
     let refuse = |m: String| std::io::Error::new(std::io::ErrorKind::InvalidInput, m);
+    let not_regular = || refuse(NOT_REGULAR.into());
+    // The type is checked before opening: opening a FIFO for reading blocks until a writer
+    // comes, which may be never. (`metadata` follows symbolic links, as `open` does.)
+    if !std::fs::metadata(path)?.is_file() {
+        return Err(not_regular());
+    }
     let file = std::fs::File::open(path)?;
+    // Checked again on what was opened, in case the path changed in between.
     let meta = file.metadata()?;
     if !meta.is_file() {
-        return Err(refuse(
-            "not a regular file (a device, pipe or directory is not read as one)".into(),
-        ));
+        return Err(not_regular());
     }
     if meta.len() > limit {
         return Err(refuse(format!(

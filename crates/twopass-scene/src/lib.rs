@@ -41,7 +41,7 @@ pub mod workload;
 
 pub use accel::{
     Accel, COHERENT_ANGLE, COHERENT_ORIGINS, INTERLEAVE_MIN_BYTES, Ray, SHAFT_TOLERANCE,
-    SurfacePoint, TriangleHit,
+    SurfacePoint, TriangleHit, build_coincident,
 };
 pub use camera::{Camera, CameraProblem};
 pub use error::{SceneError, Warning};

@@ -9,8 +9,8 @@ use std::time::Duration;
 
 use clap::{Args, ValueEnum};
 use twopass_radiosity::{
-    AdaptiveOptions, Finish, HierarchicalOptions, MAX_VISIBILITY_RAYS, Method, Options, Solver,
-    SpecularOptions, Stop, VisibilityRays,
+    AdaptiveOptions, Finish, HierarchicalOptions, MAX_VISIBILITY_RAYS, MIN_LINK_TOLERANCE, Method,
+    Options, Solver, SpecularOptions, Stop, VisibilityRays,
 };
 use twopass_scene::Scene;
 
@@ -51,7 +51,8 @@ pub struct SolveArgs {
     pub unshot: f64,
     /// Hierarchical solver: refine a link while its estimated transport error exceeds this
     /// fraction of the emitted power.
-    #[arg(long, default_value_t = HierarchicalOptions::default().link_tolerance, value_name = "FRACTION")]
+    /// At least 1.2e-7 (f32's precision, `twopass_radiosity::MIN_LINK_TOLERANCE`).
+    #[arg(long, default_value_t = HierarchicalOptions::default().link_tolerance, value_name = "FRACTION", value_parser = parse_link_tolerance)]
     pub link_tolerance: f64,
     /// Stop after this many shots (progressive) or gather iterations (hierarchical).
     #[arg(long, value_name = "N")]
@@ -202,6 +203,22 @@ pub fn parse_fraction(s: &str) -> Result<f64, String> {
         |x| (0.0..1.0).contains(x),
         "must be a fraction >= 0 and < 1",
     )
+}
+
+/// A link tolerance: finite and at least [`MIN_LINK_TOLERANCE`] (below it the refinement
+/// grows toward every pair of the smallest elements for errors under f32's rounding).
+pub(crate) fn parse_link_tolerance(s: &str) -> Result<f64, String> {
+    let x: f64 = s
+        .parse()
+        .map_err(|e: std::num::ParseFloatError| e.to_string())?;
+    if x.is_finite() && x >= MIN_LINK_TOLERANCE {
+        return Ok(x);
+    }
+    // In exponent form: a subnormal written out in full is hundreds of digits.
+    Err(format!(
+        "{x:e} must be finite and at least {MIN_LINK_TOLERANCE:e} (f32's precision: a \
+         smaller link error is below the rounding of what is compared)"
+    ))
 }
 
 /// A length in scene units: finite and > 0 (whether it fits the scene is checked by the

@@ -80,22 +80,37 @@ pub fn run(args: &ViewArgs, ctx: &Context) -> Result<(), CliError> {
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
     let mut files = Vec::new();
-    let mut write = |rel: &str, data: &[u8]| -> Result<(), CliError> {
+    let mut write = |rel: &str, data: &[u8]| -> Result<PathBuf, CliError> {
         let path = out.join(rel);
         if let Some(dir) = path.parent() {
             crate::output::create_dir(dir)?;
         }
         crate::output::write_atomic(&path, data)?;
-        files.push(path);
-        Ok(())
+        files.push(path.clone());
+        Ok(path)
     };
+    // Only the package's own files are copied: a symbolic link in it that leads out of it
+    // (to a private file, say) is refused, since the page folder is made to be served.
+    let root = three.canonicalize().map_err(|e| CliError::io(&three, e))?;
     for rel in THREE_FILES {
         let from = three.join(rel);
-        let data = twopass_scene::read_bounded(&from, MAX_THREE_FILE)
+        let real = from.canonicalize().map_err(|e| CliError::io(&from, e))?;
+        if !real.starts_with(&root) {
+            return Err(CliError::Input(format!(
+                "{}: a symbolic link out of the three.js package {} (to {}); only the \
+                 package's own files are copied",
+                from.display(),
+                three.display(),
+                real.display()
+            )));
+        }
+        let data = twopass_scene::read_bounded(&real, MAX_THREE_FILE)
             .map_err(|e| CliError::io(&from, e))?;
-        write(&format!("three/{rel}"), &data)?;
+        let copy = write(&format!("three/{rel}"), &data)?;
+        keep_permissions(&real, &copy)?;
     }
-    write(&name, &bytes)?;
+    let copy = write(&name, &bytes)?;
+    keep_permissions(&glb, &copy)?;
     write("view.js", VIEW_JS.as_bytes())?;
     write(
         "index.html",
@@ -120,6 +135,14 @@ pub fn run(args: &ViewArgs, ctx: &Context) -> Result<(), CliError> {
         );
         Ok(())
     })
+}
+
+/// Gives `copy` the permissions of `source`: a file only its owner may read stays so.
+fn keep_permissions(source: &Path, copy: &Path) -> Result<(), CliError> {
+    let permissions = std::fs::metadata(source)
+        .map_err(|e| CliError::io(source, e))?
+        .permissions();
+    std::fs::set_permissions(copy, permissions).map_err(|e| CliError::io(copy, e))
 }
 
 /// The one `<stem>.lightmap.glb` in `dir`.

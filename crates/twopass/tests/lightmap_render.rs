@@ -74,3 +74,89 @@ fn a_lightmap_of_another_scene_or_without_its_exr_is_refused() {
     assert!(err.contains("cornell-box.lightmap.exr"), "{err}");
     assert!(!dir.join("x.exr").exists());
 }
+
+/// `bytes` (an EXR) with its header's data window grown to `size` x `size` pixels, nothing
+/// else changed: a file of a few kilobytes that declares a huge image.
+fn with_data_window(bytes: &[u8], size: i32) -> Vec<u8> {
+    let key = b"dataWindow\0box2i\0\x10\0\0\0";
+    let at = bytes
+        .windows(key.len())
+        .position(|w| w == key)
+        .expect("an EXR header has a data window")
+        + key.len();
+    let word = |k: usize| i32::from_le_bytes(bytes[at + 4 * k..at + 4 * k + 4].try_into().unwrap());
+    let (x0, y0) = (word(0), word(1));
+    let mut out = bytes.to_vec();
+    out[at + 8..at + 12].copy_from_slice(&(x0 + size - 1).to_le_bytes());
+    out[at + 12..at + 16].copy_from_slice(&(y0 + size - 1).to_le_bytes());
+    out
+}
+
+/// Issue 43, findings 4 and 5: the lightmap EXR's header is checked against its `.glb` before
+/// a pixel is decoded (a header that declares 20,000 x 20,000 texels is refused by its size),
+/// and an EXR of the right size from another bake (another fingerprint), or one whose texels
+/// were changed, is refused naming both files.
+#[test]
+fn a_lightmap_exr_is_checked_against_its_glb_before_decoding() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    bake_cornell_lightmap(dir);
+    // Without the manifest, whose checksums would refuse any changed file first.
+    std::fs::remove_file(dir.join("cornell-box.manifest.json")).unwrap();
+    let exr = dir.join("cornell-box.lightmap.exr");
+    let good = std::fs::read(&exr).unwrap();
+    let refused = |why: &str| {
+        let out = render(dir, BOX, "cornell-box.lightmap.glb", "radiosity", "x.exr");
+        let err = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert_eq!(out.status.code(), Some(1), "{err}");
+        for w in ["cornell-box.lightmap.exr", "cornell-box.lightmap.glb", why] {
+            assert!(err.contains(w), "lacks `{w}`: {err}");
+        }
+        assert!(!dir.join("x.exr").exists());
+    };
+    // A header of 20,000 x 20,000 texels over the few kilobytes of the real pixels: decoding
+    // it would fail (or, with the pixels there, take gigabytes); its size is refused first.
+    std::fs::write(&exr, with_data_window(&good, 20_000)).unwrap();
+    refused("20000 x 20000 texels, the lightmap in");
+    // Another bake's EXR of the same size: other texels, their own fingerprint.
+    let image = read_exr_path(&good, dir);
+    let mut other = image.clone();
+    other.pixels_mut()[0] += glam::Vec3::splat(1.0);
+    let print = format!("{:016x}", twopass_bake::lightmap_fingerprint(&other));
+    let bytes = twopass_composite::write::encode_exr_image_with(
+        &exr,
+        &other,
+        &[(twopass_bake::LIGHTMAP_FINGERPRINT, print.clone())],
+    )
+    .unwrap();
+    std::fs::write(&exr, bytes).unwrap();
+    refused(&format!("lightmap fingerprint {print}, but"));
+    // Changed texels under the right fingerprint.
+    let right = format!("{:016x}", twopass_bake::lightmap_fingerprint(&image));
+    let bytes = twopass_composite::write::encode_exr_image_with(
+        &exr,
+        &other,
+        &[(twopass_bake::LIGHTMAP_FINGERPRINT, right)],
+    )
+    .unwrap();
+    std::fs::write(&exr, bytes).unwrap();
+    refused("the texels do not match the fingerprint");
+    // The good file back: it renders.
+    std::fs::write(&exr, &good).unwrap();
+    assert_ok(&render(
+        dir,
+        BOX,
+        "cornell-box.lightmap.glb",
+        "radiosity",
+        "x.exr",
+    ));
+}
+
+/// The image of the EXR `bytes`, read through a scratch file in `dir`.
+fn read_exr_path(bytes: &[u8], dir: &Path) -> twopass_composite::Image {
+    let path = dir.join("scratch.exr");
+    std::fs::write(&path, bytes).unwrap();
+    let image = read_exr(&path).unwrap();
+    std::fs::remove_file(&path).unwrap();
+    image
+}

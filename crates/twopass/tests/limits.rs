@@ -55,6 +55,37 @@ fn options_out_of_range_are_usage_errors() {
             vec!["--exposure"],
         ),
         (vec!["render", s, "--width", "65537"], vec!["--width"]),
+        // Issue 43, finding 14: below f32's precision the refinement never ends.
+        (
+            vec![
+                "bake",
+                s,
+                "--solver",
+                "hierarchical",
+                "--link-tolerance",
+                "5e-324",
+                "-o",
+                o,
+            ],
+            vec![
+                "--link-tolerance",
+                "5e-324",
+                "at least 1.1920928955078125e-7",
+            ],
+        ),
+        (
+            vec![
+                "bake",
+                s,
+                "--solver",
+                "hierarchical",
+                "--link-tolerance",
+                "1e-8",
+                "-o",
+                o,
+            ],
+            vec!["--link-tolerance", "1e-8", "at least 1.1920928955078125e-7"],
+        ),
         (
             vec![
                 "render", s, "--width", "65536", "--height", "65536", "-o", o,
@@ -279,4 +310,233 @@ fn a_presets_file_cannot_ask_for_more_than_the_options() {
         1,
         &["bad.presets.toml", name, "depth 4000000000", "at most 64"],
     );
+}
+
+/// Runs `twopass args`, killing it after 60 s (a test of a hang must not hang), and checks
+/// its exit code and that stderr holds every one of `words`.
+fn expect_soon(args: &[&str], code: i32, words: &[&str]) {
+    use std::time::{Duration, Instant};
+    let mut child = Command::new(env!("CARGO_BIN_EXE_twopass"))
+        .args(args)
+        .env("CI", "1")
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the binary runs");
+    let start = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > Duration::from_secs(60) {
+            child.kill().unwrap();
+            child.wait().unwrap();
+            panic!("twopass {args:?} still running after 60 s");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(
+        out.status.code(),
+        Some(code),
+        "twopass {args:?}: exit {:?}, stderr:\n{stderr}",
+        out.status.code()
+    );
+    for w in words {
+        assert!(
+            stderr.contains(w),
+            "twopass {args:?}: stderr lacks `{w}`:\n{stderr}"
+        );
+    }
+}
+
+/// Makes a FIFO at `path`.
+#[cfg(unix)]
+fn mkfifo(path: &std::path::Path) {
+    let status = Command::new("mkfifo")
+        .arg(path)
+        .status()
+        .expect("mkfifo runs");
+    assert!(status.success(), "mkfifo {}", path.display());
+}
+
+/// Issue 43, finding 7: a FIFO named as any input (the scene, an OBJ, its MTL, a `.bake`, a
+/// lightmap's `.glb` or EXR) is refused at once, naming it, as devices are: opening one for
+/// reading would wait for a writer that never comes.
+#[cfg(unix)]
+#[test]
+fn fifos_are_refused_at_once() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let path = |name: &str| dir.join(name).display().to_string();
+    let refused = "not a regular file";
+    // The scene file, and a bare OBJ.
+    for name in ["fifo.toml", "fifo.obj"] {
+        mkfifo(&dir.join(name));
+        expect_soon(&["info", &path(name)], 1, &[name, refused]);
+    }
+    // An OBJ a scene names.
+    std::fs::write(
+        dir.join("mesh.toml"),
+        "version = 1\n[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\n\n\
+         [[material]]\nname = \"white\"\ntype = \"lambert\"\ndiffuse = 0.5\n\n\
+         [[object]]\nname = \"mesh\"\nmaterial = \"white\"\n\
+         shape = { type = \"obj\", file = \"fifo.obj\" }\n",
+    )
+    .unwrap();
+    expect_soon(&["info", &path("mesh.toml")], 1, &["fifo.obj", refused]);
+    // The MTL library an OBJ names.
+    mkfifo(&dir.join("fifo.mtl"));
+    std::fs::write(
+        dir.join("lib.obj"),
+        "mtllib fifo.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    )
+    .unwrap();
+    expect_soon(&["info", &path("lib.obj")], 1, &["fifo.mtl", refused]);
+    // A bake file.
+    mkfifo(&dir.join("fifo.bake"));
+    let scene = cornell();
+    // `render --bake bake`, refused naming the file `named`.
+    let render = |bake: &str, named: &str| {
+        expect_soon(
+            &[
+                "render",
+                &scene,
+                "--method",
+                "radiosity",
+                "--bake",
+                bake,
+                "--width",
+                "8",
+                "--height",
+                "8",
+                "--quiet",
+                "-o",
+                &path("x.exr"),
+            ],
+            1,
+            &[named, refused],
+        );
+    };
+    render(&path("fifo.bake"), "fifo.bake");
+    // A lightmap's `.glb`, and the EXR beside a good `.glb`.
+    mkfifo(&dir.join("fifo.lightmap.glb"));
+    render(&path("fifo.lightmap.glb"), "fifo.lightmap.glb");
+    let baked = dir.join("baked");
+    common::bake_cornell_lightmap(&baked);
+    let exr = baked.join("cornell-box.lightmap.exr");
+    std::fs::remove_file(&exr).unwrap();
+    mkfifo(&exr);
+    let glb = baked.join("cornell-box.lightmap.glb").display().to_string();
+    render(&glb, "cornell-box.lightmap.exr");
+    // Without the manifest (whose check reads every file it lists), the lightmap reader
+    // meets the FIFO itself.
+    std::fs::remove_file(baked.join("cornell-box.manifest.json")).unwrap();
+    render(&glb, "cornell-box.lightmap.exr");
+}
+
+/// Issue 43, finding 16: the Cornell OBJ scene with the back wall's `f` line repeated 100
+/// times (an export glitch) renders at once: the 99 copies of its two triangles are dropped
+/// at load with a warning naming the object and the triangles.
+#[test]
+fn repeated_faces_are_dropped_with_a_warning() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    std::fs::create_dir(dir.join("meshes")).unwrap();
+    std::fs::copy(
+        repo("scenes/cornell-obj.toml"),
+        dir.join("cornell-obj.toml"),
+    )
+    .unwrap();
+    std::fs::copy(
+        repo("scenes/meshes/cornell-box.mtl"),
+        dir.join("meshes/cornell-box.mtl"),
+    )
+    .unwrap();
+    let obj = std::fs::read_to_string(repo("scenes/meshes/cornell-box.obj")).unwrap();
+    let wall = "f 13 14 15 16\n";
+    assert!(obj.contains(wall), "the back wall's face line");
+    let repeated = obj.replacen(wall, &wall.repeat(100), 1);
+    std::fs::write(dir.join("meshes/cornell-box.obj"), repeated).unwrap();
+    let scene = dir.join("cornell-obj.toml").display().to_string();
+    let out = dir.join("x.exr").display().to_string();
+    // The quad is two triangles (0 and 1 of the object); the second face line's are 2 and 3.
+    expect(
+        &[
+            "render", &scene, "--width", "16", "--height", "16", "--spp", "1", "-o", &out,
+        ],
+        0,
+        &[
+            "back-wall",
+            "dropped 198 triangle(s) that repeat another of the object exactly",
+            "the first is triangle 2, a copy of triangle 0",
+        ],
+    );
+}
+
+/// Issue 43, finding 12: a bare OBJ whose triangles all collapse to one point is refused
+/// naming the degenerate triangles (the file, the line of the first face), not the camera
+/// the loader would have made up to frame them.
+#[test]
+fn an_obj_collapsed_to_a_point_names_its_triangles() {
+    let tmp = tempfile::tempdir().unwrap();
+    let obj = tmp.path().join("point.obj");
+    std::fs::write(
+        &obj,
+        "# every corner at one point\nv 1 2 3\nv 1 2 3\nv 1 2 3\nv 1 2 3\nf 1 2 3\nf 2 3 4\n",
+    )
+    .unwrap();
+    let obj = obj.display().to_string();
+    expect(
+        &["info", &obj],
+        1,
+        &["point.obj:6", "all 2 triangles are degenerate"],
+    );
+    let out = twopass(&["info", &obj]);
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("camera"));
+}
+
+/// Issue 43, finding 1: 5,000 copies of one floor triangle under a light, baked with the
+/// hierarchical solver (which aborted on a stack overflow walking a chain of 5,000
+/// clusters): the copies are dropped at load, with a warning, and the bake completes.
+#[test]
+fn a_floor_of_coincident_copies_bakes_hierarchically() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let mut obj = String::from(
+        "mtllib lit.mtl\nv 0 0 0\nv 1 0 0\nv 0 0 -1\nv 0 1 0\nv 0 1 -1\nv 1 1 0\nusemtl white\n",
+    );
+    obj.push_str(&"f 1 2 3\n".repeat(5000));
+    obj.push_str("usemtl light\nf 4 5 6\n");
+    std::fs::write(dir.join("floor.obj"), obj).unwrap();
+    std::fs::write(
+        dir.join("lit.mtl"),
+        "newmtl white\nKd 0.8 0.8 0.8\nnewmtl light\nKd 0 0 0\nKe 10 10 10\n",
+    )
+    .unwrap();
+    let scene = dir.join("floor.obj").display().to_string();
+    let out = dir.join("out").display().to_string();
+    expect_soon(
+        &["bake", &scene, "--solver", "hierarchical", "-o", &out],
+        0,
+        &["dropped 4999 triangle(s) that repeat another of the object exactly"],
+    );
+}
+
+/// Issue 43, findings 1 and 2: 10^5 coincident triangles, each an object of its own (so none
+/// is dropped as a copy), load and get their BVH at once (copies of one box are built as
+/// one and expanded into a balanced subtree; the tie between them made PLOC quadratic).
+#[test]
+fn a_hundred_thousand_coincident_triangles_load() {
+    let tmp = tempfile::tempdir().unwrap();
+    let obj = tmp.path().join("copies.obj");
+    let mut text = String::from("v 0 0 0\nv 1 0 0\nv 0 0 -1\n");
+    for i in 0..100_000 {
+        text.push_str(&format!("o c{i}\nf 1 2 3\n"));
+    }
+    std::fs::write(&obj, text).unwrap();
+    let out = twopass(&["info", obj.to_str().unwrap()]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}");
+    assert!(stdout.contains("100000 triangles"), "{stdout}");
+    assert!(stdout.contains("100000 objects"), "{stdout}");
 }

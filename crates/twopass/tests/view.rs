@@ -266,3 +266,76 @@ fn view_refuses_a_folder_without_a_lightmap_or_with_a_broken_one() {
     assert_eq!(out.status.code(), Some(2));
     assert!(!dir.join("view").exists());
 }
+
+/// A stand-in for the `three` package at `dir`: its manifest and the files the page copies,
+/// each holding its own path, readable by its owner only.
+#[cfg(unix)]
+fn fake_three(dir: &Path) {
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::create_dir_all(dir).unwrap();
+    std::fs::write(
+        dir.join("package.json"),
+        r#"{"name": "three", "version": "0.0.0"}"#,
+    )
+    .unwrap();
+    for rel in [
+        "build/three.module.js",
+        "examples/jsm/loaders/GLTFLoader.js",
+        "examples/jsm/utils/BufferGeometryUtils.js",
+        "examples/jsm/controls/OrbitControls.js",
+        "LICENSE",
+    ] {
+        let path = dir.join(rel);
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(&path, rel).unwrap();
+        std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o600)).unwrap();
+    }
+}
+
+/// Issue 43, finding 15: `view --three T` copies only the package's own files with their
+/// permissions (a file only its owner may read stays so), and refuses a symbolic link in `T`
+/// that leads out of it, naming the link, without copying what it leads to.
+#[cfg(unix)]
+#[test]
+fn view_refuses_links_out_of_the_three_package_and_keeps_permissions() {
+    use std::os::unix::fs::PermissionsExt;
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let bake = dir.join("bake");
+    bake_cornell_lightmap(&bake);
+    let three = dir.join("three");
+    fake_three(&three);
+    let page = dir.join("page");
+    let run = |out: &Path| {
+        twopass(&[
+            "view",
+            bake.to_str().unwrap(),
+            "--three",
+            three.to_str().unwrap(),
+            "--output",
+            out.to_str().unwrap(),
+        ])
+    };
+    assert_ok(&run(&page));
+    let copy = page.join("three/build/three.module.js");
+    assert_eq!(
+        std::fs::read_to_string(&copy).unwrap(),
+        "build/three.module.js"
+    );
+    let mode = std::fs::metadata(&copy).unwrap().permissions().mode() & 0o777;
+    assert_eq!(mode, 0o600, "{mode:o}");
+    // LICENSE a link to a private file outside the package.
+    let private = dir.join("private.txt");
+    std::fs::write(&private, "secret").unwrap();
+    std::fs::remove_file(three.join("LICENSE")).unwrap();
+    std::os::unix::fs::symlink(&private, three.join("LICENSE")).unwrap();
+    let page = dir.join("page2");
+    let out = run(&page);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("LICENSE") && err.contains("a symbolic link out of the three.js package"),
+        "{err}"
+    );
+    assert!(!page.join("three/LICENSE").exists());
+}

@@ -14,6 +14,7 @@ use super::layout::{generated_layout, scene_layout};
 use super::settings::{Lightmap, LightmapSettings, Resolved, TEXELS_PER_DIAGONAL};
 use crate::colour::ColorMapping;
 use crate::error::BakeError;
+use crate::fingerprint::LIGHTMAP_FINGERPRINT;
 
 /// Bakes the light of `source` (a solution's diffuse radiance interpolated per texel, or a
 /// final gather per texel: [`TexelSource`]) into a lightmap over the scene's own triangles,
@@ -87,8 +88,11 @@ pub fn bake_lightmap(
         path: PathBuf::from("lightmap"),
         message: e.to_string(),
     };
-    let exr = twopass_composite::write::encode_exr_image(Path::new("lightmap.exr"), &image)
-        .map_err(encode_err)?;
+    let fingerprint = crate::fingerprint::lightmap_fingerprint(&image);
+    let tag = [(LIGHTMAP_FINGERPRINT, format!("{fingerprint:016x}"))];
+    let exr =
+        twopass_composite::write::encode_exr_image_with(Path::new("lightmap.exr"), &image, &tag)
+            .map_err(encode_err)?;
     let ldr = Rgb8Image::from_fn(width, height, |x, y| {
         let (c, _) = mapping.color(image.pixels()[(y * width + x) as usize]);
         c.to_array().map(|v| quantize(srgb_encode(v)))
@@ -100,7 +104,7 @@ pub fn bake_lightmap(
     let png =
         twopass_composite::write::encode_png(Path::new("lightmap.png"), &ldr, Some(&description))
             .map_err(encode_err)?;
-    let glb = encode_lightmap_glb(scene, &layout, &s, &png, mapping)?;
+    let glb = encode_lightmap_glb(scene, &layout, &s, &png, mapping, fingerprint)?;
     Ok(Lightmap {
         width,
         height,

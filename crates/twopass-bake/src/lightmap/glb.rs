@@ -35,6 +35,9 @@ struct LightmapExtrasBody<'a> {
     metres_per_scene_unit: f64,
     scene: &'a str,
     camera: CameraRecord,
+    /// The EXR's [`lightmap_fingerprint`](crate::fingerprint::lightmap_fingerprint), 16 hex
+    /// digits: the `.glb` is read only with that EXR.
+    exr_fingerprint: String,
 }
 
 /// The scene's camera as the lightmap `.glb` records it (`asset.extras.twopass.camera`), so
@@ -80,7 +83,8 @@ impl CameraRecord {
 pub const PNG_FORMULA: &str = "sRGB-encoded 8-bit of min(1, exposure * L), L the radiance \
      leaving the surface in W/(m^2 sr); the HDR values are in the .exr beside the .glb";
 
-/// The lightmap `.glb` of `scene` on `layout` with `png` embedded (see [`bake_lightmap`]).
+/// The lightmap `.glb` of `scene` on `layout` with `png` embedded and the fingerprint of the
+/// EXR beside it (see [`bake_lightmap`]).
 ///
 /// [`bake_lightmap`]: super::bake_lightmap
 pub(super) fn encode_lightmap_glb(
@@ -89,6 +93,7 @@ pub(super) fn encode_lightmap_glb(
     s: &Resolved,
     png: &[u8],
     mapping: ColorMapping,
+    exr_fingerprint: u64,
 ) -> Result<Vec<u8>, BakeError> {
     let m = &scene.mesh;
     let to_metres = scene.unit.metres();
@@ -166,6 +171,7 @@ pub(super) fn encode_lightmap_glb(
             metres_per_scene_unit: to_metres,
             scene: &scene_name,
             camera: CameraRecord::of(scene),
+            exr_fingerprint: format!("{exr_fingerprint:016x}"),
         },
     };
     b.finish(&scene_name, &extras)

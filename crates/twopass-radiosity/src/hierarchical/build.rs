@@ -14,7 +14,7 @@ use super::state::{BYTES_PER_CLUSTER, BYTES_PER_LINK, BYTES_PER_NODE, Hierarchic
 use crate::cluster::{Clusters, Kind, NodeRef};
 use crate::element::ElementMesh;
 use crate::error::SolveError;
-use crate::options::{Options, check_common, participating};
+use crate::options::{MIN_LINK_TOLERANCE, Options, check_common, participating};
 use crate::report::Bookkeeping;
 use crate::specular::Specular;
 use crate::specular_receivers::SpecularReceivers;
@@ -35,10 +35,13 @@ impl<'s> HierarchicalSolver<'s> {
                 problem: format!("{min_size} must be finite and > 0 scene units"),
             });
         }
-        if !(h.link_tolerance.is_finite() && h.link_tolerance > 0.0) {
+        if !(h.link_tolerance.is_finite() && h.link_tolerance >= MIN_LINK_TOLERANCE) {
             return Err(SolveError::Option {
                 name: "link_tolerance",
-                problem: format!("{} must be finite and > 0", h.link_tolerance),
+                problem: format!(
+                    "{} must be finite and at least {MIN_LINK_TOLERANCE:e} (f32's precision)",
+                    h.link_tolerance
+                ),
             });
         }
         check_common(&options)?;

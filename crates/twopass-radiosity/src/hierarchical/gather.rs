@@ -7,10 +7,9 @@ use rayon::prelude::*;
 use twopass_brdf::colour::luminance_f64;
 use twopass_brdf::random::hash;
 
-use super::directions::{DIRECTIONS, EMPTY, Incoming, NOTHING, add_tables};
+use super::directions::{DIRECTIONS, Incoming, NOTHING};
 use super::state::HierarchicalSolver;
 use crate::cluster::Kind;
-use crate::element::barycentric_2d;
 
 impl HierarchicalSolver<'_> {
     /// One Jacobi gather over every link, then push-pull. Updates the residual.
@@ -125,133 +124,6 @@ impl HierarchicalSolver<'_> {
                 (e + r) * f64::from(self.mesh.nodes[n as usize].area)
             })
             .sum()
-    }
-
-    /// Push irradiance down to the leaves (linearly interpolated inside surfaces), compute the
-    /// leaves' exitance, pull area-averaged exitance back up.
-    pub(super) fn push_pull(&mut self) {
-        let root = self.clusters.root;
-        match root.kind() {
-            Kind::Cluster(c) => {
-                self.push_cluster(c, &NOTHING);
-            }
-            Kind::Surface(n) => {
-                self.push_surface(n, [[DVec3::ZERO; 4]; 2]);
-            }
-        }
-        // Every node has sent its own light now.
-        self.settled = self.mesh.nodes.len();
-    }
-
-    /// Returns the cluster's area-weighted exitance sum (W) and the range of its leaves'
-    /// exitance luminance.
-    fn push_cluster(&mut self, c: u32, inherited: &Incoming) -> ([DVec3; 2], (f64, f64)) {
-        let here = inherited.add(&self.cluster_gathered[c as usize]);
-        let mut radiant = EMPTY;
-        let mut power = [DVec3::ZERO; 2];
-        let mut range = (f64::INFINITY, f64::NEG_INFINITY);
-        for child in self.clusters.nodes[c as usize].children {
-            let (p, r) = match child.kind() {
-                Kind::Cluster(cc) => {
-                    let out = self.push_cluster(cc, &here);
-                    radiant = add_tables(&radiant, &self.radiant[cc as usize]);
-                    out
-                }
-                Kind::Surface(n) => {
-                    // Each corner gets the cluster's light by its receiving normal.
-                    let normals = self.mesh.nodes[n as usize]
-                        .vertices
-                        .map(|v| self.mesh.vertices[v as usize].normal.as_dvec3());
-                    let at = normals.map(|nk| here.facing(&self.dirs, nk));
-                    let out = self.push_surface(
-                        n,
-                        std::array::from_fn(|o| [at[0][o], at[1][o], at[2][o], DVec3::ZERO]),
-                    );
-                    // The triangle's power toward each direction: exitance x area x cos.
-                    let normal = self.scene.mesh.geometric_normals
-                        [self.mesh.nodes[n as usize].scene_triangle as usize]
-                        .as_dvec3();
-                    for (j, d) in self.dirs.iter().enumerate() {
-                        let c = normal.dot(*d);
-                        if c > 0.0 {
-                            for (o, p) in out.0.iter().enumerate() {
-                                radiant[o][j] += (*p * c).as_vec3();
-                            }
-                        }
-                    }
-                    out
-                }
-            };
-            power[0] += p[0];
-            power[1] += p[1];
-            range = (range.0.min(r.0), range.1.max(r.1));
-        }
-        let area = self.clusters.nodes[c as usize].area.max(f64::MIN_POSITIVE);
-        self.cluster_exitance[c as usize] = [power[0] / area, power[1] / area];
-        self.cluster_spread[c as usize] = range.1 - range.0;
-        self.radiant[c as usize] = radiant;
-        (power, range)
-    }
-
-    /// Returns the surface node's area-weighted exitance sum (W) and the range of its leaves'
-    /// exitance luminance.
-    fn push_surface(&mut self, n: u32, inherited: [[DVec3; 4]; 2]) -> ([DVec3; 2], (f64, f64)) {
-        let node = self.mesh.nodes[n as usize];
-        let g = self.gathered[n as usize];
-        let here: [[DVec3; 4]; 2] =
-            std::array::from_fn(|o| std::array::from_fn(|k| inherited[o][k] + g[o][k]));
-        let area = f64::from(node.area);
-        let (power, range) = match node.children {
-            None => {
-                let t = node.scene_triangle as usize;
-                // What arrived through mirrors and glass, per vertex: reflected light (vertices
-                // made since the last splat get theirs at the next gather).
-                let mut here = here;
-                for (k, &v) in node.vertices.iter().enumerate() {
-                    if let Some(e) = self
-                        .specular
-                        .as_ref()
-                        .and_then(|s| s.received.get(v as usize))
-                    {
-                        here[1][k] += *e;
-                    }
-                }
-                // The light the leaf gets: its corners' linear interpolant plus the shifts of
-                // the links above it (see [`Link::area_correction`]).
-                let mean = |o: usize| (here[o][0] + here[o][1] + here[o][2]) / 3.0 + here[o][3];
-                let b = [self.tri_emission[t], self.tri_rho[t] * (mean(0) + mean(1))];
-                self.corners_in[n as usize] = here;
-                let y = luminance_f64(b[0] + b[1]);
-                ([b[0] * area, b[1] * area], (y, y))
-            }
-            Some(children) => {
-                let mut power = [DVec3::ZERO; 2];
-                let mut range = (f64::INFINITY, f64::NEG_INFINITY);
-                for ch in children {
-                    let child_uv = self.mesh.nodes[ch as usize].uv;
-                    let w = child_uv.map(|p| barycentric_2d(node.uv, p));
-                    let down: [[DVec3; 4]; 2] = std::array::from_fn(|o| {
-                        std::array::from_fn(|k| match w.get(k) {
-                            Some(w) => {
-                                here[o][0] * f64::from(w[0])
-                                    + here[o][1] * f64::from(w[1])
-                                    + here[o][2] * f64::from(w[2])
-                            }
-                            None => here[o][3],
-                        })
-                    });
-                    let (p, r) = self.push_surface(ch, down);
-                    power[0] += p[0];
-                    power[1] += p[1];
-                    range = (range.0.min(r.0), range.1.max(r.1));
-                }
-                (power, range)
-            }
-        };
-        let a = area.max(f64::MIN_POSITIVE);
-        self.exitance[n as usize] = [power[0] / a, power[1] / a];
-        self.spread[n as usize] = range.1 - range.0;
-        (power, range)
     }
 
     /// With the specular transfer: every deposit so far splatted afresh onto the current mesh

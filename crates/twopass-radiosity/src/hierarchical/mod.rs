@@ -43,6 +43,7 @@ mod geometry;
 mod link;
 mod links;
 mod output;
+mod push_pull;
 mod refine;
 mod schedule;
 mod state;

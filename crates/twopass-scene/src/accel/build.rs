@@ -1,5 +1,5 @@
-//! The accelerator and its build: obvhs's PLOC binary tree over the triangles' boxes,
-//! collapsed into 8-wide nodes with triangle-quad leaves and laid out for the walks.
+//! The accelerator and its build: obvhs's PLOC binary tree over the triangles' boxes (copies
+//! of one box built as one, see [`build_coincident`]), collapsed into 8-wide nodes with triangle-quad leaves and laid out for the walks.
 
 use std::time::{Duration, Instant};
 
@@ -8,6 +8,7 @@ use obvhs::{
     BvhBuildParams, aabb::Aabb, bvh2::reinsertion::ReinsertionOptimizer, ploc::PlocBuilder,
 };
 
+use super::binary::build_coincident;
 use super::bvh::{self, Bvh8};
 use super::collapse::collapse;
 use super::quad::TriangleQuad;
@@ -74,14 +75,21 @@ impl Accel {
         let bvh = if boxes.is_empty() {
             Bvh8::new(Vec::new(), &[], hot_bytes)
         } else {
-            let mut bvh2 = PlocBuilder::with_capacity(boxes.len()).build(
-                params.ploc_search_distance,
-                &boxes,
-                (0..boxes.len() as u32).collect(),
-                params.sort_precision,
-                params.search_depth_threshold,
-            );
-            ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
+            let bvh2 = build_coincident(&boxes, |boxes| {
+                let mut bvh2 = PlocBuilder::with_capacity(boxes.len()).build(
+                    params.ploc_search_distance,
+                    boxes,
+                    (0..boxes.len() as u32).collect(),
+                    params.sort_precision,
+                    params.search_depth_threshold,
+                );
+                ReinsertionOptimizer::default().run(
+                    &mut bvh2,
+                    params.reinsertion_batch_ratio,
+                    None,
+                );
+                bvh2
+            });
             let nodes = collapse(&bvh2, |leaf| {
                 let tris: Vec<[Vec3A; 3]> = leaf.iter().map(|&i| corners[i as usize]).collect();
                 quads.push(TriangleQuad::new(&tris, leaf));

@@ -9,10 +9,12 @@
 //! origin offsetting), [`triangle`] (the watertight test), [`quad`] (triangle quads: four
 //! triangles per test), [`collapse`](mod@collapse) (the 8-wide tree from obvhs's binary one),
 //! [`bvh`] (the 8-wide tree: its nodes, the node test, its layout and the walks), [`arena`]
-//! (the tree's memory in 32-byte blocks, in huge pages), [`prefetch`](mod@prefetch),
+//! (the tree's memory in 32-byte blocks, in huge pages), [`binary`] (binary trees over
+//! coincident boxes), [`prefetch`](mod@prefetch),
 //! [`shaft`] (shaft culling).
 
 mod arena;
+mod binary;
 mod build;
 mod bvh;
 mod collapse;
@@ -27,6 +29,7 @@ mod shaft;
 mod tests;
 mod triangle;
 
+pub use binary::build_coincident;
 pub use build::Accel;
 pub use hit::TriangleHit;
 pub use many::{COHERENT_ANGLE, COHERENT_ORIGINS, INTERLEAVE_MIN_BYTES};

@@ -1,6 +1,8 @@
 //! Assembling the scene: every part meshed (spheres from the scene's size), transformed and
 //! checked, degenerate triangles dropped, the accelerator built over the result.
 
+use std::collections::HashMap;
+
 use glam::Vec3;
 use twopass_brdf::Rgb;
 
@@ -193,6 +195,15 @@ impl Loader {
             mesh.texcoords.extend_from_slice(&local.texcoords);
         }
         let (mut dropped, mut first) = (0, 0);
+        // Exact copies of a triangle of this object (the same three world corners, bit for
+        // bit, in the same cyclic order) are dropped: a repeated face is a common export
+        // glitch, the copy adds no surface (a ray keeps one of the two), and each copy would
+        // still count as a surface of its own in the radiosity pass (an emitter's power
+        // doubled, and a cluster of thousands of coincident triangles). Keyed by the corners
+        // rotated to start at the smallest, so the check is one hash look-up per triangle.
+        let mut seen: HashMap<[[u32; 3]; 3], usize> = HashMap::new();
+        let mut copies: Option<(usize, usize)> = None;
+        let mut copied = 0;
         for (i, tri) in local.triangles.iter().enumerate() {
             let mut t = tri.map(|v| v + base);
             let mut nt = if smooth {
@@ -216,6 +227,15 @@ impl Loader {
                 dropped += 1;
                 continue;
             };
+            let corners = t.map(|v| mesh.positions[v as usize].to_array().map(f32::to_bits));
+            let r = (0..3).min_by_key(|&k| corners[k]).unwrap_or(0);
+            let key = [corners[r], corners[(r + 1) % 3], corners[(r + 2) % 3]];
+            if let Some(&original) = seen.get(&key) {
+                copies.get_or_insert((i, original));
+                copied += 1;
+                continue;
+            }
+            seen.insert(key, i);
             let n = n.as_vec3();
             if !smooth {
                 nt = [mesh.normals.len() as u32; 3];
@@ -243,6 +263,15 @@ impl Loader {
                 object: name.clone(),
                 dropped,
                 first,
+            });
+        }
+        if let Some((first, original)) = copies {
+            self.warnings.push(Warning::DuplicateTriangles {
+                path: self.path.clone(),
+                object: name.clone(),
+                dropped: copied,
+                first,
+                original,
             });
         }
         // The power this object emits, pi * L_e * area, must stay far inside f32.

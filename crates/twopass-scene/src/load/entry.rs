@@ -154,6 +154,23 @@ fn load_bare_obj(path: &Path, policy: &ReadPolicy) -> Result<(Scene, Vec<Warning
     for m in &file.models {
         check_range(path, None, &m.name, &m.mesh.positions)?;
     }
+    // Every vertex at one point: every triangle is degenerate. Said of the triangles, with
+    // their lines, before a camera is made up to frame a point.
+    let collapsed = file
+        .models
+        .iter()
+        .flat_map(|m| m.mesh.positions.iter())
+        .fold(Bounds::EMPTY, |b, q| b.grow(*q))
+        .diagonal()
+        == 0.0;
+    if let Some(m) = file.models.first().filter(|_| collapsed) {
+        return Err(SceneError::DegenerateObject {
+            path: path.to_owned(),
+            line: m.first_face,
+            object: m.name.clone(),
+            triangles: m.mesh.triangles.len(),
+        });
+    }
     let mut parts = Vec::new();
     let mut seen: HashMap<String, usize> = HashMap::new();
     for m in file.models {

@@ -5,6 +5,7 @@ mod lines;
 mod material;
 mod model;
 mod mtl;
+mod normalize;
 mod read;
 mod scan;
 #[cfg(test)]

@@ -13,6 +13,8 @@ pub(crate) struct ObjModel {
     pub material: Option<usize>,
     /// The `usemtl` statement in force for this group (name, line), if any.
     pub usemtl: Option<(String, usize)>,
+    /// The line of the group's first face, when the scan and tobj agree on the groups.
+    pub first_face: Option<usize>,
 }
 
 /// Where an MTL material was defined: its library and the lines of its statements.
@@ -54,6 +56,8 @@ pub(super) struct ScannedModel {
     /// Whether every corner of every face names a texture coordinate.
     pub(super) all_texcoords: bool,
     pub(super) usemtl: Option<(String, usize)>,
+    /// The line of its first face (0 before one is met).
+    pub(super) first_face: usize,
 }
 
 /// One MTL library, read and checked by us, parsed by tobj.

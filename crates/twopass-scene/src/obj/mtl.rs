@@ -7,12 +7,15 @@ use super::model::MtlOrigin;
 use crate::error::SceneError;
 use crate::input::{self, InputKind, ReadPolicy};
 
+/// An MTL library's materials and their index by name, as tobj reads them.
+pub(super) type MtlMaterials = (Vec<tobj::Material>, HashMap<String, usize>);
+
 /// Reads and checks an MTL library, expands one-value colours (`Kd r` means `Kd r r r`) and
 /// has tobj parse the result. `Ok(None)` when the file does not exist.
 pub(super) fn load_mtl(
     path: &Path,
     policy: &ReadPolicy,
-) -> Result<Option<(tobj::MTLLoadResult, Vec<MtlOrigin>)>, SceneError> {
+) -> Result<Option<(MtlMaterials, Vec<MtlOrigin>)>, SceneError> {
     if !path.exists() {
         return Ok(None);
     }
@@ -96,13 +99,11 @@ pub(super) fn load_mtl(
         normalized.push_str(&out);
         normalized.push('\n');
     }
-    let result = tobj::load_mtl_buf(&mut std::io::Cursor::new(normalized.as_bytes()));
-    if let Err(source) = &result {
-        return Err(SceneError::Statement {
+    let (materials, map) = tobj::load_mtl_buf(&mut std::io::Cursor::new(normalized.as_bytes()))
+        .map_err(|source| SceneError::Statement {
             path: path.to_owned(),
             line: 1,
             problem: format!("cannot load MTL: {source}"),
-        });
-    }
-    Ok(Some((result, origins)))
+        })?;
+    Ok(Some(((materials, map.into_iter().collect()), origins)))
 }

@@ -8,7 +8,8 @@ use glam::Vec3;
 
 use super::lines::{find_bad_line, find_non_finite_line, first_non_finite, triples};
 use super::model::{MtlLib, ObjFile, ObjModel};
-use super::mtl::load_mtl;
+use super::mtl::{MtlMaterials, load_mtl};
+use super::normalize::normalize;
 use super::scan::scan;
 use crate::error::SceneError;
 use crate::input::{self, InputKind, ReadPolicy};
@@ -18,37 +19,54 @@ pub(crate) fn load(path: &Path, policy: &ReadPolicy) -> Result<ObjFile, SceneErr
     let text = input::read_text(path, InputKind::Obj, policy)?;
     // An empty parent joins to the bare name, which is how the user wrote it.
     let dir = path.parent().unwrap_or(Path::new(""));
-    // The libraries, in the order tobj asks for them (it takes the rest of the line as one
-    // file name).
+    // The libraries, in the order tobj asks for them. tobj takes the rest of an `mtllib` line
+    // as one file name; the OBJ format lists several, separated by spaces. So a line names
+    // one library when a file of that whole name exists, else one per word, and tobj's
+    // request for the line gets their materials merged (later ones win, as between lines).
     let mut libs: Vec<MtlLib> = Vec::new();
     let mut mtllibs = Vec::new();
     let mut missing_mtl = None;
     for line in text.lines() {
-        let Some(rest) = line.trim_start().strip_prefix("mtllib") else {
-            continue;
-        };
-        if !rest.starts_with(char::is_whitespace) {
+        let trimmed = line.trim_start();
+        if trimmed.split_whitespace().next() != Some("mtllib") {
             continue;
         }
-        let written = line.split_once(' ').unwrap_or_default().1.trim().to_owned();
-        let mtl_path = dir.join(&written);
-        mtllibs.push(mtl_path.clone());
-        let lib = match load_mtl(&mtl_path, policy)? {
-            Some((result, origins)) => MtlLib {
-                written,
-                result,
-                origins,
-            },
-            None => {
-                missing_mtl.get_or_insert(mtl_path);
-                MtlLib {
-                    written,
-                    result: Err(tobj::LoadError::OpenFileFailed),
-                    origins: Vec::new(),
+        let written = trimmed["mtllib".len()..].trim().to_owned();
+        if written.is_empty() {
+            continue;
+        }
+        let names: Vec<&str> = if dir.join(&written).is_file() {
+            vec![written.as_str()]
+        } else {
+            written.split_whitespace().collect()
+        };
+        let mut merged: Option<MtlMaterials> = None;
+        let mut origins = Vec::new();
+        for name in names {
+            let mtl_path = dir.join(name);
+            mtllibs.push(mtl_path.clone());
+            match load_mtl(&mtl_path, policy)? {
+                Some(((materials, map), found)) => {
+                    let (all, all_map) = merged.get_or_insert_with(Default::default);
+                    let offset = all.len();
+                    for (name, i) in map {
+                        all_map.insert(name, i + offset);
+                    }
+                    all.extend(materials);
+                    origins.extend(found);
+                }
+                None => {
+                    missing_mtl.get_or_insert(mtl_path);
                 }
             }
-        };
-        libs.push(lib);
+        }
+        libs.push(MtlLib {
+            written,
+            result: merged
+                .map(|(materials, map)| (materials, map.into_iter().collect()))
+                .ok_or(tobj::LoadError::OpenFileFailed),
+            origins,
+        });
     }
     // The merged name -> index map, as tobj builds it (later libraries win).
     let mut material_map: HashMap<String, usize> = HashMap::new();
@@ -76,11 +94,12 @@ pub(crate) fn load(path: &Path, policy: &ReadPolicy) -> Result<ObjFile, SceneErr
             .find(|l| Path::new(&l.written) == p)
             .map_or(Err(tobj::LoadError::OpenFileFailed), |l| l.result.clone())
     };
+    let parsed = normalize(&text);
     let (models, materials) =
-        tobj::load_obj_buf(&mut std::io::Cursor::new(text.as_bytes()), &opts, loader).map_err(
+        tobj::load_obj_buf(&mut std::io::Cursor::new(parsed.as_bytes()), &opts, loader).map_err(
             |source| SceneError::Obj {
                 path: path.to_owned(),
-                line: find_bad_line(&text, source),
+                line: find_bad_line(&parsed, source),
                 source,
             },
         )?;
@@ -162,6 +181,11 @@ pub(crate) fn load(path: &Path, policy: &ReadPolicy) -> Result<ObjFile, SceneErr
             },
             material: mesh.material_id,
             usemtl: scanned.get(k).and_then(|s| s.usemtl.clone()),
+            first_face: scanned
+                .get(k)
+                .filter(|_| agree)
+                .map(|s| s.first_face)
+                .filter(|&l| l > 0),
         });
     }
     if out.is_empty() {

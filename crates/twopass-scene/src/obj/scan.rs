@@ -120,6 +120,9 @@ pub(super) fn scan(
                     }
                 }
                 faces += 1;
+                if current.first_face == 0 {
+                    current.first_face = n;
+                }
                 current.triangles += corners.len() - 2;
                 current.all_normals &= normals == corners.len();
                 current.all_texcoords &= texcoords == corners.len();
@@ -130,7 +133,8 @@ pub(super) fn scan(
                 faces = 0;
             }
             "usemtl" => {
-                let name = line.split_once(' ').unwrap_or_default().1.trim();
+                // The name is the rest of the line, after any white space.
+                let name = line.trim_start()["usemtl".len()..].trim();
                 if name.is_empty() {
                     return Err(err(n, "`usemtl` needs a material name".into()));
                 }
@@ -171,6 +175,7 @@ pub(super) fn push_model(models: &mut Vec<ScannedModel>, current: &mut ScannedMo
         all_normals: true,
         all_texcoords: true,
         usemtl: current.usemtl.clone(),
+        first_face: 0,
     };
     let done = std::mem::replace(current, next);
     if done.triangles > 0 {

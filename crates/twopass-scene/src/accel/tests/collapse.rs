@@ -345,3 +345,42 @@ fn coherent_packets_agree_with_the_single_ray_walk_and_the_oracle() {
     assert!(RayPacket::new(&o[..1], &[Vec3::new(f32::NAN, 0.0, 1.0)]).is_none());
     assert!(RayPacket::new(&[], &[]).is_none());
 }
+
+/// Depth of the 8-wide tree below `node` (1 for a node with only leaves), without recursion.
+fn depth(accel: &Accel) -> usize {
+    let mut deepest = 0;
+    let mut stack = vec![(0u32, 1usize)];
+    while let Some((node, d)) = stack.pop() {
+        deepest = deepest.max(d);
+        let n = accel.bvh.arena.node(node);
+        for c in 0..8 {
+            if n.inner & (1 << c) != 0 {
+                stack.push((n.child[c], d + 1));
+            }
+        }
+    }
+    deepest
+}
+
+/// Issue 43, finding 2: 10^5 copies of one triangle. The tree is valid, every copy is in it
+/// once, and it is shallow: 10^5 triangles in leaves of up to 4 need 25,000 leaves, which
+/// 8-wide nodes hold in ceil(log8 25000) = 5 levels; a balanced binary tree collapsed by 3
+/// levels per node stays within a few more (a chain of copies would be thousands deep).
+#[test]
+fn coincident_triangles_build_a_shallow_valid_tree() {
+    let positions = vec![
+        Vec3::ZERO,
+        Vec3::new(1.0, 0.0, 0.0),
+        Vec3::new(0.0, 0.0, -1.0),
+    ];
+    let triangles = vec![[0u32, 1, 2]; 100_000];
+    let accel = build_and_check(&positions, &triangles, HOT_BYTES);
+    let d = depth(&accel);
+    assert!((5..=8).contains(&d), "depth {d}");
+    // A ray straight down through the triangle hits a copy at distance 1.
+    let hit = accel
+        .closest(Vec3::new(0.25, 1.0, -0.25), Vec3::NEG_Y, f32::INFINITY)
+        .expect("the copies are hit");
+    assert_eq!(hit.t, 1.0);
+    assert!(accel.any_hit(Vec3::new(0.25, 1.0, -0.25), Vec3::NEG_Y, 2.0));
+}
