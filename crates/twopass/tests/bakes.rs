@@ -40,6 +40,14 @@ fn a_room_is_baked_rendered_measured_and_its_reference_cached() {
     assert_eq!(room["triangles"], 48 + 320 + 2);
     assert_eq!(room["reference"]["cached"], false);
     assert!(f(&room["reference"]["mean_luminance"]) > 0.0);
+    // The noise row is half the reference's samples against it: its relative RMSE is the
+    // reference's own noise figure.
+    let noise = &room["reference"]["noise"];
+    let floor = f(&room["reference"]["noise_rel_rmse"]);
+    assert!(
+        floor > 0.0 && (f(&noise["rel_rmse"]) - floor).abs() < 1e-3 * floor,
+        "{noise}"
+    );
     assert!(f(&room["bake"]["seconds"]) > 0.0);
     assert!(f(&room["bake"]["peak_memory_mib"]) > 1.0);
     let images = room["images"].as_array().unwrap();
@@ -70,6 +78,8 @@ fn a_room_is_baked_rendered_measured_and_its_reference_cached() {
     for file in [
         "terminator.toml",
         "terminator.obj",
+        "reference-16spp.exr",
+        "reference-16spp-half0.exr",
         "reference-16spp.json",
         "lightmap.exr",
         "element-bake.exr",
@@ -95,10 +105,14 @@ fn a_room_is_baked_rendered_measured_and_its_reference_cached() {
         text.contains("\nsummary: 32 x 32, reference 16 spp"),
         "{text}"
     );
-    assert!(
-        text.contains("lightmap") && text.contains("element bake"),
-        "{text}"
-    );
+    for row in [
+        "\nlightmap ",
+        "\nelement bake ",
+        "\n(ref. noise) ",
+        "\nterminator  (ref. noise) ",
+    ] {
+        assert!(text.contains(row), "no row {row:?} in {text}");
+    }
     assert_eq!(std::fs::metadata(&exr).unwrap().modified().unwrap(), stamp);
     let saved: Value =
         serde_json::from_slice(&std::fs::read(out.join("bench-bakes.json")).unwrap()).unwrap();

@@ -232,6 +232,13 @@ fn measure_room(
             error,
         });
     }
+    let noise = measure(
+        &reference.half,
+        &reference.image,
+        &objects,
+        &names,
+        args.min_region_pixels,
+    )?;
     let pixels = reference.image.pixels();
     let mean_luminance =
         pixels.iter().map(|&p| f64::from(luminance(p))).sum::<f64>() / pixels.len() as f64;
@@ -246,6 +253,7 @@ fn measure_room(
             seconds: reference.render_seconds,
             noise_rel_rmse: reference.noise_rel_rmse,
             mean_luminance,
+            noise,
         },
         bake: BakeReport {
             dir: bake_dir.display().to_string(),

@@ -8,7 +8,9 @@
 //! bench's seed mixed with [`REFERENCE_SEED_MIX`], so no bake shares its sample sequence). A
 //! half differs from the mean by half the halves' difference, whose variance is the mean's:
 //! the relative RMSE of a half against the mean is the reference's own noise, the floor below
-//! which no measured error means anything.
+//! which no measured error means anything. The first half is kept beside the mean
+//! (`reference-<S>spp-half0.exr`) so the bench can measure it as it measures a bake: what a
+//! perfect image would score against this reference.
 
 use std::ffi::OsString;
 use std::path::{Path, PathBuf};
@@ -70,6 +72,8 @@ struct Record {
 pub struct Converged {
     /// The image, W/(m^2 sr).
     pub image: Image,
+    /// Its first half (half the samples), which differs from it by its noise.
+    pub half: Image,
     /// Wall-clock seconds of its render (when it was rendered, possibly in an earlier run).
     pub render_seconds: f64,
     /// Relative RMSE of the reference from its own noise.
@@ -80,27 +84,31 @@ pub struct Converged {
     pub exr: PathBuf,
 }
 
-/// The cache files in `dir` for `spp`: (image, sidecar).
-fn files(dir: &Path, spp: u32) -> (PathBuf, PathBuf) {
+/// The cache files in `dir` for `spp`: (image, sidecar, first half).
+fn files(dir: &Path, spp: u32) -> (PathBuf, PathBuf, PathBuf) {
     (
         dir.join(format!("reference-{spp}spp.exr")),
         dir.join(format!("reference-{spp}spp.json")),
+        dir.join(format!("reference-{spp}spp-half0.exr")),
     )
 }
 
 /// The cached reference for `key` in `dir`, when there is a complete one of `size`.
 fn cached(dir: &Path, key: &ReferenceKey, size: (u32, u32)) -> Option<Converged> {
-    let (exr, json) = files(dir, key.spp);
+    let (exr, json, half) = files(dir, key.spp);
     let record: Record = serde_json::from_slice(&crate::output::read_small(&json).ok()?).ok()?;
     if &record.key != key {
         return None;
     }
     let image = read_exr(&exr).ok()?;
-    if image.size() != size || image.first_non_finite().is_some() {
+    let half = read_exr(&half).ok()?;
+    let sound = |i: &Image| i.size() == size && i.first_non_finite().is_none();
+    if !(sound(&image) && sound(&half)) {
         return None;
     }
     Some(Converged {
         image,
+        half,
         render_seconds: record.render_seconds,
         noise_rel_rmse: record.noise_rel_rmse,
         cached: true,
@@ -121,7 +129,7 @@ pub fn converged(
     if let Some(hit) = cached(dir, key, size) {
         return Ok(hit);
     }
-    let (exr, json) = files(dir, key.spp);
+    let (exr, json, first) = files(dir, key.spp);
     let mut halves = Vec::with_capacity(2);
     let mut render_seconds = 0.0;
     for half in 0..2u64 {
@@ -147,7 +155,9 @@ pub fn converged(
             )));
         }
         halves.push(image);
-        let _ = std::fs::remove_file(&path);
+        if path != first {
+            let _ = std::fs::remove_file(&path);
+        }
     }
     let mean = Image::from_fn(size.0, size.1, |x, y| {
         0.5 * (halves[0].get(x, y) + halves[1].get(x, y))
@@ -162,8 +172,10 @@ pub fn converged(
     };
     let text = serde_json::to_string_pretty(&record).expect("record serializes");
     crate::output::write_atomic(&json, text.as_bytes())?;
+    let half = halves.swap_remove(0);
     Ok(Converged {
         image: mean,
+        half,
         render_seconds,
         noise_rel_rmse,
         cached: false,

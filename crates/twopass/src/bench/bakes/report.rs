@@ -105,6 +105,9 @@ pub struct ReferenceReport {
     pub noise_rel_rmse: f64,
     /// Its mean luminance, W/(m^2 sr).
     pub mean_luminance: f64,
+    /// Its first half measured against it as the bakes' images are: what a perfect image
+    /// would score against this reference (the floor of every figure).
+    pub noise: ImageError,
 }
 
 /// The bake's cost, measured on the child process.
@@ -145,8 +148,8 @@ fn short(object: &str) -> &str {
 }
 
 /// The worst region of an image as `name +x.x %`.
-fn worst(image: &ImageReport) -> String {
-    image.error.worst().map_or_else(
+fn worst(error: &ImageError) -> String {
+    error.worst().map_or_else(
         || "-".to_owned(),
         |r| format!("{} {:+.1} %", short(&r.object), 100.0 * r.error),
     )
@@ -177,15 +180,20 @@ pub fn print_room(r: &RoomReport, min_pixels: u64) -> Result<(), CliError> {
         ">10 %",
         "p95"
     );
-    for i in &r.images {
+    for (source, e) in r
+        .images
+        .iter()
+        .map(|i| (i.source, &i.error))
+        .chain([("(ref. noise)", &r.reference.noise)])
+    {
         outln!(
             "{:<13} {:>9} {:>8} {:>8} {:>8}  {}",
-            i.source,
-            pct(i.error.rel_rmse),
-            format!("{:+.1} %", 100.0 * i.error.mean_error),
-            pct(i.error.share_off),
-            pct(i.error.p95_deviation),
-            worst(i)
+            source,
+            pct(e.rel_rmse),
+            format!("{:+.1} %", 100.0 * e.mean_error),
+            pct(e.share_off),
+            pct(e.p95_deviation),
+            worst(e)
         );
     }
     // Regions ordered by the largest |error| over the images.
@@ -261,12 +269,26 @@ pub fn print_summary(report: &BakesReport) -> Result<(), CliError> {
                 pct(i.error.p95_deviation),
                 r.bake.seconds,
                 fmt_mib(r.bake.peak_memory_mib),
-                worst(i)
+                worst(&i.error)
             );
         }
+        let e = &r.reference.noise;
+        outln!(
+            "{:<11} {:<13} {:>9} {:>8} {:>8} {:>8} {:>7} {:>8}  {}",
+            r.room,
+            "(ref. noise)",
+            pct(e.rel_rmse),
+            format!("{:+.1} %", 100.0 * e.mean_error),
+            pct(e.share_off),
+            pct(e.p95_deviation),
+            "",
+            "",
+            worst(e)
+        );
     }
     outln!(
-        "deviation = |Y - Y_ref| / max(Y_ref, {} x the reference's mean luminance); regions: objects of >= {} pixels",
+        "deviation = |Y - Y_ref| / max(Y_ref, {} x the reference's mean luminance); regions: objects of >= {} pixels;\n\
+         (ref. noise): half the reference's samples against it, what a perfect image would score",
         report.deviation_floor,
         report.min_region_pixels
     );
