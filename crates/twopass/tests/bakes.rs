@@ -124,6 +124,20 @@ fn a_room_is_baked_rendered_measured_and_its_reference_cached() {
 }
 
 #[test]
+fn an_image_size_other_than_size_is_a_usage_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = cli("bench bakes --rooms terminator --width 64 --out")
+        .arg(dir.path())
+        .run();
+    common::assert_exit(&o, 2);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("bench bakes: --width/--height do not apply; every room's camera is --size pixels square"),
+        "{err}"
+    );
+}
+
+#[test]
 fn an_unknown_room_is_a_usage_error_naming_the_rooms() {
     let dir = tempfile::tempdir().unwrap();
     let o = cli("bench bakes --rooms kitchen --out")

@@ -84,6 +84,11 @@ fn threads_args(ctx: &Context) -> Vec<OsString> {
 /// Measures every room asked for and reports.
 pub fn run(args: &BakesArgs, ctx: &Context) -> Result<(), CliError> {
     let started = Instant::now();
+    if ctx.width.is_some() || ctx.height.is_some() {
+        return Err(CliError::Usage(
+            "bench bakes: --width/--height do not apply; every room's camera is --size pixels square".into(),
+        ));
+    }
     let out = args
         .out
         .clone()
