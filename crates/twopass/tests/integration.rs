@@ -4,6 +4,7 @@
 mod common;
 
 mod bake;
+mod bakes;
 mod cli;
 mod compare;
 mod lightmap;

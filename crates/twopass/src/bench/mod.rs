@@ -2,9 +2,10 @@
 //!
 //! One module per benchmark: `rays` (ray queries and the BVH build), `radiosity` (solves by
 //! element count or generated scene size), `render` (every method, and new views from a bake),
-//! `tradeoff` (the speed/accuracy sweep and the presets); `memory` measures the peak resident
-//! memory they report.
+//! `tradeoff` (the speed/accuracy sweep and the presets), `bakes` (bake quality on generated
+//! rooms against the path tracer); `memory` measures the peak resident memory they report.
 
+pub mod bakes;
 pub mod memory;
 pub mod radiosity;
 pub mod rays;
@@ -33,6 +34,11 @@ pub enum BenchCommand {
     /// The speed/accuracy trade: sweeps every method's knobs, measures time and error against
     /// a cached converged reference, plots the Pareto front and derives the presets.
     Tradeoff(tradeoff::TradeoffArgs),
+    /// Bake quality on a family of generated rooms: for each, a cached converged reference
+    /// (the path tracer), one `twopass bake --lightmap` (time, peak memory) and the renders
+    /// from its lightmap and its `.bake`, measured against the reference per image and per
+    /// object. Arguments after `--` go to every bake.
+    Bakes(bakes::BakesArgs),
 }
 
 /// Runs a benchmark.
@@ -42,5 +48,6 @@ pub fn run(cmd: &BenchCommand, ctx: &Context) -> Result<(), CliError> {
         BenchCommand::Radiosity(args) => radiosity::run(args, ctx),
         BenchCommand::Render(args) => render::run(args, ctx),
         BenchCommand::Tradeoff(args) => tradeoff::run(args, ctx),
+        BenchCommand::Bakes(args) => bakes::run(args, ctx),
     }
 }

@@ -1,0 +1,270 @@
+//! `twopass bench bakes`: bake quality on a family of generated rooms nobody tuned for
+//! (`twopass_scene::workload::room`), per room and per object, against the project's own path
+//! tracer.
+//!
+//! For each room, in `OUT/<room>/`: the room's scene and OBJ (`<room>.toml`, `<room>.obj`);
+//! its converged reference (`reference`: the path tracer in a child process, cached); one
+//! `twopass bake <room>.toml --lightmap --output OUT/<room>/bake ARGS` in a child process
+//! (`ARGS` are the bench's arguments after `--`), timed and measured for peak memory; then two
+//! renders from it (`render --bake ... --method radiosity`, children too): `lightmap.exr`
+//! from `<room>.lightmap.glb` and `element-bake.exr` from `<room>.bake`, each measured against
+//! the reference (`metric`). The report (`report`) goes to `OUT/bench-bakes.json` and stdout.
+
+mod child;
+mod metric;
+mod reference;
+mod report;
+
+use std::ffi::OsString;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use clap::Args;
+use twopass_brdf::colour::luminance;
+use twopass_scene::workload::{RoomKind, RoomSettings, room};
+
+use self::child::run_twopass;
+use self::metric::{measure, object_map};
+use self::reference::{ReferenceKey, converged};
+use self::report::{BakeReport, BakesReport, ImageReport, ReferenceReport, RoomReport};
+use crate::bench::memory::mib;
+use crate::context::Context;
+use crate::error::CliError;
+
+/// Arguments of `twopass bench bakes`.
+#[derive(Debug, Args)]
+pub struct BakesArgs {
+    /// Rooms to measure, comma separated: spheres, grazing, near-light, two-lights,
+    /// terminator [default: all].
+    #[arg(long, value_delimiter = ',', value_parser = parse_room)]
+    pub rooms: Vec<RoomKind>,
+    /// Triangles of the `spheres` room (the others have a fixed size).
+    #[arg(long, default_value_t = 100_000, value_parser = clap::value_parser!(u32).range(1_000..=10_000_000))]
+    pub triangles: u32,
+    /// Width and height of every room's camera, pixels.
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(8..=4096))]
+    pub size: u32,
+    /// Samples per pixel of the converged references (two halves of half as many each).
+    #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(2..=1_000_000))]
+    pub reference_spp: u32,
+    /// Samples per pixel of the renders from the bakes (anti-aliasing only: a bake render
+    /// has no noise).
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    pub render_spp: u32,
+    /// Fewest pixels an object covers to be measured as a region.
+    #[arg(long, default_value_t = 200, value_parser = clap::value_parser!(u64).range(1..))]
+    pub min_region_pixels: u64,
+    /// Seed of the rooms' layouts (`--seed` seeds the reference, the bake and the renders).
+    #[arg(long, default_value_t = 0)]
+    pub room_seed: u64,
+    /// Folder of the rooms, references, bakes, renders and `bench-bakes.json`
+    /// [default: --output, else bench-bakes].
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Arguments given to every `twopass bake` after the bench's own, after `--`
+    /// (`twopass bench bakes -- --texel-size 0.05`).
+    #[arg(last = true, value_name = "BAKE ARGS")]
+    pub bake_args: Vec<OsString>,
+}
+
+fn parse_room(s: &str) -> Result<RoomKind, String> {
+    RoomKind::from_name(s).ok_or_else(|| {
+        let names: Vec<&str> = RoomKind::ALL.iter().map(|k| k.name()).collect();
+        format!("no room `{s}`; the rooms are {}", names.join(", "))
+    })
+}
+
+/// `--threads N` for a child when the bench was given it.
+fn threads_args(ctx: &Context) -> Vec<OsString> {
+    ctx.threads
+        .map(|t| vec!["--threads".into(), t.to_string().into()])
+        .unwrap_or_default()
+}
+
+/// Measures every room asked for and reports.
+pub fn run(args: &BakesArgs, ctx: &Context) -> Result<(), CliError> {
+    let started = Instant::now();
+    if ctx.width.is_some() || ctx.height.is_some() {
+        return Err(CliError::Usage(
+            "bench bakes: --width/--height do not apply; every room's camera is --size pixels square".into(),
+        ));
+    }
+    let out = args
+        .out
+        .clone()
+        .or_else(|| ctx.output.clone())
+        .unwrap_or_else(|| PathBuf::from("bench-bakes"));
+    crate::output::create_dir(&out)?;
+    let kinds = if args.rooms.is_empty() {
+        RoomKind::ALL.to_vec()
+    } else {
+        args.rooms.clone()
+    };
+    let mut report = BakesReport::new(
+        out.display().to_string(),
+        args.size,
+        args.reference_spp,
+        args.render_spp,
+        ctx.seed,
+        args.room_seed,
+        args.triangles,
+        args.bake_args
+            .iter()
+            .map(|a| a.to_string_lossy().into_owned())
+            .collect(),
+        args.min_region_pixels,
+    );
+    for kind in kinds {
+        let r = measure_room(kind, &out, args, ctx)?;
+        report.rooms.push(r);
+    }
+    report.wall_seconds = started.elapsed().as_secs_f64();
+    crate::output::finish_report(&out.join("bench-bakes.json"), &report, ctx, |report| {
+        for r in &report.rooms {
+            report::print_room(r, report.min_region_pixels)?;
+        }
+        report::print_summary(report)
+    })
+}
+
+/// A progress line on standard error, unless quiet or reporting JSON.
+fn progress(ctx: &Context, line: std::fmt::Arguments) {
+    if ctx.chatty() {
+        errln!("{line}");
+    }
+}
+
+/// Writes one room, renders or finds its reference, bakes it, renders the bake and measures.
+fn measure_room(
+    kind: RoomKind,
+    out: &Path,
+    args: &BakesArgs,
+    ctx: &Context,
+) -> Result<RoomReport, CliError> {
+    let name = kind.name();
+    let dir = out.join(name);
+    let settings = RoomSettings {
+        triangles: args.triangles as usize,
+        seed: args.room_seed,
+        resolution: args.size,
+    };
+    let room = room(kind, &settings);
+    crate::output::write_atomic(&dir.join(&room.mesh_file), room.mesh.as_bytes())?;
+    let scene_path = dir.join(room.scene_file());
+    crate::output::write_atomic(&scene_path, room.scene.as_bytes())?;
+    let (scene, _) = ctx.load_scene(&scene_path)?;
+    let size = (scene.camera.width, scene.camera.height);
+    let objects = object_map(&scene);
+    let names: Vec<String> = scene.objects.iter().map(|o| o.name.clone()).collect();
+
+    let key = ReferenceKey::new(&room.scene, &room.mesh, args.reference_spp, ctx.seed);
+    progress(ctx, format_args!("{name}: reference, {} spp", key.spp));
+    let reference = converged(&dir, &scene_path, &key, size, ctx.threads)?;
+    if reference.cached {
+        progress(
+            ctx,
+            format_args!(
+                "{name}: reference from the cache ({})",
+                reference.exr.display()
+            ),
+        );
+    }
+
+    let bake_dir = dir.join("bake");
+    match std::fs::remove_dir_all(&bake_dir) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+            return Err(CliError::io(&bake_dir, e));
+        }
+        _ => {}
+    }
+    let mut bake: Vec<OsString> = vec![
+        "bake".into(),
+        scene_path.clone().into(),
+        "--lightmap".into(),
+    ];
+    bake.extend(["--output".into(), bake_dir.clone().into()]);
+    bake.extend([
+        "--seed".into(),
+        ctx.seed.to_string().into(),
+        "--quiet".into(),
+    ]);
+    bake.extend(threads_args(ctx));
+    bake.extend(args.bake_args.iter().cloned());
+    progress(ctx, format_args!("{name}: bake"));
+    let baked = run_twopass(&bake)?;
+
+    let mut images = Vec::new();
+    for (source, file, exr) in [
+        ("lightmap", format!("{name}.lightmap.glb"), "lightmap.exr"),
+        ("element bake", format!("{name}.bake"), "element-bake.exr"),
+    ] {
+        let bake_file = bake_dir.join(file);
+        if !bake_file.is_file() {
+            progress(
+                ctx,
+                format_args!(
+                    "{name}: the bake wrote no {}; not measured",
+                    bake_file.display()
+                ),
+            );
+            continue;
+        }
+        let exr = dir.join(exr);
+        let mut render: Vec<OsString> = vec!["render".into(), scene_path.clone().into()];
+        render.extend(["--bake".into(), bake_file.clone().into()]);
+        let words = format!(
+            "--method radiosity --spp {} --seed {} --quiet",
+            args.render_spp, ctx.seed
+        );
+        render.extend(words.split_whitespace().map(OsString::from));
+        render.extend(threads_args(ctx));
+        render.extend(["--output".into(), exr.clone().into()]);
+        progress(ctx, format_args!("{name}: render from the {source}"));
+        let rendered = run_twopass(&render)?;
+        let image = twopass_composite::write::read_exr(&exr)?;
+        let error = measure(
+            &image,
+            &reference.image,
+            &objects,
+            &names,
+            args.min_region_pixels,
+        )?;
+        images.push(ImageReport {
+            source,
+            bake_file: bake_file.display().to_string(),
+            exr: exr.display().to_string(),
+            render_seconds: rendered.seconds,
+            error,
+        });
+    }
+    let noise = measure(
+        &reference.half,
+        &reference.image,
+        &objects,
+        &names,
+        args.min_region_pixels,
+    )?;
+    let pixels = reference.image.pixels();
+    let mean_luminance =
+        pixels.iter().map(|&p| f64::from(luminance(p))).sum::<f64>() / pixels.len() as f64;
+    Ok(RoomReport {
+        room: name.to_owned(),
+        scene: scene_path.display().to_string(),
+        triangles: scene.mesh.triangles.len(),
+        objects: scene.objects.len(),
+        reference: ReferenceReport {
+            exr: reference.exr.display().to_string(),
+            cached: reference.cached,
+            seconds: reference.render_seconds,
+            noise_rel_rmse: reference.noise_rel_rmse,
+            mean_luminance,
+            noise,
+        },
+        bake: BakeReport {
+            dir: bake_dir.display().to_string(),
+            seconds: baked.seconds,
+            peak_memory_mib: mib(baked.peak_bytes),
+        },
+        images,
+    })
+}
