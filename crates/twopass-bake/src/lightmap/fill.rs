@@ -9,6 +9,7 @@ use twopass_scene::{DiffuseRadiance, RadianceEstimate, RadianceEstimator, Scene}
 
 use super::filter::{Guide, denoise};
 use super::layout::{Layout, Region};
+use super::raster::for_each_texel;
 use super::settings::{AtlasSource, Resolved};
 
 /// Where the texels' light comes from.
@@ -59,26 +60,18 @@ fn rasterize(region: &Region, layout: &Layout) -> Vec<Sample> {
     let origin = Vec2::new(region.at[0] as f32, region.at[1] as f32);
     for &t in &region.triangles {
         let [a, b, c] = layout.corners[t as usize].map(|p| p - origin);
-        let det = (b - a).perp_dot(c - a);
-        if det.abs() <= f32::MIN_POSITIVE {
-            continue;
-        }
-        let weights = |p: Vec2| {
-            let w1 = (p - a).perp_dot(c - a) / det;
-            let w2 = (b - a).perp_dot(p - a) / det;
-            [1.0 - w1 - w2, w1, w2]
-        };
-        let lo = a.min(b).min(c).floor().max(Vec2::ZERO);
-        let hi = a.max(b).max(c).ceil().min(Vec2::new(w as f32, h as f32));
         let mut any = false;
-        for y in lo.y as u32..hi.y as u32 {
-            for x in lo.x as u32..hi.x as u32 {
-                let bary = weights(Vec2::new(x as f32 + 0.5, y as f32 + 0.5));
-                if bary.iter().all(|&k| k >= -1e-5) {
-                    owner[(y * w + x) as usize] = Some((t, bary.map(|k| k.max(0.0))));
-                    any = true;
-                }
-            }
+        for_each_texel(
+            [a, b, c],
+            [w, h],
+            |bary| bary.iter().all(|&k| k >= -1e-5),
+            |x, y, bary| {
+                owner[(y * w + x) as usize] = Some((t, bary.map(|k| k.max(0.0))));
+                any = true;
+            },
+        );
+        if (b - a).perp_dot(c - a).abs() <= f32::MIN_POSITIVE {
+            continue;
         }
         if !any {
             // A sliver may cover no texel centre: its centroid's texel still gets its light.

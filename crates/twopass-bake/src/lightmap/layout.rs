@@ -7,6 +7,7 @@ use std::path::PathBuf;
 use glam::Vec2;
 use twopass_scene::Scene;
 
+use super::raster::for_each_texel;
 use super::settings::{AtlasSource, Resolved};
 use crate::error::BakeError;
 
@@ -196,26 +197,26 @@ pub(super) fn scene_layout(scene: &Scene, s: &Resolved) -> Result<Layout, String
                 scene.objects[m.triangle_object[t] as usize].name
             ));
         }
-        let lo = a.min(b).min(d).floor().max(Vec2::ZERO);
-        let hi = a.max(b).max(d).ceil().min(size);
-        for y in lo.y as u32..hi.y as u32 {
-            for x in lo.x as u32..hi.x as u32 {
-                let p = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
-                let w1 = (p - a).perp_dot(d - a) / det;
-                let w2 = (b - a).perp_dot(p - a) / det;
-                if w1 > 1e-4 && w2 > 1e-4 && 1.0 - w1 - w2 > 1e-4 {
-                    let i = (y * side + x) as usize;
-                    if owner[i] != u32::MAX {
-                        let name = |t: usize| &scene.objects[m.triangle_object[t] as usize].name;
-                        return Err(format!(
-                            "texture coordinates overlap (objects `{}` and `{}`)",
-                            name(owner[i] as usize),
-                            name(t)
-                        ));
-                    }
-                    owner[i] = t as u32;
+        let mut overlap = None;
+        for_each_texel(
+            [a, b, d],
+            [side, side],
+            |[w0, w1, w2]| w1 > 1e-4 && w2 > 1e-4 && w0 > 1e-4,
+            |x, y, _| {
+                let i = (y * side + x) as usize;
+                if owner[i] != u32::MAX {
+                    overlap.get_or_insert(owner[i]);
                 }
-            }
+                owner[i] = t as u32;
+            },
+        );
+        if let Some(other) = overlap {
+            let name = |t: usize| &scene.objects[m.triangle_object[t] as usize].name;
+            return Err(format!(
+                "texture coordinates overlap (objects `{}` and `{}`)",
+                name(other as usize),
+                name(t)
+            ));
         }
     }
     let groups = m

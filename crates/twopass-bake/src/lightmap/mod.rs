@@ -37,6 +37,7 @@ mod fill;
 mod filter;
 mod glb;
 mod layout;
+mod raster;
 mod settings;
 
 pub use crate::weld::COPLANAR_COS;
