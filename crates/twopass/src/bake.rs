@@ -169,6 +169,23 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
         }
     }
     let load_time = started.elapsed();
+    // A texel too small for any atlas is refused before the solve, leaving any earlier set in
+    // the output folder as it was.
+    if args.lightmap
+        && let Some(size) = args.texel_size
+    {
+        let smallest = bake::lightmap::smallest_texel_size(&scene);
+        if size < smallest {
+            return Err(CliError::Usage(format!(
+                "--texel-size {size}: {} has {:.6e} square units of surface, more than a \
+                 {side} x {side} lightmap holds at that size; the smallest texel size that \
+                 could fit is {smallest:.6e}",
+                args.scene.display(),
+                scene.total_area(),
+                side = bake::lightmap::MAX_LIGHTMAP_SIDE,
+            )));
+        }
+    }
     let preset_solve = match &args.preset {
         Some(name) => {
             let preset = crate::preset::load(&args.scene, args.presets.as_deref(), name)?;

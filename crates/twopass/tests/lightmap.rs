@@ -92,6 +92,36 @@ fn gather_takes_off_auto_or_a_ray_count() {
 }
 
 #[test]
+fn a_texel_size_no_atlas_can_hold_is_refused_before_the_solve() {
+    // The box's 5 walls, floor, ceiling and blocks are about 2.2 million mm^2: at 1e-7 mm a
+    // texel, no 8192 x 8192 atlas holds them. Refused at once (no solve), the set already in
+    // the folder untouched.
+    let out_dir = tempfile::tempdir().unwrap();
+    let dir = out_dir.path();
+    let first = common::bake_box(dir)
+        .words("--format bake --element-size 100 --unshot 1e-2 --quiet")
+        .run();
+    common::assert_ok(&first);
+    let manifest = dir.join("cornell-box.manifest.json");
+    let before = std::fs::read(&manifest).unwrap();
+    let out = common::bake_box(dir)
+        .words("--format bake --lightmap --texel-size 1e-7")
+        .run();
+    common::assert_exit(&out, 2);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--texel-size") && err.contains("smallest texel size"),
+        "{err}"
+    );
+    assert_eq!(
+        std::fs::read(&manifest).unwrap(),
+        before,
+        "the old set untouched"
+    );
+    assert!(!dir.join("cornell-box.lightmap.glb").exists());
+}
+
+#[test]
 fn texel_size_needs_lightmap() {
     let scene = repo("scenes/cornell-box.toml");
     for words in ["--texel-size 5", "--lightmap --texel-size -1"] {

@@ -14,6 +14,16 @@ use crate::error::BakeError;
 /// Largest lightmap side, texels: 8192 x 8192 RGB f32 is 805 MB in memory.
 pub const MAX_LIGHTMAP_SIDE: u32 = 8192;
 
+/// The smallest texel edge (scene units) at which `scene`'s surface could fit in one
+/// [`MAX_LIGHTMAP_SIDE`] x [`MAX_LIGHTMAP_SIDE`] atlas even if the charts filled it without a
+/// gap: the square root of the total area over the atlas's texels. A smaller texel can never
+/// fit (a bake can refuse it before solving); a somewhat larger one may still not, once charts
+/// and their padding are packed.
+pub fn smallest_texel_size(scene: &Scene) -> f32 {
+    let texels = f64::from(MAX_LIGHTMAP_SIDE).powi(2);
+    (scene.total_area() / texels).sqrt() as f32
+}
+
 /// Largest ratio between a triangle's share of its chart's atlas area and its share of the
 /// chart's surface area that the unwrapper accepts before it splits the chart.
 pub const MAX_AREA_DISTORTION: f32 = 2.0;

@@ -45,5 +45,5 @@ pub use bake::bake_lightmap;
 pub use fill::TexelSource;
 pub use filter::FILTER;
 pub use glb::{CameraRecord, PNG_FORMULA};
-pub use layout::{MAX_AREA_DISTORTION, MAX_LIGHTMAP_SIDE};
+pub use layout::{MAX_AREA_DISTORTION, MAX_LIGHTMAP_SIDE, smallest_texel_size};
 pub use settings::{AtlasSource, Lightmap, LightmapSettings, TEXELS_PER_DIAGONAL};
