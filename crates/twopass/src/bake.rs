@@ -227,6 +227,11 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
         path: args.scene.clone(),
         source,
     })?;
+    // The folder is created and held once the solve can start (nothing is written for a scene
+    // the solver refuses).
+    let dir = ctx.output_or(Path::new("bake"));
+    crate::output::create_dir(dir)?;
+    let _folder = lock_folder(dir, ctx)?;
     if ctx.chatty() {
         let (_, reason) = options.method.choose(&scene);
         errln!("radiosity: {} solver ({reason})", solver.method().name());
@@ -271,8 +276,6 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
     );
     manifest.timings.load_s = load_time.as_secs_f64();
 
-    let dir = ctx.output_or(Path::new("bake"));
-    crate::output::create_dir(dir)?;
     let stem = args
         .scene
         .file_stem()
@@ -388,6 +391,27 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
         print_summary(&manifest, &manifest_path)?;
     }
     Ok(())
+}
+
+/// Holds `dir` for this bake (an advisory lock on the folder itself, released when the
+/// returned handle drops, also when the process dies), so two bakes into one folder never mix
+/// their files: the second waits for the first to finish, then writes its whole set.
+fn lock_folder(dir: &Path, ctx: &Context) -> Result<std::fs::File, CliError> {
+    let folder = std::fs::File::open(dir).map_err(|e| CliError::io(dir, e))?;
+    match folder.try_lock() {
+        Ok(()) => {}
+        Err(std::fs::TryLockError::WouldBlock) => {
+            if ctx.chatty() {
+                errln!(
+                    "{}: another bake is writing into this folder; waiting for it",
+                    dir.display()
+                );
+            }
+            folder.lock().map_err(|e| CliError::io(dir, e))?;
+        }
+        Err(std::fs::TryLockError::Error(e)) => return Err(CliError::io(dir, e)),
+    }
+    Ok(folder)
 }
 
 fn print_summary(m: &Manifest, manifest_path: &Path) -> Result<(), CliError> {

@@ -195,3 +195,43 @@ fn bad_solver_options_are_usage_errors() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("--element-size"), "{err}");
 }
+
+#[test]
+fn two_bakes_into_one_folder_leave_one_whole_set() {
+    // Two bakes of different settings started together into one folder: the second waits for
+    // the first (a lock on the folder), so the manifest at the end seals the files beside it.
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let scene = repo("scenes/cornell-box.toml");
+    for round in 0..3 {
+        let children: Vec<_> = ["0.5", "0.25"]
+            .iter()
+            .map(|exposure| {
+                std::process::Command::new(env!("CARGO_BIN_EXE_twopass"))
+                    .arg("bake")
+                    .arg(&scene)
+                    .args(["--element-size", "150", "--unshot", "1e-2", "--quiet"])
+                    .args(["--format", "glb,ply,bake", "--exposure", exposure])
+                    .arg("--output")
+                    .arg(dir)
+                    .spawn()
+                    .unwrap()
+            })
+            .collect();
+        for mut child in children {
+            assert!(child.wait().unwrap().success(), "round {round}");
+        }
+        let manifest: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.join("cornell-box.manifest.json")).unwrap())
+                .unwrap();
+        for f in manifest["files"].as_array().unwrap() {
+            let bytes = std::fs::read(f["path"].as_str().unwrap()).unwrap();
+            assert_eq!(
+                f["crc32"].as_u64().unwrap(),
+                u64::from(crc32fast::hash(&bytes)),
+                "round {round}: {} does not match its manifest",
+                f["path"]
+            );
+        }
+    }
+}
