@@ -60,7 +60,22 @@ impl Context {
     /// that image would be larger than [`Camera::MAX_PIXELS`] or a side than
     /// [`Camera::MAX_SIDE`].
     pub fn camera(&self, camera: &Camera) -> Result<Camera, CliError> {
-        resized(camera, self.width, self.height)
+        let camera = resized(camera, self.width, self.height)?;
+        let pixels = u64::from(camera.width) * u64::from(camera.height);
+        let need = pixels * RENDER_BYTES_PER_PIXEL;
+        let limit = memory_limit();
+        if need > limit {
+            return Err(CliError::Usage(format!(
+                "--width/--height: a {} x {} image needs about {:.1} GiB ({RENDER_BYTES_PER_PIXEL} \
+                 bytes per pixel), more than the {:.1} GiB a command may take here; render a \
+                 smaller image",
+                camera.width,
+                camera.height,
+                need as f64 / f64::from(1u32 << 30),
+                limit as f64 / f64::from(1u32 << 30)
+            )));
+        }
+        Ok(camera)
     }
 
     /// The output path, or `default` when `--output` was not given.
@@ -93,9 +108,21 @@ impl Context {
     }
 }
 
-/// Memory a solve may take, bytes: four fifths of the machine's memory (`MemTotal` of
-/// /proc/meminfo), or 16 GiB where that cannot be read.
+/// Peak memory of a render per image pixel, bytes: the film's layers, the composite, the
+/// encoded files and the adaptive pass's buffers. Every method measured about 317 bytes per
+/// pixel at 2048 x 2048 (docs/benchmarks.md, "Render memory"); this keeps a margin over that.
+pub const RENDER_BYTES_PER_PIXEL: u64 = 336;
+
+/// Memory a command may take, bytes: `TWOPASS_MEMORY_LIMIT` (bytes) when set, else four
+/// fifths of the machine's memory (`MemTotal` of /proc/meminfo), or 16 GiB where that cannot
+/// be read.
 pub fn memory_limit() -> u64 {
+    if let Some(bytes) = std::env::var("TWOPASS_MEMORY_LIMIT")
+        .ok()
+        .and_then(|v| v.trim().parse::<u64>().ok())
+    {
+        return bytes;
+    }
     std::fs::read_to_string("/proc/meminfo")
         .ok()
         .and_then(|text| {

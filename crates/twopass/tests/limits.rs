@@ -540,3 +540,34 @@ fn a_hundred_thousand_coincident_triangles_load() {
     assert!(stdout.contains("100000 triangles"), "{stdout}");
     assert!(stdout.contains("100000 objects"), "{stdout}");
 }
+
+#[test]
+fn a_render_larger_than_the_memory_allows_is_refused_up_front() {
+    // Under a 100 MB allowance a 1024 x 1024 image (about 336 MB at 336 bytes per pixel) is
+    // refused before anything is computed or written; 256 x 256 (22 MB) renders.
+    let dir = tempfile::tempdir().unwrap();
+    let run = |width: &str, out: &str| {
+        Command::new(env!("CARGO_BIN_EXE_twopass"))
+            .env("TWOPASS_MEMORY_LIMIT", "100000000")
+            .args([
+                "render",
+                &cornell(),
+                "--method",
+                "whitted",
+                "--spp",
+                "1",
+                "--width",
+                width,
+            ])
+            .arg("-o")
+            .arg(dir.path().join(out))
+            .output()
+            .unwrap()
+    };
+    let big = run("1024", "big.exr");
+    common::assert_exit(&big, 2);
+    let err = String::from_utf8_lossy(&big.stderr);
+    assert!(err.contains("1024 x 1024") && err.contains("GiB"), "{err}");
+    assert!(!dir.path().join("big.exr").exists());
+    common::assert_ok(&run("256", "small.exr"));
+}
