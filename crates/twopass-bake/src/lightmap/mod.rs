@@ -13,12 +13,17 @@
 //! they lie in [0, 1] and no two triangles overlap in them ([`AtlasSource`]); OBJ has no second
 //! UV set, so that one set is the lightmap's.
 //!
-//! **Texels.** Every texel whose centre lies on a triangle of its chart takes the solution's
-//! radiance there ([`DiffuseRadiance::radiance`](twopass_scene::DiffuseRadiance::radiance): the element mesh's per-vertex radiosity
-//! interpolated at that point of the scene triangle, divided by pi), and each triangle's
-//! centroid texel is always filled, so no triangle is left without a value. Each chart has a
-//! border of `padding` texels on every side; the empty texels of a chart are then dilated
-//! `padding` times (each takes the mean of its filled neighbours in the same chart), so bilinear
+//! **Texels.** Every texel whose centre lies on a triangle of its chart (found row by row,
+//! `raster`) takes its light from a [`TexelSource`]: the solution's radiance there
+//! ([`DiffuseRadiance::radiance`](twopass_scene::DiffuseRadiance::radiance): the element mesh's
+//! per-vertex radiosity interpolated at that point of the scene triangle, divided by pi), or a
+//! final gather at the texel centre ([`RadianceEstimator`](twopass_scene::RadianceEstimator),
+//! keyed by the texel's index in the atlas), whose indirect part `filter` then denoises in
+//! atlas space. A gathered texel whose rays mostly see the inside of a closed object
+//! ([`MAX_BACK_FACES`]) is left empty. A triangle that covers no texel centre fills its
+//! centroid's texel, so no triangle is left without a value. Each chart has a border of
+//! `padding` texels on every side; the empty texels of a chart are then dilated `padding`
+//! times (each takes the mean of its filled neighbours in the same chart), so bilinear
 //! filtering and mip levels at a chart's edge read the chart's own light, never a neighbour's
 //! or black.
 //!
@@ -28,9 +33,10 @@
 //! the per-vertex bakes, so the PNG's linear value times `1 / exposure` gives `L` up to the
 //! clip.
 //!
-//! Files, one job each: `settings` (what a bake takes and gives), `layout` (the atlas), `fill`
-//! (the texels of one region), `glb` (the `.glb` and its extras), `bake` ([`bake_lightmap`],
-//! which runs them in that order).
+//! Files, one job each: `settings` (what a bake takes and gives), `layout` (the atlas),
+//! `raster` (the texel centres a triangle covers), `fill` (the texels of one region), `filter`
+//! (the gathered indirect light denoised), `glb` (the `.glb` and its extras), `bake`
+//! ([`bake_lightmap`], which runs them in that order).
 
 mod bake;
 mod fill;
@@ -42,7 +48,7 @@ mod settings;
 
 pub use crate::weld::COPLANAR_COS;
 pub use bake::bake_lightmap;
-pub use fill::TexelSource;
+pub use fill::{MAX_BACK_FACES, TexelSource};
 pub use filter::FILTER;
 pub use glb::{CameraRecord, PNG_FORMULA};
 pub use layout::{MAX_AREA_DISTORTION, MAX_LIGHTMAP_SIDE, smallest_texel_size};
