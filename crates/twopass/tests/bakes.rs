@@ -102,7 +102,9 @@ fn a_room_is_baked_rendered_measured_and_its_reference_cached() {
         "{text}"
     );
     assert!(
-        text.contains("\nsummary: 32 x 32, reference 16 spp"),
+        text.contains(
+            "\nsummary: rooms 32 x 32 (scene files at their own camera's size), reference 16 spp"
+        ),
         "{text}"
     );
     for row in [
@@ -150,5 +152,42 @@ fn an_unknown_room_is_a_usage_error_naming_the_rooms() {
             "no room `kitchen`; the rooms are spheres, grazing, near-light, two-lights, terminator"
         ),
         "{err}"
+    );
+}
+
+#[test]
+fn a_scene_file_is_measured_at_its_own_camera_in_a_folder_of_its_stem() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("lamp.toml");
+    std::fs::write(
+        &scene,
+        "version = 1\n[camera]\nposition = [0, 1, 3]\nlook_at = [0, 0.5, 0]\nfov_y = 60\n\
+         resolution = [24, 16]\n\
+         [[material]]\nname = \"w\"\ntype = \"lambert\"\ndiffuse = 0.5\n\
+         [[object]]\nname = \"floor\"\nmaterial = \"w\"\n\
+         shape = { type = \"quad\", origin = [-2, 0, -2], edge_u = [0, 0, 4], edge_v = [4, 0, 0] }\n\
+         [[object]]\nname = \"lamp\"\nmaterial = \"w\"\nemission = 5\n\
+         shape = { type = \"quad\", origin = [-0.5, 2, -0.5], edge_u = [1, 0, 0], edge_v = [0, 0, 1] }\n",
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let report = common::ok_json(
+        &cli("bench bakes --reference-spp 8 --min-region-pixels 20 --json")
+            .words("--scene")
+            .arg(&scene)
+            .words("--out")
+            .arg(&out)
+            .run(),
+    );
+    let rooms = report["rooms"].as_array().unwrap();
+    assert_eq!(rooms.len(), 1, "only the scene, no room");
+    assert_eq!(rooms[0]["room"], "lamp");
+    assert_eq!(rooms[0]["objects"], 2);
+    assert!(out.join("lamp").join("lightmap.exr").is_file());
+    assert!(
+        out.join("lamp")
+            .join("bake")
+            .join("lamp.lightmap.glb")
+            .is_file()
     );
 }

@@ -38,6 +38,10 @@ pub struct BakesArgs {
     /// terminator [default: all].
     #[arg(long, value_delimiter = ',', value_parser = parse_room)]
     pub rooms: Vec<RoomKind>,
+    /// Scene files (.toml or .obj) to measure as well, each at its own camera's resolution,
+    /// its outputs in `DIR/<stem>/`; given alone (without `--rooms`), only these are measured.
+    #[arg(long, value_name = "FILE")]
+    pub scene: Vec<PathBuf>,
     /// Triangles of the `spheres` room (the others have a fixed size).
     #[arg(long, default_value_t = 100_000, value_parser = clap::value_parser!(u32).range(1_000..=10_000_000))]
     pub triangles: u32,
@@ -95,7 +99,7 @@ pub fn run(args: &BakesArgs, ctx: &Context) -> Result<(), CliError> {
         .or_else(|| ctx.output.clone())
         .unwrap_or_else(|| PathBuf::from("bench-bakes"));
     crate::output::create_dir(&out)?;
-    let kinds = if args.rooms.is_empty() {
+    let kinds = if args.rooms.is_empty() && args.scene.is_empty() {
         RoomKind::ALL.to_vec()
     } else {
         args.rooms.clone()
@@ -116,6 +120,10 @@ pub fn run(args: &BakesArgs, ctx: &Context) -> Result<(), CliError> {
     );
     for kind in kinds {
         let r = measure_room(kind, &out, args, ctx)?;
+        report.rooms.push(r);
+    }
+    for path in &args.scene {
+        let r = measure_scene_file(path, &out, args, ctx)?;
         report.rooms.push(r);
     }
     report.wall_seconds = started.elapsed().as_secs_f64();
@@ -152,12 +160,51 @@ fn measure_room(
     crate::output::write_atomic(&dir.join(&room.mesh_file), room.mesh.as_bytes())?;
     let scene_path = dir.join(room.scene_file());
     crate::output::write_atomic(&scene_path, room.scene.as_bytes())?;
+    let key = ReferenceKey::new(&room.scene, &room.mesh, args.reference_spp, ctx.seed);
+    measure_scene(name, &dir, &scene_path, key, args, ctx)
+}
+
+/// Measures a scene file the user gave: its outputs in `DIR/<stem>/`, its reference keyed by
+/// the scene file's text (a changed mesh that the scene names is not noticed: delete the
+/// cached reference then).
+fn measure_scene_file(
+    path: &Path,
+    out: &Path,
+    args: &BakesArgs,
+    ctx: &Context,
+) -> Result<RoomReport, CliError> {
+    let name = path
+        .file_stem()
+        .map_or_else(|| "scene".to_owned(), |s| s.to_string_lossy().into_owned());
+    let text = std::fs::read(path).map_err(|e| CliError::io(path, e))?;
+    let dir = out.join(&name);
+    crate::output::create_dir(&dir)?;
+    let key = ReferenceKey::new(
+        &String::from_utf8_lossy(&text),
+        "",
+        args.reference_spp,
+        ctx.seed,
+    );
+    measure_scene(&name, &dir, path, key, args, ctx)
+}
+
+/// Renders or finds the reference of the scene at `scene_path` (keyed by `key`), bakes it into
+/// `dir/bake`, renders the bake and measures, as `name`.
+fn measure_scene(
+    name: &str,
+    dir: &Path,
+    scene_path: &Path,
+    key: ReferenceKey,
+    args: &BakesArgs,
+    ctx: &Context,
+) -> Result<RoomReport, CliError> {
+    let scene_path = scene_path.to_path_buf();
+    let dir = dir.to_path_buf();
     let (scene, _) = ctx.load_scene(&scene_path)?;
     let size = (scene.camera.width, scene.camera.height);
     let objects = object_map(&scene);
     let names: Vec<String> = scene.objects.iter().map(|o| o.name.clone()).collect();
 
-    let key = ReferenceKey::new(&room.scene, &room.mesh, args.reference_spp, ctx.seed);
     progress(ctx, format_args!("{name}: reference, {} spp", key.spp));
     let reference = converged(&dir, &scene_path, &key, size, ctx.threads)?;
     if reference.cached {

@@ -237,7 +237,8 @@ pub fn print_room(r: &RoomReport, min_pixels: u64) -> Result<(), CliError> {
 /// Prints the summary over the family: one row per room and image.
 pub fn print_summary(report: &BakesReport) -> Result<(), CliError> {
     outln!(
-        "\nsummary: {} x {}, reference {} spp, renders {} spp, seed {}, bake args [{}]; {:.0} s",
+        "\nsummary: rooms {} x {} (scene files at their own camera's size), reference {} spp, \
+         renders {} spp, seed {}, bake args [{}]; {:.0} s",
         report.size,
         report.size,
         report.reference_spp,
