@@ -18,6 +18,15 @@
 //!
 //! The point's own value in the solution is not used at all.
 //!
+//! **Near hits.** A landing nearer than [`GatherSettings::near_distance`] (by default the
+//! radiosity pass's element edge) takes one more bounce instead of the solution's value there:
+//! near the point one element fills much of the hemisphere, and its error (a concave corner
+//! or a contact the element mesh does not resolve) would reach the point whole.
+//!
+//! **Inside objects.** The estimate reports which share of its gather rays first hit the back
+//! of a closed object ([`RadianceEstimate::back_faces`]): a lightmap texel whose centre lies
+//! where another object intersects its surface sees only that, and the bake leaves it out.
+//!
 //! **Sampling.** Gather rays are cosine-distributed about the shading normal (importance
 //! sampling of the cosine in E = integral of L cos), dimensions 0 and 1 of one Owen-scrambled
 //! Sobol point per ray ([`Sampler`], keyed by (seed, point key, ray)); a delta path takes its
