@@ -100,6 +100,14 @@ const SHRINK: &[Shrink] = &[
         replace: &[],
         default_output: None,
     },
+    // The README's line is small already (one room, 32 pixels, a 16-spp reference); its
+    // folder goes to the temporary directory.
+    Shrink {
+        command: &["bench", "bakes"],
+        add: &[],
+        replace: &[],
+        default_output: Some("bench-bakes"),
+    },
     // 1000 rays measured for 10 ms; a generated scene of 10k triangles instead of 100k.
     Shrink {
         command: &["bench", "rays"],
