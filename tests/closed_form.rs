@@ -9,6 +9,31 @@ pub fn corner_form_factor(x: f64, y: f64) -> f64 {
     (x / a * (y / a).atan() + y / b * (x / b).atan()) / (2.0 * std::f64::consts::PI)
 }
 
+/// Form factor from a point of the plane y = 0 at (x, z), facing up, to the square of side
+/// 0.5 at height 1 centred over the origin ([`floor_under_square`]): the signed sum of four
+/// [`corner_form_factor`]s.
+pub fn square_form_factor(x: f64, z: f64) -> f64 {
+    let h = 0.25;
+    let c = corner_form_factor;
+    c(h - x, h - z) - c(-h - x, h - z) - c(h - x, -h - z) + c(-h - x, -h - z)
+}
+
+/// The scene [`square_form_factor`] describes, as scene-file text: a grey (rho 0.5) floor
+/// (object 0, 4 x 4 around the origin) under a black square of side 0.5 at height 1 facing
+/// down (object 1) that emits `emission` W/(m^2 sr), 0 for none.
+pub fn floor_under_square(emission: f32) -> String {
+    format!(
+        "version = 1\n\
+         [camera]\nposition = [0, 0.9, 3]\nlook_at = [0, 0, 0]\nfov_y = 40\nresolution = [8, 8]\n\
+         [[material]]\nname = \"grey\"\ntype = \"lambert\"\ndiffuse = 0.5\n\
+         [[material]]\nname = \"black\"\ntype = \"lambert\"\ndiffuse = 0\n\
+         [[object]]\nname = \"floor\"\nmaterial = \"grey\"\n\
+         shape = {{ type = \"quad\", origin = [-2, 0, -2], edge_u = [0, 0, 4], edge_v = [4, 0, 0] }}\n\
+         [[object]]\nname = \"square\"\nmaterial = \"black\"\nemission = {emission}\n\
+         shape = {{ type = \"quad\", origin = [-0.25, 1, -0.25], edge_u = [0.5, 0, 0], edge_v = [0, 0, 0.5] }}\n"
+    )
+}
+
 #[test]
 fn corner_form_factor_matches_quadrature_and_its_limit() {
     // F = integral over the rectangle of cos(theta) cos(theta') / (pi r^2) dA = integral of

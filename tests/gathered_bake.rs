@@ -7,18 +7,8 @@ use twopass_radiosity::{Options, Solver};
 use twopass_scene::Scene;
 use twopass_trace::gather::{GatherSettings, Gatherer};
 
-use crate::closed_form::corner_form_factor;
+use crate::closed_form::{floor_under_square, square_form_factor};
 use crate::{on_threads, scene_path};
-
-/// A grey floor under a square emitter of side 0.5 at height 1 (L_e = 10, facing down).
-const FLOOR: &str = "version = 1\n\
-    [camera]\nposition = [0, 0.9, 3]\nlook_at = [0, 0, 0]\nfov_y = 40\nresolution = [8, 8]\n\
-    [[material]]\nname = \"grey\"\ntype = \"lambert\"\ndiffuse = 0.5\n\
-    [[material]]\nname = \"black\"\ntype = \"lambert\"\ndiffuse = 0\n\
-    [[object]]\nname = \"floor\"\nmaterial = \"grey\"\n\
-    shape = { type = \"quad\", origin = [-2, 0, -2], edge_u = [0, 0, 4], edge_v = [4, 0, 0] }\n\
-    [[object]]\nname = \"light\"\nmaterial = \"black\"\nemission = 10\n\
-    shape = { type = \"quad\", origin = [-0.25, 1, -0.25], edge_u = [0.5, 0, 0], edge_v = [0, 0, 0.5] }\n";
 
 fn solved(scene: &Scene) -> twopass_radiosity::Solution {
     let mut solver = Solver::new(scene, Options::default()).unwrap();
@@ -28,7 +18,11 @@ fn solved(scene: &Scene) -> twopass_radiosity::Solution {
 
 #[test]
 fn gathered_element_vertices_match_the_closed_form() {
-    let (scene, _) = twopass_scene::load_toml(FLOOR, std::path::Path::new("floor.toml")).unwrap();
+    let (scene, _) = twopass_scene::load_toml(
+        &floor_under_square(10.0),
+        std::path::Path::new("floor.toml"),
+    )
+    .unwrap();
     let solution = solved(&scene);
     let gatherer = Gatherer::new(
         &scene,
@@ -47,9 +41,7 @@ fn gathered_element_vertices_match_the_closed_form() {
             continue;
         }
         let (x, z) = (f64::from(v.position.x), f64::from(v.position.z));
-        let h = 0.25;
-        let c = corner_form_factor;
-        let f = c(h - x, h - z) - c(-h - x, h - z) - c(h - x, -h - z) + c(-h - x, -h - z);
+        let f = square_form_factor(x, z);
         // Radiosity B = rho L_e pi F, W/m^2 (the solution's unit).
         let exact = 0.5 * 10.0 * std::f64::consts::PI * f;
         let got = f64::from(direct.x);

@@ -9,7 +9,7 @@ use twopass_scene::{DiffuseRadiance, RadianceEstimator, Scene};
 use twopass_trace::gather::{GatherSettings, Gatherer};
 
 use super::common::scene;
-use crate::closed_form::corner_form_factor;
+use crate::closed_form::square_form_factor;
 use crate::on_threads;
 
 /// A solution that is `value` on every triangle of the objects in `lit` and zero elsewhere
@@ -44,19 +44,10 @@ impl DiffuseRadiance for Constant {
     }
 }
 
-/// A grey floor (object 0) under a square of side 0.5 at height 1, centred over the origin
-/// (object 1): an emitter of L_e = 10 facing down, or a black surface.
+/// The scene of [`crate::closed_form::floor_under_square`]: the floor is object 0, the square
+/// object 1.
 fn floor_under_square(emission: f32) -> Scene {
-    scene(&format!(
-        "version = 1\n\
-         [camera]\nposition = [0, 0.9, 3]\nlook_at = [0, 0, 0]\nfov_y = 40\nresolution = [8, 8]\n\
-         [[material]]\nname = \"grey\"\ntype = \"lambert\"\ndiffuse = 0.5\n\
-         [[material]]\nname = \"black\"\ntype = \"lambert\"\ndiffuse = 0\n\
-         [[object]]\nname = \"floor\"\nmaterial = \"grey\"\n\
-         shape = {{ type = \"quad\", origin = [-2, 0, -2], edge_u = [0, 0, 4], edge_v = [4, 0, 0] }}\n\
-         [[object]]\nname = \"square\"\nmaterial = \"black\"\nemission = {emission}\n\
-         shape = {{ type = \"quad\", origin = [-0.25, 1, -0.25], edge_u = [0.5, 0, 0], edge_v = [0, 0, 0.5] }}\n"
-    ))
+    scene(&crate::closed_form::floor_under_square(emission))
 }
 
 /// The point of the floor straight under (x, z): its triangle and barycentrics.
@@ -69,13 +60,6 @@ fn floor_point(scene: &Scene, x: f32, z: f32) -> (u32, [f32; 3]) {
         .expect("the floor");
     assert_eq!(hit.object, 0);
     (hit.point.triangle, hit.barycentric)
-}
-
-/// Form factor from a point of the floor at (x, z) to the square of side 0.5 at height 1.
-fn square_form_factor(x: f64, z: f64) -> f64 {
-    let h = 0.25;
-    let c = corner_form_factor;
-    c(h - x, h - z) - c(-h - x, h - z) - c(h - x, -h - z) + c(-h - x, -h - z)
 }
 
 #[test]

@@ -98,11 +98,14 @@ pub fn encode_vertex_glb(
                 if new {
                     first.push((t, corner));
                 }
-                let value = parts_at(solution, &parts, t, corner);
-                for (s, x) in sums[v as usize].iter_mut().zip(value) {
-                    *s += x;
+                // A gathered vertex takes its estimate instead of the solution's mean.
+                if gather.is_none() {
+                    let value = parts_at(solution, &parts, t, corner);
+                    for (s, x) in sums[v as usize].iter_mut().zip(value) {
+                        *s += x;
+                    }
+                    counts[v as usize] += 1;
                 }
-                counts[v as usize] += 1;
                 indices.push(v);
             }
         }

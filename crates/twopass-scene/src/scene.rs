@@ -93,6 +93,17 @@ impl Mesh {
             .unwrap_or(self.geometric_normals[t as usize])
     }
 
+    /// [`Mesh::shading_normal`] turned to the front side, the side of the geometric normal
+    /// (unit): the normal a surface point is shaded with.
+    pub fn front_shading_normal(&self, t: u32, b: [f32; 3]) -> Vec3 {
+        let n = self.shading_normal(t, b);
+        if n.dot(self.geometric_normals[t as usize]) < 0.0 {
+            -n
+        } else {
+            n
+        }
+    }
+
     /// The surface point of triangle `t` at barycentrics `b`.
     pub fn surface_point(&self, t: u32, b: [f32; 3]) -> SurfacePoint {
         SurfacePoint::on_triangle(self.corners(t), b, self.geometric_normals[t as usize], t)
@@ -297,16 +308,28 @@ impl Scene {
             h.triangle,
         );
         let object = self.mesh.triangle_object[h.triangle as usize];
-        let mut shading_normal = self.mesh.shading_normal(h.triangle, h.barycentric);
-        if shading_normal.dot(point.normal) < 0.0 {
-            shading_normal = -shading_normal;
-        }
         Hit {
             t: h.t,
             point,
             barycentric: h.barycentric,
-            shading_normal,
+            shading_normal: self.mesh.front_shading_normal(h.triangle, h.barycentric),
             front_face: ray.direction.dot(point.normal) < 0.0,
+            object,
+            material: self.objects[object as usize].material,
+        }
+    }
+
+    /// The hit of triangle `t` at barycentrics `b` as a ray arriving on its front side would
+    /// find it (at distance 0): where a point of the surface itself, a lightmap texel or a
+    /// vertex, is shaded.
+    pub fn surface_hit(&self, t: u32, b: [f32; 3]) -> Hit {
+        let object = self.mesh.triangle_object[t as usize];
+        Hit {
+            t: 0.0,
+            point: self.mesh.surface_point(t, b),
+            barycentric: b,
+            shading_normal: self.mesh.front_shading_normal(t, b),
+            front_face: true,
             object,
             material: self.objects[object as usize].material,
         }

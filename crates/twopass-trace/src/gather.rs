@@ -224,23 +224,8 @@ impl<'a> Gatherer<'a> {
     /// The shading context of a point on the front of triangle `t`, seen along its shading
     /// normal.
     fn shading_at(&self, t: u32, b: [f32; 3]) -> Shading<'a> {
-        let scene = self.scene;
-        let point = scene.mesh.surface_point(t, b);
-        let mut shading_normal = scene.mesh.shading_normal(t, b);
-        if shading_normal.dot(point.normal) < 0.0 {
-            shading_normal = -shading_normal;
-        }
-        let object = scene.mesh.triangle_object[t as usize];
-        let hit = Hit {
-            t: 0.0,
-            point,
-            barycentric: b,
-            shading_normal,
-            front_face: true,
-            object,
-            material: scene.objects[object as usize].material,
-        };
-        Shading::new(scene, hit, -shading_normal)
+        let hit = self.scene.surface_hit(t, b);
+        Shading::new(self.scene, hit, -hit.shading_normal)
     }
 
     /// Radiance arriving along one gather ray leaving `s` in the cosine-distributed
@@ -334,21 +319,8 @@ impl<'a> Gatherer<'a> {
         tally: &mut Tally,
     ) -> Rgb {
         let scene = self.scene;
-        let point = scene.mesh.surface_point(t, b);
-        let mut normal = scene.mesh.shading_normal(t, b);
-        if normal.dot(point.normal) < 0.0 {
-            normal = -normal;
-        }
-        let object = scene.mesh.triangle_object[t as usize];
-        let hit = Hit {
-            t: 0.0,
-            point,
-            barycentric: b,
-            shading_normal: normal,
-            front_face: true,
-            object,
-            material: scene.objects[object as usize].material,
-        };
+        let hit = scene.surface_hit(t, b);
+        let (point, normal) = (hit.point, hit.shading_normal);
         let here = Shading::new(scene, hit, dir);
         let rho = here.material.diffuse_albedo();
         let mut irradiance = Rgb::ZERO;

@@ -2,7 +2,7 @@
 //! (the solution's radiance, or a final gather's estimate with its indirect part denoised in
 //! atlas space), then the padding filled by dilation within the chart.
 
-use glam::{Vec2, Vec3};
+use glam::Vec2;
 use rayon::prelude::*;
 use twopass_brdf::Rgb;
 use twopass_scene::{DiffuseRadiance, RadianceEstimate, RadianceEstimator, Scene};
@@ -154,7 +154,7 @@ pub(super) fn fill_region(
                 .map(|(p, e)| Guide {
                     texel: p.texel,
                     position: scene.mesh.surface_point(p.triangle, p.barycentric).position,
-                    normal: shading_normal(scene, p.triangle, p.barycentric),
+                    normal: scene.mesh.front_shading_normal(p.triangle, p.barycentric),
                     chart: chart(p.triangle),
                     object: scene.mesh.triangle_object[p.triangle as usize],
                     error: e.indirect_error,
@@ -175,16 +175,6 @@ pub(super) fn fill_region(
         covered,
         rays,
         shadow_rays,
-    }
-}
-
-/// The unit shading normal of triangle `t` at `b`, on its front side.
-fn shading_normal(scene: &Scene, t: u32, b: [f32; 3]) -> Vec3 {
-    let n = scene.mesh.shading_normal(t, b);
-    if n.dot(scene.mesh.geometric_normals[t as usize]) < 0.0 {
-        -n
-    } else {
-        n
     }
 }
 

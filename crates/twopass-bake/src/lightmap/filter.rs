@@ -73,6 +73,10 @@ pub(super) fn denoise(
     let mut current = indirect.to_vec();
     for pass in 0..PASSES {
         let step = 1i32 << pass;
+        // Farther than this from the centre on the surface, a texel is not the centre's
+        // neighbour however close in the atlas (another part of the chart, folded).
+        let reach = texel_size * (step as f32) * 2.0 * 1.5 + texel_size;
+        let max_distance2 = reach * reach * 2.0;
         current = guides
             .par_iter()
             .enumerate()
@@ -96,8 +100,7 @@ pub(super) fn denoise(
                             continue;
                         }
                         let d = o.position - g.position;
-                        let reach = texel_size * (step as f32) * 2.0 * 1.5 + texel_size;
-                        if d.length_squared() > reach * reach * 2.0 {
+                        if d.length_squared() > max_distance2 {
                             continue;
                         }
                         let plane = g.normal.dot(d).abs() / (PLANE_SIGMA * texel_size);
