@@ -23,6 +23,11 @@ pub struct Energy {
     pub unshot: DVec3,
     /// Change of the unshot estimate when adaptive subdivision re-estimated patch radiosities.
     pub remeshing: DVec3,
+    /// Power that form factors summing above one would have created: more arriving than was
+    /// sent, where surfaces are closer than the mesh resolves (a light a hair's breadth from
+    /// a wall). Progressive refinement takes it out of each such shot, so it is not part of
+    /// the balance; the hierarchical solver's is its last iteration's, in the balance.
+    pub excess: DVec3,
 }
 
 impl Energy {
@@ -32,6 +37,12 @@ impl Energy {
         let d = (self.emitted - rest).abs();
         let e = self.emitted.max(DVec3::splat(f64::MIN_POSITIVE));
         (d / e).max_element()
+    }
+
+    /// [`Energy::excess`] over the emitted power, the largest over the channels.
+    pub fn excess_fraction(&self) -> f64 {
+        let e = self.emitted.max(DVec3::splat(f64::MIN_POSITIVE));
+        (self.excess.max(DVec3::ZERO) / e).max_element()
     }
 }
 
@@ -139,6 +150,11 @@ pub struct SolveProgress {
 pub struct Residuals {
     /// Largest relative energy imbalance seen after any shot.
     pub energy_imbalance: f64,
+    /// [`Energy::excess_fraction`]: power that form factors summing above one would have
+    /// created, over the emitted power. Near zero unless surfaces are closer than the mesh
+    /// resolves.
+    #[serde(default)]
+    pub energy_excess: f64,
     /// Smallest sampled vertex form-factor row sum.
     pub row_sum_min: f64,
     /// Mean sampled row sum.
@@ -159,6 +175,7 @@ impl Residuals {
     /// pairs (A_p F_pq, A_q F_qp) of power transfers that reciprocity says are equal.
     pub fn from_samples(
         energy_imbalance: f64,
+        energy_excess: f64,
         row_sums: &[f64],
         pairs: impl IntoIterator<Item = (f64, f64)>,
     ) -> Self {
@@ -173,6 +190,7 @@ impl Residuals {
         }
         Self {
             energy_imbalance,
+            energy_excess,
             row_sum_min: row_sums.iter().copied().fold(f64::INFINITY, f64::min),
             row_sum_mean: row_sums.iter().sum::<f64>() / row_sums.len().max(1) as f64,
             row_sum_max: row_sums.iter().copied().fold(f64::NEG_INFINITY, f64::max),

@@ -131,6 +131,11 @@ impl Gather {
     }
 }
 
+/// Share of the emitted power above which the power that form factors summing above one
+/// would have created ([`twopass_radiosity::Residuals::energy_excess`]) is a warning: the
+/// vertex form factors of an ordinary mesh overshoot by well under this.
+const ENERGY_EXCESS_WARNING: f64 = 0.01;
+
 /// Most gather rays per texel `--gather` accepts.
 const MAX_GATHER_RAYS: u32 = 65_536;
 
@@ -248,6 +253,19 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
     };
     let residuals = solver.residuals(samples);
     let residuals_time = residuals_started.elapsed();
+    if residuals.energy_excess > ENERGY_EXCESS_WARNING && !ctx.quiet {
+        errln!(
+            "warning: {}: form factors summing above one would have created {:.1} % of the \
+             emitted power ({}): surfaces closer than the element mesh resolves, such as a light \
+             almost touching a wall; the light near them is not to be trusted",
+            args.scene.display(),
+            100.0 * residuals.energy_excess,
+            match solver.method() {
+                twopass_radiosity::Method::Progressive => "kept out of the shots",
+                _ => "in the solution",
+            }
+        );
+    }
     let solution = solver.solution();
     // The final gather over the solution, ending where the time budget (less the reserve for
     // the files) does.
@@ -449,10 +467,11 @@ fn print_summary(m: &Manifest, manifest_path: &Path) -> Result<(), CliError> {
     );
     let r = &m.residuals.residuals;
     outln!(
-        "  residual {:.2e}; energy imbalance {:.1e}; form-factor row sums {:.3}..{:.3} \
-         (mean {:.3}); reciprocity spread {:.2e} (weighted {:.2e}, {} pairs)",
+        "  residual {:.2e}; energy imbalance {:.1e}, excess {:.1e}; form-factor row sums \
+         {:.3}..{:.3} (mean {:.3}); reciprocity spread {:.2e} (weighted {:.2e}, {} pairs)",
         m.unshot_fraction,
         r.energy_imbalance,
+        r.energy_excess,
         r.row_sum_min,
         r.row_sum_max,
         r.row_sum_mean,

@@ -159,6 +159,56 @@ fn a_scene_without_emitters_is_a_clear_error() {
 }
 
 #[test]
+fn a_light_almost_touching_a_wall_is_warned_of() {
+    // A 0.2 x 0.2 light a micrometre in front of a wall of a closed 1 m cube, facing it: the
+    // wall's elements under it would receive more than it sends.
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("gap.toml");
+    let mut text = String::from(
+        "version = 1\nunit = \"m\"\n[camera]\nposition = [0.5, 0.5, 0.9]\n\
+         look_at = [0.5, 0.5, 0]\nfov_y = 60\n[[material]]\nname = \"w\"\ntype = \"lambert\"\n\
+         diffuse = 0.5\n",
+    );
+    // The cube's faces, facing in (edge_u x edge_v points inside).
+    let faces = [
+        ([0, 0, 0], [1, 0, 0], [0, 1, 0]),
+        ([0, 0, 1], [0, 1, 0], [1, 0, 0]),
+        ([0, 0, 0], [0, 0, 1], [1, 0, 0]),
+        ([0, 1, 0], [1, 0, 0], [0, 0, 1]),
+        ([0, 0, 0], [0, 1, 0], [0, 0, 1]),
+        ([1, 0, 0], [0, 0, 1], [0, 1, 0]),
+    ];
+    for (i, (o, u, v)) in faces.iter().enumerate() {
+        text += &format!(
+            "[[object]]\nname = \"face{i}\"\nmaterial = \"w\"\n\
+             shape = {{ type = \"quad\", origin = {o:?}, edge_u = {u:?}, edge_v = {v:?} }}\n"
+        );
+    }
+    text += "[[object]]\nname = \"light\"\nmaterial = \"w\"\nemission = [10, 10, 10]\n\
+             shape = { type = \"quad\", origin = [0.4, 0.4, 1e-6], edge_u = [0, 0.2, 0], \
+             edge_v = [0.2, 0, 0] }\n";
+    std::fs::write(&scene, text).unwrap();
+    let out_dir = dir.path().join("out");
+    let out = cli("bake --solver progressive --gather off")
+        .arg(&scene)
+        .output(&out_dir)
+        .run();
+    common::assert_ok(&out);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("warning: ")
+            && err.contains("gap.toml: form factors summing above one would have created")
+            && err.contains("kept out of the shots"),
+        "{err}"
+    );
+    // The manifest records it.
+    let manifest: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out_dir.join("gap.manifest.json")).unwrap()).unwrap();
+    let excess = manifest["residuals"]["energy_excess"].as_f64().unwrap();
+    assert!(excess > 0.1, "{excess}");
+}
+
+#[test]
 fn an_unwritable_output_fails_without_partial_files() {
     let dir = tempfile::tempdir().unwrap();
     let blocker = dir.path().join("taken");

@@ -107,6 +107,7 @@ impl HierarchicalSolver<'_> {
         self.residual = after - before;
         self.bookkeeping.energy.absorbed = absorbed;
         self.bookkeeping.energy.escaped = before - arrived;
+        self.bookkeeping.energy.excess = (arrived - before).max(DVec3::ZERO);
         self.bookkeeping.energy.unshot = self.residual;
         self.bookkeeping.energy.emitted = self.emitted;
         self.residual_fraction =

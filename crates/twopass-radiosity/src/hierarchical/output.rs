@@ -266,7 +266,12 @@ impl HierarchicalSolver<'_> {
                 )
             })
             .collect();
-        Residuals::from_samples(self.bookkeeping.worst_imbalance, &sums, pairs)
+        Residuals::from_samples(
+            self.bookkeeping.worst_imbalance,
+            self.bookkeeping.energy.excess_fraction(),
+            &sums,
+            pairs,
+        )
     }
 
     /// The sum of the transport coefficients that reach `leaf` (its own links and its

@@ -112,7 +112,12 @@ impl ProgressiveSolver<'_> {
                 areas[q] * patch_ff(self, q, p),
             ));
         }
-        Residuals::from_samples(self.bookkeeping.worst_imbalance, &sums, pairs)
+        Residuals::from_samples(
+            self.bookkeeping.worst_imbalance,
+            self.bookkeeping.energy.excess_fraction(),
+            &sums,
+            pairs,
+        )
     }
 
     /// The element mesh.
