@@ -46,11 +46,12 @@ pub use accel::{
 pub use camera::{Camera, CameraProblem};
 pub use error::{SceneError, Warning};
 pub use input::{
-    MAX_MTL_BYTES, MAX_OBJ_BYTES, MAX_SCENE_BYTES, ReadPolicy, printable, read_bounded,
+    MAX_GLTF_BYTES, MAX_MTL_BYTES, MAX_OBJ_BYTES, MAX_SCENE_BYTES, ReadPolicy, printable,
+    read_bounded,
 };
 pub use load::{
-    MAX_COORDINATE, MAX_EMITTED_POWER, MAX_TRIANGLES, SPHERE_TOLERANCE, load, load_toml,
-    load_toml_with, load_with,
+    GltfOrigin, GltfSource, MAX_COORDINATE, MAX_EMITTED_POWER, MAX_TRIANGLES, SMOOTH_ROUGHNESS,
+    SPHERE_TOLERANCE, load, load_toml, load_toml_with, load_with,
 };
 pub use radiance::{DiffuseRadiance, RadianceEstimate, RadianceEstimator};
 pub use scene::{Bounds, Emitter, Hit, Mesh, Object, Scene, SceneMaterial};
