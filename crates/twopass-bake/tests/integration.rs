@@ -7,5 +7,6 @@ mod common;
 mod bake;
 mod blender;
 mod lightmap;
+mod quantity;
 mod validator;
 mod vertex;

@@ -100,6 +100,7 @@ fn lightmap_glb_passes_the_khronos_validator() {
     let settings = twopass_bake::LightmapSettings {
         texel_size: Some(10.0),
         padding: 2,
+        quantity: None,
     };
     let lm = bake::bake_lightmap(
         bake::TexelSource::Solution(solution),
