@@ -4,6 +4,7 @@
 
 mod common;
 
+mod asset;
 mod bake;
 mod blender;
 mod lightmap;

@@ -60,7 +60,7 @@ fn validate(name: &str, bytes: &[u8]) -> Option<serde_json::Value> {
 
 /// Validates `bytes` (as [`validate`]) and asserts the report has no error and no warning,
 /// printing it otherwise; returns the report for further checks.
-fn assert_valid(name: &str, bytes: &[u8]) -> Option<serde_json::Value> {
+pub(crate) fn assert_valid(name: &str, bytes: &[u8]) -> Option<serde_json::Value> {
     let report = validate(name, bytes)?;
     let issues = &report["issues"];
     let errors = issues["numErrors"].as_u64().unwrap();

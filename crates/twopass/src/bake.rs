@@ -84,8 +84,10 @@ pub struct BakeArgs {
     pub exposure: Option<f32>,
     /// Also bake a lightmap: `<stem>.lightmap.glb` (the scene's own triangles with a UV atlas
     /// on TEXCOORD_1, the OBJ's own texture coordinates when they fit, else generated, and the lightmap as an embedded PNG emissive texture),
-    /// `<stem>.lightmap.exr` (HDR radiance, W/(m^2 sr)) and `<stem>.lightmap.png` (the LDR
-    /// texture, exposure-scaled sRGB).
+    /// `<stem>.lightmap.exr` (HDR, W/(m^2 sr)) and `<stem>.lightmap.png` (the LDR
+    /// texture, exposure-scaled sRGB); for a glTF scene also `<stem>.lightmapped.glb`, the
+    /// scene's own glTF with the atlas on TEXCOORD_1 and the lightmap referenced by every
+    /// baked material's `extras.lightMap`.
     #[arg(long)]
     pub lightmap: bool,
     /// What the lightmap's texels hold: `irradiance` (E / pi in W/(m^2 sr), the light a white
@@ -362,11 +364,19 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
         };
         let lm = bake::bake_lightmap(source, &scene, &settings, mapping)?;
         let seconds = started.elapsed().as_secs_f64();
-        for (ext, bytes) in [("glb", &lm.glb), ("exr", &lm.exr), ("png", &lm.png)] {
-            let path = dir.join(format!("{stem}.lightmap.{ext}"));
+        let files = [
+            ("lightmap", "glb", Some(&lm.glb)),
+            ("lightmap", "exr", Some(&lm.exr)),
+            ("lightmap", "png", Some(&lm.png)),
+            // A glTF scene's own asset back, with the lightmap on TEXCOORD_1.
+            ("lightmapped", "glb", lm.asset.as_ref()),
+        ];
+        for (kind, ext, bytes) in files {
+            let Some(bytes) = bytes else { continue };
+            let path = dir.join(format!("{stem}.{kind}.{ext}"));
             bake::write_atomic(&path, bytes)?;
             manifest.files.push(FileRecord {
-                format: format!("lightmap-{ext}"),
+                format: format!("{kind}-{ext}"),
                 path,
                 bytes: bytes.len() as u64,
                 crc32: Some(crc32fast::hash(bytes)),

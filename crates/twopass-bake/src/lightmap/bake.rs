@@ -8,6 +8,7 @@ use twopass_composite::tonemap::{quantize, srgb_encode};
 use twopass_composite::{Image, Rgb8Image};
 use twopass_scene::Scene;
 
+use super::asset::encode_asset_glb;
 use super::fill::{RegionTexels, TexelSource, fill_region};
 use super::glb::encode_lightmap_glb;
 use super::layout::{generated_layout, scene_layout};
@@ -111,6 +112,18 @@ pub fn bake_lightmap(
         twopass_composite::write::encode_png(Path::new("lightmap.png"), &ldr, Some(&description))
             .map_err(encode_err)?;
     let glb = encode_lightmap_glb(scene, &layout, &s, &png, mapping, fingerprint)?;
+    let asset = match &scene.gltf {
+        Some(src) => Some(encode_asset_glb(
+            src,
+            scene,
+            &layout,
+            &s,
+            &png,
+            mapping,
+            fingerprint,
+        )?),
+        None => None,
+    };
     Ok(Lightmap {
         width,
         height,
@@ -123,6 +136,7 @@ pub fn bake_lightmap(
         shadow_rays,
         atlas: layout.source,
         glb,
+        asset,
         exr,
         png,
     })

@@ -38,11 +38,13 @@
 //! the per-vertex bakes, so the PNG's linear value times `1 / exposure` gives `L` up to the
 //! clip.
 //!
-//! Files, one job each: `settings` (what a bake takes and gives), `layout` (the atlas),
+//! Files, one job each: `settings` (what a bake takes and gives), `asset` (a glTF scene's own
+//! document written back with the lightmap), `layout` (the atlas),
 //! `raster` (the texel centres a triangle covers), `fill` (the texels of one region), `filter`
 //! (the gathered indirect light denoised), `glb` (the `.glb` and its extras), `bake`
 //! ([`bake_lightmap`], which runs them in that order).
 
+mod asset;
 mod bake;
 mod fill;
 mod filter;

@@ -121,6 +121,9 @@ pub struct Lightmap {
     pub atlas: AtlasSource,
     /// The scene's triangles with `TEXCOORD_1` into the atlas, as a `.glb` embedding the PNG.
     pub glb: Vec<u8>,
+    /// For a glTF scene, the user's own document written back as `.glb` with the atlas on
+    /// `TEXCOORD_1` and the PNG embedded and referenced (module `asset`); `None` otherwise.
+    pub asset: Option<Vec<u8>>,
     /// The HDR lightmap as EXR bytes.
     pub exr: Vec<u8>,
     /// The LDR lightmap as PNG bytes (exposure-scaled sRGB).

@@ -8,7 +8,8 @@
 //! on repeated names), so a mesh that several nodes use (instancing) becomes one object per
 //! use, each with its own copy of the triangles in world space. Each object keeps the
 //! primitive's whole vertex list in order, so its vertex `i` is the primitive's vertex `i`
-//! ([`GltfOrigin`]). Indexed and non-indexed primitives are read; `NORMAL` gives smooth
+//! ([`GltfOrigin`]; triangles the scene drops, of zero area or repeating another exactly, are
+//! not in it). Indexed and non-indexed primitives are read; `NORMAL` gives smooth
 //! shading normals (flat shading without it); `TEXCOORD_1`, when present, is kept as the
 //! mesh's texture coordinates (the lightmap layout a bake uses if it is valid; stored v up,
 //! as an OBJ's, so `(u, 1 - v)` of glTF's). `TEXCOORD_0` is not read (textures are not
@@ -75,6 +76,9 @@ pub struct GltfOrigin {
     pub mesh: usize,
     /// Index of the primitive in the mesh's `primitives`.
     pub primitive: usize,
+    /// Whether the node's world transform mirrors (the scene's triangles are wound the other
+    /// way round than the primitive's, to keep their front side).
+    pub flips: bool,
 }
 
 /// A glTF scene's own document and data, kept with the loaded [`Scene`] so that a bake can

@@ -190,6 +190,7 @@ pub(super) fn walk(ld: &mut Loader, file: &GltfFile) -> Result<Walked, SceneErro
                 node: node.index(),
                 mesh: mesh.index(),
                 primitive: primitive.index(),
+                flips: transform.flips,
             });
         }
     }
