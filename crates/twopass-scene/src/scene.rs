@@ -233,7 +233,7 @@ pub struct Scene {
     pub bounds: Bounds,
     /// A glTF scene's own document and data (`None` for other inputs): what a bake needs to
     /// write the user's asset back.
-    pub gltf: Option<Box<crate::load::GltfSource>>,
+    pub gltf: Option<Box<crate::gltf_source::GltfSource>>,
     accel: Accel,
 }
 

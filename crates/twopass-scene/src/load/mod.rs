@@ -9,5 +9,5 @@ mod materials;
 mod objects;
 
 pub use entry::{load, load_toml, load_toml_with, load_with};
-pub use gltf::{GltfOrigin, GltfSource, SMOOTH_ROUGHNESS};
+pub use gltf::SMOOTH_ROUGHNESS;
 pub use loader::{MAX_COORDINATE, MAX_EMITTED_POWER, MAX_TRIANGLES, SPHERE_TOLERANCE};

@@ -8,7 +8,7 @@
 //! on repeated names), so a mesh that several nodes use (instancing) becomes one object per
 //! use, each with its own copy of the triangles in world space. Each object keeps the
 //! primitive's whole vertex list in order, so its vertex `i` is the primitive's vertex `i`
-//! ([`GltfOrigin`]; triangles the scene drops, of zero area or repeating another exactly, are
+//! ([`GltfOrigin`](crate::GltfOrigin); triangles the scene drops, of zero area or repeating another exactly, are
 //! not in it). Indexed and non-indexed primitives are read; `NORMAL` gives smooth
 //! shading normals (flat shading without it); `TEXCOORD_1`, when present, is kept as the
 //! mesh's texture coordinates (the lightmap layout a bake uses if it is valid; stored v up,
@@ -61,55 +61,11 @@ use std::path::Path;
 
 use super::loader::{Loader, framing_camera};
 use crate::error::{SceneError, Warning};
+use crate::gltf_source::GltfSource;
 use crate::input::{LineIndex, ReadPolicy};
 use crate::scene::Scene;
 
 pub use material::SMOOTH_ROUGHNESS;
-
-/// Where a scene object loaded from a glTF comes from: its vertex `i` is vertex `i` of this
-/// primitive, placed by this node.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct GltfOrigin {
-    /// Index of the node in the document's `nodes`.
-    pub node: usize,
-    /// Index of the mesh in the document's `meshes`.
-    pub mesh: usize,
-    /// Index of the primitive in the mesh's `primitives`.
-    pub primitive: usize,
-    /// Whether the node's world transform mirrors (the scene's triangles are wound the other
-    /// way round than the primitive's, to keep their front side).
-    pub flips: bool,
-}
-
-/// A glTF scene's own document and data, kept with the loaded [`Scene`] so that a bake can
-/// write the user's asset back with its lightmap, unchanged otherwise.
-#[derive(Clone, Default)]
-pub struct GltfSource {
-    /// The document's JSON (a `.gltf` file, or a `.glb`'s JSON chunk).
-    pub json: Vec<u8>,
-    /// Each buffer's bytes in document order (a `.glb`'s binary chunk, a data URI decoded, an
-    /// external file read).
-    pub buffers: Vec<Vec<u8>>,
-    /// Each image given by a URI (a data URI or a file): its bytes and MIME type; `None` for
-    /// an image in a buffer view, or one that could not be read (a warning said so).
-    pub images: Vec<Option<(Vec<u8>, String)>>,
-    /// Per scene object, in [`Scene::objects`] order, where it comes from.
-    pub origins: Vec<GltfOrigin>,
-}
-
-impl std::fmt::Debug for GltfSource {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("GltfSource")
-            .field("json_bytes", &self.json.len())
-            .field(
-                "buffer_bytes",
-                &self.buffers.iter().map(Vec::len).collect::<Vec<_>>(),
-            )
-            .field("images", &self.images.len())
-            .field("origins", &self.origins)
-            .finish()
-    }
-}
 
 /// Loads a glTF 2.0 file (`.gltf` or `.glb`) as a scene in metres.
 pub(super) fn load_gltf(

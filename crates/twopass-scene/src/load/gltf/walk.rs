@@ -8,10 +8,10 @@ use glam::{DMat4, DVec3, Vec2, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 use twopass_brdf::Rgb;
 
-use super::GltfOrigin;
 use super::read::{GltfFile, quoted};
 use crate::camera::Camera;
 use crate::error::{SceneError, Warning};
+use crate::gltf_source::GltfOrigin;
 use crate::load::loader::{Geometry, Loader, Part, PlacedPart};
 use crate::shape::ShapeMesh;
 use crate::transform::Transform;
