@@ -9,7 +9,8 @@
 //! (`POSITION`, `NORMAL`, `TEXCOORD_0`, `COLOR_0`, `TANGENT`, joints, weights, morph targets)
 //! copied element by element into the order of a vertex list split where the generated charts
 //! split it (a vertex per glTF vertex and chart), and a new `TEXCOORD_1` (replacing the one it
-//! had). Triangles the scene dropped (zero area, exact repeats) are left out. A mesh that
+//! had; a primitive without `TEXCOORD_0` gets the atlas there too, as glTF numbers the sets
+//! without gaps). Triangles the scene dropped (zero area, exact repeats) are left out. A mesh that
 //! several nodes use gets one copy per node after the first (the copies share nothing but
 //! their names), since each use has its own place in the atlas.
 //!
@@ -381,7 +382,13 @@ fn rewrite_primitives(
                     attributes.insert(semantic.clone(), json!(gathered(w, index, &order)?));
                 }
             }
-            attributes.insert("TEXCOORD_1".into(), json!(w.float_accessor(&uv)));
+            let atlas = w.float_accessor(&uv);
+            attributes.insert("TEXCOORD_1".into(), json!(atlas));
+            // glTF numbers texture coordinate sets from 0 without gaps: a primitive that had
+            // none shows the atlas on set 0 too.
+            attributes
+                .entry("TEXCOORD_0")
+                .or_insert_with(|| json!(atlas));
             p["attributes"] = Value::Object(attributes);
             if let Some(targets) = primitive["targets"].as_array() {
                 let mut new_targets = Vec::with_capacity(targets.len());

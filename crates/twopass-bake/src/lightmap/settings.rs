@@ -133,8 +133,8 @@ pub struct Lightmap {
 /// Where a lightmap's texture coordinates come from.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum AtlasSource {
-    /// The scene's own texture coordinates (an OBJ's `vt`): every triangle has them, they lie
-    /// in [0, 1] and no two triangles overlap.
+    /// The scene's own texture coordinates (an OBJ's `vt`, a glTF's `TEXCOORD_1`): every
+    /// triangle has them, they lie in [0, 1] and no two triangles overlap.
     Scene,
     /// Generated charts, because the scene's coordinates could not serve (the reason).
     Generated(String),
@@ -144,7 +144,9 @@ impl AtlasSource {
     /// In words, as the manifest records it.
     pub fn describe(&self) -> String {
         match self {
-            Self::Scene => "the scene's texture coordinates (OBJ vt)".to_owned(),
+            Self::Scene => {
+                "the scene's texture coordinates (an OBJ's vt, a glTF's TEXCOORD_1)".to_owned()
+            }
             Self::Generated(why) => format!("generated charts ({why})"),
         }
     }

@@ -35,8 +35,30 @@ pub(super) fn read(
     } else {
         bytes.clone()
     };
-    let gltf::Gltf { document, blob } =
-        gltf::Gltf::from_slice(&bytes).map_err(|e| err("the document", describe(&e)))?;
+    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(&bytes)
+        .map_err(|e| err("the document", describe(&e)))?;
+    // gltf-json's validation reads each POSITION accessor without checking its index first
+    // (it would panic on one past the end): checked here, then the document validated.
+    let root = document.into_json();
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let position = gltf::json::validation::Checked::Valid(gltf::Semantic::Positions);
+            if let Some(a) = primitive.attributes.get(&position)
+                && a.value() >= root.accessors.len()
+            {
+                return Err(err(
+                    &format!("mesh {m}, primitive {p}"),
+                    format!(
+                        "POSITION accessor {} does not exist (the document has {} accessors)",
+                        a.value(),
+                        root.accessors.len()
+                    ),
+                ));
+            }
+        }
+    }
+    let document =
+        gltf::Document::from_json(root).map_err(|e| err("the document", describe(&e)))?;
     drop(bytes);
     let dir = path.parent().unwrap_or(Path::new("."));
     let mut buffers = Vec::with_capacity(document.buffers().len());

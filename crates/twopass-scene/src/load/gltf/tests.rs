@@ -282,3 +282,28 @@ fn base64_decodes_rfc_4648_vectors() {
     }
     assert!(base64("Zm9v!").is_err());
 }
+
+#[test]
+fn no_corrupted_byte_makes_the_loader_panic() {
+    // Every byte of a small glb replaced by 0x00, 0xff and itself + 1 in turn (lengths,
+    // offsets, counts, indices, floats and JSON text): each load returns, a scene or an error.
+    let dir = tempfile::tempdir().unwrap();
+    let bytes = hierarchy();
+    let path = dir.path().join("c.glb");
+    let (mut loaded, mut refused) = (0, 0);
+    for i in 0..bytes.len() {
+        for value in [0x00, 0xff, bytes[i].wrapping_add(1)] {
+            let mut b = bytes.clone();
+            b[i] = value;
+            std::fs::write(&path, &b).unwrap();
+            match load(&path) {
+                Ok(_) => loaded += 1,
+                Err(_) => refused += 1,
+            }
+        }
+    }
+    assert!(
+        loaded > 0 && refused > 0,
+        "{loaded} loaded, {refused} refused"
+    );
+}

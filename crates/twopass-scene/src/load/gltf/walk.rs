@@ -262,21 +262,22 @@ fn read_primitive(
     let position = primitive
         .get(&gltf::Semantic::Positions)
         .ok_or_else(|| ld.gltf_err(at, "has no POSITION attribute".into()))?;
-    let accessors = [
-        Some(("POSITION", position.clone())),
-        primitive.indices().map(|a| ("indices", a)),
-        primitive
-            .get(&gltf::Semantic::Normals)
-            .map(|a| ("NORMAL", a)),
-        primitive
-            .get(&gltf::Semantic::TexCoords(1))
-            .map(|a| ("TEXCOORD_1", a)),
-    ];
-    if let Some((what, a)) = accessors
-        .iter()
-        .flatten()
-        .find(|(_, a)| a.sparse().is_some())
-    {
+    // Every accessor the primitive has (attributes and morph targets), since a bake writes
+    // them all back.
+    let mut accessors: Vec<(String, gltf::Accessor<'_>)> = primitive
+        .attributes()
+        .map(|(semantic, a)| (semantic.to_string(), a))
+        .collect();
+    accessors.extend(primitive.indices().map(|a| ("indices".to_owned(), a)));
+    for target in primitive.morph_targets() {
+        for a in [target.positions(), target.normals(), target.tangents()]
+            .into_iter()
+            .flatten()
+        {
+            accessors.push(("morph target".to_owned(), a));
+        }
+    }
+    if let Some((what, a)) = accessors.iter().find(|(_, a)| a.sparse().is_some()) {
         ld.gltf_warn(
             at,
             format!(
