@@ -86,7 +86,14 @@ fn hierarchy_instances_camera_and_emission_load_in_world_space() {
     let dir = tempfile::tempdir().unwrap();
     let path = write(dir.path(), "h.glb", &hierarchy());
     let (scene, warnings) = load(&path).unwrap();
-    assert!(warnings.is_empty(), "{warnings:?}");
+    let text: Vec<String> = warnings.iter().map(|w| w.to_string()).collect();
+    assert_eq!(
+        text,
+        [format!(
+            "{}: mesh 0 `Tri`: is shown by 2 nodes: loaded as one object per node, each with its own copy of the triangles in world space (instances are not shared in memory)",
+            path.display()
+        )]
+    );
     let names: Vec<&str> = scene.objects.iter().map(|o| o.name.as_str()).collect();
     assert_eq!(names, ["A", "B"]);
     // A: p -> T + R_y(90) (S (p + (0, 0, 5))), with R_y(90) (x, y, z) = (z, y, -x), worked by
@@ -305,5 +312,27 @@ fn no_corrupted_byte_makes_the_loader_panic() {
     assert!(
         loaded > 0 && refused > 0,
         "{loaded} loaded, {refused} refused"
+    );
+}
+
+#[test]
+fn a_confined_load_refuses_a_buffer_outside_the_scene_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let inner = dir.path().join("scene");
+    std::fs::create_dir(&inner).unwrap();
+    let mut w = GltfWriter::new();
+    let grey = w.material("Grey", MaterialSpec::default());
+    let mesh = w.mesh("Tri", &TRIANGLE, None, None, None, &[0, 1, 2], Some(grey));
+    let n = w.node("Only", Some(mesh), None, Trs::default(), vec![]);
+    let path = inner.join("s.gltf");
+    // The buffer is written beside the scene's folder and named by `../`.
+    w.write_gltf(vec![n], &path, "../outside.bin");
+    assert!(load(&path).is_ok());
+    let policy = crate::ReadPolicy::confined(&path).unwrap();
+    let text = crate::load_with(&path, &policy).unwrap_err().to_string();
+    assert!(
+        text.starts_with(&format!("{}: buffer 0: ", path.display()))
+            && text.contains("lies outside the scene's folder"),
+        "{text}"
     );
 }

@@ -74,6 +74,8 @@ pub(super) fn walk(ld: &mut Loader, file: &GltfFile) -> Result<Walked, SceneErro
         origins: Vec::new(),
         camera: None,
     };
+    // How many nodes of the scene show each mesh, for the instancing note.
+    let mut uses = vec![0usize; doc.meshes().len()];
     let mut seen = vec![false; doc.nodes().len()];
     let mut stack: Vec<(gltf::Node<'_>, DMat4)> = scene
         .nodes()
@@ -124,6 +126,7 @@ pub(super) fn walk(ld: &mut Loader, file: &GltfFile) -> Result<Walked, SceneErro
         let Some(mesh) = node.mesh() else {
             continue;
         };
+        uses[mesh.index()] += 1;
         let transform =
             Transform::from_matrix(world).map_err(|p| ld.gltf_err(&at, format!("world {p}")))?;
         let several = mesh.primitives().len() > 1;
@@ -193,6 +196,15 @@ pub(super) fn walk(ld: &mut Loader, file: &GltfFile) -> Result<Walked, SceneErro
                 flips: transform.flips,
             });
         }
+    }
+    for mesh in doc.meshes().filter(|m| uses[m.index()] > 1) {
+        ld.gltf_warn(
+            &format!("mesh {}{}", mesh.index(), quoted(mesh.name())),
+            format!(
+                "is shown by {} nodes: loaded as one object per node, each with its own copy of the triangles in world space (instances are not shared in memory)",
+                uses[mesh.index()]
+            ),
+        );
     }
     Ok(walked)
 }
