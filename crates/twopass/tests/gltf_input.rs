@@ -295,3 +295,42 @@ fn a_blender_export_bakes_and_blender_imports_the_asset_back_with_its_lightmap()
         "{r}"
     );
 }
+
+#[test]
+fn an_irradiance_lightmap_renders_as_the_radiance_lightmap() {
+    // Read back for `render --bake`, an irradiance lightmap is multiplied by each surface's
+    // albedo and given its emission: the image of the radiance lightmap of the same solve.
+    let tmp = tempfile::tempdir().unwrap();
+    let glb = tmp.path().join("cornell.glb");
+    cornell_glb(&glb, None);
+    let mut images = Vec::new();
+    for quantity in ["irradiance", "radiance"] {
+        let dir = tmp.path().join(quantity);
+        assert_ok(
+            &cli("bake")
+                .arg(&glb)
+                .words("--format bake --lightmap --texel-size 0.005 --gather off --quiet")
+                .words("--lightmap-quantity")
+                .arg(quantity)
+                .output(&dir)
+                .run(),
+        );
+        let out = dir.join("render.exr");
+        assert_ok(
+            &cli("render")
+                .arg(&glb)
+                .words("--method radiosity --width 64 --height 64 --spp 4 --quiet --bake")
+                .arg(dir.join("cornell.lightmap.glb"))
+                .output(&out)
+                .run(),
+        );
+        images.push(read_exr(&out).unwrap());
+    }
+    let m = compare(&images[0], &images[1], &ToneMap::default()).unwrap();
+    eprintln!(
+        "irradiance vs radiance lightmap renders: relative RMSE {:.2e}",
+        m.rel_rmse
+    );
+    assert!(m.rel_rmse < 1e-4, "relative RMSE {:.2e}", m.rel_rmse);
+    assert!(images[1].pixels().iter().any(|p| p.min_element() > 0.0));
+}
