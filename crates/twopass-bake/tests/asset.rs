@@ -58,6 +58,12 @@ fn square(
 /// non-overlapping `TEXCOORD_1` (the tiles' two uses then overlap, so only without the
 /// instanced tile).
 fn room(own_uv1: bool) -> Vec<u8> {
+    let (w, roots) = room_document(own_uv1);
+    w.glb(roots)
+}
+
+/// The document of [`room`] and its root nodes.
+fn room_document(own_uv1: bool) -> (GltfWriter, Vec<gltf_json::Index<gltf_json::Node>>) {
     let mut w = GltfWriter::new();
     let grey = w.material("Grey", MaterialSpec::default());
     let red = w.material(
@@ -151,7 +157,7 @@ fn room(own_uv1: bool) -> Vec<u8> {
         );
         roots.extend([a, parent]);
     }
-    w.glb(roots)
+    (w, roots)
 }
 
 fn baked(bytes: &[u8], dir: &Path) -> (Scene, Lightmap) {
@@ -330,4 +336,95 @@ fn a_valid_texcoord_1_of_the_users_is_the_atlas_and_the_geometry_is_kept_byte_fo
             assert_eq!(uv1(&p, b0), uv1(&q, b1));
         }
     }
+}
+
+#[test]
+fn a_gltf_with_external_buffer_and_image_comes_back_as_one_glb() {
+    use gltf_json as json;
+    let dir = tempfile::tempdir().unwrap();
+    let (mut w, roots) = room_document(false);
+    // A 2 x 2 PNG beside the document, as the floor material's base colour texture.
+    let mut png = Vec::new();
+    {
+        let mut e = png::Encoder::new(&mut png, 2, 2);
+        e.set_color(png::ColorType::Rgb);
+        e.set_depth(png::BitDepth::Eight);
+        let mut writer = e.write_header().unwrap();
+        writer
+            .write_image_data(&[255, 0, 0, 0, 255, 0, 0, 0, 255, 255, 255, 255])
+            .unwrap();
+    }
+    std::fs::write(dir.path().join("checker.png"), &png).unwrap();
+    let image = w.root.push(json::Image {
+        buffer_view: None,
+        mime_type: None,
+        name: Some("checker".into()),
+        uri: Some("checker.png".into()),
+        extensions: None,
+        extras: None,
+    });
+    let texture = w.root.push(json::Texture {
+        name: None,
+        sampler: None,
+        source: image,
+        extensions: None,
+        extras: None,
+    });
+    w.root.materials[0]
+        .pbr_metallic_roughness
+        .base_color_texture = Some(json::texture::Info {
+        index: texture,
+        tex_coord: 0,
+        extensions: None,
+        extras: None,
+    });
+    let path = dir.path().join("room.gltf");
+    w.write_gltf(roots, &path, "room.bin");
+    let (scene, warnings) = twopass_scene::load(&path).unwrap();
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.to_string().contains("baseColorTexture not used")),
+        "{warnings:?}"
+    );
+    let solution = solve(&scene, 0.1);
+    let settings = LightmapSettings {
+        texel_size: Some(0.02),
+        ..LightmapSettings::default()
+    };
+    let lm = bake_lightmap(
+        TexelSource::Solution(&solution),
+        &scene,
+        &settings,
+        ColorMapping { exposure: 1.0 },
+    )
+    .unwrap();
+    let asset = lm.asset.unwrap();
+    assert_valid("room-gltf.lightmapped.glb", &asset);
+    // One buffer, the binary chunk; the user's image embedded byte for byte.
+    let after = gltf::Gltf::from_slice(&asset).unwrap();
+    assert_eq!(after.buffers().count(), 1);
+    let blob = after.blob.as_deref().unwrap();
+    let checker = after
+        .images()
+        .find(|i| i.name() == Some("checker"))
+        .unwrap();
+    match checker.source() {
+        gltf::image::Source::View { view, mime_type } => {
+            assert_eq!(mime_type, "image/png");
+            assert_eq!(
+                &blob[view.offset()..view.offset() + view.length()],
+                png.as_slice()
+            );
+        }
+        other => panic!("{other:?}"),
+    }
+    let floor = after.nodes().find(|n| n.name() == Some("Floor")).unwrap();
+    let p = floor.mesh().unwrap().primitives().next().unwrap();
+    let info = p
+        .material()
+        .pbr_metallic_roughness()
+        .base_color_texture()
+        .unwrap();
+    assert_eq!(info.texture().source().name(), Some("checker"));
 }
