@@ -27,6 +27,21 @@ pub(super) fn read(
         at: at.to_owned(),
         problem,
     };
+    if bytes.starts_with(b"glTF") {
+        // The gltf crate subtracts the header from the declared length unchecked.
+        let declared = bytes
+            .get(8..12)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+        if declared.is_none_or(|n| n < 12) {
+            return Err(err(
+                "the document",
+                format!(
+                    "not a valid glTF binary: its header declares {} bytes, fewer than the 12-byte header itself",
+                    declared.unwrap_or(0)
+                ),
+            ));
+        }
+    }
     let json = if bytes.starts_with(b"glTF") {
         gltf::Glb::from_slice(&bytes)
             .map_err(|e| err("the document", describe(&e)))?
