@@ -336,3 +336,89 @@ fn a_confined_load_refuses_a_buffer_outside_the_scene_folder() {
         "{text}"
     );
 }
+
+#[test]
+fn transmission_with_ior_is_a_dielectric_and_a_smooth_metal_a_conductor() {
+    use gltf::json;
+    let dir = tempfile::tempdir().unwrap();
+    let mut w = GltfWriter::new();
+    let glass = w.material(
+        "Water",
+        MaterialSpec {
+            base: [1.0; 3],
+            roughness: 0.0,
+            ..MaterialSpec::default()
+        },
+    );
+    let gold = w.material(
+        "Gold",
+        MaterialSpec {
+            base: [1.0, 0.78, 0.34],
+            metallic: 1.0,
+            roughness: 0.0,
+            ..MaterialSpec::default()
+        },
+    );
+    #[allow(clippy::needless_update)]
+    let extensions = json::extensions::material::Material {
+        transmission: Some(json::extensions::material::Transmission {
+            transmission_factor: json::extensions::material::TransmissionFactor(1.0),
+            transmission_texture: None,
+            extras: None,
+        }),
+        ior: Some(json::extensions::material::Ior {
+            ior: json::extensions::material::IndexOfRefraction(1.33),
+            extras: None,
+        }),
+        ..Default::default()
+    };
+    w.root.materials[glass.value()].extensions = Some(extensions);
+    w.root.extensions_used.extend([
+        "KHR_materials_transmission".to_owned(),
+        "KHR_materials_ior".to_owned(),
+    ]);
+    let a = w.mesh("A", &TRIANGLE, None, None, None, &[0, 1, 2], Some(glass));
+    let b = w.mesh("B", &TRIANGLE, None, None, None, &[0, 1, 2], Some(gold));
+    let na = w.node("Glass", Some(a), None, Trs::default(), vec![]);
+    let nb = w.node(
+        "Metal",
+        Some(b),
+        None,
+        Trs {
+            t: [2.0, 0.0, 0.0],
+            ..Trs::default()
+        },
+        vec![],
+    );
+    let path = write(dir.path(), "m.glb", &w.glb(vec![na, nb]));
+    let (scene, warnings) = load(&path).unwrap();
+    // A clear, smooth, fully transmitting material: nothing lost, no warning of it; the gold's
+    // red channel of 1 is clamped, as said.
+    let text: Vec<String> = warnings.iter().map(|w| w.to_string()).collect();
+    let p = path.display();
+    assert_eq!(
+        text,
+        [
+            format!(
+                "{p}: material 1 `Gold`: baseColorFactor [1.0, 0.78, 0.34] clamped to [0.999, 0.78, 0.34] (a reflectance must be below 1)"
+            ),
+            format!("{p}: nothing in the scene emits light: every render will be black"),
+        ]
+    );
+    match scene.materials[0].material.lobe() {
+        Some(twopass_brdf::Lobe::Dielectric { ior }) => assert_eq!(*ior, 1.33),
+        other => panic!("{other:?}"),
+    }
+    // The gold: a smooth conductor whose normal-incidence reflectance is the base colour
+    // (clamped to 0.999 where it is 1).
+    match scene.materials[1].material.lobe() {
+        Some(twopass_brdf::Lobe::Conductor { ior }) => {
+            for (c, f0) in [0.999f32, 0.78, 0.34].into_iter().enumerate() {
+                let r =
+                    twopass_brdf::fresnel::complex(1.0, ior.n.to_array()[c], ior.k.to_array()[c]);
+                assert!((r - f0).abs() < 1e-4, "channel {c}: {r} vs {f0}");
+            }
+        }
+        other => panic!("{other:?}"),
+    }
+}
