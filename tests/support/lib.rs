@@ -4,6 +4,8 @@
 
 use std::path::Path;
 
+pub mod gltf;
+
 use exr::meta::attribute::{AttributeValue, Text};
 use exr::meta::header::LayerAttributes;
 

@@ -364,27 +364,38 @@ impl GlbBuilder {
             ),
             ..Default::default()
         };
-        let mut json_bytes = self.root.to_vec().map_err(|e| encode_err(e.to_string()))?;
-        while !json_bytes.len().is_multiple_of(4) {
-            json_bytes.push(b' ');
-        }
-        let total = 12 + 8 + json_bytes.len() + if bin.is_empty() { 0 } else { 8 + bin.len() };
-        let total32 = u32::try_from(total)
-            .map_err(|_| encode_err(format!("{total} bytes exceed the 4 GiB limit of .glb")))?;
-        let mut bytes = Vec::with_capacity(total);
-        bytes.extend_from_slice(b"glTF");
-        bytes.extend_from_slice(&2u32.to_le_bytes());
-        bytes.extend_from_slice(&total32.to_le_bytes());
-        bytes.extend_from_slice(&(json_bytes.len() as u32).to_le_bytes());
-        bytes.extend_from_slice(b"JSON");
-        bytes.extend_from_slice(&json_bytes);
-        if !bin.is_empty() {
-            bytes.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-            bytes.extend_from_slice(b"BIN\0");
-            bytes.extend_from_slice(&bin);
-        }
-        Ok(bytes)
+        let json_bytes = self.root.to_vec().map_err(|e| encode_err(e.to_string()))?;
+        glb_bytes(json_bytes, bin)
     }
+}
+
+/// A `.glb` of `json` and `bin`: the 12-byte header, the JSON chunk padded with spaces and,
+/// unless `bin` is empty, the binary chunk padded with zeros (4-byte aligned, as glTF wants).
+pub(crate) fn glb_bytes(mut json_bytes: Vec<u8>, mut bin: Vec<u8>) -> Result<Vec<u8>, BakeError> {
+    while !json_bytes.len().is_multiple_of(4) {
+        json_bytes.push(b' ');
+    }
+    while !bin.len().is_multiple_of(4) {
+        bin.push(0);
+    }
+    let total = 12 + 8 + json_bytes.len() + if bin.is_empty() { 0 } else { 8 + bin.len() };
+    let total32 = u32::try_from(total).map_err(|_| BakeError::Encode {
+        path: PathBuf::from("glb"),
+        message: format!("{total} bytes exceed the 4 GiB limit of .glb"),
+    })?;
+    let mut bytes = Vec::with_capacity(total);
+    bytes.extend_from_slice(b"glTF");
+    bytes.extend_from_slice(&2u32.to_le_bytes());
+    bytes.extend_from_slice(&total32.to_le_bytes());
+    bytes.extend_from_slice(&(json_bytes.len() as u32).to_le_bytes());
+    bytes.extend_from_slice(b"JSON");
+    bytes.extend_from_slice(&json_bytes);
+    if !bin.is_empty() {
+        bytes.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+        bytes.extend_from_slice(b"BIN\0");
+        bytes.extend_from_slice(&bin);
+    }
+    Ok(bytes)
 }
 
 /// The unlit material of the per-vertex bakes: white base colour times `COLOR_0`, shown as it

@@ -84,7 +84,8 @@ pub use format::{BAKE_FORMAT_VERSION, MAX_BAKE_BYTES, decode_bake, encode_bake, 
 pub use gathered::{ELEMENT_KEYS, gathered_solution};
 pub use gltf::{Glb, HDR_ATTRIBUTES, encode_glb};
 pub use lightmap::{
-    AtlasSource, CameraRecord, Lightmap, LightmapSettings, TexelSource, bake_lightmap,
+    AtlasSource, CameraRecord, Lightmap, LightmapQuantity, LightmapSettings, TexelSource,
+    bake_lightmap,
 };
 pub use lightmap_read::{LightmapRadiance, lightmap_exr_path, read_lightmap_glb};
 pub use manifest::{

@@ -32,6 +32,10 @@ pub struct LightmapRadiance {
     image: Image,
     /// The EXR the texels came from.
     exr: PathBuf,
+    /// For an irradiance lightmap (texels E / pi), each scene triangle's diffuse albedo and
+    /// emitted radiance, so that the radiance is albedo x texel + emission; `None` for a
+    /// radiance lightmap.
+    reflect: Option<Vec<(Rgb, Rgb)>>,
 }
 
 impl LightmapRadiance {
@@ -64,7 +68,8 @@ impl LightmapRadiance {
 }
 
 impl DiffuseRadiance for LightmapRadiance {
-    /// The lightmap bilinearly sampled at the point's `TEXCOORD_1`, W/(m^2 sr).
+    /// The lightmap bilinearly sampled at the point's `TEXCOORD_1`, W/(m^2 sr) (an irradiance
+    /// lightmap's E / pi times the albedo, plus the emission).
     fn radiance(&self, triangle: u32, barycentric: [f32; 3]) -> Rgb {
         let Some(c) = self.corners.get(triangle as usize) else {
             return Rgb::ZERO;
@@ -73,7 +78,11 @@ impl DiffuseRadiance for LightmapRadiance {
         if !p.is_finite() {
             return Rgb::ZERO;
         }
-        self.sample(p)
+        let texel = self.sample(p);
+        match self.reflect.as_ref().and_then(|r| r.get(triangle as usize)) {
+            Some(&(albedo, emitted)) => albedo * texel + emitted,
+            None => texel,
+        }
     }
 
     /// Zero: a lightmap holds the total radiance only, not its indirect part, so renderers that
@@ -249,7 +258,7 @@ pub fn read_lightmap_glb(glb: &Path, scene: &Scene) -> Result<LightmapRadiance, 
             ),
         ));
     }
-    let recorded = glb_fingerprint(&gltf);
+    let recorded = glb_record(&gltf, "exr_fingerprint");
     let found = header.text.get(LIGHTMAP_FINGERPRINT).cloned();
     if recorded != found {
         return Err(invalid(
@@ -290,21 +299,29 @@ pub fn read_lightmap_glb(glb: &Path, scene: &Scene) -> Result<LightmapRadiance, 
     image
         .check_finite("lightmap")
         .map_err(|e| invalid(&exr, e.to_string()))?;
+    let reflect = (glb_record(&gltf, "quantity").as_deref() == Some("irradiance")).then(|| {
+        (0..m.triangles.len() as u32)
+            .map(|t| {
+                let o = &scene.objects[m.triangle_object[t as usize] as usize];
+                (scene.material_of(t).diffuse_albedo(), o.emission)
+            })
+            .collect()
+    });
     Ok(LightmapRadiance {
         corners,
         image,
         exr,
+        reflect,
     })
 }
 
-/// The fingerprint of its EXR a lightmap `.glb` records (`asset.extras.twopass.exr_fingerprint`),
-/// if any (bakes before it was recorded have none).
-fn glb_fingerprint(gltf: &::gltf::Gltf) -> Option<String> {
+/// The text a lightmap `.glb` records under `asset.extras.twopass.<key>`, if any: `exr_fingerprint`
+/// (its EXR's fingerprint; bakes before it was recorded have none) or `quantity` (`radiance` or
+/// `irradiance`; bakes before it was recorded hold radiance).
+fn glb_record(gltf: &::gltf::Gltf, key: &str) -> Option<String> {
     let raw = gltf.document.as_json().asset.extras.as_ref()?;
     let value: serde_json::Value = serde_json::from_str(raw.get()).ok()?;
-    value["twopass"]["exr_fingerprint"]
-        .as_str()
-        .map(str::to_owned)
+    value["twopass"][key].as_str().map(str::to_owned)
 }
 
 /// Width and height from a PNG's header (`IHDR`, the first chunk), or `None`.

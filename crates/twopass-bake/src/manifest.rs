@@ -248,13 +248,22 @@ pub struct LightmapRecord {
     pub atlas: String,
     /// Texels a triangle touches (conservative rasterization), each lit at its own point.
     pub covered_texels: usize,
-    /// How the PNG encodes radiance.
+    /// What the texels hold: `radiance` (outgoing, W/(m^2 sr), albedo and emission included)
+    /// or `irradiance` (E / pi, W/(m^2 sr), to be multiplied by the albedo);
+    /// [`LightmapQuantity`](crate::LightmapQuantity). Older manifests, without it, hold radiance.
+    #[serde(default = "radiance")]
+    pub quantity: String,
+    /// How the PNG encodes the texels.
     pub png: String,
     /// Time to lay out, fill and encode the lightmap, seconds.
     pub seconds: f64,
     /// The final gather that filled the texels, or `None` when they show the solution.
     #[serde(default)]
     pub gather: Option<GatherRecord>,
+}
+
+fn radiance() -> String {
+    "radiance".to_owned()
 }
 
 /// The settings and cost of a final gather, as the manifest records them.

@@ -4,8 +4,10 @@
 
 mod common;
 
+mod asset;
 mod bake;
 mod blender;
 mod lightmap;
+mod quantity;
 mod validator;
 mod vertex;

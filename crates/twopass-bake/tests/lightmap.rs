@@ -22,6 +22,7 @@ fn baked() -> &'static (Scene, Solution, Lightmap) {
         let settings = LightmapSettings {
             texel_size: Some(TEXEL),
             padding: 2,
+            quantity: None,
         };
         let lm = bake_lightmap(
             TexelSource::Solution(&solution),
@@ -292,6 +293,7 @@ fn bake_obj(scene: &Scene) -> Lightmap {
     let settings = LightmapSettings {
         texel_size: Some(0.01),
         padding: 2,
+        quantity: None,
     };
     bake_lightmap(
         TexelSource::Solution(&solution),
@@ -357,6 +359,7 @@ fn curved_surfaces_unwrap_into_few_charts_that_carry_their_power() {
     let settings = LightmapSettings {
         texel_size: Some(texel),
         padding: 2,
+        quantity: None,
     };
     let lm = bake_lightmap(
         TexelSource::Solution(&solution),
@@ -420,6 +423,7 @@ fn a_face_thinner_than_a_texel_is_lit_along_its_whole_length() {
     let settings = LightmapSettings {
         texel_size: Some(0.01),
         padding: 2,
+        quantity: None,
     };
     let lm = bake_lightmap(
         TexelSource::Solution(&solution),

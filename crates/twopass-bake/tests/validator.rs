@@ -60,7 +60,7 @@ fn validate(name: &str, bytes: &[u8]) -> Option<serde_json::Value> {
 
 /// Validates `bytes` (as [`validate`]) and asserts the report has no error and no warning,
 /// printing it otherwise; returns the report for further checks.
-fn assert_valid(name: &str, bytes: &[u8]) -> Option<serde_json::Value> {
+pub(crate) fn assert_valid(name: &str, bytes: &[u8]) -> Option<serde_json::Value> {
     let report = validate(name, bytes)?;
     let issues = &report["issues"];
     let errors = issues["numErrors"].as_u64().unwrap();
@@ -100,6 +100,7 @@ fn lightmap_glb_passes_the_khronos_validator() {
     let settings = twopass_bake::LightmapSettings {
         texel_size: Some(10.0),
         padding: 2,
+        quantity: None,
     };
     let lm = bake::bake_lightmap(
         bake::TexelSource::Solution(solution),

@@ -20,8 +20,8 @@ pub enum SceneError {
         /// The operating system's error.
         source: std::io::Error,
     },
-    /// The file is neither a `.toml` scene nor an `.obj` mesh.
-    #[error("{}: not a scene: expected a .toml scene file or an .obj mesh", path.display())]
+    /// The file is neither a `.toml` scene, an `.obj` mesh nor a glTF (`.gltf`, `.glb`).
+    #[error("{}: not a scene: expected a .toml scene file, an .obj mesh or a glTF 2.0 file (.gltf, .glb)", path.display())]
     UnsupportedFormat {
         /// The file.
         path: PathBuf,
@@ -231,6 +231,20 @@ pub enum SceneError {
         /// Which value and the range it must lie in.
         problem: String,
     },
+    /// A glTF file that cannot be read as a scene: a malformed document, a buffer that is
+    /// missing or too short, an accessor out of its buffer, an index out of range, a NaN
+    /// position. `at` locates it in the document (`node 2 \`Chair\`, mesh 1 \`Seat\`,
+    /// primitive 0`, `buffer 0`, `the document`).
+    #[error("{}: {at}: {problem}", path.display())]
+    Gltf {
+        /// The glTF file.
+        path: PathBuf,
+        /// Where in the document: the node, mesh and primitive (index and name), the buffer,
+        /// accessor or camera.
+        at: String,
+        /// What is wrong.
+        problem: String,
+    },
     /// An error in a file an object of the scene refers to (its OBJ mesh or MTL library),
     /// located at that object.
     #[error("{}:{line}: object `{object}`: {source}", path.display())]
@@ -331,6 +345,16 @@ pub enum Warning {
         /// The scene file.
         path: PathBuf,
     },
+    /// Part of a glTF that twopass does not model (a texture, a lamp, a skin, a primitive of
+    /// points or lines, ...), and what was done instead.
+    Gltf {
+        /// The glTF file.
+        path: PathBuf,
+        /// Where in the document (`material 3 \`Wood\``, `node 5 \`Lamp\``, ...).
+        at: String,
+        /// What is not modelled and what was done instead.
+        problem: String,
+    },
 }
 
 impl fmt::Display for Warning {
@@ -399,6 +423,7 @@ impl fmt::Display for Warning {
                 "{}: film aspect {film:.3} differs from image aspect {image:.3}; the film height sets the field of view",
                 path.display()
             ),
+            Self::Gltf { path, at, problem } => write!(f, "{}: {at}: {problem}", path.display()),
             Self::NoEmitters { path } => write!(
                 f,
                 "{}: nothing in the scene emits light: every render will be black",

@@ -16,6 +16,9 @@ pub const MAX_SCENE_BYTES: u64 = 64 << 20;
 pub const MAX_OBJ_BYTES: u64 = 1 << 30;
 /// Largest MTL material library read, bytes (16 MiB).
 pub const MAX_MTL_BYTES: u64 = 16 << 20;
+/// Largest glTF file (`.gltf` JSON or `.glb`) and largest external glTF buffer or image read,
+/// bytes (1 GiB each, as an OBJ).
+pub const MAX_GLTF_BYTES: u64 = 1 << 30;
 
 /// Which files a scene may make the loader read.
 ///
@@ -101,6 +104,9 @@ pub(crate) enum InputKind {
     Scene,
     Obj,
     Mtl,
+    Gltf,
+    GltfBuffer,
+    GltfImage,
 }
 
 impl InputKind {
@@ -109,6 +115,7 @@ impl InputKind {
             Self::Scene => MAX_SCENE_BYTES,
             Self::Obj => MAX_OBJ_BYTES,
             Self::Mtl => MAX_MTL_BYTES,
+            Self::Gltf | Self::GltfBuffer | Self::GltfImage => MAX_GLTF_BYTES,
         }
     }
 
@@ -117,6 +124,9 @@ impl InputKind {
             Self::Scene => "scene file",
             Self::Obj => "OBJ mesh",
             Self::Mtl => "MTL library",
+            Self::Gltf => "glTF file",
+            Self::GltfBuffer => "glTF buffer",
+            Self::GltfImage => "glTF image",
         }
     }
 }
@@ -128,6 +138,24 @@ pub(crate) fn read_text(
     kind: InputKind,
     policy: &ReadPolicy,
 ) -> Result<String, SceneError> {
+    let bytes = read_bytes(path, kind, policy)?;
+    String::from_utf8(bytes).map_err(|e| {
+        let valid = &e.as_bytes()[..e.utf8_error().valid_up_to()];
+        let line = valid.iter().filter(|&&b| b == b'\n').count() + 1;
+        SceneError::Input {
+            path: path.to_owned(),
+            problem: format!("line {line}: not UTF-8 text"),
+        }
+    })
+}
+
+/// Reads `path` whole if it is a regular file no larger than its kind's limit and, under a
+/// confining policy, inside the allowed folder.
+pub(crate) fn read_bytes(
+    path: &Path,
+    kind: InputKind,
+    policy: &ReadPolicy,
+) -> Result<Vec<u8>, SceneError> {
     let io = |source| SceneError::Io {
         path: path.to_owned(),
         source,
@@ -146,17 +174,12 @@ pub(crate) fn read_text(
             )));
         }
     }
-    let bytes = read_bounded(path, kind.limit()).map_err(|e| {
+    read_bounded(path, kind.limit()).map_err(|e| {
         if e.kind() == std::io::ErrorKind::InvalidInput {
             refuse(format!("{}: {e}", kind.name()))
         } else {
             io(e)
         }
-    })?;
-    String::from_utf8(bytes).map_err(|e| {
-        let valid = &e.as_bytes()[..e.utf8_error().valid_up_to()];
-        let line = valid.iter().filter(|&&b| b == b'\n').count() + 1;
-        refuse(format!("line {line}: not UTF-8 text"))
     })
 }
 

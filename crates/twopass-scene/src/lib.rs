@@ -28,6 +28,7 @@ mod accel;
 mod camera;
 pub mod description;
 mod error;
+mod gltf_source;
 mod input;
 mod load;
 mod obj;
@@ -45,12 +46,14 @@ pub use accel::{
 };
 pub use camera::{Camera, CameraProblem};
 pub use error::{SceneError, Warning};
+pub use gltf_source::{GltfOrigin, GltfSource};
 pub use input::{
-    MAX_MTL_BYTES, MAX_OBJ_BYTES, MAX_SCENE_BYTES, ReadPolicy, printable, read_bounded,
+    MAX_GLTF_BYTES, MAX_MTL_BYTES, MAX_OBJ_BYTES, MAX_SCENE_BYTES, ReadPolicy, printable,
+    read_bounded,
 };
 pub use load::{
-    MAX_COORDINATE, MAX_EMITTED_POWER, MAX_TRIANGLES, SPHERE_TOLERANCE, load, load_toml,
-    load_toml_with, load_with,
+    MAX_COORDINATE, MAX_EMITTED_POWER, MAX_TRIANGLES, SMOOTH_ROUGHNESS, SPHERE_TOLERANCE, load,
+    load_toml, load_toml_with, load_with,
 };
 pub use radiance::{DiffuseRadiance, RadianceEstimate, RadianceEstimator};
 pub use scene::{Bounds, Emitter, Hit, Mesh, Object, Scene, SceneMaterial};

@@ -231,6 +231,9 @@ pub struct Scene {
     pub camera: Camera,
     /// Bounds of all geometry.
     pub bounds: Bounds,
+    /// A glTF scene's own document and data (`None` for other inputs): what a bake needs to
+    /// write the user's asset back.
+    pub gltf: Option<Box<crate::gltf_source::GltfSource>>,
     accel: Accel,
 }
 
@@ -279,6 +282,7 @@ impl Scene {
             emitters,
             camera,
             bounds,
+            gltf: None,
             accel,
         }
     }

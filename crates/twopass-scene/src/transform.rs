@@ -1,6 +1,6 @@
 //! Object-to-world transforms: scale, then rotations in order, then translation.
 
-use glam::{Mat3, Mat4, Quat, Vec3};
+use glam::{DMat3, DMat4, Mat3, Mat4, Quat, Vec3};
 
 /// An affine object-to-world transform with its normal matrix.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -54,6 +54,43 @@ impl Transform {
         Ok(Self {
             matrix,
             normal: Mat3::from_quat(rot) * Mat3::from_diagonal(inverse_scale),
+            flips: det < 0.0,
+        })
+    }
+
+    /// Any affine transform given as its matrix (a glTF node's world matrix), in f64 so that
+    /// a product of a deep hierarchy keeps its precision until this one rounding. Fails with
+    /// a description when a value is not finite, the matrix is not affine (its last row is not
+    /// 0, 0, 0, 1) or its linear part is singular (a zero scale).
+    pub fn from_matrix(m: DMat4) -> Result<Self, String> {
+        if !m.is_finite() {
+            return Err("transform has a NaN or infinite entry".into());
+        }
+        if m.row(3) != glam::DVec4::W {
+            return Err(format!(
+                "transform is not affine (its last row is {} instead of 0, 0, 0, 1)",
+                m.row(3)
+            ));
+        }
+        let linear = DMat3::from_mat4(m);
+        let det = linear.determinant();
+        let scale = [linear.x_axis, linear.y_axis, linear.z_axis].map(|a| a.length());
+        let largest = scale.iter().fold(0.0_f64, |a, &b| a.max(b));
+        // Singular, or so flat that its inverse carries no precision in f32.
+        if det == 0.0 || det.abs() <= largest.powi(3) * 1e-12 {
+            return Err(format!(
+                "transform's linear part is singular (a zero scale; determinant {det:e})"
+            ));
+        }
+        let normal = linear.inverse().transpose();
+        let matrix = m.as_mat4();
+        let normal = normal.as_mat3();
+        if !matrix.is_finite() || !normal.is_finite() {
+            return Err("transform does not fit single precision".into());
+        }
+        Ok(Self {
+            matrix,
+            normal,
             flips: det < 0.0,
         })
     }

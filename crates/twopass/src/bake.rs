@@ -57,7 +57,7 @@ impl Format {
 /// Arguments of `twopass bake`.
 #[derive(Debug, Args)]
 pub struct BakeArgs {
-    /// Scene file (.toml) or mesh (.obj).
+    /// Scene file (.toml), mesh (.obj) or glTF 2.0 (.gltf, .glb).
     pub scene: PathBuf,
     /// Outputs to write, comma separated (the manifest is always written).
     #[arg(
@@ -84,10 +84,19 @@ pub struct BakeArgs {
     pub exposure: Option<f32>,
     /// Also bake a lightmap: `<stem>.lightmap.glb` (the scene's own triangles with a UV atlas
     /// on TEXCOORD_1, the OBJ's own texture coordinates when they fit, else generated, and the lightmap as an embedded PNG emissive texture),
-    /// `<stem>.lightmap.exr` (HDR radiance, W/(m^2 sr)) and `<stem>.lightmap.png` (the LDR
-    /// texture, exposure-scaled sRGB).
+    /// `<stem>.lightmap.exr` (HDR, W/(m^2 sr)) and `<stem>.lightmap.png` (the LDR
+    /// texture, exposure-scaled sRGB); for a glTF scene also `<stem>.lightmapped.glb`, the
+    /// scene's own glTF with the atlas on TEXCOORD_1 and the lightmap referenced by every
+    /// baked material's `extras.lightMap`.
     #[arg(long)]
     pub lightmap: bool,
+    /// What the lightmap's texels hold: `irradiance` (E / pi in W/(m^2 sr), the light a white
+    /// diffuse surface would reflect, which engines multiply by the material's base colour:
+    /// Unity and Godot as it is, three.js with lightMapIntensity = pi; no emission) or
+    /// `radiance` (the surface's outgoing radiance, its albedo and emission included)
+    /// [default: irradiance for a glTF scene, radiance otherwise].
+    #[arg(long, value_enum, value_name = "QUANTITY", requires = "lightmap")]
+    pub lightmap_quantity: Option<Quantity>,
     /// Lightmap texel edge on the surface, scene units [default: scene diagonal / 200].
     #[arg(long, value_name = "LENGTH", value_parser = parse_length, requires = "lightmap")]
     pub texel_size: Option<f32>,
@@ -99,6 +108,15 @@ pub struct BakeArgs {
     /// Vertices and patch pairs sampled for the residual report.
     #[arg(long, default_value_t = 200, value_name = "N", value_parser = parse_residual_samples)]
     pub residual_samples: usize,
+}
+
+/// What a lightmap holds (`--lightmap-quantity`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Quantity {
+    /// Incoming irradiance over pi, E / pi, W/(m^2 sr): multiplied by the albedo in engines.
+    Irradiance,
+    /// Outgoing radiance, W/(m^2 sr), albedo and emission included.
+    Radiance,
 }
 
 /// The final gather a bake runs (`--gather`).
@@ -352,6 +370,10 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
         let started = Instant::now();
         let settings = bake::LightmapSettings {
             texel_size: args.texel_size,
+            quantity: args.lightmap_quantity.map(|q| match q {
+                Quantity::Irradiance => bake::LightmapQuantity::Irradiance,
+                Quantity::Radiance => bake::LightmapQuantity::Radiance,
+            }),
             ..bake::LightmapSettings::default()
         };
         let source = match estimator {
@@ -360,11 +382,19 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
         };
         let lm = bake::bake_lightmap(source, &scene, &settings, mapping)?;
         let seconds = started.elapsed().as_secs_f64();
-        for (ext, bytes) in [("glb", &lm.glb), ("exr", &lm.exr), ("png", &lm.png)] {
-            let path = dir.join(format!("{stem}.lightmap.{ext}"));
+        let files = [
+            ("lightmap", "glb", Some(&lm.glb)),
+            ("lightmap", "exr", Some(&lm.exr)),
+            ("lightmap", "png", Some(&lm.png)),
+            // A glTF scene's own asset back, with the lightmap on TEXCOORD_1.
+            ("lightmapped", "glb", lm.asset.as_ref()),
+        ];
+        for (kind, ext, bytes) in files {
+            let Some(bytes) = bytes else { continue };
+            let path = dir.join(format!("{stem}.{kind}.{ext}"));
             bake::write_atomic(&path, bytes)?;
             manifest.files.push(FileRecord {
-                format: format!("lightmap-{ext}"),
+                format: format!("{kind}-{ext}"),
                 path,
                 bytes: bytes.len() as u64,
                 crc32: Some(crc32fast::hash(bytes)),
@@ -378,7 +408,8 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
             charts: lm.charts,
             atlas: lm.atlas.describe(),
             covered_texels: lm.covered_texels,
-            png: bake::lightmap::PNG_FORMULA.into(),
+            quantity: lm.quantity.name().into(),
+            png: lm.quantity.png_formula().into(),
             seconds,
             gather: gatherer.as_ref().map(|gatherer| {
                 let g = gatherer.settings();

@@ -28,7 +28,7 @@ use crate::pipeline::{
 /// Arguments of `twopass compare`.
 #[derive(Debug, Args)]
 pub struct CompareArgs {
-    /// Scene file (.toml) or mesh (.obj).
+    /// Scene file (.toml), mesh (.obj) or glTF 2.0 (.gltf, .glb).
     pub scene: PathBuf,
     /// Draft quality: 256 pixels wide, few samples, a coarse radiosity mesh. Without it: 512
     /// wide, 16 samples per pixel, 4096 for the reference, the default radiosity mesh solved to

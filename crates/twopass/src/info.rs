@@ -13,7 +13,7 @@ use crate::plan::{Plan, lobe_name, plan};
 /// Arguments of `twopass info`.
 #[derive(Debug, Args)]
 pub struct InfoArgs {
-    /// Scene file (.toml) or mesh (.obj).
+    /// Scene file (.toml), mesh (.obj) or glTF 2.0 (.gltf, .glb).
     pub scene: PathBuf,
 }
 

@@ -31,7 +31,7 @@ use crate::solve::SolveArgs;
 /// Arguments of `twopass render`.
 #[derive(Debug, Args)]
 pub struct RenderArgs {
-    /// Scene file (.toml) or mesh (.obj).
+    /// Scene file (.toml), mesh (.obj) or glTF 2.0 (.gltf, .glb).
     pub scene: PathBuf,
     /// The method.
     #[arg(long, value_enum, default_value = "hybrid")]

@@ -7,6 +7,7 @@ mod bake;
 mod bakes;
 mod cli;
 mod compare;
+mod gltf_input;
 mod lightmap;
 mod lightmap_render;
 mod limits;

@@ -8,10 +8,13 @@ use twopass_composite::tonemap::{quantize, srgb_encode};
 use twopass_composite::{Image, Rgb8Image};
 use twopass_scene::Scene;
 
+use super::asset::encode_asset_glb;
 use super::fill::{RegionTexels, TexelSource, fill_region};
-use super::glb::{PNG_FORMULA, encode_lightmap_glb};
+use super::glb::encode_lightmap_glb;
 use super::layout::{generated_layout, scene_layout};
-use super::settings::{Lightmap, LightmapSettings, Resolved, TEXELS_PER_DIAGONAL};
+use super::settings::{
+    Lightmap, LightmapQuantity, LightmapSettings, Resolved, TEXELS_PER_DIAGONAL,
+};
 use crate::colour::ColorMapping;
 use crate::error::BakeError;
 use crate::fingerprint::LIGHTMAP_FINGERPRINT;
@@ -49,6 +52,9 @@ pub fn bake_lightmap(
             .texel_size
             .unwrap_or(scene.bounds.diagonal() / TEXELS_PER_DIAGONAL),
         padding: settings.padding.max(1),
+        quantity: settings
+            .quantity
+            .unwrap_or_else(|| LightmapQuantity::for_scene(scene)),
     };
     if !(s.texel_size.is_finite() && s.texel_size > 0.0) {
         return Err(BakeError::Encode {
@@ -98,24 +104,39 @@ pub fn bake_lightmap(
         c.to_array().map(|v| quantize(srgb_encode(v)))
     });
     let description = format!(
-        "twopass lightmap: {PNG_FORMULA}; exposure {:e}",
+        "twopass lightmap: {}; exposure {:e}",
+        s.quantity.png_formula(),
         mapping.exposure
     );
     let png =
         twopass_composite::write::encode_png(Path::new("lightmap.png"), &ldr, Some(&description))
             .map_err(encode_err)?;
     let glb = encode_lightmap_glb(scene, &layout, &s, &png, mapping, fingerprint)?;
+    let asset = match &scene.gltf {
+        Some(src) => Some(encode_asset_glb(
+            src,
+            scene,
+            &layout,
+            &s,
+            &png,
+            mapping,
+            fingerprint,
+        )?),
+        None => None,
+    };
     Ok(Lightmap {
         width,
         height,
         texel_size: s.texel_size,
         radiance: image,
+        quantity: s.quantity,
         charts: layout.charts,
         covered_texels,
         rays,
         shadow_rays,
         atlas: layout.source,
         glb,
+        asset,
         exr,
         png,
     })

@@ -10,7 +10,7 @@ use twopass_scene::{DiffuseRadiance, RadianceEstimate, RadianceEstimator, Scene}
 use super::filter::{Guide, denoise};
 use super::layout::{Layout, Region};
 use super::raster::{for_each_overlapped_texel, for_each_texel};
-use super::settings::{AtlasSource, Resolved};
+use super::settings::{AtlasSource, LightmapQuantity, Resolved};
 
 /// Where the texels' light comes from.
 #[derive(Clone, Copy)]
@@ -183,7 +183,17 @@ pub(super) fn fill_region(
         TexelSource::Solution(radiance) => {
             let values: Vec<Rgb> = samples
                 .par_iter()
-                .map(|p| radiance.radiance(p.triangle, p.barycentric))
+                .map(|p| {
+                    let l = radiance.radiance(p.triangle, p.barycentric);
+                    match s.quantity {
+                        LightmapQuantity::Radiance => l,
+                        LightmapQuantity::Irradiance => {
+                            let object = scene.mesh.triangle_object[p.triangle as usize];
+                            let emitted = scene.objects[object as usize].emission;
+                            incoming(l - emitted, scene, p.triangle)
+                        }
+                    }
+                })
                 .collect();
             for (p, v) in samples.iter().zip(values) {
                 value[p.texel as usize] = v;
@@ -227,7 +237,10 @@ pub(super) fn fill_region(
             let indirect: Vec<Rgb> = estimates.iter().map(|e| e.indirect).collect();
             let indirect = denoise(&guides, &indirect, [w, h], s.texel_size);
             for ((p, e), ind) in samples.iter().zip(&estimates).zip(indirect) {
-                value[p.texel as usize] = e.emitted + e.direct + ind;
+                value[p.texel as usize] = match s.quantity {
+                    LightmapQuantity::Radiance => e.emitted + e.direct + ind,
+                    LightmapQuantity::Irradiance => incoming(e.direct + ind, scene, p.triangle),
+                };
                 filled[p.texel as usize] = true;
             }
         }
@@ -240,6 +253,22 @@ pub(super) fn fill_region(
         rays,
         shadow_rays,
     }
+}
+
+/// Irradiance over pi, W/(m^2 sr), from the radiance `reflected` (no emission) leaving
+/// triangle `t`: divided by its material's diffuse albedo per channel, 0 where that is 0 (no
+/// reflected light tells of the light that arrived), and never negative (the solution's
+/// interpolation may dip below the emission on an emitter's edge).
+fn incoming(reflected: Rgb, scene: &Scene, t: u32) -> Rgb {
+    let rho = scene.material_of(t).diffuse_albedo().to_array();
+    let r = reflected.to_array();
+    Rgb::from_array(std::array::from_fn(|c| {
+        if rho[c] > 0.0 {
+            (r[c] / rho[c]).max(0.0)
+        } else {
+            0.0
+        }
+    }))
 }
 
 /// Dilation: each of `rings` passes gives every empty texel the mean of its filled

@@ -23,6 +23,7 @@ struct LightmapExtras<'a> {
 #[derive(Serialize)]
 struct LightmapExtrasBody<'a> {
     lightmap: &'static str,
+    quantity: &'static str,
     texcoord: u32,
     atlas: &'a str,
     exposure: f32,
@@ -158,7 +159,8 @@ pub(super) fn encode_lightmap_glb(
     let atlas = layout.source.describe();
     let extras = LightmapExtras {
         twopass: LightmapExtrasBody {
-            lightmap: PNG_FORMULA,
+            lightmap: s.quantity.png_formula(),
+            quantity: s.quantity.name(),
             texcoord: 1,
             atlas: &atlas,
             exposure: mapping.exposure,

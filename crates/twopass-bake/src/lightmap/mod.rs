@@ -27,17 +27,24 @@
 //! filtering and mip levels at a chart's edge read the chart's own light, never a neighbour's
 //! or black.
 //!
+//! **Quantity.** The texels hold outgoing radiance or incoming irradiance over pi
+//! ([`LightmapQuantity`]): the irradiance is the reflected part of the light found at the
+//! texel (the solution's radiance less the emission, or a gather's direct and denoised
+//! indirect parts) divided by the albedo per channel, 0 where the albedo is 0.
+//!
 //! **Encodings.** The HDR lightmap is linear radiance `L` in W/(m^2 sr) per RGB channel (EXR,
 //! 32-bit float, plain `R`, `G`, `B`). The LDR lightmap a glTF loader uses is a plain
 //! exposure-scaled sRGB PNG: `round(255 srgb(min(1, exposure * L)))`, the [`ColorMapping`](crate::colour::ColorMapping) of
 //! the per-vertex bakes, so the PNG's linear value times `1 / exposure` gives `L` up to the
 //! clip.
 //!
-//! Files, one job each: `settings` (what a bake takes and gives), `layout` (the atlas),
+//! Files, one job each: `settings` (what a bake takes and gives), `asset` (a glTF scene's own
+//! document written back with the lightmap), `layout` (the atlas),
 //! `raster` (the texel centres a triangle covers), `fill` (the texels of one region), `filter`
 //! (the gathered indirect light denoised), `glb` (the `.glb` and its extras), `bake`
 //! ([`bake_lightmap`], which runs them in that order).
 
+mod asset;
 mod bake;
 mod fill;
 mod filter;
@@ -52,4 +59,7 @@ pub use fill::{MAX_BACK_FACES, TexelSource};
 pub use filter::FILTER;
 pub use glb::{CameraRecord, PNG_FORMULA};
 pub use layout::{MAX_AREA_DISTORTION, MAX_LIGHTMAP_SIDE, smallest_texel_size};
-pub use settings::{AtlasSource, Lightmap, LightmapSettings, TEXELS_PER_DIAGONAL};
+pub use settings::{
+    AtlasSource, IRRADIANCE_PNG_FORMULA, Lightmap, LightmapQuantity, LightmapSettings,
+    TEXELS_PER_DIAGONAL,
+};

@@ -19,7 +19,68 @@ pub struct LightmapSettings {
     /// filtering and the first mip level inside the chart).
     #[default(2)]
     pub padding: u32,
+    /// What the texels hold; `None`: [`LightmapQuantity::for_scene`] (irradiance for a glTF
+    /// scene, radiance otherwise).
+    #[default(None)]
+    pub quantity: Option<LightmapQuantity>,
 }
+
+/// What a lightmap's texels hold, per RGB channel.
+///
+/// Engines multiply a lightmap by the surface's own base colour (and its texture):
+/// Unity and Godot take the texel as the light a white diffuse surface would reflect (outgoing
+/// = albedo x texel), three.js (r155 and later, physically based lights) as irradiance E in
+/// W/m^2 (outgoing = albedo / pi x texel x `lightMapIntensity`). [`Irradiance`] holds E / pi,
+/// so Unity and Godot use it as it is and three.js with `lightMapIntensity = pi`;
+/// [`Radiance`] is the surface's own outgoing light with its albedo and emission baked in, for
+/// viewers that show the lightmap alone (as emission).
+///
+/// [`Irradiance`]: LightmapQuantity::Irradiance
+/// [`Radiance`]: LightmapQuantity::Radiance
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LightmapQuantity {
+    /// Outgoing radiance L = L_e + rho E / pi, W/(m^2 sr): emission and albedo included.
+    Radiance,
+    /// Incoming irradiance over pi, E / pi, W/(m^2 sr): the radiance a white Lambertian
+    /// surface would reflect there, so that albedo x texel is the reflected radiance rho E /
+    /// pi. No emission. It is the reflected light divided by the albedo per channel, so a
+    /// channel whose albedo is 0 (black, or a mirror, glass or metal, which have no diffuse
+    /// part) holds 0.
+    Irradiance,
+}
+
+impl LightmapQuantity {
+    /// The default for `scene`: irradiance for a glTF scene (its asset goes back to an engine
+    /// that multiplies by its own base colour), radiance otherwise.
+    pub fn for_scene(scene: &twopass_scene::Scene) -> Self {
+        if scene.gltf.is_some() {
+            Self::Irradiance
+        } else {
+            Self::Radiance
+        }
+    }
+
+    /// Its name on the command line and in the manifest: `radiance` or `irradiance`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Radiance => "radiance",
+            Self::Irradiance => "irradiance",
+        }
+    }
+
+    /// How the lightmap PNG encodes it (recorded in the `.glb` and the manifest).
+    pub fn png_formula(self) -> &'static str {
+        match self {
+            Self::Radiance => super::glb::PNG_FORMULA,
+            Self::Irradiance => IRRADIANCE_PNG_FORMULA,
+        }
+    }
+}
+
+/// How the lightmap PNG encodes an irradiance lightmap.
+pub const IRRADIANCE_PNG_FORMULA: &str = "sRGB-encoded 8-bit of min(1, exposure * E / pi), E \
+     the irradiance reaching the surface in W/m^2 (E / pi in W/(m^2 sr): multiply by the \
+     albedo for the reflected radiance); the HDR values are in the .exr beside the .glb";
 
 /// [`LightmapSettings`] resolved for one scene: the texel size given or derived, the padding
 /// at least 1.
@@ -29,6 +90,8 @@ pub(super) struct Resolved {
     pub(super) texel_size: f32,
     /// Border around every chart, texels (at least 1).
     pub(super) padding: u32,
+    /// What the texels hold.
+    pub(super) quantity: LightmapQuantity,
 }
 
 /// A baked lightmap and the user-mesh glTF that shows it.
@@ -41,9 +104,11 @@ pub struct Lightmap {
     /// Edge of one texel on the surface, scene units: the settings' or the one derived from
     /// the scene's size.
     pub texel_size: f32,
-    /// Linear radiance per texel, W/(m^2 sr) per RGB channel, row-major, top row first (UV
-    /// (0, 0) is the top-left corner, as glTF has it).
+    /// The [`quantity`](Lightmap::quantity) per texel, W/(m^2 sr) per RGB channel, linear,
+    /// row-major, top row first (UV (0, 0) is the top-left corner, as glTF has it).
     pub radiance: Image,
+    /// What the texels hold.
+    pub quantity: LightmapQuantity,
     /// Charts in the atlas (1 when the scene's own texture coordinates are used).
     pub charts: usize,
     /// Texels a triangle touches, each lit at its own point (the rest are padding, dilated or
@@ -57,6 +122,9 @@ pub struct Lightmap {
     pub atlas: AtlasSource,
     /// The scene's triangles with `TEXCOORD_1` into the atlas, as a `.glb` embedding the PNG.
     pub glb: Vec<u8>,
+    /// For a glTF scene, the user's own document written back as `.glb` with the atlas on
+    /// `TEXCOORD_1` and the PNG embedded and referenced (module `asset`); `None` otherwise.
+    pub asset: Option<Vec<u8>>,
     /// The HDR lightmap as EXR bytes.
     pub exr: Vec<u8>,
     /// The LDR lightmap as PNG bytes (exposure-scaled sRGB).
@@ -66,8 +134,8 @@ pub struct Lightmap {
 /// Where a lightmap's texture coordinates come from.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum AtlasSource {
-    /// The scene's own texture coordinates (an OBJ's `vt`): every triangle has them, they lie
-    /// in [0, 1] and no two triangles overlap.
+    /// The scene's own texture coordinates (an OBJ's `vt`, a glTF's `TEXCOORD_1`): every
+    /// triangle has them, they lie in [0, 1] and no two triangles overlap.
     Scene,
     /// Generated charts, because the scene's coordinates could not serve (the reason).
     Generated(String),
@@ -77,7 +145,9 @@ impl AtlasSource {
     /// In words, as the manifest records it.
     pub fn describe(&self) -> String {
         match self {
-            Self::Scene => "the scene's texture coordinates (OBJ vt)".to_owned(),
+            Self::Scene => {
+                "the scene's texture coordinates (an OBJ's vt, a glTF's TEXCOORD_1)".to_owned()
+            }
             Self::Generated(why) => format!("generated charts ({why})"),
         }
     }

@@ -21,6 +21,12 @@ pub fn cornell(element_size: f32) -> (Scene, Solution) {
 /// The scene at `path` (from the repository root) solved like [`cornell`].
 pub fn solved(path: &str, element_size: f32) -> (Scene, Solution) {
     let (scene, _) = twopass_scene::load(repo().join(path)).unwrap();
+    let solution = solve(&scene, element_size);
+    (scene, solution)
+}
+
+/// `scene` solved like [`cornell`].
+pub fn solve(scene: &Scene, element_size: f32) -> Solution {
     let options = Options {
         element_size: Some(element_size),
         stop: Stop {
@@ -29,8 +35,7 @@ pub fn solved(path: &str, element_size: f32) -> (Scene, Solution) {
         },
         ..Options::default()
     };
-    let mut solver = Solver::new(&scene, options).unwrap();
+    let mut solver = Solver::new(scene, options).unwrap();
     solver.run(|_| std::ops::ControlFlow::Continue(()));
-    let solution = solver.solution();
-    (scene, solution)
+    solver.solution()
 }

@@ -4,11 +4,11 @@
 use std::collections::HashMap;
 use std::path::Path;
 
-use glam::Vec3;
 use twopass_brdf::Rgb;
 
-use super::loader::{Geometry, Loader, Part, PlacedPart, check_range, unknown_key_offset};
-use crate::camera::Camera;
+use super::loader::{
+    Geometry, Loader, Part, PlacedPart, check_range, framing_camera, unknown_key_offset,
+};
 use crate::description::{SceneFile, VERSION};
 use crate::error::{SceneError, Warning};
 use crate::input::{self, InputKind, LineIndex, ReadPolicy};
@@ -16,8 +16,10 @@ use crate::obj;
 use crate::scene::{Bounds, Scene};
 use crate::transform::Transform;
 
-/// Loads a scene: a `.toml` scene file, or a bare `.obj` mesh (framed by a default camera, with
-/// its MTL materials or a default grey). Returns the scene and the recoverable problems found.
+/// Loads a scene: a `.toml` scene file, a bare `.obj` mesh (framed by a default camera, with
+/// its MTL materials or a default grey), or a glTF 2.0 file (`.gltf` or `.glb`: its default
+/// scene's node hierarchy, materials and first camera; the module docs of `load::gltf` give
+/// the mapping). Returns the scene and the recoverable problems found.
 /// Any path the scene names is read (see [`load_with`] to confine reads).
 pub fn load(path: impl AsRef<Path>) -> Result<(Scene, Vec<Warning>), SceneError> {
     load_with(path, &ReadPolicy::unconfined())
@@ -41,6 +43,7 @@ pub fn load_with(
             load_toml_with(&text, path, policy)
         }
         Some("obj") => load_bare_obj(path, policy),
+        Some("gltf" | "glb") => super::gltf::load_gltf(path, policy),
         _ => Err(SceneError::UnsupportedFormat {
             path: path.to_owned(),
         }),
@@ -196,34 +199,7 @@ fn load_bare_obj(path: &Path, policy: &ReadPolicy) -> Result<(Scene, Vec<Warning
             transform: Transform::default(),
         });
     }
-    // Frame the bounds: look down -z at the centre from far enough to see the bounding sphere.
-    let bounds = parts
-        .iter()
-        .fold(Bounds::EMPTY, |b, p| match &p.part.geometry {
-            Geometry::Mesh(m) => m.positions.iter().fold(b, |b, q| b.grow(*q)),
-            Geometry::Sphere { .. } => b,
-        });
-    let fov_y = 40f32.to_radians();
-    let radius = (bounds.diagonal() * 0.5).max(f32::MIN_POSITIVE);
-    let distance = radius / (fov_y * 0.5).sin() * 1.1;
-    let center = if bounds.diagonal() > 0.0 {
-        bounds.center()
-    } else {
-        Vec3::ZERO
-    };
-    let camera = Camera::look_at(
-        center + Vec3::Z * distance,
-        center,
-        Vec3::Y,
-        fov_y,
-        512,
-        512,
-    )
-    .map_err(|problem| SceneError::Camera {
-        path: path.to_owned(),
-        line: None,
-        problem,
-    })?;
+    let camera = framing_camera(path, &parts)?;
     // A bare OBJ states no unit: metres, as the OBJ format's readers assume by default.
     ld.finish(parts, camera, crate::unit::Unit::Metre)
 }

@@ -8,10 +8,11 @@ use glam::Vec3;
 use toml::Spanned;
 use twopass_brdf::{Material, Rgb};
 
+use crate::camera::Camera;
 use crate::description::Triple;
 use crate::error::{SceneError, Warning};
 use crate::input::{LineIndex, ReadPolicy, printable};
-use crate::scene::SceneMaterial;
+use crate::scene::{Bounds, SceneMaterial};
 use crate::shape::ShapeMesh;
 use crate::transform::Transform;
 
@@ -108,6 +109,42 @@ pub(super) fn check_range(
         }
     }
     Ok(())
+}
+
+/// The camera of a scene that names none (a bare OBJ, a glTF without a camera): a 40 degree
+/// vertical field of view, 512 x 512 pixels, looking down -z at the centre of the parts' world
+/// bounds from far enough (1.1 times) that their bounding sphere fills the view.
+pub(super) fn framing_camera(path: &Path, parts: &[PlacedPart]) -> Result<Camera, SceneError> {
+    let bounds = parts
+        .iter()
+        .fold(Bounds::EMPTY, |b, p| match &p.part.geometry {
+            Geometry::Mesh(m) => m
+                .positions
+                .iter()
+                .fold(b, |b, q| b.grow(p.transform.point(*q))),
+            Geometry::Sphere { .. } => b,
+        });
+    let fov_y = 40f32.to_radians();
+    let radius = (bounds.diagonal() * 0.5).max(f32::MIN_POSITIVE);
+    let distance = radius / (fov_y * 0.5).sin() * 1.1;
+    let center = if bounds.diagonal() > 0.0 {
+        bounds.center()
+    } else {
+        Vec3::ZERO
+    };
+    Camera::look_at(
+        center + Vec3::Z * distance,
+        center,
+        Vec3::Y,
+        fov_y,
+        512,
+        512,
+    )
+    .map_err(|problem| SceneError::Camera {
+        path: path.to_owned(),
+        line: None,
+        problem,
+    })
 }
 
 pub(super) fn rgb(t: Triple) -> Rgb {

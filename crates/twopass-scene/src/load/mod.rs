@@ -1,11 +1,13 @@
-//! Loading: a TOML scene file or a bare OBJ, validated once, into a [`Scene`](crate::scene::Scene).
+//! Loading: a TOML scene file, a bare OBJ or a glTF, validated once, into a [`Scene`](crate::scene::Scene).
 
 mod assemble;
 mod camera;
 mod entry;
+mod gltf;
 mod loader;
 mod materials;
 mod objects;
 
 pub use entry::{load, load_toml, load_toml_with, load_with};
+pub use gltf::SMOOTH_ROUGHNESS;
 pub use loader::{MAX_COORDINATE, MAX_EMITTED_POWER, MAX_TRIANGLES, SPHERE_TOLERANCE};
