@@ -16,9 +16,10 @@
 //! - [`CausticScope::Focused`] (the hybrid): only the paths whose delta chain holds a
 //!   refraction, connected at their first diffuse vertex with its diffuse reflectance: the light
 //!   the radiosity pass deposits on its elements blurred by their size (the focus under a glass
-//!   sphere). The hybrid shows the solution less that part there
-//!   ([`twopass_scene::DiffuseRadiance::focused_caustic_radiance`]), and the light tracer's
-//!   value in its place.
+//!   sphere). The classic hybrids show the solution less that part there
+//!   ([`twopass_scene::DiffuseRadiance::focused_caustic_radiance`]), the gathered hybrid
+//!   leaves out the emission its gather rays reach through a refraction there
+//!   ([`crate::gather`]), and the light tracer's value takes its place.
 //!
 //! **Estimator.** A light path starts at a point of an emitter chosen by power, uniform over
 //! its area, in a direction drawn from the cones its specular objects subtend

@@ -31,6 +31,8 @@ const SOBOL_SAMPLES: u64 = 1 << 16;
 #[derive(Debug, Clone)]
 pub struct Sampler {
     stream: SplitMix64,
+    /// The hash of (seed, pixel, sample) the stream starts from; forks derive theirs from it.
+    key: u64,
     /// The point's index in the pixel's sequence (the sample number), or `u32::MAX` past it.
     index: u32,
     /// The next dimension [`Sampler::next_f32`] hands out.
@@ -49,6 +51,7 @@ impl Sampler {
         let h = mix64(p ^ sample.wrapping_mul(0xa076_1d64_78bd_642f));
         Self {
             stream: SplitMix64::new(h),
+            key: h,
             index: if sample < SOBOL_SAMPLES {
                 sample as u32
             } else {
@@ -56,6 +59,35 @@ impl Sampler {
             },
             dimension: 0,
             scramble: (p >> 32) as u32,
+            set: [0.0; 4],
+        }
+    }
+
+    /// The numbers of sub-sample `j` of `per` drawn at site `site` of this camera sample: point
+    /// `sample * per + j` of a Sobol sequence scrambled per (pixel, site), so that the sub-samples
+    /// of all of a pixel's camera samples together are the first points of one sequence (a
+    /// per-pixel gather's rays stratified over the pixel, not only within one camera sample).
+    /// `site` tells apart the places one camera sample draws sub-samples at (the camera hit,
+    /// each landing of the delta recursion), numbered alike in every camera sample. The
+    /// independent stream is hashed from the same indices.
+    pub fn fork(&self, site: u64, j: u32, per: u32) -> Self {
+        let scramble = (mix64(u64::from(self.scramble) ^ site.wrapping_mul(0x9e37_79b9_7f4a_7c15))
+            >> 32) as u32;
+        let per = u64::from(per.max(1));
+        let index = (self.index != u32::MAX)
+            .then(|| u64::from(self.index) * per + u64::from(j))
+            .filter(|&i| i < SOBOL_SAMPLES);
+        let key = mix64(
+            self.key
+                ^ site.wrapping_mul(0x9e37_79b9_7f4a_7c15)
+                ^ u64::from(j).wrapping_mul(0xd6e8_feb8_6659_fd93),
+        );
+        Self {
+            stream: SplitMix64::new(key),
+            key,
+            index: index.map_or(u32::MAX, |i| i as u32),
+            dimension: 0,
+            scramble,
             set: [0.0; 4],
         }
     }
