@@ -87,10 +87,13 @@ impl DiffuseSource<'_> {
         match *self {
             DiffuseSource::Gather { ref gatherer, rays } => {
                 r.add(Layer::Emission, s.emitted);
+                // The light tracer connects its focused paths only at surfaces without a delta
+                // lobe (at one with a lobe it follows the lobe instead).
+                let focused_elsewhere = without_focused && s.material.delta().is_none();
                 let indirect = gatherer.indirect_per_sample(
                     s,
                     rays,
-                    without_focused,
+                    focused_elsewhere,
                     (at.sampler, at.site),
                     tally,
                 );

@@ -18,6 +18,15 @@
 //!
 //! The point's own value in the solution is not used at all.
 //!
+//! **Per pixel.** The gathered hybrid ([`crate::hybrid::gathered`]) runs the same gather rays
+//! at every diffuse point the camera sees, directly or through mirrors and glass, a few per
+//! camera sample (its direct light comes from the Whitted core's shadow rays, the same
+//! estimator as E_direct's). Where the camera sees the point directly and a light tracer adds
+//! the focused caustics per pixel ([`crate::light_tracing::CausticScope::Focused`]: L S+ D E
+//! with a refraction in S+), the gather rays leave out the emission they reach through a delta
+//! path holding a refraction, which is exactly that path class; everything else they reach
+//! through mirrors and glass they keep.
+//!
 //! **Near hits.** A landing nearer than [`GatherSettings::near_distance`] (by default the
 //! radiosity pass's element edge) takes one more bounce instead of the solution's value there:
 //! near the point one element fills much of the hemisphere, and its error (a concave corner
@@ -127,8 +136,9 @@ pub struct GatherSettings {
     pub max_depth: u32,
     /// Hits closer than this (scene units) take one more bounce instead of the solution's
     /// value: a shadow ray from the hit and one more cosine-distributed ray that reads the
-    /// solution (or, landing this near again, bounces again: [`NEAR_BOUNCES`] in all). Near the point, an element of the solution fills much of the hemisphere and
-    /// its error would reach the point whole (a concave corner, a contact); farther away the
+    /// solution (or, landing this near again, bounces again: [`NEAR_BOUNCES`] in all). Near
+    /// the point, an element of the solution fills much of the hemisphere and its error would
+    /// reach the point whole (a concave corner, a contact); farther away the
     /// same error is averaged over many elements. `None`: the scene's bounding-box diagonal
     /// over [`NEAR_PER_DIAGONAL`] (the radiosity pass's default element edge); 0: never.
     #[default(None)]

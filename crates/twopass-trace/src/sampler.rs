@@ -241,4 +241,37 @@ mod tests {
             assert!(stratum(i, k, glam::Vec2::splat(0.999_999_94)).max_element() < 1.0);
         }
     }
+
+    /// A pixel's forks at one site, `per` per camera sample, are the points `sample * per + j`
+    /// of one sequence: over 4 samples of 4 forks the first dimension puts one value in each
+    /// sixteenth of [0, 1); other sites and pixels scramble it differently.
+    #[test]
+    fn forks_of_a_pixels_samples_are_one_stratified_sequence() {
+        let first = |pixel, sample, site, j, per| {
+            Sampler::new(9, pixel, sample).fork(site, j, per).next_f32()
+        };
+        // Sample 1's fork 0 of 2 and sample 2's fork 0 of 1 are both point 2.
+        assert_eq!(first(5, 1, 3, 0, 2), first(5, 2, 3, 0, 1));
+        let mut strata: Vec<u32> = (0..4u64)
+            .flat_map(|s| (0..4).map(move |j| (first(5, s, 3, j, 4) * 16.0) as u32))
+            .collect();
+        strata.sort_unstable();
+        assert_eq!(strata, (0..16).collect::<Vec<_>>());
+        assert_ne!(
+            first(5, 0, 3, 0, 4),
+            first(5, 0, 4, 0, 4),
+            "sites share a scramble"
+        );
+        assert_ne!(
+            first(5, 0, 3, 0, 4),
+            first(6, 0, 3, 0, 4),
+            "pixels share a scramble"
+        );
+        // Reproducible, and the independent stream differs per fork.
+        let mut a = Sampler::new(9, 5, 1).fork(3, 2, 4);
+        let mut b = Sampler::new(9, 5, 1).fork(3, 2, 4);
+        assert_eq!(a.next_u64(), b.next_u64());
+        let mut c = Sampler::new(9, 5, 1).fork(3, 1, 4);
+        assert_ne!(a.next_u64(), c.next_u64());
+    }
 }
