@@ -2,9 +2,9 @@
 //! final gather over the solution per camera sample) against closed forms and the path tracer:
 //! the furnace reads L_e / (1 - rho) exactly in expectation; the pixels seen through the glass
 //! sphere of the Cornell spheres and the floor along a box's contact agree with the reference
-//! within the two renders' own noise (where the classic hybrid, which shows the solution there,
-//! does not); the per-pixel focused caustics and the gather rays count the light focused by
-//! glass once; no NaN or infinity reaches the image even from a solution that holds some.
+//! within the two renders' own noise (along the contact the classic hybrid, which shows the
+//! solution there, does not); the per-pixel caustics and the gather rays count the light
+//! focused by glass once; no NaN or infinity reaches the image even from a solution that holds some.
 
 use std::ops::ControlFlow;
 
@@ -301,7 +301,7 @@ fn the_floor_along_a_contact_matches_the_path_tracer() {
 }
 
 #[test]
-fn focused_caustics_are_counted_once() {
+fn caustics_are_counted_once() {
     // Where the camera sees the floor lit through the glass sphere, the gathered hybrid leaves
     // that light to the light tracer (caustic_paths > 0) or finds it with its own gather rays
     // through the glass (caustic_paths = 0): one or the other, never both, so the region's

@@ -13,6 +13,7 @@ use crate::counters::Tally;
 use crate::film::{Layer, Radiance};
 use crate::gather::Gatherer;
 use crate::integrator::Shading;
+use crate::light_tracing::CausticScope;
 use crate::sampler::Sampler;
 
 /// Where the diffuse light at a hit comes from.
@@ -50,23 +51,26 @@ pub(crate) struct SampleSite<'s> {
 }
 
 impl DiffuseSource<'_> {
-    /// Whether the source can leave the focused caustics (light through glass onto the
-    /// surface the camera sees) to a light tracer: a solution that separates that part, or the
-    /// gather, which then leaves out the emission its rays reach through a refraction.
-    pub(crate) fn can_leave_focused_caustics(&self) -> bool {
+    /// The caustics the source can leave to a light tracer where the camera sees a diffuse
+    /// surface, if any: the focused ones (light through glass) for a solution that separates
+    /// them, every one (light through mirrors and glass) for the gather, which then leaves out
+    /// the emission its rays reach through a delta path.
+    pub(crate) fn caustics_to_leave(&self) -> Option<CausticScope> {
         match self {
-            DiffuseSource::Ambient { .. } => false,
+            DiffuseSource::Ambient { .. } => None,
             DiffuseSource::Radiosity(solution) | DiffuseSource::RadiosityIndirect(solution) => {
-                solution.separates_focused_caustics()
+                solution
+                    .separates_focused_caustics()
+                    .then_some(CausticScope::Focused)
             }
-            DiffuseSource::Gather { .. } => true,
+            DiffuseSource::Gather { .. } => Some(CausticScope::FirstDiffuse),
         }
     }
 
     /// Adds the emission and the diffuse light this source provides at `s` to `r`; returns
     /// whether the direct diffuse light must still be added with shadow rays. With
-    /// `without_focused`, the focused caustic part is left out (a light tracing pass shows it
-    /// per pixel instead). `at` and `tally` serve the sources that trace rays.
+    /// `without_focused`, the caustics of [`DiffuseSource::caustics_to_leave`] are left out (a
+    /// light tracing pass shows them per pixel instead). `at` and `tally` serve the sources that trace rays.
     pub(crate) fn diffuse(
         &self,
         s: &Shading<'_>,
@@ -87,13 +91,13 @@ impl DiffuseSource<'_> {
         match *self {
             DiffuseSource::Gather { ref gatherer, rays } => {
                 r.add(Layer::Emission, s.emitted);
-                // The light tracer connects its focused paths only at surfaces without a delta
-                // lobe (at one with a lobe it follows the lobe instead).
-                let focused_elsewhere = without_focused && s.material.delta().is_none();
+                // The light tracer connects its paths only at surfaces without a delta lobe
+                // (at one with a lobe it follows the lobe instead).
+                let caustics_elsewhere = without_focused && s.material.delta().is_none();
                 let indirect = gatherer.indirect_per_sample(
                     s,
                     rays,
-                    focused_elsewhere,
+                    caustics_elsewhere,
                     (at.sampler, at.site),
                     tally,
                 );

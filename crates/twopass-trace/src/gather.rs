@@ -22,10 +22,9 @@
 //! at every diffuse point the camera sees, directly or through mirrors and glass, a few per
 //! camera sample (its direct light comes from the Whitted core's shadow rays, the same
 //! estimator as E_direct's). Where the camera sees the point directly and a light tracer adds
-//! the focused caustics per pixel ([`crate::light_tracing::CausticScope::Focused`]: L S+ D E
-//! with a refraction in S+), the gather rays leave out the emission they reach through a delta
-//! path holding a refraction, which is exactly that path class; everything else they reach
-//! through mirrors and glass they keep.
+//! the caustics per pixel ([`crate::light_tracing::CausticScope::FirstDiffuse`]: L S+ D E),
+//! the gather rays leave out the emission they reach through a delta path, which is exactly
+//! that path class; the rest of the solution they reach through mirrors and glass they keep.
 //!
 //! **Near hits.** A landing nearer than [`GatherSettings::near_distance`] (by default the
 //! radiosity pass's element edge) takes one more bounce instead of the solution's value there:
@@ -53,8 +52,8 @@ use std::time::Instant;
 
 use glam::{Vec2, Vec3};
 use smart_default::SmartDefault;
+use twopass_brdf::Rgb;
 use twopass_brdf::colour::luminance;
-use twopass_brdf::{Rgb, SampleKind};
 use twopass_scene::workload::cosine_direction;
 use twopass_scene::{DiffuseRadiance, Hit, RadianceEstimate, RadianceEstimator, Scene};
 
@@ -77,18 +76,6 @@ enum FirstHit {
     Front,
     /// The back of an opaque closed surface: the ray left from inside a closed object.
     Back,
-}
-
-/// Where a gather ray's delta path stands.
-#[derive(Debug, Clone, Copy)]
-struct DeltaPath {
-    /// Delta bounces so far.
-    depth: u32,
-    /// Whether one of them was a refraction.
-    refracted: bool,
-    /// Whether a light tracer counts, at the gathering point, the emission reached through a
-    /// refraction (the focused caustics), so the gather leaves it out.
-    focused_elsewhere: bool,
 }
 
 /// Per object of `scene`: whether its surface is closed, every edge (its two end positions,
@@ -256,13 +243,13 @@ impl<'a> Gatherer<'a> {
     /// hybrid ([`crate::hybrid::gathered`]). The rays are [`RadianceEstimator::estimate`]'s
     /// (near hits take one more bounce, delta paths are followed), their numbers forked from
     /// the camera sample's `sampler` at `site` ([`Sampler::fork`]) so that a pixel's rays over
-    /// all its samples are stratified together. With `focused_elsewhere`, the emission reached
-    /// through a refraction is left to the light tracer.
+    /// all its samples are stratified together. With `caustics_elsewhere`, the emission reached
+    /// through mirrors and glass is left to the light tracer.
     pub(crate) fn indirect_per_sample(
         &self,
         s: &Shading<'_>,
         rays: u32,
-        focused_elsewhere: bool,
+        caustics_elsewhere: bool,
         (sampler, site): (&Sampler, u64),
         tally: &mut Tally,
     ) -> Rgb {
@@ -273,7 +260,7 @@ impl<'a> Gatherer<'a> {
         for j in 0..rays {
             let mut fork = sampler.fork(site, j, rays);
             let u = fork.next_2d();
-            let (l, _) = self.gather_ray(s, u, focused_elsewhere, &mut fork, tally);
+            let (l, _) = self.gather_ray(s, u, caustics_elsewhere, &mut fork, tally);
             if l.is_finite() {
                 sum += l;
             }
@@ -290,14 +277,14 @@ impl<'a> Gatherer<'a> {
 
     /// Radiance arriving along one gather ray leaving `s` in the cosine-distributed
     /// direction of `u` (the direct part excluded), W/(m^2 sr), and what the ray hit first.
-    /// With `focused_elsewhere`, the emission reached through a delta path holding a
-    /// refraction is left out: a light tracer counts that light at this point (the focused
-    /// caustics, [`crate::light_tracing::CausticScope::Focused`]).
+    /// With `caustics_elsewhere`, the emission reached through a delta path is left out: a
+    /// light tracer counts that light at this point
+    /// ([`crate::light_tracing::CausticScope::FirstDiffuse`]).
     fn gather_ray(
         &self,
         s: &Shading<'_>,
         u: Vec2,
-        focused_elsewhere: bool,
+        caustics_elsewhere: bool,
         sampler: &mut Sampler,
         tally: &mut Tally,
     ) -> (Rgb, FirstHit) {
@@ -362,15 +349,9 @@ impl<'a> Gatherer<'a> {
             && let Some(bs) = lobe.sample(here.wo, sampler.next_2d())
         {
             let next = here.frame.to_world(bs.wi).normalize();
-            let refracted = bs.kind == SampleKind::SpecularTransmission;
             tally.rays += 1;
             if let Some(h) = scene.intersect_from(&here.hit.point, next) {
-                let path = DeltaPath {
-                    depth: 1,
-                    refracted,
-                    focused_elsewhere,
-                };
-                l += bs.weight * self.follow(h, next, path, sampler, tally);
+                l += bs.weight * self.follow(h, next, caustics_elsewhere, sampler, tally);
             }
         }
         (l, first)
@@ -439,24 +420,19 @@ impl<'a> Gatherer<'a> {
         sum
     }
 
-    /// Radiance arriving along a delta path from its hit `hit` (reached along `dir`, in the
-    /// state `path`), W/(m^2 sr): the solution where it ends, emission included unless a
-    /// light tracer counts it ([`DeltaPath::focused_elsewhere`] after a refraction).
+    /// Radiance arriving along a delta path from its hit `hit` (reached along `dir`, one delta
+    /// bounce in), W/(m^2 sr): the solution where it ends, emission included unless
+    /// `caustics_elsewhere` (a light tracer counts it).
     fn follow(
         &self,
         hit: Hit,
         dir: Vec3,
-        path: DeltaPath,
+        caustics_elsewhere: bool,
         sampler: &mut Sampler,
         tally: &mut Tally,
     ) -> Rgb {
         let scene = self.scene;
-        let (mut hit, mut dir, mut throughput) = (hit, dir, Rgb::ONE);
-        let DeltaPath {
-            mut depth,
-            mut refracted,
-            focused_elsewhere,
-        } = path;
+        let (mut hit, mut dir, mut depth, mut throughput) = (hit, dir, 1, Rgb::ONE);
         let mut sum = Rgb::ZERO;
         loop {
             let here = Shading::new(scene, hit, dir);
@@ -464,7 +440,7 @@ impl<'a> Gatherer<'a> {
                 let mut l = self
                     .solution
                     .radiance(here.hit.point.triangle, here.hit.barycentric);
-                if refracted && focused_elsewhere {
+                if caustics_elsewhere {
                     l = (l - here.emitted).max(Rgb::ZERO);
                 }
                 sum += throughput * l;
@@ -479,7 +455,6 @@ impl<'a> Gatherer<'a> {
                 return sum;
             };
             let next = here.frame.to_world(bs.wi).normalize();
-            refracted |= bs.kind == SampleKind::SpecularTransmission;
             tally.rays += 1;
             let Some(h) = scene.intersect_from(&here.hit.point, next) else {
                 return sum;

@@ -20,18 +20,17 @@
 //! (L S+ D, D S+ D: the radiosity pass's specular transfer). Shadow rays stop at mirrors and
 //! glass (they are occluders), so they never add a path through them. Which estimator counts
 //! which path class (Heckbert's notation from the light; x the diffuse point being shaded, seen
-//! from the eye directly or through mirrors and glass; "focused" the light tracer of
-//! [`crate::light_tracing::CausticScope::Focused`]):
+//! from the eye directly or through mirrors and glass):
 //!
 //! | path class | `hybrid` (gathered) | `hybrid-classic` | `hybrid-direct` |
 //! | --- | --- | --- | --- |
 //! | L x: emission of x | x's emission | solution at x | x's emission |
 //! | L x: direct light | shadow rays at x | solution at x | shadow rays at x |
 //! | L ... D y x, y farther than the near distance | gather rays: the solution at y less y's emission | solution at x | solution's indirect part at x |
-//! | L ... D y x, y near x | gather rays: one more bounce at y (a shadow ray, a ray reading the solution less emission) | solution at x | solution's indirect part at x |
-//! | L ... y S+ x: through mirrors and glass onto x | gather rays: the delta path followed, the whole solution where it ends | solution at x | solution's indirect part at x |
-//! | of which L S+ x with a refraction, x the camera's first hit | focused (the gather rays leave the emission at such a path's end out) | focused (the solution's focused part left out at x) | as hybrid-classic |
-//! | of which L S+ x with a refraction, x seen through mirrors or glass | gather rays | solution at x (the blurred caustic shown whole) | solution's indirect part at x |
+//! | L ... D y x, y near x | gather rays: more bounces near x (a shadow ray and a ray each, [`crate::gather::NEAR_BOUNCES`] at most), then the solution less emission | solution at x | solution's indirect part at x |
+//! | L ... D y S+ x: diffuse light through mirrors and glass | gather rays: the delta path followed, the solution less emission where it ends | solution at x | solution's indirect part at x |
+//! | L S+ x, x the camera's first hit | light tracer ([`CausticScope::FirstDiffuse`]); the gather rays leave the emission at a delta path's end out | with glass in S+: light tracer ([`CausticScope::Focused`]), the solution's focused part left out at x; with mirrors only: solution at x | as hybrid-classic, in the indirect part |
+//! | L S+ x, x seen through mirrors or glass | gather rays: the emission where the delta path ends | solution at x (the blurred caustic shown whole) | solution's indirect part at x |
 //! | L ... S+ E: seen in mirrors and glass | Whitted recursion, then the above at x | Whitted recursion, then the above | Whitted recursion, then the above |
 //! | L G E: glossy highlights | shadow rays | shadow rays | shadow rays |
 //! | L ... D G E, L ... S G E | not shown | not shown | not shown |
@@ -39,18 +38,21 @@
 //! In the gathered hybrid the solution's own value at x is never used: its blockiness and
 //! its leaks along contacts never reach the image, and its errors reach it only through one
 //! bounce, scaled by rho and averaged over the hemisphere. The gather rays per camera sample
-//! ([`WhittedSettings::gather_rays`]) are stratified over the pixel's samples. On a scene whose
-//! materials are all Lambertian the classic hybrid traces nothing and computes exactly what
-//! radiosity alone does (the same floating-point operations: the images are bit-identical, and
-//! a test says so).
+//! ([`WhittedSettings::gather_rays`]) are stratified over the pixel's samples. Their noise is
+//! the price: highest where the solution holds small bright patches (a caustic's focus), which
+//! few gather rays find. On a scene whose materials are all Lambertian the classic hybrid
+//! traces nothing and computes exactly what radiosity alone does (the same floating-point
+//! operations: the images are bit-identical, and a test says so).
 //!
-//! **Per-pixel caustics.** Light that an emitter sends through glass onto a diffuse surface
-//! (L S+ D with a refraction) is focused more sharply than the element mesh can show. When the
-//! scene has a refracting surface (and, for the classic hybrids, the solution separates that
-//! light, [`DiffuseRadiance::separates_focused_caustics`]), the render loop adds a light
-//! tracing pass of exactly those paths at the diffuse surface the camera sees first
-//! ([`crate::light_tracing::CausticScope::Focused`], [`WhittedSettings::caustic_paths`] light
-//! paths per camera sample), and the hybrids leave that light out there, as the table says.
+//! **Per-pixel caustics.** Light that an emitter sends through mirrors and glass onto a diffuse
+//! surface (L S+ D) is focused more sharply than the element mesh can show, and gather rays
+//! find it only by chance. Where the camera sees a diffuse surface first, the render loop adds
+//! a light tracing pass of those paths ([`WhittedSettings::caustic_paths`] light paths per
+//! camera sample): all of them for the gathered hybrid ([`CausticScope::FirstDiffuse`], when
+//! the scene has a mirror or glass), those through glass for the classic hybrids
+//! ([`CausticScope::Focused`], when the scene has glass and the solution separates that
+//! light, [`DiffuseRadiance::separates_focused_caustics`]); the hybrids leave that light out
+//! there, as the table says.
 //!
 //! The solution is read only through [`DiffuseRadiance`]; this crate does not depend on the
 //! solver.
@@ -141,27 +143,31 @@ fn radiosity_based<'a>(
     settings: WhittedSettings,
     name: &'static str,
 ) -> Whitted<'a> {
-    // Per-pixel focused caustics: only where the view-dependent terms are traced, the source
-    // can leave that light out, and the scene has a refracting surface to focus it.
-    let caustics = (view_dependent
-        && settings.caustic_paths > 0.0
-        && source.can_leave_focused_caustics()
-        && scene.objects.iter().any(|o| {
-            scene.materials[o.material as usize]
-                .material
-                .is_dielectric()
-        }))
-    .then(|| {
-        LightTracer::new(
-            scene,
-            LightTracingSettings {
-                paths_per_sample: settings.caustic_paths,
-                max_depth: settings.max_depth,
-                ..LightTracingSettings::new(CausticScope::Focused)
-            },
-        )
-    })
-    .flatten();
+    // Per-pixel caustics: only where the view-dependent terms are traced, the source can
+    // leave that light out, and the scene has a surface to send it: glass for the focused
+    // caustics, a mirror or glass for all of them (the light tracer needs a specular target).
+    let caustics = source
+        .caustics_to_leave()
+        .filter(|&scope| {
+            view_dependent
+                && settings.caustic_paths > 0.0
+                && (scope != CausticScope::Focused
+                    || scene.objects.iter().any(|o| {
+                        scene.materials[o.material as usize]
+                            .material
+                            .is_dielectric()
+                    }))
+        })
+        .and_then(|scope| {
+            LightTracer::new(
+                scene,
+                LightTracingSettings {
+                    paths_per_sample: settings.caustic_paths,
+                    max_depth: settings.max_depth,
+                    ..LightTracingSettings::new(scope)
+                },
+            )
+        });
     Whitted {
         lights: Lights::new(scene),
         source,

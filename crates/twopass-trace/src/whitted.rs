@@ -14,7 +14,7 @@
 //! | `max_depth` | bounces | 8 | delta bounces followed after the camera hit |
 //! | `min_throughput` | dimensionless | 1e-3 | a branch whose largest channel weight falls below is cut |
 //! | `shadow_grid` | samples per axis | 4 | shadow rays per emitter per shading point: grid^2 |
-//! | `caustic_paths` | light paths per camera sample | 1 | the hybrids' per-pixel focused caustics ([`crate::hybrid`]); 0: off |
+//! | `caustic_paths` | light paths per camera sample | 1 | the hybrids' per-pixel caustics ([`crate::hybrid`]); 0: off |
 //! | `gather_rays` | rays per camera sample and shading point | 8 | the gathered hybrid's indirect light ([`crate::hybrid::gathered`]) |
 
 use smart_default::SmartDefault;
@@ -43,9 +43,10 @@ pub struct WhittedSettings {
     /// (`shadow_grid`^2 rays; at least 1).
     #[default(4)]
     pub shadow_grid: u32,
-    /// Light paths per camera sample of the hybrids' per-pixel focused caustics (light through
-    /// glass, [`crate::light_tracing::CausticScope::Focused`]); 0 turns them off. Used only when
-    /// the scene has a refracting surface and the solution separates that light.
+    /// Light paths per camera sample of the hybrids' per-pixel caustics (light through mirrors
+    /// and glass onto the surface the camera sees, [`crate::light_tracing::CausticScope`]); 0
+    /// turns them off (the gathered hybrid's gather rays then find that light by chance). See
+    /// [`crate::hybrid`] for when each hybrid runs them.
     #[default(1.0)]
     pub caustic_paths: f32,
     /// Gather rays per camera sample at each diffuse shading point of the gathered hybrid
@@ -69,9 +70,8 @@ pub struct Whitted<'a> {
     pub(crate) view_dependent: bool,
     pub(crate) settings: WhittedSettings,
     pub(crate) name: &'static str,
-    /// The per-pixel focused caustics (the hybrids only): the render loop adds this light
-    /// tracer's image, and the camera's first diffuse hit shows the solution without its
-    /// focused part.
+    /// The per-pixel caustics (the hybrids only): the render loop adds this light tracer's
+    /// image, and the camera's first diffuse hit leaves that light out ([`crate::hybrid`]).
     pub(crate) caustics: Option<LightTracer>,
 }
 
