@@ -387,8 +387,8 @@ fn region_mean(image: &twopass_image::Image, x: (f32, f32), y: (f32, f32)) -> DV
 fn the_tracer_adds_no_light_through_glass_again() {
     // Under the glass sphere the floor is hidden from the light: shadow rays stop at the glass
     // (an occluder) and the solution's direct part is zero there, so the caustic lives only in
-    // the solution's indirect part. The hybrid (the whole solution) and hybrid-direct (shadow
-    // rays plus the indirect part) must then agree on the caustic, and both must see it.
+    // the solution's indirect part. The classic hybrid (the whole solution) and hybrid-direct
+    // (shadow rays plus the indirect part) must then agree on the caustic, and both must see it.
     use twopass_trace::hybrid::{DirectLight, hybrid};
     use twopass_trace::{RenderProgress, RenderSettings, WhittedSettings, render};
     let (s, _) = load(scene_path("cornell-spheres.toml")).unwrap();
@@ -476,7 +476,7 @@ fn a_mirror_facing_no_diffuse_surface_is_not_modelled() {
 
 #[test]
 fn per_pixel_caustics_replace_the_meshs_focused_light_once() {
-    // The hybrid shows the light the glass sphere focuses either from the element mesh
+    // The classic hybrid shows the light the glass sphere focuses either from the element mesh
     // (caustic_paths = 0) or per pixel by light tracing, with the mesh's focused part taken
     // out where the camera sees it. Each counts it once: the image's and the caustic's mean
     // agree. Per pixel the caustic is sharper, so closer to the reference there.

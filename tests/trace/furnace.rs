@@ -7,7 +7,7 @@ use twopass_trace::{Reference, ReferenceSettings, RenderProgress, RenderSettings
 
 use super::common::{mean_and_error, scene};
 
-const CUBE: &str = "version = 1\n\
+pub(super) const CUBE: &str = "version = 1\n\
     [camera]\nposition = [0.1, -0.2, 0.05]\nlook_at = [0.4, 0.3, 1]\nfov_y = 100\nresolution = [32, 32]\n\
     [[material]]\nname = \"half\"\ntype = \"lambert\"\ndiffuse = 0.5\n\
     [[object]]\nname = \"floor\"\nmaterial = \"half\"\nemission = 0.5\n\
@@ -34,16 +34,24 @@ fn path_tracer_furnace_has_radiance_one() {
     };
     let out = render(&scene, &scene.camera, &r, &settings, &RenderProgress::new());
     assert_eq!(out.stats.non_finite, 0);
-    let img = out.layers.composite();
-    for c in 0..3 {
-        let values: Vec<f64> = img.pixels().iter().map(|p| f64::from(p[c])).collect();
-        let (mean, err) = mean_and_error(&values);
-        eprintln!("furnace channel {c}: {mean:.4} +- {err:.4}");
-        // Every pixel is an independent unbiased estimate of 1.
-        assert!((mean - 1.0).abs() < 4.0 * err, "biased: {mean} +- {err}");
-        assert!(4.0 * err < 0.02, "too noisy to decide at 2%: {err}");
-    }
+    assert_reads_one(&out.layers.composite(), 0.02);
     // The camera sees only emitters: the emission layer holds exactly L_e = 0.5.
     let e = out.layers.layer(twopass_trace::Layer::Emission).mean();
     assert!(e.abs_diff_eq(glam::Vec3::splat(0.5), 1e-6), "{e}");
+}
+
+/// Asserts that `img`, whose every pixel is an independent unbiased estimate of 1 (the
+/// furnace's radiance), has a mean of 1 per channel within four standard errors, and that
+/// four standard errors are below `resolution`.
+pub(super) fn assert_reads_one(img: &twopass_image::Image, resolution: f64) {
+    for c in 0..3 {
+        let values: Vec<f64> = img.pixels().iter().map(|p| f64::from(p[c])).collect();
+        let (mean, err) = mean_and_error(&values);
+        eprintln!("furnace channel {c}: {mean:.5} +- {err:.5}");
+        assert!((mean - 1.0).abs() < 4.0 * err, "biased: {mean} +- {err}");
+        assert!(
+            4.0 * err < resolution,
+            "too noisy to decide at {resolution}: {err}"
+        );
+    }
 }

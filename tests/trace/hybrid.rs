@@ -1,7 +1,9 @@
-//! The hybrid invariant (ARCHITECTURE.md, "Hybrid without double counting"): on a scene whose
-//! materials are all Lambertian, the hybrid renders exactly what radiosity alone renders, with a
-//! test double and with a real solution; and the hybrid against the reference path tracer on the
-//! diffuse Cornell box.
+//! The classic hybrid's invariant (ARCHITECTURE.md, "Hybrid without double counting"): on a
+//! scene whose materials are all Lambertian, the classic hybrid (`hybrid-classic`: the solution
+//! shown where the camera sees a diffuse surface) renders exactly what radiosity alone renders,
+//! with a test double and with a real solution; and the classic hybrid against the reference
+//! path tracer on the diffuse Cornell box. The gathered hybrid (`hybrid`) traces shadow and
+//! gather rays on any scene; tests/trace/gathered.rs checks it.
 
 use std::ops::ControlFlow;
 

@@ -9,5 +9,6 @@ mod common;
 mod determinism;
 mod furnace;
 mod gather;
+mod gathered;
 mod hybrid;
 mod optics;

@@ -6,7 +6,7 @@
 use std::ops::ControlFlow;
 use std::time::Instant;
 
-use twopass_trace::hybrid::{DirectLight, hybrid, radiosity_only};
+use twopass_trace::hybrid::{DirectLight, gathered, hybrid, radiosity_only};
 use twopass_trace::whitted::ambient_estimate;
 use twopass_trace::{
     Integrator, Reference, ReferenceSettings, RenderProgress, RenderSettings, Whitted,
@@ -41,6 +41,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let methods: Vec<Box<dyn Integrator + '_>> = vec![
         Box::new(Whitted::new(&scene, ambient_estimate(&scene), w)),
         Box::new(radiosity_only(&scene, &solution)),
+        Box::new(gathered(&scene, &solution, w)),
         Box::new(hybrid(&scene, &solution, DirectLight::FromSolution, w)),
         Box::new(hybrid(&scene, &solution, DirectLight::PerPixel, w)),
         Box::new(Reference::new(&scene, ReferenceSettings::default())),

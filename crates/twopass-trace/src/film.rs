@@ -15,8 +15,9 @@ pub enum Layer {
     /// Light emitted toward the camera by the surface it sees first (one-sided emitters).
     Emission,
     /// Light reflected diffusely at the first surface: from the radiosity solution (radiosity
-    /// alone, hybrid), from shadow rays (Whitted, the direct part of hybrid-direct, plus the
-    /// radiosity indirect part there), or every diffusely reflected path (reference).
+    /// alone, hybrid-classic), from shadow rays (Whitted, the direct part of the hybrid and
+    /// hybrid-direct, plus the gather rays or the radiosity indirect part there), or every
+    /// diffusely reflected path (reference).
     Diffuse,
     /// Light reflected by the glossy lobe (Phong, Blinn-Phong, Cook-Torrance) at the first
     /// surface: from emitters with shadow rays (Whitted, hybrid); the reference path tracer also

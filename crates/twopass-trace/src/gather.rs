@@ -18,10 +18,20 @@
 //!
 //! The point's own value in the solution is not used at all.
 //!
+//! **Per pixel.** The gathered hybrid ([`crate::hybrid::gathered`]) runs the same gather rays
+//! at every diffuse point the camera sees, directly or through mirrors and glass, a few per
+//! camera sample (its direct light comes from the Whitted core's shadow rays, the same
+//! estimator as E_direct's). Where the camera sees the point directly and a light tracer adds
+//! the caustics per pixel ([`crate::light_tracing::CausticScope::FirstDiffuse`]: L S+ D E),
+//! the gather rays leave out the emission they reach through a delta path, which is exactly
+//! that path class; the rest of the solution they reach through mirrors and glass they keep.
+//!
 //! **Near hits.** A landing nearer than [`GatherSettings::near_distance`] (by default the
 //! radiosity pass's element edge) takes one more bounce instead of the solution's value there:
 //! near the point one element fills much of the hemisphere, and its error (a concave corner
-//! or a contact the element mesh does not resolve) would reach the point whole.
+//! or a contact the element mesh does not resolve) would reach the point whole. That bounce's
+//! own near landings bounce again, up to [`NEAR_BOUNCES`] in all (in a contact both surfaces
+//! near the point are where the solution leaks).
 //!
 //! **Inside objects.** The estimate reports which share of its gather rays first hit the back
 //! of a closed object ([`RadianceEstimate::back_faces`]): a lightmap texel whose centre lies
@@ -113,8 +123,9 @@ pub struct GatherSettings {
     pub max_depth: u32,
     /// Hits closer than this (scene units) take one more bounce instead of the solution's
     /// value: a shadow ray from the hit and one more cosine-distributed ray that reads the
-    /// solution. Near the point, an element of the solution fills much of the hemisphere and
-    /// its error would reach the point whole (a concave corner, a contact); farther away the
+    /// solution (or, landing this near again, bounces again: [`NEAR_BOUNCES`] in all). Near
+    /// the point, an element of the solution fills much of the hemisphere and its error would
+    /// reach the point whole (a concave corner, a contact); farther away the
     /// same error is averaged over many elements. `None`: the scene's bounding-box diagonal
     /// over [`NEAR_PER_DIAGONAL`] (the radiosity pass's default element edge); 0: never.
     #[default(None)]
@@ -123,6 +134,11 @@ pub struct GatherSettings {
     #[default(0)]
     pub seed: u64,
 }
+
+/// Most bounces a near hit takes before reading the solution ([`GatherSettings::near_distance`]):
+/// each further one multiplies the solution's error there by a reflectance and the share of
+/// near landings, so a few leave a contact's error far below the gather's noise.
+pub const NEAR_BOUNCES: u32 = 4;
 
 /// The default [`GatherSettings::near_distance`] is the scene's diagonal over this: the
 /// default element edge of the radiosity pass, the scale of the solution's blockiness.
@@ -221,6 +237,37 @@ impl<'a> Gatherer<'a> {
         self.settings
     }
 
+    /// The diffusely reflected indirect light at the shading point `s` (rho times the mean
+    /// radiance its gather rays bring, W/(m^2 sr); zero on a back face or a surface without a
+    /// diffuse part) from `rays` gather rays of one camera sample: the per-pixel gather of the
+    /// hybrid ([`crate::hybrid::gathered`]). The rays are [`RadianceEstimator::estimate`]'s
+    /// (near hits take one more bounce, delta paths are followed), their numbers forked from
+    /// the camera sample's `sampler` at `site` ([`Sampler::fork`]) so that a pixel's rays over
+    /// all its samples are stratified together. With `caustics_elsewhere`, the emission reached
+    /// through mirrors and glass is left to the light tracer.
+    pub(crate) fn indirect_per_sample(
+        &self,
+        s: &Shading<'_>,
+        rays: u32,
+        caustics_elsewhere: bool,
+        (sampler, site): (&Sampler, u64),
+        tally: &mut Tally,
+    ) -> Rgb {
+        if !s.hit.front_face || !s.material.reflects_diffusely() || rays == 0 {
+            return Rgb::ZERO;
+        }
+        let mut sum = Rgb::ZERO;
+        for j in 0..rays {
+            let mut fork = sampler.fork(site, j, rays);
+            let u = fork.next_2d();
+            let (l, _) = self.gather_ray(s, u, caustics_elsewhere, &mut fork, tally);
+            if l.is_finite() {
+                sum += l;
+            }
+        }
+        s.material.diffuse_albedo() * sum / rays as f32
+    }
+
     /// The shading context of a point on the front of triangle `t`, seen along its shading
     /// normal.
     fn shading_at(&self, t: u32, b: [f32; 3]) -> Shading<'a> {
@@ -230,10 +277,14 @@ impl<'a> Gatherer<'a> {
 
     /// Radiance arriving along one gather ray leaving `s` in the cosine-distributed
     /// direction of `u` (the direct part excluded), W/(m^2 sr), and what the ray hit first.
+    /// With `caustics_elsewhere`, the emission reached through a delta path is left out: a
+    /// light tracer counts that light at this point
+    /// ([`crate::light_tracing::CausticScope::FirstDiffuse`]).
     fn gather_ray(
         &self,
         s: &Shading<'_>,
         u: Vec2,
+        caustics_elsewhere: bool,
         sampler: &mut Sampler,
         tally: &mut Tally,
     ) -> (Rgb, FirstHit) {
@@ -300,7 +351,7 @@ impl<'a> Gatherer<'a> {
             let next = here.frame.to_world(bs.wi).normalize();
             tally.rays += 1;
             if let Some(h) = scene.intersect_from(&here.hit.point, next) {
-                l += bs.weight * self.follow(h, next, 1, sampler, tally);
+                l += bs.weight * self.follow(h, next, caustics_elsewhere, sampler, tally);
             }
         }
         (l, first)
@@ -310,6 +361,9 @@ impl<'a> Gatherer<'a> {
     /// toward the point, without its emission (the point's shadow rays counted that) and
     /// estimated by one more bounce: one shadow ray to an emitter chosen by power, and one
     /// cosine-distributed ray whose landing gives the solution's radiance less its emission.
+    /// A landing of that ray near the hit in turn takes one more bounce, up to
+    /// [`NEAR_BOUNCES`] in all: in a contact or a concave corner the surfaces facing each
+    /// other near the point are where the solution errs most (a contact's leak).
     fn near_bounce(
         &self,
         t: u32,
@@ -319,55 +373,77 @@ impl<'a> Gatherer<'a> {
         tally: &mut Tally,
     ) -> Rgb {
         let scene = self.scene;
-        let hit = scene.surface_hit(t, b);
-        let (point, normal) = (hit.point, hit.shading_normal);
-        let here = Shading::new(scene, hit, dir);
-        let rho = here.material.diffuse_albedo();
-        let mut irradiance = Rgb::ZERO;
-        if !scene.emitters.is_empty() {
-            let e = self.choice.pick(sampler.next_f32());
-            let p = self.choice.probability(e);
-            if p > 0.0 {
-                irradiance += irradiance_from(scene, &self.lights, &here, e, 1, sampler, tally) / p;
+        let (mut t, mut b, mut dir) = (t, b, dir);
+        // The product of the reflectances of the bounces so far, and the radiance gathered.
+        let (mut weight, mut sum) = (Rgb::ONE, Rgb::ZERO);
+        for level in 1..=NEAR_BOUNCES {
+            let hit = scene.surface_hit(t, b);
+            let (point, normal) = (hit.point, hit.shading_normal);
+            let here = Shading::new(scene, hit, dir);
+            weight *= here.material.diffuse_albedo();
+            if !scene.emitters.is_empty() {
+                let e = self.choice.pick(sampler.next_f32());
+                let p = self.choice.probability(e);
+                if p > 0.0 {
+                    let irradiance =
+                        irradiance_from(scene, &self.lights, &here, e, 1, sampler, tally) / p;
+                    sum += weight * irradiance * std::f32::consts::FRAC_1_PI;
+                }
             }
-        }
-        let bounce = cosine_direction(normal, sampler.next_2d());
-        if bounce.dot(point.normal) > 0.0 {
+            let bounce = cosine_direction(normal, sampler.next_2d());
+            if bounce.dot(point.normal) <= 0.0 {
+                break;
+            }
             tally.rays += 1;
             let origin = point.spawn_origin(bounce);
-            if let Some(h) = scene.accel().closest(origin, bounce, f32::INFINITY)
-                && bounce.dot(scene.mesh.geometric_normals[h.triangle as usize]) < 0.0
-            {
-                let landed = scene.mesh.triangle_object[h.triangle as usize] as usize;
-                let solved = self.solution.radiance(h.triangle, h.barycentric);
-                // E = pi mean(L) under cosine sampling.
-                irradiance +=
-                    (solved - scene.objects[landed].emission).max(Rgb::ZERO) * std::f32::consts::PI;
+            let Some(h) = scene.accel().closest(origin, bounce, f32::INFINITY) else {
+                break;
+            };
+            if bounce.dot(scene.mesh.geometric_normals[h.triangle as usize]) >= 0.0 {
+                break;
             }
+            let landed = scene.mesh.triangle_object[h.triangle as usize] as usize;
+            let material = &scene.materials[scene.objects[landed].material as usize].material;
+            if h.t < self.near
+                && level < NEAR_BOUNCES
+                && material.delta().is_none()
+                && material.reflects_diffusely()
+            {
+                (t, b, dir) = (h.triangle, h.barycentric, bounce);
+                continue;
+            }
+            // Under cosine sampling the reflected radiance is rho times the landing's.
+            let solved = self.solution.radiance(h.triangle, h.barycentric);
+            sum += weight * (solved - scene.objects[landed].emission).max(Rgb::ZERO);
+            break;
         }
-        rho * irradiance * std::f32::consts::FRAC_1_PI
+        sum
     }
 
-    /// Radiance arriving along a delta path from its hit `hit` (reached along `dir`,
-    /// `depth` delta bounces in), W/(m^2 sr): the solution where it ends, emission included.
+    /// Radiance arriving along a delta path from its hit `hit` (reached along `dir`, one delta
+    /// bounce in), W/(m^2 sr): the solution where it ends, emission included unless
+    /// `caustics_elsewhere` (a light tracer counts it).
     fn follow(
         &self,
         hit: Hit,
         dir: Vec3,
-        depth: u32,
+        caustics_elsewhere: bool,
         sampler: &mut Sampler,
         tally: &mut Tally,
     ) -> Rgb {
         let scene = self.scene;
-        let (mut hit, mut dir, mut depth, mut throughput) = (hit, dir, depth, Rgb::ONE);
+        let (mut hit, mut dir, mut depth, mut throughput) = (hit, dir, 1, Rgb::ONE);
         let mut sum = Rgb::ZERO;
         loop {
             let here = Shading::new(scene, hit, dir);
             if here.hit.front_face {
-                sum += throughput
-                    * self
-                        .solution
-                        .radiance(here.hit.point.triangle, here.hit.barycentric);
+                let mut l = self
+                    .solution
+                    .radiance(here.hit.point.triangle, here.hit.barycentric);
+                if caustics_elsewhere {
+                    l = (l - here.emitted).max(Rgb::ZERO);
+                }
+                sum += throughput * l;
             }
             let Some(lobe) = here.material.delta() else {
                 return sum;
@@ -444,7 +520,7 @@ impl RadianceEstimator for Gatherer<'_> {
             for i in n..n + batch {
                 let mut sampler = Sampler::new(self.settings.seed, key, u64::from(i));
                 let u = sampler.next_2d();
-                let (l, first) = self.gather_ray(&s, u, &mut sampler, &mut tally);
+                let (l, first) = self.gather_ray(&s, u, false, &mut sampler, &mut tally);
                 hits += u32::from(first != FirstHit::Nothing);
                 backs += u32::from(first == FirstHit::Back);
                 if !l.is_finite() {

@@ -1,34 +1,69 @@
-//! The radiosity-based methods: radiosity alone, the two-pass hybrid (Wallace, Cohen &
-//! Greenberg 1987) and the hybrid with per-pixel direct light (Chen et al. 1991), all on the
+//! The radiosity-based methods: radiosity alone, the gathered hybrid (Chen et al. 1991's
+//! multi-pass method: a final gather over the solution per pixel), the classic two-pass hybrid
+//! (Wallace, Cohen & Greenberg 1987) and the hybrid with per-pixel direct light, all on the
 //! Whitted shading core of [`crate::whitted`] with a different source of diffuse light.
 //!
-//! **No double counting** (ARCHITECTURE.md, "The physics, in brief" and "Specular transfer"): the
-//! radiosity solution holds all diffuse light, direct and indirect, and emission, including the
-//! light that reached a diffuse surface through mirrors and glass (L S+ D, D S+ D: the radiosity
-//! pass's specular transfer). The hybrid adds only what radiosity cannot hold: glossy lobes
-//! against the emitters and delta reflection and refraction paths from the eye (E S+ D), whose
-//! rays take the radiosity where they land. Shadow rays stop at mirrors and glass (they are
-//! occluders), so they never add a path through them again; the per-pixel direct light of
-//! hybrid-direct replaces only the solution's direct part, which holds no such path either. On a scene whose materials are all Lambertian none of those
-//! terms exists, no shadow ray is traced and the hybrid computes exactly what radiosity alone does
-//! (the same floating-point operations: the images are bit-identical, and a test says so).
+//! | method | function | diffuse light at a shading point |
+//! | --- | --- | --- |
+//! | `radiosity` | [`radiosity_only`] | the solution there, nothing traced |
+//! | `hybrid` | [`gathered`] | shadow rays to every emitter, plus gather rays that read the solution where they land ([`crate::gather`]) |
+//! | `hybrid-classic` | [`hybrid`] with [`DirectLight::FromSolution`] | the solution there |
+//! | `hybrid-direct` | [`hybrid`] with [`DirectLight::PerPixel`] | shadow rays, plus the solution's indirect part there |
 //!
-//! **Per-pixel caustics.** Light that an emitter sends through glass onto a diffuse surface
-//! (L S+ D with a refraction) is focused more sharply than the element mesh can show. When the
-//! solution separates it ([`DiffuseRadiance::separates_focused_caustics`]) and the scene has a
-//! refracting surface, the hybrids show, where the camera sees a diffuse surface first, the
-//! solution without that part, and the render loop adds a light tracing pass of exactly those
-//! paths ([`crate::light_tracing::CausticScope::Focused`],
-//! [`WhittedSettings::caustic_paths`] light paths per camera sample): counted once, per pixel.
-//! Seen through a mirror or glass (deeper in the recursion) the solution is shown whole.
+//! All but radiosity alone add the glossy lobes against the emitters (shadow rays) and follow
+//! delta reflection and refraction from the eye (E S+), shading every surface reached the
+//! same way as the camera's first hit.
+//!
+//! **No double counting** (ARCHITECTURE.md, "The physics, in brief", "The final gather" and
+//! "Specular transfer"). The radiosity solution holds all diffuse light, direct and indirect,
+//! and emission, including the light that reached a diffuse surface through mirrors and glass
+//! (L S+ D, D S+ D: the radiosity pass's specular transfer). Shadow rays stop at mirrors and
+//! glass (they are occluders), so they never add a path through them. Which estimator counts
+//! which path class (Heckbert's notation from the light; x the diffuse point being shaded, seen
+//! from the eye directly or through mirrors and glass):
+//!
+//! | path class | `hybrid` (gathered) | `hybrid-classic` | `hybrid-direct` |
+//! | --- | --- | --- | --- |
+//! | L x: emission of x | x's emission | solution at x | x's emission |
+//! | L x: direct light | shadow rays at x | solution at x | shadow rays at x |
+//! | L ... D y x, y farther than the near distance | gather rays: the solution at y less y's emission | solution at x | solution's indirect part at x |
+//! | L ... D y x, y near x | gather rays: more bounces near x (a shadow ray and a ray each, [`crate::gather::NEAR_BOUNCES`] at most), then the solution less emission | solution at x | solution's indirect part at x |
+//! | L ... D y S+ x: diffuse light through mirrors and glass | gather rays: the delta path followed, the solution less emission where it ends | solution at x | solution's indirect part at x |
+//! | L S+ x, x the camera's first hit | light tracer ([`CausticScope::FirstDiffuse`]); the gather rays leave the emission at a delta path's end out | with glass in S+: light tracer ([`CausticScope::Focused`]), the solution's focused part left out at x; with mirrors only: solution at x | as hybrid-classic, in the indirect part |
+//! | L S+ x, x seen through mirrors or glass | gather rays: the emission where the delta path ends | solution at x (the blurred caustic shown whole) | solution's indirect part at x |
+//! | L ... S+ E: seen in mirrors and glass | Whitted recursion, then the above at x | Whitted recursion, then the above | Whitted recursion, then the above |
+//! | L G E: glossy highlights | shadow rays | shadow rays | shadow rays |
+//! | L ... D G E, L ... S G E | not shown | not shown | not shown |
+//!
+//! In the gathered hybrid the solution's own value at x is never used: its blockiness and
+//! its leaks along contacts never reach the image, and its errors reach it only through one
+//! bounce, scaled by rho and averaged over the hemisphere. The gather rays per camera sample
+//! ([`WhittedSettings::gather_rays`]) are stratified over the pixel's samples. Their noise is
+//! the price: highest where the solution holds small bright patches (a caustic's focus), which
+//! few gather rays find. On a scene whose materials are all Lambertian the classic hybrid
+//! traces nothing and computes exactly what radiosity alone does (the same floating-point
+//! operations: the images are bit-identical, and a test says so).
+//!
+//! **Per-pixel caustics.** Light that an emitter sends through mirrors and glass onto a diffuse
+//! surface (L S+ D) is focused more sharply than the element mesh can show, and gather rays
+//! find it only by chance. Where the camera sees a diffuse surface first, the render loop adds
+//! a light tracing pass of those paths ([`WhittedSettings::caustic_paths`] light paths per
+//! camera sample): all of them for the gathered hybrid ([`CausticScope::FirstDiffuse`], when
+//! the scene has a mirror or glass), those through glass for the classic hybrids
+//! ([`CausticScope::Focused`], when the scene has glass and the solution separates that
+//! light, [`DiffuseRadiance::separates_focused_caustics`]); the hybrids leave that light out
+//! there, as the table says.
 //!
 //! The solution is read only through [`DiffuseRadiance`]; this crate does not depend on the
 //! solver.
+
+use std::sync::Arc;
 
 use twopass_scene::{DiffuseRadiance, Scene};
 
 use crate::diffuse::DiffuseSource;
 use crate::emitters::Lights;
+use crate::gather::{GatherSettings, Gatherer};
 use crate::light_tracing::{CausticScope, LightTracer, LightTracingSettings};
 use crate::whitted::{Whitted, WhittedSettings};
 
@@ -49,7 +84,8 @@ pub fn radiosity_only<'a>(scene: &Scene, solution: &'a dyn DiffuseRadiance) -> W
 /// Where the two-pass hybrid takes direct diffuse light from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum DirectLight {
-    /// From the solution, which holds all diffuse light: the hybrid (`hybrid`).
+    /// From the solution, which holds all diffuse light: the classic hybrid
+    /// (`hybrid-classic`).
     FromSolution,
     /// From shadow rays at every shading point (Chen et al. 1991; sharp shadows without a
     /// finer mesh), the solution's [`DiffuseRadiance::indirect_radiance`] for the rest: the
@@ -57,7 +93,32 @@ pub enum DirectLight {
     PerPixel,
 }
 
-/// The two-pass hybrid: the solution's diffuse light (all of it, or its indirect part with
+/// The gathered hybrid (`hybrid`): at every diffuse shading point (the camera's first hit and
+/// every one reached through mirrors and glass), direct light by shadow rays to every emitter
+/// and the indirect light by [`WhittedSettings::gather_rays`] gather rays per camera sample
+/// that read `solution` where they land ([`Gatherer`], the final gather of the bakes), plus
+/// the glossy lobes against the emitters and delta reflection and refraction paths.
+pub fn gathered<'a>(
+    scene: &'a Scene,
+    solution: &'a dyn DiffuseRadiance,
+    settings: WhittedSettings,
+) -> Whitted<'a> {
+    let gatherer = Gatherer::new(
+        scene,
+        solution,
+        GatherSettings {
+            max_depth: settings.max_depth,
+            ..GatherSettings::default()
+        },
+    );
+    let source = DiffuseSource::Gather {
+        gatherer: Arc::new(gatherer),
+        rays: settings.gather_rays,
+    };
+    radiosity_based(scene, source, true, settings, "hybrid")
+}
+
+/// The classic two-pass hybrids: the solution's diffuse light (all of it, or its indirect part with
 /// `direct` light per pixel), plus the glossy lobes against the emitters (shadow rays) and
 /// delta reflection and refraction paths.
 pub fn hybrid<'a>(
@@ -67,7 +128,7 @@ pub fn hybrid<'a>(
     settings: WhittedSettings,
 ) -> Whitted<'a> {
     let (source, name) = match direct {
-        DirectLight::FromSolution => (DiffuseSource::Radiosity(solution), "hybrid"),
+        DirectLight::FromSolution => (DiffuseSource::Radiosity(solution), "hybrid-classic"),
         DirectLight::PerPixel => (DiffuseSource::RadiosityIndirect(solution), "hybrid-direct"),
     };
     radiosity_based(scene, source, true, settings, name)
@@ -82,27 +143,31 @@ fn radiosity_based<'a>(
     settings: WhittedSettings,
     name: &'static str,
 ) -> Whitted<'a> {
-    // Per-pixel focused caustics: only where the view-dependent terms are traced, the solution
-    // separates that light, and the scene has a refracting surface to focus it.
-    let caustics = (view_dependent
-        && settings.caustic_paths > 0.0
-        && source.separates_focused_caustics()
-        && scene.objects.iter().any(|o| {
-            scene.materials[o.material as usize]
-                .material
-                .is_dielectric()
-        }))
-    .then(|| {
-        LightTracer::new(
-            scene,
-            LightTracingSettings {
-                paths_per_sample: settings.caustic_paths,
-                max_depth: settings.max_depth,
-                ..LightTracingSettings::new(CausticScope::Focused)
-            },
-        )
-    })
-    .flatten();
+    // Per-pixel caustics: only where the view-dependent terms are traced, the source can
+    // leave that light out, and the scene has a surface to send it: glass for the focused
+    // caustics, a mirror or glass for all of them (the light tracer needs a specular target).
+    let caustics = source
+        .caustics_to_leave()
+        .filter(|&scope| {
+            view_dependent
+                && settings.caustic_paths > 0.0
+                && (scope != CausticScope::Focused
+                    || scene.objects.iter().any(|o| {
+                        scene.materials[o.material as usize]
+                            .material
+                            .is_dielectric()
+                    }))
+        })
+        .and_then(|scope| {
+            LightTracer::new(
+                scene,
+                LightTracingSettings {
+                    paths_per_sample: settings.caustic_paths,
+                    max_depth: settings.max_depth,
+                    ..LightTracingSettings::new(scope)
+                },
+            )
+        });
     Whitted {
         lights: Lights::new(scene),
         source,

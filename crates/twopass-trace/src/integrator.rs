@@ -31,7 +31,7 @@ pub struct SampleState<'a> {
 /// loop ([`crate::render()`]) owns tiling, threads, seeding and progress.
 pub trait Integrator: Sync {
     /// A short name for reports and file names (`whitted`, `radiosity`, `hybrid`,
-    /// `hybrid-direct`, `reference`).
+    /// `hybrid-classic`, `hybrid-direct`, `reference`).
     fn name(&self) -> &'static str;
 
     /// Radiance (W/(m^2 sr) per channel) arriving at the camera along `ray` (unit direction),

@@ -3,8 +3,9 @@
 //! - [`Whitted`]: Whitted-style ray tracing alone (shadow rays to the area emitters, the local
 //!   models of twopass-brdf, the Phong ambient term in place of interreflection, mirror
 //!   reflection and refraction followed recursively).
-//! - [`hybrid::radiosity_only`], [`hybrid::hybrid`] (with [`hybrid::DirectLight`]): the
-//!   radiosity-based methods, reading a solution through
+//! - [`hybrid::radiosity_only`], [`hybrid::gathered`] (the hybrid: a final gather over the
+//!   solution per pixel, [`gather`]), [`hybrid::hybrid`] (the classic hybrids, with
+//!   [`hybrid::DirectLight`]): the radiosity-based methods, reading a solution through
 //!   [`twopass_scene::DiffuseRadiance`] only.
 //! - [`Reference`]: a path tracer with next-event estimation, MIS and Russian roulette, the
 //!   ground truth.

@@ -16,9 +16,13 @@
 //! - [`CausticScope::Focused`] (the hybrid): only the paths whose delta chain holds a
 //!   refraction, connected at their first diffuse vertex with its diffuse reflectance: the light
 //!   the radiosity pass deposits on its elements blurred by their size (the focus under a glass
-//!   sphere). The hybrid shows the solution less that part there
-//!   ([`twopass_scene::DiffuseRadiance::focused_caustic_radiance`]), and the light tracer's
-//!   value in its place.
+//!   sphere). The classic hybrids show the solution less that part there
+//!   ([`twopass_scene::DiffuseRadiance::focused_caustic_radiance`]), the gathered hybrid
+//!   leaves out the emission its gather rays reach through a refraction there
+//!   ([`crate::gather`]), and the light tracer's value takes its place.
+//! - [`CausticScope::FirstDiffuse`] (the gathered hybrid): as `Focused` for every delta chain,
+//!   mirrors too; the gathered hybrid's gather rays at the surface the camera sees leave out
+//!   the emission they reach through any delta path.
 //!
 //! **Estimator.** A light path starts at a point of an emitter chosen by power, uniform over
 //! its area, in a direction drawn from the cones its specular objects subtend
@@ -60,8 +64,12 @@ pub enum CausticScope {
     /// diffuse or glossy vertex: the reference's half of the path space.
     All,
     /// Paths whose delta chain holds a refraction, connected at their first diffuse vertex
-    /// with its diffuse reflectance only: the hybrid's per-pixel caustics.
+    /// with its diffuse reflectance only: the classic hybrids' per-pixel caustics.
     Focused,
+    /// Every path through at least one delta bounce, connected at its first diffuse vertex
+    /// with its diffuse reflectance only: the gathered hybrid's per-pixel caustics (its gather
+    /// rays would find the light a mirror or glass sends onto the point only by chance).
+    FirstDiffuse,
 }
 
 /// Settings of the light tracer.
@@ -279,6 +287,10 @@ impl LightTracer {
                         if refracted {
                             self.connect(scene, view, &h, &frame, wo, beta, true, tally, splats);
                         }
+                        return;
+                    }
+                    CausticScope::FirstDiffuse => {
+                        self.connect(scene, view, &h, &frame, wo, beta, true, tally, splats);
                         return;
                     }
                     CausticScope::All => {

@@ -31,6 +31,8 @@ const SOBOL_SAMPLES: u64 = 1 << 16;
 #[derive(Debug, Clone)]
 pub struct Sampler {
     stream: SplitMix64,
+    /// The hash of (seed, pixel, sample) the stream starts from; forks derive theirs from it.
+    key: u64,
     /// The point's index in the pixel's sequence (the sample number), or `u32::MAX` past it.
     index: u32,
     /// The next dimension [`Sampler::next_f32`] hands out.
@@ -49,6 +51,7 @@ impl Sampler {
         let h = mix64(p ^ sample.wrapping_mul(0xa076_1d64_78bd_642f));
         Self {
             stream: SplitMix64::new(h),
+            key: h,
             index: if sample < SOBOL_SAMPLES {
                 sample as u32
             } else {
@@ -56,6 +59,35 @@ impl Sampler {
             },
             dimension: 0,
             scramble: (p >> 32) as u32,
+            set: [0.0; 4],
+        }
+    }
+
+    /// The numbers of sub-sample `j` of `per` drawn at site `site` of this camera sample: point
+    /// `sample * per + j` of a Sobol sequence scrambled per (pixel, site), so that the sub-samples
+    /// of all of a pixel's camera samples together are the first points of one sequence (a
+    /// per-pixel gather's rays stratified over the pixel, not only within one camera sample).
+    /// `site` tells apart the places one camera sample draws sub-samples at (the camera hit,
+    /// each landing of the delta recursion), numbered alike in every camera sample. The
+    /// independent stream is hashed from the same indices.
+    pub fn fork(&self, site: u64, j: u32, per: u32) -> Self {
+        let scramble = (mix64(u64::from(self.scramble) ^ site.wrapping_mul(0x9e37_79b9_7f4a_7c15))
+            >> 32) as u32;
+        let per = u64::from(per.max(1));
+        let index = (self.index != u32::MAX)
+            .then(|| u64::from(self.index) * per + u64::from(j))
+            .filter(|&i| i < SOBOL_SAMPLES);
+        let key = mix64(
+            self.key
+                ^ site.wrapping_mul(0x9e37_79b9_7f4a_7c15)
+                ^ u64::from(j).wrapping_mul(0xd6e8_feb8_6659_fd93),
+        );
+        Self {
+            stream: SplitMix64::new(key),
+            key,
+            index: index.map_or(u32::MAX, |i| i as u32),
+            dimension: 0,
+            scramble,
             set: [0.0; 4],
         }
     }
@@ -208,5 +240,38 @@ mod tests {
             assert!((c - lo).abs_diff_eq(glam::Vec2::splat(0.125), 1e-6));
             assert!(stratum(i, k, glam::Vec2::splat(0.999_999_94)).max_element() < 1.0);
         }
+    }
+
+    /// A pixel's forks at one site, `per` per camera sample, are the points `sample * per + j`
+    /// of one sequence: over 4 samples of 4 forks the first dimension puts one value in each
+    /// sixteenth of [0, 1); other sites and pixels scramble it differently.
+    #[test]
+    fn forks_of_a_pixels_samples_are_one_stratified_sequence() {
+        let first = |pixel, sample, site, j, per| {
+            Sampler::new(9, pixel, sample).fork(site, j, per).next_f32()
+        };
+        // Sample 1's fork 0 of 2 and sample 2's fork 0 of 1 are both point 2.
+        assert_eq!(first(5, 1, 3, 0, 2), first(5, 2, 3, 0, 1));
+        let mut strata: Vec<u32> = (0..4u64)
+            .flat_map(|s| (0..4).map(move |j| (first(5, s, 3, j, 4) * 16.0) as u32))
+            .collect();
+        strata.sort_unstable();
+        assert_eq!(strata, (0..16).collect::<Vec<_>>());
+        assert_ne!(
+            first(5, 0, 3, 0, 4),
+            first(5, 0, 4, 0, 4),
+            "sites share a scramble"
+        );
+        assert_ne!(
+            first(5, 0, 3, 0, 4),
+            first(6, 0, 3, 0, 4),
+            "pixels share a scramble"
+        );
+        // Reproducible, and the independent stream differs per fork.
+        let mut a = Sampler::new(9, 5, 1).fork(3, 2, 4);
+        let mut b = Sampler::new(9, 5, 1).fork(3, 2, 4);
+        assert_eq!(a.next_u64(), b.next_u64());
+        let mut c = Sampler::new(9, 5, 1).fork(3, 1, 4);
+        assert_ne!(a.next_u64(), c.next_u64());
     }
 }

@@ -14,14 +14,15 @@
 //! | `max_depth` | bounces | 8 | delta bounces followed after the camera hit |
 //! | `min_throughput` | dimensionless | 1e-3 | a branch whose largest channel weight falls below is cut |
 //! | `shadow_grid` | samples per axis | 4 | shadow rays per emitter per shading point: grid^2 |
-//! | `caustic_paths` | light paths per camera sample | 1 | the hybrids' per-pixel focused caustics ([`crate::hybrid`]); 0: off |
+//! | `caustic_paths` | light paths per camera sample | 1 | the hybrids' per-pixel caustics ([`crate::hybrid`]); 0: off |
+//! | `gather_rays` | rays per camera sample and shading point | 8 | the gathered hybrid's indirect light ([`crate::hybrid::gathered`]) |
 
 use smart_default::SmartDefault;
 use twopass_brdf::Rgb;
 use twopass_scene::{Ray, Scene};
 
 use crate::counters::Tally;
-use crate::diffuse::DiffuseSource;
+use crate::diffuse::{DiffuseSource, SampleSite};
 use crate::emitters::Lights;
 use crate::film::{Layer, Radiance};
 use crate::integrator::{Integrator, SampleState, Shading, direct_light, trace_from};
@@ -42,11 +43,19 @@ pub struct WhittedSettings {
     /// (`shadow_grid`^2 rays; at least 1).
     #[default(4)]
     pub shadow_grid: u32,
-    /// Light paths per camera sample of the hybrids' per-pixel focused caustics (light through
-    /// glass, [`crate::light_tracing::CausticScope::Focused`]); 0 turns them off. Used only when
-    /// the scene has a refracting surface and the solution separates that light.
+    /// Light paths per camera sample of the hybrids' per-pixel caustics (light through mirrors
+    /// and glass onto the surface the camera sees, [`crate::light_tracing::CausticScope`]); 0
+    /// turns them off (the gathered hybrid's gather rays then find that light by chance). See
+    /// [`crate::hybrid`] for when each hybrid runs them.
     #[default(1.0)]
     pub caustic_paths: f32,
+    /// Gather rays per camera sample at each diffuse shading point of the gathered hybrid
+    /// ([`crate::hybrid::gathered`]): a pixel of `spp` samples averages `spp` times as many
+    /// (stratified together, [`Sampler::fork`]). 0: no indirect light. At the CLI's 16
+    /// samples per pixel the default's 128 rays per pixel bring the indirect light's noise on
+    /// the Cornell box under its discretisation error (docs/benchmarks.md).
+    #[default(8)]
+    pub gather_rays: u32,
 }
 
 /// A Whitted-family ray tracer: camera rays, local models against emitters, delta lobes
@@ -61,9 +70,8 @@ pub struct Whitted<'a> {
     pub(crate) view_dependent: bool,
     pub(crate) settings: WhittedSettings,
     pub(crate) name: &'static str,
-    /// The per-pixel focused caustics (the hybrids only): the render loop adds this light
-    /// tracer's image, and the camera's first diffuse hit shows the solution without its
-    /// focused part.
+    /// The per-pixel caustics (the hybrids only): the render loop adds this light tracer's
+    /// image, and the camera's first diffuse hit leaves that light out ([`crate::hybrid`]).
     pub(crate) caustics: Option<LightTracer>,
 }
 
@@ -100,12 +108,13 @@ impl<'a> Whitted<'a> {
 
     /// The layered radiance leaving the surface of `hit` toward the origin of a ray of unit
     /// direction `direction`, `depth` delta bounces after the camera hit, reached with
-    /// throughput `throughput`.
+    /// throughput `throughput` along the branches `site` (1 at the camera hit; a child's is
+    /// twice its parent's, plus 1 through a refraction).
     fn shade(
         &self,
         scene: &Scene,
         s: &Shading<'_>,
-        depth: u32,
+        (depth, site): (u32, u64),
         throughput: Rgb,
         sampler: &mut Sampler,
         tally: &mut Tally,
@@ -117,7 +126,13 @@ impl<'a> Whitted<'a> {
         // Diffuse light (and emission) from the source; direct diffuse light by shadow rays
         // when the source asks for it, sharing the shadow rays with the glossy lobe.
         let per_pixel_caustics = depth == 0 && self.caustics.is_some();
-        let direct_diffuse = self.source.diffuse(s, per_pixel_caustics, &mut r);
+        let at = SampleSite {
+            sampler: &*sampler,
+            site,
+        };
+        let direct_diffuse = self
+            .source
+            .diffuse(s, per_pixel_caustics, at, tally, &mut r);
         let need_diffuse = direct_diffuse && m.reflects_diffusely();
         if s.hit.front_face && (need_diffuse || glossy) {
             let [d, g] = direct_light(
@@ -152,10 +167,10 @@ impl<'a> Whitted<'a> {
             && let Some(lobe) = m.delta()
         {
             let rays = [
-                (lobe.reflection(s.wo), Layer::Reflection),
-                (lobe.refraction(s.wo), Layer::Refraction),
+                (lobe.reflection(s.wo), Layer::Reflection, 0),
+                (lobe.refraction(s.wo), Layer::Refraction, 1),
             ];
-            for (ray, layer) in rays {
+            for (ray, layer, branch) in rays {
                 let Some(ray) = ray else { continue };
                 let t = throughput * ray.weight;
                 if t.max_element() < self.settings.min_throughput {
@@ -164,7 +179,8 @@ impl<'a> Whitted<'a> {
                 let dir = s.frame.to_world(ray.wi).normalize();
                 if let Some(h) = trace_from(scene, s, dir, tally) {
                     let child = Shading::new(scene, h, dir);
-                    let l = self.shade(scene, &child, depth + 1, t, sampler, tally);
+                    let child_site = site.wrapping_mul(2).wrapping_add(branch);
+                    let l = self.shade(scene, &child, (depth + 1, child_site), t, sampler, tally);
                     r.add(layer, ray.weight * l.total());
                 }
             }
@@ -189,7 +205,7 @@ impl Integrator for Whitted<'_> {
             None => Radiance::ZERO,
             Some(hit) => {
                 let s = Shading::new(scene, hit, ray.direction);
-                self.shade(scene, &s, 0, Rgb::ONE, sampler, tally)
+                self.shade(scene, &s, (0, 1), Rgb::ONE, sampler, tally)
             }
         }
     }

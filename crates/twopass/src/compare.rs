@@ -1,5 +1,6 @@
 //! `twopass compare SCENE`: the Cornell-box comparison. Renders the scene with every method it
-//! calls for (Whitted, radiosity alone, hybrid, hybrid with per-pixel direct light, and the
+//! calls for (Whitted, radiosity alone, the hybrid gathered per pixel, the classic hybrid
+//! where it differs from radiosity alone, the hybrid with per-pixel direct light, and the
 //! reference path tracer) at one resolution and exposure, and writes, in `--output DIR`
 //! (default `compare/`): `<stem>-compare.png` (a row of renders, a row of difference images
 //! against the reference), `<stem>-<method>.exr` per method (every layer), and

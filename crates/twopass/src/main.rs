@@ -48,7 +48,8 @@ enum Command {
     /// Render the scene with every method it calls for and compare them with the reference:
     /// a comparison sheet, one EXR per method, a JSON and CSV report.
     Compare(compare::CompareArgs),
-    /// Render an image with one method: whitted, radiosity, hybrid, hybrid-direct, reference.
+    /// Render an image with one method: whitted, radiosity, hybrid (gathered
+    /// per pixel), hybrid-classic, hybrid-direct, reference.
     Render(render::RenderArgs),
     /// Tabulate the plausibility of every reflection model and plot their lobes.
     BrdfCheck(brdf_check::BrdfCheckArgs),

@@ -12,7 +12,7 @@ use twopass_bake::Manifest;
 use twopass_composite::layer::Layers;
 use twopass_radiosity::{Solution, Solver};
 use twopass_scene::{DiffuseRadiance, Scene};
-use twopass_trace::hybrid::{DirectLight, hybrid, radiosity_only};
+use twopass_trace::hybrid::{DirectLight, gathered, hybrid, radiosity_only};
 use twopass_trace::whitted::ambient_estimate;
 use twopass_trace::{
     Integrator, Layer, LayerImages, Reference, ReferenceSettings, RenderOutput, RenderProgress,
@@ -32,9 +32,14 @@ pub enum RenderMethod {
     Whitted,
     /// Radiosity alone: camera rays shaded by the radiosity solution.
     Radiosity,
-    /// Two-pass: radiosity for the diffuse light, the tracer for the non-diffuse terms.
+    /// Two-pass with a final gather per pixel: direct light by shadow rays, indirect light by
+    /// gather rays reading the radiosity solution where they land, the tracer for the
+    /// non-diffuse terms.
     Hybrid,
-    /// As hybrid, with direct diffuse light per pixel and radiosity's indirect part.
+    /// The classic two-pass hybrid: the radiosity solution shown where the camera (or a mirror
+    /// or glass) sees a diffuse surface, the tracer for the non-diffuse terms.
+    HybridClassic,
+    /// As hybrid-classic, with direct diffuse light per pixel and radiosity's indirect part.
     HybridDirect,
     /// The reference path tracer.
     Reference,
@@ -43,7 +48,10 @@ pub enum RenderMethod {
 impl RenderMethod {
     /// Whether the method reads a radiosity solution.
     pub fn needs_radiosity(self) -> bool {
-        matches!(self, Self::Radiosity | Self::Hybrid | Self::HybridDirect)
+        matches!(
+            self,
+            Self::Radiosity | Self::Hybrid | Self::HybridClassic | Self::HybridDirect
+        )
     }
 
     /// The name used on the command line and in reports.
@@ -52,6 +60,7 @@ impl RenderMethod {
             Self::Whitted => "whitted",
             Self::Radiosity => "radiosity",
             Self::Hybrid => "hybrid",
+            Self::HybridClassic => "hybrid-classic",
             Self::HybridDirect => "hybrid-direct",
             Self::Reference => "reference",
         }
@@ -68,18 +77,19 @@ pub fn methods(scene: &Scene) -> (Vec<RenderMethod>, Vec<String>) {
     let mut skipped = Vec::new();
     if p.diffuse.required {
         methods.push(RenderMethod::Radiosity);
+        methods.push(RenderMethod::Hybrid);
         if p.specular.required {
-            methods.push(RenderMethod::Hybrid);
+            methods.push(RenderMethod::HybridClassic);
         } else {
             skipped.push(format!(
-                "hybrid: identical to radiosity alone, the specular pass is skipped ({})",
+                "hybrid-classic: identical to radiosity alone, the specular pass is skipped ({})",
                 p.specular.reason
             ));
         }
         methods.push(RenderMethod::HybridDirect);
     } else {
         skipped.push(format!(
-            "radiosity, hybrid, hybrid-direct: {}",
+            "radiosity, hybrid, hybrid-classic, hybrid-direct: {}",
             p.diffuse.reason
         ));
     }
@@ -309,7 +319,8 @@ pub fn integrator<'a>(
     match method {
         RenderMethod::Whitted => Box::new(Whitted::new(scene, ambient_estimate(scene), whitted)),
         RenderMethod::Radiosity => Box::new(radiosity_only(scene, solution())),
-        RenderMethod::Hybrid => Box::new(hybrid(
+        RenderMethod::Hybrid => Box::new(gathered(scene, solution(), whitted)),
+        RenderMethod::HybridClassic => Box::new(hybrid(
             scene,
             solution(),
             DirectLight::FromSolution,

@@ -153,8 +153,10 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
             decisions.diffuse.reason
         )));
     }
-    if matches!(method, RenderMethod::Hybrid | RenderMethod::HybridDirect)
-        && !decisions.specular.required
+    if matches!(
+        method,
+        RenderMethod::Hybrid | RenderMethod::HybridClassic | RenderMethod::HybridDirect
+    ) && !decisions.specular.required
     {
         skipped.push(format!(
             "specular pass skipped: {}",

@@ -167,6 +167,7 @@ fn bench_render_times_every_method_and_the_bake_frame_rate() {
             "whitted",
             "radiosity",
             "hybrid",
+            "hybrid-classic",
             "hybrid-direct",
             "reference"
         ]

@@ -35,6 +35,7 @@ fn report_matches_the_images_it_wrote() {
             "whitted",
             "radiosity",
             "hybrid",
+            "hybrid-classic",
             "hybrid-direct"
         ]
     );
@@ -81,14 +82,16 @@ fn report_matches_the_images_it_wrote() {
 }
 
 #[test]
-fn a_diffuse_scene_skips_the_hybrid_and_says_why() {
+fn a_diffuse_scene_skips_the_classic_hybrid_and_says_why() {
+    // On Lambertian walls the classic hybrid is radiosity alone; the gathered hybrid is not.
     let dir = tempfile::tempdir().unwrap();
     let report = quick_compare(BOX, dir.path(), ["16", "1", "4"]);
     let methods = common::row_methods(&report);
-    assert!(!methods.contains(&"hybrid"));
+    assert!(methods.contains(&"hybrid"));
+    assert!(!methods.contains(&"hybrid-classic"));
     let skipped = report["skipped"][0].as_str().unwrap();
     assert!(
-        skipped.starts_with("hybrid") && skipped.contains("purely diffuse"),
+        skipped.starts_with("hybrid-classic") && skipped.contains("purely diffuse"),
         "{skipped}"
     );
 }

@@ -19,6 +19,7 @@ fn every_method_writes_layers_that_sum_to_the_image() {
         "whitted",
         "radiosity",
         "hybrid",
+        "hybrid-classic",
         "hybrid-direct",
         "reference",
     ] {

@@ -28,12 +28,24 @@ fn front_presets_and_cache_agree_with_the_measured_rows() {
     let first = sweep(dir.path());
     let rows = first["rows"].as_array().unwrap();
 
-    // Every method the diffuse box calls for was measured (hybrid is skipped, and says why).
-    for m in ["reference", "whitted", "radiosity", "hybrid-direct"] {
+    // Every method the diffuse box calls for was measured (the classic hybrid is skipped, and
+    // says why).
+    for m in [
+        "reference",
+        "whitted",
+        "radiosity",
+        "hybrid",
+        "hybrid-direct",
+    ] {
         assert!(rows.iter().any(|r| r["method"] == m), "{m} missing");
     }
-    assert!(rows.iter().all(|r| r["method"] != "hybrid"));
-    assert!(first["skipped"][0].as_str().unwrap().starts_with("hybrid"));
+    assert!(rows.iter().all(|r| r["method"] != "hybrid-classic"));
+    assert!(
+        first["skipped"][0]
+            .as_str()
+            .unwrap()
+            .starts_with("hybrid-classic")
+    );
 
     // The front, recomputed from the definition: no other row is no slower and no less
     // accurate while strictly better in one of the two.

@@ -95,6 +95,7 @@ pub fn run(args: &RenderBenchArgs, ctx: &Context) -> Result<(), CliError> {
         RenderMethod::Whitted,
         RenderMethod::Radiosity,
         RenderMethod::Hybrid,
+        RenderMethod::HybridClassic,
         RenderMethod::HybridDirect,
         RenderMethod::Reference,
     ]

@@ -30,6 +30,7 @@ fn colour(method: &str) -> RGBColor {
         "whitted" => RGBColor(214, 39, 40),
         "radiosity" => RGBColor(31, 119, 180),
         "hybrid" => RGBColor(255, 127, 14),
+        "hybrid-classic" => RGBColor(148, 103, 189),
         _ => RGBColor(44, 160, 44), // hybrid-direct
     }
 }
