@@ -11,3 +11,4 @@ mod furnace;
 mod gather;
 mod hybrid;
 mod optics;
+mod share;

@@ -45,7 +45,8 @@ pub mod whitted;
 pub use film::{Layer, LayerImages, Radiance};
 pub use render::{
     AdaptiveSampling, BUDGET_FLOOR, BUDGET_SMOOTHING, RenderOutput, RenderSettings, RenderStats,
-    SampleBudget, render, render_budgeted,
+    SampleBudget, ShareOutput, TileShare, add_light, render, render_budgeted, render_share,
+    tile_origins,
 };
 
 pub use counters::{RenderProgress, Tally};

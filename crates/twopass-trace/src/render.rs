@@ -391,6 +391,84 @@ pub fn render_budgeted(
         .then(|| render_with(scene, camera, integrator, settings, Some(budget), progress))
 }
 
+/// The square tiles of a `width` x `height` render with tiles of `tile` pixels (at least 1),
+/// by their top-left corners in row-major order: the render loop's unit of work, and what
+/// [`render_share`] splits among processes.
+pub fn tile_origins(width: u32, height: u32, tile: u32) -> Vec<(u32, u32)> {
+    let tile = tile.max(1);
+    (0..height.div_ceil(tile))
+        .flat_map(|ty| (0..width.div_ceil(tile)).map(move |tx| (tx * tile, ty * tile)))
+        .collect()
+}
+
+/// The tiles one of several processes renders ([`render_share`]).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct TileShare {
+    /// Indices into [`tile_origins`] of the render's size and tile edge.
+    pub tiles: std::ops::Range<usize>,
+    /// Whether this share also traces the integrator's light tracing pass, which is one pass
+    /// over the whole image (a light path's splats land on any pixel), so exactly one share of
+    /// a split render carries it.
+    pub light: bool,
+}
+
+/// What one share of a render computed.
+#[derive(Debug, Clone)]
+pub struct ShareOutput {
+    /// The camera pass, full size: the share's tiles hold exactly what [`render`] computes
+    /// there before it adds the light tracing pass; every other pixel is zero.
+    pub layers: LayerImages,
+    /// The light tracing pass over the whole image, when the share carried it and the
+    /// integrator has one; [`add_light`] adds it to the assembled camera pass.
+    pub light: Option<LayerImages>,
+    /// What this share measured (its own samples, rays and time).
+    pub stats: RenderStats,
+}
+
+/// Renders the tiles of `share` alone (see [`render`]): each pixel's value is bit for bit
+/// what [`render`] gives it, because every random stream is keyed by (seed, pixel, sample).
+/// `None` with adaptive sampling, whose refinement of a pixel depends on its neighbours' first
+/// pass and so on the whole image.
+pub fn render_share(
+    scene: &Scene,
+    camera: &Camera,
+    integrator: &dyn Integrator,
+    settings: &RenderSettings,
+    share: &TileShare,
+    progress: &RenderProgress,
+) -> Option<ShareOutput> {
+    if settings
+        .adaptive
+        .is_some_and(|a| a.base.max(1) < settings.samples_per_pixel)
+    {
+        return None;
+    }
+    let (out, light) = render_core(
+        scene,
+        camera,
+        integrator,
+        settings,
+        None,
+        Some(share),
+        progress,
+    );
+    Some(ShareOutput {
+        layers: out.layers,
+        light,
+        stats: out.stats,
+    })
+}
+
+/// Adds the light tracing pass `light` to the camera pass `layers`, pixel by pixel: the one
+/// sum [`render`] and the assembly of a split render both take, so both give the same bits.
+pub fn add_light(layers: &mut LayerImages, light: &LayerImages) {
+    for (img, add) in layers.images.iter_mut().zip(&light.images) {
+        for (p, a) in img.pixels_mut().iter_mut().zip(add.pixels()) {
+            *p += *a;
+        }
+    }
+}
+
 fn render_with(
     scene: &Scene,
     camera: &Camera,
@@ -399,6 +477,20 @@ fn render_with(
     budget: Option<&SampleBudget>,
     progress: &RenderProgress,
 ) -> RenderOutput {
+    render_core(scene, camera, integrator, settings, budget, None, progress).0
+}
+
+/// The render loop; with a `share`, only its tiles, and the light tracing pass (if the share
+/// carries it) returned apart instead of added.
+fn render_core(
+    scene: &Scene,
+    camera: &Camera,
+    integrator: &dyn Integrator,
+    settings: &RenderSettings,
+    budget: Option<&SampleBudget>,
+    share: Option<&TileShare>,
+    progress: &RenderProgress,
+) -> (RenderOutput, Option<LayerImages>) {
     let start = Instant::now();
     let (width, height) = (camera.width, camera.height);
     let spp = match budget {
@@ -410,7 +502,9 @@ fn render_with(
     };
     let tile = settings.tile_size.max(1);
     let pixels = u64::from(width) * u64::from(height);
-    let light = integrator.light_tracer();
+    let light = integrator
+        .light_tracer()
+        .filter(|_| share.is_none_or(|s| s.light));
     let adaptive = settings
         .adaptive
         .map(|a| AdaptiveSampling {
@@ -418,12 +512,18 @@ fn render_with(
             ..a
         })
         .filter(|a| a.base < spp && budget.is_none());
-    let passes = 1 + u64::from(light.is_some()) + u64::from(adaptive.is_some());
-    progress.start(passes * pixels);
+    let all_tiles = tile_origins(width, height, tile);
+    let tiles = match share {
+        Some(s) => &all_tiles[s.tiles.start.min(all_tiles.len())..s.tiles.end.min(all_tiles.len())],
+        None => &all_tiles[..],
+    };
+    let share_pixels: u64 = tiles
+        .iter()
+        .map(|&(x, y)| u64::from(tile.min(width - x)) * u64::from(tile.min(height - y)))
+        .sum();
+    let passes = 1 + u64::from(adaptive.is_some());
+    progress.start(passes * share_pixels + u64::from(light.is_some()) * pixels);
 
-    let tiles: Vec<(u32, u32)> = (0..height.div_ceil(tile))
-        .flat_map(|ty| (0..width.div_ceil(tile)).map(move |tx| (tx * tile, ty * tile)))
-        .collect();
     let pass = Pass {
         scene,
         camera,
@@ -483,16 +583,17 @@ fn render_with(
         gather(second, &mut layers, &mut spread, &|i| refine[i]);
     }
     let mut light_paths = 0;
+    let mut apart = None;
     if let Some(tracer) = light {
         let paths = match budget {
             Some(b) => tracer.paths_for_samples(b.total()),
             None => tracer.paths_for(camera, spp),
         };
         let lit = tracer.trace(scene, camera, paths, settings.seed, progress, pixels);
-        for (img, add) in layers.images.iter_mut().zip(&lit.layers.images) {
-            for (p, a) in img.pixels_mut().iter_mut().zip(add.pixels()) {
-                *p += *a;
-            }
+        if share.is_some() {
+            apart = Some(lit.layers);
+        } else {
+            add_light(&mut layers, &lit.layers);
         }
         tally.add(lit.tally);
         non_finite += lit.non_finite;
@@ -504,7 +605,7 @@ fn render_with(
             .iter()
             .all(|i| i.pixels().iter().all(|p: &Rgb| p.is_finite()))
     );
-    RenderOutput {
+    let out = RenderOutput {
         layers,
         stats: RenderStats {
             method: integrator.name(),
@@ -519,5 +620,6 @@ fn render_with(
             light_paths,
             elapsed: start.elapsed(),
         },
-    }
+    };
+    (out, apart)
 }
