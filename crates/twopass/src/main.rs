@@ -17,6 +17,7 @@ mod error;
 mod figure;
 mod info;
 mod output;
+mod part;
 mod pipeline;
 mod plan;
 mod preset;
@@ -60,6 +61,9 @@ enum Command {
     Bench(bench::BenchCommand),
     /// Write a static three.js page that shows a lightmap bake from the scene's camera.
     View(view::ViewArgs),
+    /// Assemble the part files of `render --part` or `bake --from --part` into the outputs
+    /// the single-process command writes, bit for bit.
+    Merge(part::merge::MergeArgs),
 }
 
 fn main() -> ExitCode {
@@ -108,5 +112,6 @@ fn run(cli: Cli) -> Result<(), CliError> {
         Command::Bake(args) => bake::run(args, &cli.ctx),
         Command::Bench(cmd) => bench::run(cmd, &cli.ctx),
         Command::View(args) => view::run(args, &cli.ctx),
+        Command::Merge(args) => part::merge::run(args, &cli.ctx),
     })
 }
