@@ -11,6 +11,7 @@ mod lightmap;
 mod lightmap_render;
 mod limits;
 mod outputs;
+mod parts;
 mod readme;
 mod render;
 mod tradeoff;
