@@ -22,6 +22,7 @@ mod pipeline;
 mod plan;
 mod preset;
 mod render;
+mod slurm;
 mod solve;
 mod view;
 
@@ -64,6 +65,10 @@ enum Command {
     /// Assemble the part files of `render --part` or `bake --from --part` into the outputs
     /// the single-process command writes, bit for bit.
     Merge(part::merge::MergeArgs),
+    /// Run a render or a bake on a Slurm cluster: the solve as one job, the parts as a job
+    /// array after it, the merge after the array; and how far a submitted job is.
+    #[command(subcommand)]
+    Slurm(slurm::SlurmCommand),
 }
 
 fn main() -> ExitCode {
@@ -113,5 +118,6 @@ fn run(cli: Cli) -> Result<(), CliError> {
         Command::Bench(cmd) => bench::run(cmd, &cli.ctx),
         Command::View(args) => view::run(args, &cli.ctx),
         Command::Merge(args) => part::merge::run(args, &cli.ctx),
+        Command::Slurm(cmd) => slurm::run(cmd, &cli.ctx),
     })
 }
