@@ -14,5 +14,6 @@ mod outputs;
 mod parts;
 mod readme;
 mod render;
+mod slurm;
 mod tradeoff;
 mod view;
