@@ -368,14 +368,14 @@ pub(crate) fn write_set(
         let path = dir.join(format!("{stem}.{}", format.extension()));
         let bytes = match format {
             Format::Glb => {
-                let glb = bake::encode_glb(shown, &scene, mapping)?;
+                let glb = bake::encode_glb(shown, scene, mapping)?;
                 manifest.color = Some(color_record(glb.clamped_vertices));
                 glb.bytes
             }
-            Format::Ply => bake::encode_ply(shown, &scene, mapping)?,
-            Format::Bake => bake::encode_bake(shown, &scene)?,
+            Format::Ply => bake::encode_ply(shown, scene, mapping)?,
+            Format::Bake => bake::encode_bake(shown, scene)?,
             Format::VertexGlb => {
-                let glb = bake::encode_vertex_glb(&solution, &scene, mapping, estimator)?;
+                let glb = bake::encode_vertex_glb(solution, scene, mapping, estimator)?;
                 if manifest.color.is_none() {
                     manifest.color = Some(color_record(glb.clamped_vertices));
                 }
@@ -400,7 +400,7 @@ pub(crate) fn write_set(
             Some(g) => TexelSource::Gather(g),
             None => TexelSource::Solution(solution),
         };
-        let lm = bake::bake_lightmap(source, &scene, &settings, mapping)?;
+        let lm = bake::bake_lightmap(source, scene, &settings, mapping)?;
         let seconds = started.elapsed().as_secs_f64();
         for (ext, bytes) in [("glb", &lm.glb), ("exr", &lm.exr), ("png", &lm.png)] {
             let path = dir.join(format!("{stem}.lightmap.{ext}"));
