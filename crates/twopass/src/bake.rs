@@ -170,9 +170,6 @@ fn parse_exposure(s: &str) -> Result<f32, String> {
 
 /// Solves the scene and writes the selected outputs and the manifest.
 pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
-    if let (Some(from), Some(part)) = (&args.from, args.part) {
-        return crate::part::bake::write_part(args, from, part, ctx);
-    }
     let started = Instant::now();
     let (scene, warnings) = ctx.load_scene(&args.scene)?;
     if !ctx.quiet {

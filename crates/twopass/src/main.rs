@@ -114,7 +114,10 @@ fn run(cli: Cli) -> Result<(), CliError> {
         Command::BrdfCheck(args) => brdf_check::run(args, &cli.ctx),
         Command::Render(args) => render::run(args, &cli.ctx),
         Command::Compare(args) => compare::run(args, &cli.ctx),
-        Command::Bake(args) => bake::run(args, &cli.ctx),
+        Command::Bake(args) => match (&args.from, args.part) {
+            (Some(from), Some(part)) => part::bake::write_part(args, from, part, &cli.ctx),
+            _ => bake::run(args, &cli.ctx),
+        },
         Command::Bench(cmd) => bench::run(cmd, &cli.ctx),
         Command::View(args) => view::run(args, &cli.ctx),
         Command::Merge(args) => part::merge::run(args, &cli.ctx),

@@ -29,8 +29,7 @@ use twopass_radiosity::Solution;
 use twopass_scene::{RadianceEstimate, RadianceEstimator, Scene};
 use twopass_trace::gather::Gatherer;
 
-use super::file::{Cost, PartHeader, PartIndex, encode};
-use super::render::{part_path, stem};
+use super::file::{Cost, PartHeader, PartIndex, encode, part_path, stem};
 use super::set::PartSet;
 use crate::bake::{BakeArgs, BakeSet, Format, Gather, lock_folder, write_set};
 use crate::context::Context;

@@ -12,7 +12,7 @@
 //! | 24+h..24+h+p | the payload: the part's values as `f32` bit patterns, little endian ([`Payload`]) |
 //! | last 4 | CRC-32 (IEEE) of every byte before it |
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
@@ -182,6 +182,24 @@ pub fn decode(bytes: &[u8]) -> Result<(PartHeader, Payload), String> {
         .map(|c| f32::from_le_bytes(c.try_into().expect("4 bytes")))
         .collect();
     Ok((header, payload))
+}
+
+/// The scene file's stem, which names the outputs.
+pub fn stem(scene: &Path) -> String {
+    scene
+        .file_stem()
+        .map_or_else(|| "scene".to_owned(), |s| s.to_string_lossy().into_owned())
+}
+
+/// Where a part file goes: `output` itself when it ends in `.part`, else
+/// `<name>.<I>-of-<N>.part` in the folder `output` names (default `parts`).
+pub fn part_path(output: Option<&Path>, name: &str, part: PartIndex) -> PathBuf {
+    match output {
+        Some(p) if p.extension().is_some_and(|e| e == "part") => p.to_owned(),
+        _ => output
+            .unwrap_or(Path::new("parts"))
+            .join(format!("{name}.{}-of-{}.part", part.index, part.of)),
+    }
 }
 
 #[cfg(test)]

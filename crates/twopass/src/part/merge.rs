@@ -25,7 +25,7 @@ pub fn run(args: &MergeArgs, ctx: &Context) -> Result<(), CliError> {
     let started = Instant::now();
     let set = read_set(&args.parts)?;
     match set.header.kind.as_str() {
-        "render" => super::render::merge(&set, ctx, started),
+        "render" => super::assemble::merge(&set, ctx, started),
         "bake" => super::bake::merge(&set, ctx, started),
         other => Err(CliError::Input(format!(
             "{}: a part of kind `{other}`, which this twopass cannot merge",

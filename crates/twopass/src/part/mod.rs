@@ -4,9 +4,10 @@
 //! atlas, a vertex's in its output): every random sequence depends on its key alone, so a part
 //! computes exactly what the single process computes for its keys, and the merge assembles
 //! the same bits for any number of parts. Files, one job each: `file` (the part file format),
-//! `set` (a set of parts checked as one job), `render` (render parts and their assembly),
+//! `set` (a set of parts checked as one job), `render` (render parts), `assemble` (a set of render parts into the images),
 //! `bake` (gather shards and their merge), `merge` (the command).
 
+pub mod assemble;
 pub mod bake;
 pub mod file;
 pub mod merge;

@@ -8,22 +8,18 @@
 //! after assembling the tiles, the same sum the single render takes. Adaptive sampling decides
 //! each pixel from its neighbours over the whole image, so `--part` refuses it (usage error).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
 use serde::Serialize;
 use serde_json::{Map, Value, json};
-use twopass_composite::RenderMetadata;
-use twopass_composite::tonemap::ToneMap;
-use twopass_composite::write::{write_exr_render, write_png_tonemapped};
 use twopass_scene::{Camera, Scene};
-use twopass_trace::{Integrator, LayerImages, RenderSettings, TileShare, tile_origins};
+use twopass_trace::{Integrator, RenderSettings, TileShare, tile_origins};
 
-use super::file::{Cost, PartHeader, PartIndex, encode};
-use super::set::PartSet;
+use super::file::{Cost, PartHeader, PartIndex, encode, part_path, stem};
 use crate::context::Context;
 use crate::error::CliError;
-use crate::pipeline::{RenderMethod, check_dropped, to_layers};
+use crate::pipeline::{RenderMethod, check_dropped};
 use crate::preset::RenderKnobs;
 
 /// The tiles of part `part` among `count` tiles: a contiguous range, sizes differing by one
@@ -174,26 +170,8 @@ pub fn write_part(
     })
 }
 
-/// The scene file's stem, which names the outputs.
-pub fn stem(scene: &Path) -> String {
-    scene
-        .file_stem()
-        .map_or_else(|| "scene".to_owned(), |s| s.to_string_lossy().into_owned())
-}
-
-/// Where a part file goes: `output` itself when it ends in `.part`, else
-/// `<name>.<I>-of-<N>.part` in the folder `output` names (default `parts`).
-pub fn part_path(output: Option<&Path>, name: &str, part: PartIndex) -> PathBuf {
-    match output {
-        Some(p) if p.extension().is_some_and(|e| e == "part") => p.to_owned(),
-        _ => output
-            .unwrap_or(Path::new("parts"))
-            .join(format!("{name}.{}-of-{}.part", part.index, part.of)),
-    }
-}
-
 /// Calls `f` with the row-major index of every pixel of `tiles`, tile by tile, rows within.
-fn for_each_share_pixel(
+pub fn for_each_share_pixel(
     (width, height): (u32, u32),
     tile: u32,
     tiles: &[(u32, u32)],
@@ -229,139 +207,6 @@ fn settings_of(job: &RenderJob<'_>, settings: &RenderSettings) -> Map<String, Va
         Value::Object(map) => map,
         _ => unreachable!("a JSON object literal"),
     }
-}
-
-#[derive(Serialize)]
-struct MergeSummary {
-    scene: PathBuf,
-    method: String,
-    width: u32,
-    height: u32,
-    parts: u32,
-    rays: u64,
-    shadow_rays: u64,
-    /// Seconds of all parts together: the job's cost.
-    part_seconds: f64,
-    merge_seconds: f64,
-    exr: Option<PathBuf>,
-    png: Option<PathBuf>,
-}
-
-/// Assembles a checked set of render parts into the single render's EXR (and PNG), at
-/// `--output` as `render` reads it.
-pub fn merge(set: &PartSet, ctx: &Context, started: Instant) -> Result<(), CliError> {
-    let s = &set.header.settings;
-    let bad = |what: &str| {
-        CliError::Input(format!(
-            "{}: a render part without a valid {what} setting",
-            set.parts[0].path.display()
-        ))
-    };
-    let num = |k: &str| s.get(k).and_then(Value::as_u64).ok_or_else(|| bad(k));
-    let (width, height) = (num("width")? as u32, num("height")? as u32);
-    let tile = num("tile_size")? as u32;
-    let spp = num("spp")? as u32;
-    let seed = num("seed")?;
-    let method: RenderMethod = s
-        .get("method")
-        .cloned()
-        .and_then(|m| serde_json::from_value(m).ok())
-        .ok_or_else(|| bad("method"))?;
-    let png = s
-        .get("png")
-        .and_then(Value::as_bool)
-        .ok_or_else(|| bad("png"))?;
-    let exposure = s.get("exposure").and_then(Value::as_f64).map(|e| e as f32);
-    let tiles = tile_origins(width, height, tile);
-    let mut layers = LayerImages::new(width, height);
-    let mut light = None;
-    for part in &set.parts {
-        let range = share_of(part.header.part, tiles.len());
-        let mut values = part.payload.chunks_exact(3);
-        let mut short = false;
-        for_each_share_pixel((width, height), tile, &tiles[range], |at| {
-            for img in &mut layers.images {
-                match values.next() {
-                    Some(v) => img.pixels_mut()[at] = glam::Vec3::from_slice(v),
-                    None => short = true,
-                }
-            }
-        });
-        let carries = part.header.extra.get("light").and_then(Value::as_bool) == Some(true);
-        let rest: Vec<f32> = values.flat_map(|v| v.iter().copied()).collect();
-        let light_len = 6 * 3 * width as usize * height as usize;
-        if short || rest.len() != if carries { light_len } else { 0 } {
-            return Err(CliError::Input(format!(
-                "{}: part {} holds {} values, not what its tiles{} need",
-                part.path.display(),
-                part.header.part,
-                part.payload.len(),
-                if carries { " and the light pass" } else { "" }
-            )));
-        }
-        if carries {
-            let mut l = LayerImages::new(width, height);
-            for (img, chunk) in l
-                .images
-                .iter_mut()
-                .zip(rest.chunks_exact(3 * width as usize * height as usize))
-            {
-                for (p, v) in img.pixels_mut().iter_mut().zip(chunk.chunks_exact(3)) {
-                    *p = glam::Vec3::from_slice(v);
-                }
-            }
-            light = Some(l);
-        }
-    }
-    if let Some(l) = &light {
-        twopass_trace::add_light(&mut layers, l);
-    }
-    let images = to_layers(&layers)?;
-    let targets = crate::render::targets(ctx.output.as_deref(), &set.header.scene, method, png)?;
-    if let Some(exr) = &targets.exr {
-        crate::output::create_dir(exr.parent().unwrap_or(Path::new("")))?;
-        let metadata = RenderMetadata::new(method.name(), spp, seed, set.cost.seconds);
-        write_exr_render(exr, &images, &metadata)?;
-    }
-    if let Some(png) = &targets.png {
-        let image = images.require("image")?;
-        let map = match exposure {
-            Some(stops) => ToneMap::from_stops(stops)?,
-            None => ToneMap::auto(image, 0.99, 1.0)?,
-        };
-        crate::output::create_dir(png.parent().unwrap_or(Path::new("")))?;
-        write_png_tonemapped(png, image, &map)?;
-    }
-    let summary = MergeSummary {
-        scene: set.header.scene.clone(),
-        method: method.name().into(),
-        width,
-        height,
-        parts: set.header.part.of,
-        rays: set.cost.rays,
-        shadow_rays: set.cost.shadow_rays,
-        part_seconds: set.cost.seconds,
-        merge_seconds: started.elapsed().as_secs_f64(),
-        exr: targets.exr,
-        png: targets.png,
-    };
-    crate::output::report(&summary, ctx, || {
-        outln!(
-            "merged {} parts of {} ({} {} x {} at {spp} spp): {} rays, {} shadow rays, {:.2} s in all parts",
-            summary.parts,
-            summary.scene.display(),
-            summary.method,
-            width,
-            height,
-            summary.rays,
-            summary.shadow_rays,
-            summary.part_seconds
-        );
-        for p in summary.exr.iter().chain(&summary.png) {
-            outln!("wrote {}", p.display());
-        }
-        Ok(())
-    })
 }
 
 /// Where a radiosity-based render's diffuse light comes from, as the part header records it:

@@ -10,7 +10,7 @@ use crate::bake::BakeArgs;
 use crate::context::Context;
 use crate::error::CliError;
 use crate::part::PartIndex;
-use crate::part::render::{part_path, stem};
+use crate::part::file::{part_path, stem};
 use crate::render::RenderArgs;
 use crate::solve::SolveArgs;
 
