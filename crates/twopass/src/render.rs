@@ -206,12 +206,7 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
             camera: &camera,
             method,
             knobs,
-            radiosity: crate::part::render::radiosity_source(
-                method,
-                args.bake.as_deref(),
-                solve,
-                ctx,
-            )?,
+            radiosity: crate::part::render::radiosity_source(method, args.bake.as_deref(), solve)?,
             png: args.png,
             exposure: args.exposure,
             started,

@@ -210,13 +210,14 @@ fn settings_of(job: &RenderJob<'_>, settings: &RenderSettings) -> Map<String, Va
 }
 
 /// Where a radiosity-based render's diffuse light comes from, as the part header records it:
-/// the bake file's name and CRC-32, or the solve's settings (a solve with one seed gives the
-/// same solution in every process); `none` for the other methods.
+/// the bake file's name and CRC-32, or the solver's flags (a solve with one seed gives the
+/// same solution in every process; the flags, not the resolved options, which carry the
+/// machine's memory limit, so that nodes of different sizes agree); `none` for the other
+/// methods.
 pub fn radiosity_source(
     method: RenderMethod,
     bake: Option<&Path>,
     solve: &crate::solve::SolveArgs,
-    ctx: &Context,
 ) -> Result<String, CliError> {
     if !method.needs_radiosity() {
         return Ok("none".into());
@@ -227,6 +228,6 @@ pub fn radiosity_source(
                 .map_err(|e| CliError::io(file, e))?;
             format!("bake {} crc32 {:08x}", stem(file), crc32fast::hash(&bytes))
         }
-        None => format!("solve {:?}", solve.options(ctx.seed)),
+        None => format!("solve {solve:?}"),
     })
 }
