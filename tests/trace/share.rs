@@ -1,9 +1,10 @@
-//! A render split into tile shares (`twopass render --part`) and assembled gives the single
-//! render's bits, for any number of shares.
+//! A render split into tile shares (`twopass render --part`), its light tracing pass split by
+//! paths, and assembled gives the single render's bits, for any number of shares.
 
 use twopass_trace::{
     Integrator, LayerImages, Reference, ReferenceSettings, RenderProgress, RenderSettings,
-    TileShare, Whitted, WhittedSettings, add_light, render, render_share, tile_origins,
+    TileShare, Whitted, WhittedSettings, add_light, light_image, render, render_share,
+    tile_origins,
 };
 
 use super::common::repo_scene;
@@ -15,15 +16,15 @@ fn assembled(
     integrator: &dyn Integrator,
     settings: &RenderSettings,
     parts: usize,
-) -> (LayerImages, u64) {
+) -> (LayerImages, u64, usize) {
     let tiles = tile_origins(camera.width, camera.height, settings.tile_size);
     let mut layers = LayerImages::new(camera.width, camera.height);
-    let mut light = None;
+    let mut light = Vec::new();
     let mut rays = 0;
     for i in 0..parts {
         let share = TileShare {
             tiles: tiles.len() * i / parts..tiles.len() * (i + 1) / parts,
-            light: i == 0,
+            light: (i as u32, parts as u32),
         };
         let out = render_share(
             scene,
@@ -47,22 +48,34 @@ fn assembled(
             }
         }
         if let Some(l) = out.light {
-            assert!(light.is_none(), "one share carries the light pass");
-            light = Some(l);
+            light.push(l);
         }
     }
-    if let Some(l) = &light {
-        add_light(&mut layers, l);
+    let traced = light.iter().filter(|l| !l.splats.is_empty()).count();
+    if let Some(paths) = light.first().map(|l| l.paths) {
+        assert_eq!(
+            light.len(),
+            parts,
+            "every share traces its run of the light pass"
+        );
+        let image = light_image(
+            camera.width,
+            camera.height,
+            paths,
+            light.iter().map(|l| l.splats.as_slice()),
+        );
+        add_light(&mut layers, &image);
     }
-    (layers, rays)
+    (layers, rays, traced)
 }
 
 #[test]
 fn shares_assembled_equal_the_single_render_bit_for_bit() {
     let scene = repo_scene("cornell-spheres.toml");
-    let camera = scene.camera.with_resolution(Some(20), Some(20));
+    // 48 x 48 pixels at 8 samples: 18,432 light paths, five chunks of the light pass.
+    let camera = scene.camera.with_resolution(Some(48), Some(48));
     let settings = RenderSettings {
-        samples_per_pixel: 2,
+        samples_per_pixel: 8,
         seed: 7,
         tile_size: 7,
         ..Default::default()
@@ -83,9 +96,16 @@ fn shares_assembled_equal_the_single_render_bit_for_bit() {
             &settings,
             &RenderProgress::new(),
         );
-        // 9 tiles: 4 parts leave shares of 2 and 3 tiles, 10 leave one part empty.
+        // 49 tiles and 5 light chunks: 3 and 4 parts split both unevenly, 10 leave some parts
+        // no light chunk.
         for parts in [1, 3, 4, 10] {
-            let (layers, rays) = assembled(&scene, &camera, integrator, &settings, parts);
+            let (layers, rays, traced) = assembled(&scene, &camera, integrator, &settings, parts);
+            if integrator.light_tracer().is_some() && parts > 1 {
+                assert!(
+                    traced > 1,
+                    "{parts} parts: the light pass is split ({traced})"
+                );
+            }
             assert_eq!(
                 layers,
                 whole.layers,
@@ -114,7 +134,7 @@ fn adaptive_sampling_is_not_split() {
     let whitted = Whitted::new(&scene, glam::Vec3::ZERO, WhittedSettings::default());
     let share = TileShare {
         tiles: 0..1,
-        light: true,
+        light: (0, 1),
     };
     let out = render_share(
         &scene,

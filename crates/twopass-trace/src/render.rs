@@ -19,6 +19,7 @@ use crate::counters::RenderProgress;
 use crate::counters::Tally;
 use crate::film::{LayerImages, Radiance};
 use crate::integrator::{Integrator, SampleState};
+use crate::light_tracing::{Splat, add_splats, finish_splats, light_chunks};
 use crate::sampler::{Sampler, stratum};
 
 /// Sampling settings of a render.
@@ -406,10 +407,19 @@ pub fn tile_origins(width: u32, height: u32, tile: u32) -> Vec<(u32, u32)> {
 pub struct TileShare {
     /// Indices into [`tile_origins`] of the render's size and tile edge.
     pub tiles: std::ops::Range<usize>,
-    /// Whether this share also traces the integrator's light tracing pass, which is one pass
-    /// over the whole image (a light path's splats land on any pixel), so exactly one share of
-    /// a split render carries it.
-    pub light: bool,
+    /// Which run of the light tracing pass's chunks this share traces, `(i, n)`: the i-th
+    /// (from 0) of `n` equal runs. A light path's splats land on any pixel, so the pass is
+    /// split by its paths, not by tiles; every share of a split render takes one run.
+    pub light: (u32, u32),
+}
+
+/// One share's run of the light tracing pass: its splats in path order.
+#[derive(Debug, Clone)]
+pub struct LightShare {
+    /// Splats of the share's paths, in path order.
+    pub splats: Vec<Splat>,
+    /// Light paths of the whole pass (each share's splats are divided by it).
+    pub paths: u64,
 }
 
 /// What one share of a render computed.
@@ -418,9 +428,9 @@ pub struct ShareOutput {
     /// The camera pass, full size: the share's tiles hold exactly what [`render`] computes
     /// there before it adds the light tracing pass; every other pixel is zero.
     pub layers: LayerImages,
-    /// The light tracing pass over the whole image, when the share carried it and the
-    /// integrator has one; [`add_light`] adds it to the assembled camera pass.
-    pub light: Option<LayerImages>,
+    /// The share's run of the light tracing pass, when the integrator has one;
+    /// [`light_image`] over every share's, in share order, gives the pass's image.
+    pub light: Option<LightShare>,
     /// What this share measured (its own samples, rays and time).
     pub stats: RenderStats,
 }
@@ -459,6 +469,23 @@ pub fn render_share(
     })
 }
 
+/// The light tracing pass's image from the splats of its shares (in share order: the order of
+/// their chunks) and its number of paths: the sum [`render`] takes, bit for bit.
+pub fn light_image<'a>(
+    width: u32,
+    height: u32,
+    paths: u64,
+    shares: impl IntoIterator<Item = &'a [Splat]>,
+) -> LayerImages {
+    let mut layers = LayerImages::new(width, height);
+    let mut non_finite = 0;
+    for splats in shares {
+        add_splats(&mut layers, splats, &mut non_finite);
+    }
+    finish_splats(&mut layers, paths, &mut non_finite);
+    layers
+}
+
 /// Adds the light tracing pass `light` to the camera pass `layers`, pixel by pixel: the one
 /// sum [`render`] and the assembly of a split render both take, so both give the same bits.
 pub fn add_light(layers: &mut LayerImages, light: &LayerImages) {
@@ -490,7 +517,7 @@ fn render_core(
     budget: Option<&SampleBudget>,
     share: Option<&TileShare>,
     progress: &RenderProgress,
-) -> (RenderOutput, Option<LayerImages>) {
+) -> (RenderOutput, Option<LightShare>) {
     let start = Instant::now();
     let (width, height) = (camera.width, camera.height);
     let spp = match budget {
@@ -502,9 +529,7 @@ fn render_core(
     };
     let tile = settings.tile_size.max(1);
     let pixels = u64::from(width) * u64::from(height);
-    let light = integrator
-        .light_tracer()
-        .filter(|_| share.is_none_or(|s| s.light));
+    let light = integrator.light_tracer();
     let adaptive = settings
         .adaptive
         .map(|a| AdaptiveSampling {
@@ -589,15 +614,22 @@ fn render_core(
             Some(b) => tracer.paths_for_samples(b.total()),
             None => tracer.paths_for(camera, spp),
         };
-        let lit = tracer.trace(scene, camera, paths, settings.seed, progress, pixels);
-        if share.is_some() {
-            apart = Some(lit.layers);
+        if let Some(share) = share {
+            let chunks = light_chunks(paths);
+            let (i, n) = (u64::from(share.light.0), u64::from(share.light.1.max(1)));
+            let run = chunks * i / n..chunks * (i + 1) / n;
+            let (splats, t) =
+                tracer.trace_share(scene, camera, paths, settings.seed, run, progress, pixels);
+            tally.add(t);
+            light_paths = paths;
+            apart = Some(LightShare { splats, paths });
         } else {
+            let lit = tracer.trace(scene, camera, paths, settings.seed, progress, pixels);
             add_light(&mut layers, &lit.layers);
+            tally.add(lit.tally);
+            non_finite += lit.non_finite;
+            light_paths = lit.paths;
         }
-        tally.add(lit.tally);
-        non_finite += lit.non_finite;
-        light_paths = lit.paths;
     }
     debug_assert!(
         layers

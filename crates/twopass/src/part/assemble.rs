@@ -1,5 +1,6 @@
 //! A set of render parts assembled into the images the single-process render writes: the
-//! tiles copied into place, then the light tracing pass of part 1 added, the same sum
+//! tiles copied into place, then the light tracing pass summed from every part's splats in
+//! part (path) order and added, the same sums
 //! `render` takes, and the EXR and PNG written where `render` writes them for `--output`.
 
 use std::path::{Path, PathBuf};
@@ -10,9 +11,9 @@ use serde_json::Value;
 use twopass_composite::RenderMetadata;
 use twopass_composite::tonemap::ToneMap;
 use twopass_composite::write::{write_exr_render, write_png_tonemapped};
-use twopass_trace::{LayerImages, tile_origins};
+use twopass_trace::{Layer, LayerImages, Splat, add_light, light_image, tile_origins};
 
-use super::render::{for_each_share_pixel, share_of};
+use super::render::{SPLAT_WORDS, for_each_share_pixel, share_of};
 use super::set::PartSet;
 use crate::context::Context;
 use crate::error::CliError;
@@ -61,47 +62,48 @@ pub fn merge(set: &PartSet, ctx: &Context, started: Instant) -> Result<(), CliEr
     let exposure = s.get("exposure").and_then(Value::as_f64).map(|e| e as f32);
     let tiles = tile_origins(width, height, tile);
     let mut layers = LayerImages::new(width, height);
-    let mut light = None;
+    let mut splats: Vec<Vec<Splat>> = Vec::new();
+    let light_paths = set.header.extra.get("light_paths").and_then(Value::as_u64);
     for part in &set.parts {
         let range = share_of(part.header.part, tiles.len());
-        let mut values = part.payload.chunks_exact(3);
-        let mut short = false;
-        for_each_share_pixel((width, height), tile, &tiles[range], |at| {
-            for img in &mut layers.images {
-                match values.next() {
-                    Some(v) => img.pixels_mut()[at] = glam::Vec3::from_slice(v),
-                    None => short = true,
-                }
-            }
+        let mut pixels = 0;
+        for_each_share_pixel((width, height), tile, &tiles[range.clone()], |_| {
+            pixels += 1
         });
-        let carries = part.header.extra.get("light").and_then(Value::as_bool) == Some(true);
-        let rest: Vec<f32> = values.flat_map(|v| v.iter().copied()).collect();
-        let light_len = 6 * 3 * width as usize * height as usize;
-        if short || rest.len() != if carries { light_len } else { 0 } {
+        let (own, rest) = part
+            .payload
+            .split_at((6 * 3 * pixels).min(part.payload.len()));
+        let paths = part.header.extra.get("light_paths").and_then(Value::as_u64);
+        if own.len() != 6 * 3 * pixels || rest.len() % SPLAT_WORDS != 0 || paths != light_paths {
             return Err(CliError::Input(format!(
-                "{}: part {} holds {} values, not what its tiles{} need",
+                "{}: part {} holds {} values, not its tiles' {} and whole light splats of a \
+                 pass of {} paths; nothing merged",
                 part.path.display(),
                 part.header.part,
                 part.payload.len(),
-                if carries { " and the light pass" } else { "" }
+                6 * 3 * pixels,
+                light_paths.map_or_else(|| "no".to_owned(), |p| p.to_string())
             )));
         }
-        if carries {
-            let mut l = LayerImages::new(width, height);
-            for (img, chunk) in l
-                .images
-                .iter_mut()
-                .zip(rest.chunks_exact(3 * width as usize * height as usize))
-            {
-                for (p, v) in img.pixels_mut().iter_mut().zip(chunk.chunks_exact(3)) {
-                    *p = glam::Vec3::from_slice(v);
+        let mut values = own.chunks_exact(3);
+        for_each_share_pixel((width, height), tile, &tiles[range], |at| {
+            for img in &mut layers.images {
+                if let Some(v) = values.next() {
+                    img.pixels_mut()[at] = glam::Vec3::from_slice(v);
                 }
             }
-            light = Some(l);
-        }
+        });
+        splats.push(decode_splats(rest, width * height).map_err(|why| {
+            CliError::Input(format!(
+                "{}: part {}: {why}; nothing merged",
+                part.path.display(),
+                part.header.part
+            ))
+        })?);
     }
-    if let Some(l) = &light {
-        twopass_trace::add_light(&mut layers, l);
+    if let Some(paths) = light_paths {
+        let light = light_image(width, height, paths, splats.iter().map(Vec::as_slice));
+        add_light(&mut layers, &light);
     }
     let images = to_layers(&layers)?;
     let targets = crate::render::targets(ctx.output.as_deref(), &set.header.scene, method, png)?;
@@ -149,4 +151,20 @@ pub fn merge(set: &PartSet, ctx: &Context, started: Instant) -> Result<(), CliEr
         }
         Ok(())
     })
+}
+
+/// A part's light splats (pixel, layer, value) from their `f32` words, each checked.
+fn decode_splats(words: &[f32], pixels: u32) -> Result<Vec<Splat>, String> {
+    words
+        .chunks_exact(SPLAT_WORDS)
+        .map(|w| {
+            let (pixel, layer) = (w[0].to_bits(), w[1].to_bits() as usize);
+            match Layer::ALL.get(layer) {
+                Some(&l) if pixel < pixels => Ok((pixel, l, glam::Vec3::new(w[2], w[3], w[4]))),
+                _ => Err(format!(
+                    "a light splat on pixel {pixel}, layer {layer}: none such"
+                )),
+            }
+        })
+        .collect()
 }

@@ -1,12 +1,13 @@
 //! `twopass render ... --part I/N`: the I-th of N shares of the render's tiles (row-major
-//! tile order, contiguous ranges), written as a part file; and the assembly of a whole set
-//! into the images the single-process render writes.
+//! tile order, contiguous ranges) and of its light tracing pass's paths, written as a part
+//! file (`part::assemble` merges a set).
 //!
 //! Each pixel's random streams are keyed by (seed, pixel, sample), so a tile renders to the
-//! same bits in any process. The light tracing pass (caustics through glass) is one pass over
-//! the whole image whose splats land anywhere: part 1 carries it whole and the merge adds it
-//! after assembling the tiles, the same sum the single render takes. Adaptive sampling decides
-//! each pixel from its neighbours over the whole image, so `--part` refuses it (usage error).
+//! same bits in any process. The light tracing pass (caustics through glass) splats anywhere
+//! on the image: a part traces the I-th of N runs of its path chunks and keeps their splats,
+//! which the merge adds in path order, the same sum the single render takes. Adaptive sampling
+//! decides each pixel from its neighbours over the whole image, so `--part` refuses it (usage
+//! error).
 
 use std::path::Path;
 use std::time::Instant;
@@ -21,6 +22,10 @@ use crate::context::Context;
 use crate::error::CliError;
 use crate::pipeline::{RenderMethod, check_dropped};
 use crate::preset::RenderKnobs;
+
+/// `f32` words per light splat in a part file: the pixel and the layer (as bit patterns), the
+/// value's three channels.
+pub const SPLAT_WORDS: usize = 5;
 
 /// The tiles of part `part` among `count` tiles: a contiguous range, sizes differing by one
 /// at most.
@@ -71,7 +76,7 @@ struct PartSummary<'a> {
     part: String,
     file: &'a Path,
     tiles: [usize; 2],
-    light_pass: bool,
+    light_splats: usize,
     rays: u64,
     shadow_rays: u64,
     seconds: f64,
@@ -91,7 +96,7 @@ pub fn write_part(
     let tiles = tile_origins(camera.width, camera.height, settings.tile_size);
     let share = TileShare {
         tiles: share_of(part, tiles.len()),
-        light: part.index == 1,
+        light: (part.index - 1, part.of),
     };
     let out = twopass_trace::render_share(
         job.scene,
@@ -114,10 +119,15 @@ pub fn write_part(
             }
         },
     );
-    if let Some(light) = &out.light {
-        for img in &light.images {
-            payload.extend(img.pixels().iter().flat_map(|p| p.to_array()));
-        }
+    let splats = out.light.as_ref().map_or(&[][..], |l| l.splats.as_slice());
+    for &(pixel, layer, value) in splats {
+        payload.extend([
+            f32::from_bits(pixel),
+            f32::from_bits(layer.index() as u32),
+            value.x,
+            value.y,
+            value.z,
+        ]);
     }
     let stem = stem(job.scene_path);
     let path = part_path(
@@ -131,7 +141,7 @@ pub fn write_part(
         scene: job.scene_path.to_owned(),
         scene_fingerprint: format!("{:016x}", twopass_bake::scene_fingerprint(job.scene)),
         settings: settings_of(job, settings),
-        extra: json!({ "light": out.light.is_some() }),
+        extra: json!({ "light_paths": out.light.as_ref().map(|l| l.paths) }),
         cost: Cost {
             rays: out.stats.rays,
             shadow_rays: out.stats.shadow_rays,
@@ -143,7 +153,7 @@ pub fn write_part(
         part: part.to_string(),
         file: &path,
         tiles: [share.tiles.start, share.tiles.end],
-        light_pass: out.light.is_some(),
+        light_splats: splats.len(),
         rays: header.cost.rays,
         shadow_rays: header.cost.shadow_rays,
         seconds: header.cost.seconds,
@@ -156,10 +166,13 @@ pub fn write_part(
             share.tiles.start,
             share.tiles.end,
             tiles.len(),
-            if summary.light_pass {
-                " and the light tracing pass"
-            } else {
-                ""
+            match &out.light {
+                Some(l) => format!(
+                    " and its run of the light tracing pass ({} splats of {} paths in all)",
+                    l.splats.len(),
+                    l.paths
+                ),
+                None => String::new(),
             },
             summary.seconds,
             summary.rays,
