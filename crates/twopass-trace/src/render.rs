@@ -507,8 +507,8 @@ fn render_with(
     render_core(scene, camera, integrator, settings, budget, None, progress).0
 }
 
-/// The render loop; with a `share`, only its tiles, and the light tracing pass (if the share
-/// carries it) returned apart instead of added.
+/// The render loop; with a `share`, only its tiles and its run of the light tracing pass,
+/// whose splats are returned apart instead of added.
 fn render_core(
     scene: &Scene,
     camera: &Camera,

@@ -86,7 +86,7 @@ pub struct PartHeader {
     /// Every setting that shapes the merged result, as named fields; parts merge only when
     /// these are equal.
     pub settings: serde_json::Map<String, serde_json::Value>,
-    /// What this part holds besides its share (a render's part 1: the light tracing pass).
+    /// What this part holds besides its settings (a render part: the light pass's paths).
     pub extra: serde_json::Value,
     /// What the part cost.
     pub cost: Cost,
