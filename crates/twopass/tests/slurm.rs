@@ -13,17 +13,46 @@ use crate::common::{BOX, SPHERES, assert_exit, assert_ok, cli, repo};
 /// Longest wait for a submitted job, real time (the jobs are seconds of work each).
 const JOB_LIMIT: Duration = Duration::from_secs(300);
 
+/// Longest wait for `sinfo`: with Slurm installed but no controller up, it retries for about
+/// a minute before it gives up.
+const SINFO_LIMIT: Duration = Duration::from_secs(15);
+
+/// Whether a Slurm node takes jobs (asked once per test binary).
+fn node_takes_jobs() -> bool {
+    static UP: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *UP.get_or_init(|| {
+        let Ok(mut child) = Command::new("sinfo")
+            .args(["-h", "-o", "%T"])
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+        else {
+            return false;
+        };
+        let start = Instant::now();
+        loop {
+            match child.try_wait() {
+                Ok(Some(status)) if status.success() => break,
+                Ok(None) if start.elapsed() < SINFO_LIMIT => {
+                    std::thread::sleep(Duration::from_millis(100));
+                }
+                _ => {
+                    let _ = child.kill();
+                    let _ = child.wait();
+                    return false;
+                }
+            }
+        }
+        let mut text = String::new();
+        let _ = std::io::Read::read_to_string(&mut child.stdout.take().unwrap(), &mut text);
+        text.lines()
+            .any(|s| ["idle", "mixed", "allocated", "completing"].contains(&s.trim()))
+    })
+}
+
 /// Whether a Slurm cluster takes jobs; in CI with `TWOPASS_SLURM=1`, a panic when none does.
 fn cluster_up() -> bool {
-    let up = Command::new("sinfo")
-        .args(["-h", "-o", "%T"])
-        .output()
-        .is_ok_and(|o| {
-            o.status.success()
-                && String::from_utf8_lossy(&o.stdout)
-                    .lines()
-                    .any(|s| ["idle", "mixed", "allocated", "completing"].contains(&s.trim()))
-        });
+    let up = node_takes_jobs();
     if !up {
         let required = std::env::var_os("CI").is_some()
             && std::env::var("TWOPASS_SLURM").is_ok_and(|v| v == "1");
