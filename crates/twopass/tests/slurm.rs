@@ -347,3 +347,61 @@ fn a_set_with_a_part_of_another_seed_is_refused() {
     );
     assert!(!d.join("mixed.exr").exists());
 }
+
+#[test]
+fn dry_run_prints_the_three_scripts_and_refuses_flags_out_of_place() {
+    let scene = s(&repo(BOX));
+    let dir = tempfile::tempdir().unwrap();
+    let job = dir.path().join("job");
+    let out = cli("slurm render --parts 3 --dry-run --dir")
+        .arg(&job)
+        .words("--")
+        .arg(&scene)
+        .words("--method hybrid --width 32 --unshot 0.01")
+        .run();
+    assert_ok(&out);
+    let text = String::from_utf8_lossy(&out.stdout);
+    for want in [
+        "# The radiosity solution, once, for every part.",
+        "--unshot 0.01 --format bake --gather off",
+        "#SBATCH --array=1-3",
+        "#SBATCH --requeue",
+        "--part \"${SLURM_ARRAY_TASK_ID}/3\"",
+        "cornell-box-hybrid.3-of-3.part",
+        "sbatch --parsable --dependency=afterany:ARRAY merge.sbatch",
+    ] {
+        assert!(text.contains(want), "no {want:?} in\n{text}");
+    }
+    // The parts read the solve's solution instead of solving again.
+    let parts = text.split("parts.sbatch").nth(1).unwrap();
+    assert!(
+        !parts.contains("--unshot") && parts.contains("--bake"),
+        "{parts}"
+    );
+    // Nothing is written by a dry run.
+    assert!(!job.exists());
+    // Whitted needs no solve.
+    let out = cli("slurm render --parts 2 --dry-run --dir")
+        .arg(&job)
+        .words("--")
+        .arg(&scene)
+        .words("--method whitted")
+        .run();
+    assert_ok(&out);
+    assert!(!String::from_utf8_lossy(&out.stdout).contains("solve.sbatch"));
+    // Flags of the command given to `slurm` itself, or that `slurm` sets, are usage errors.
+    for (before, after) in [
+        ("--width 32", "--method whitted"),
+        ("", "--method whitted --output x.exr"),
+        ("", "--method whitted --part 1/2"),
+        ("", "--method whitted --adaptive 4"),
+    ] {
+        let out = cli("slurm render --parts 2 --dry-run")
+            .words(before)
+            .words("--")
+            .arg(&scene)
+            .words(after)
+            .run();
+        assert_exit(&out, 2);
+    }
+}

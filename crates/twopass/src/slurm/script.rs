@@ -147,6 +147,13 @@ fn usage(kind: Kind, e: &clap::Error) -> CliError {
 
 /// Checks the user's command and builds the plan.
 pub fn plan(kind: Kind, args: &SubmitArgs, ctx: &Context) -> Result<Plan, CliError> {
+    if ctx.width.is_some() || ctx.height.is_some() || ctx.seed != 0 || ctx.confine {
+        return Err(CliError::Usage(
+            "--width, --height, --seed and --confine belong to the command after --, which \
+             `twopass slurm` passes to every job as it is"
+                .into(),
+        ));
+    }
     let argv =
         std::iter::once(format!("twopass {}", kind.command())).chain(args.command.iter().cloned());
     let (line_ctx, scene, name, needs_solve, no_more) = match kind {
