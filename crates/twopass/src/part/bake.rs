@@ -35,16 +35,26 @@ use crate::bake::{BakeArgs, BakeSet, Format, Gather, lock_folder, write_set};
 use crate::context::Context;
 use crate::error::CliError;
 
-/// `f32` words per recorded estimate: the key (2), emitted, direct and indirect (9), the
-/// indirect error and back-face fraction (2), rays and shadow rays (4).
-const WORDS: usize = 17;
+/// `f32` words per recorded estimate: the key (2), the point (triangle and barycentrics, 4),
+/// emitted, direct and indirect (9), the indirect error and back-face fraction (2), rays and
+/// shadow rays (4).
+const WORDS: usize = 21;
+
+/// A gathered point as the bake asks for it: its key, triangle and barycentrics (as bit
+/// patterns), so that a replayed estimate is only ever given for the very point it was
+/// computed at.
+type Point = (u64, u32, [u32; 3]);
+
+fn point(key: u64, triangle: u32, barycentric: [f32; 3]) -> Point {
+    (key, triangle, barycentric.map(f32::to_bits))
+}
 
 /// Gathers the points of one shard and records their estimates; every other point gets an
 /// empty estimate (no light, no rays), which the part never writes.
 struct Shard<'a> {
     gatherer: &'a Gatherer<'a>,
     part: PartIndex,
-    taken: Mutex<Vec<(u64, RadianceEstimate)>>,
+    taken: Mutex<Vec<(Point, RadianceEstimate)>>,
 }
 
 impl RadianceEstimator for Shard<'_> {
@@ -56,21 +66,21 @@ impl RadianceEstimator for Shard<'_> {
         self.taken
             .lock()
             .unwrap_or_else(std::sync::PoisonError::into_inner)
-            .push((key, e));
+            .push((point(key, triangle, barycentric), e));
         e
     }
 }
 
-/// Answers every point with the estimate a part recorded for its key; a key no part
-/// recorded is counted (and answered with nothing), so the merge can refuse before writing.
+/// Answers every point with the estimate a part recorded for it; a point no part recorded is
+/// kept (and answered with nothing), so the merge can refuse before writing.
 struct Replay {
-    estimates: HashMap<u64, RadianceEstimate>,
+    estimates: HashMap<Point, RadianceEstimate>,
     unknown: Mutex<Option<u64>>,
 }
 
 impl RadianceEstimator for Replay {
-    fn estimate(&self, _: u32, _: [f32; 3], key: u64) -> RadianceEstimate {
-        match self.estimates.get(&key) {
+    fn estimate(&self, triangle: u32, barycentric: [f32; 3], key: u64) -> RadianceEstimate {
+        match self.estimates.get(&point(key, triangle, barycentric)) {
             Some(e) => *e,
             None => {
                 *self
@@ -201,13 +211,17 @@ pub fn write_part(
         .taken
         .into_inner()
         .unwrap_or_else(std::sync::PoisonError::into_inner);
-    taken.sort_by_key(|(k, _)| *k);
-    taken.dedup_by_key(|(k, _)| *k);
+    taken.sort_by_key(|(p, _)| *p);
+    taken.dedup_by_key(|(p, _)| *p);
     let mut payload = Vec::with_capacity(WORDS * taken.len());
-    for (key, e) in &taken {
+    for ((key, triangle, bary), e) in &taken {
         let words = [
             *key as u32,
             (key >> 32) as u32,
+            *triangle,
+            bary[0],
+            bary[1],
+            bary[2],
             e.emitted.x.to_bits(),
             e.emitted.y.to_bits(),
             e.emitted.z.to_bits(),
@@ -354,7 +368,8 @@ pub fn merge(set: &PartSet, ctx: &Context, started: Instant) -> Result<(), CliEr
         .unwrap_or_else(std::sync::PoisonError::into_inner)
     {
         return Err(CliError::Input(format!(
-            "{}: no part holds the point of key {key} ({} of {}); nothing merged",
+            "{}: no part holds the point of key {key} (part {} of {}) where this bake asks for \
+             it; nothing merged",
             first.path.display(),
             key % u64::from(set.header.part.of) + 1,
             set.header.part.of
@@ -409,7 +424,7 @@ pub fn merge(set: &PartSet, ctx: &Context, started: Instant) -> Result<(), CliEr
 }
 
 /// Every part's recorded estimates by key, each key checked to be in its part's shard.
-fn estimates_of(set: &PartSet) -> Result<HashMap<u64, RadianceEstimate>, CliError> {
+fn estimates_of(set: &PartSet) -> Result<HashMap<Point, RadianceEstimate>, CliError> {
     let mut all = HashMap::new();
     for part in &set.parts {
         let corrupt = |why: String| {
@@ -436,15 +451,15 @@ fn estimates_of(set: &PartSet) -> Result<HashMap<u64, RadianceEstimate>, CliErro
             }
             let f = |i: usize| f32::from_bits(w[i]);
             let e = RadianceEstimate {
-                emitted: glam::Vec3::new(f(2), f(3), f(4)),
-                direct: glam::Vec3::new(f(5), f(6), f(7)),
-                indirect: glam::Vec3::new(f(8), f(9), f(10)),
-                indirect_error: f(11),
-                back_faces: f(12),
-                rays: u64::from(w[13]) | u64::from(w[14]) << 32,
-                shadow_rays: u64::from(w[15]) | u64::from(w[16]) << 32,
+                emitted: glam::Vec3::new(f(6), f(7), f(8)),
+                direct: glam::Vec3::new(f(9), f(10), f(11)),
+                indirect: glam::Vec3::new(f(12), f(13), f(14)),
+                indirect_error: f(15),
+                back_faces: f(16),
+                rays: u64::from(w[17]) | u64::from(w[18]) << 32,
+                shadow_rays: u64::from(w[19]) | u64::from(w[20]) << 32,
             };
-            all.insert(key, e);
+            all.insert((key, w[2], [w[3], w[4], w[5]]), e);
         }
     }
     Ok(all)
