@@ -400,3 +400,35 @@ shape = { type = "sphere", center = [-1.4, 0.4, -1.3], radius = 0.35, subdivisio
         );
     }
 }
+
+#[test]
+fn contact_shadows_never_show_negative_light() {
+    // The two-lights room (a sphere resting on the floor) with every grey surface at albedo
+    // 0.05: the light in the sphere's contact shadow is nearly zero, and the vertices there
+    // take their leaves' corner values plus uniform shifts that may be negative. What the
+    // solution shows must still be light: no vertex below zero, none not finite.
+    let room = twopass_scene::workload::room(
+        twopass_scene::workload::RoomKind::TwoLights,
+        &Default::default(),
+    );
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join(&room.mesh_file), &room.mesh).unwrap();
+    let text = room.scene.replace("diffuse = 0.5", "diffuse = 0.05");
+    assert_ne!(text, room.scene, "the room's grey material is diffuse 0.5");
+    let path = dir.path().join(room.scene_file());
+    std::fs::write(&path, text).unwrap();
+    let (scene, _) = twopass_scene::load(&path).unwrap();
+    let solver = solve(
+        &scene,
+        Options {
+            method: Method::Hierarchical,
+            ..Options::default()
+        },
+    );
+    let shown = solver.solution().vertex_radiosity();
+    let negative = shown
+        .iter()
+        .filter(|v| !v.is_finite() || v.min_element() < 0.0)
+        .count();
+    assert_eq!(negative, 0, "of {} vertices", shown.len());
+}

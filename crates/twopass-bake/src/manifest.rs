@@ -246,7 +246,7 @@ pub struct LightmapRecord {
     /// Where the texture coordinates come from (the scene's, or generated and why).
     #[serde(default)]
     pub atlas: String,
-    /// Texels whose centre lies on a triangle.
+    /// Texels a triangle touches (conservative rasterization), each lit at its own point.
     pub covered_texels: usize,
     /// How the PNG encodes radiance.
     pub png: String,

@@ -11,7 +11,7 @@ use twopass_bake::{self as bake, ColorMapping};
 use twopass_radiosity::{Options, Solution, Solver};
 
 use crate::common::{cornell, solved};
-use twopass_scene::Scene;
+use twopass_scene::{DiffuseRadiance, Scene};
 
 const TEXEL: f32 = 5.0;
 
@@ -384,4 +384,105 @@ fn curved_surfaces_unwrap_into_few_charts_that_carry_their_power() {
         (power_map / power_mesh - 1.0).abs() < 0.01,
         "lightmap {power_map}, element mesh {power_mesh}"
     );
+}
+
+/// Barycentrics of `p` in triangle `t` in the horizontal (x, z) plane, if it lies inside.
+fn horizontal_barycentric(t: [Vec3; 3], p: Vec3) -> Option<[f32; 3]> {
+    let [a, b, c] = t.map(|q| Vec2::new(q.x, q.z));
+    let q = Vec2::new(p.x, p.z);
+    let det = (b - a).perp_dot(c - a);
+    let w1 = (q - a).perp_dot(c - a) / det;
+    let w2 = (b - a).perp_dot(q - a) / det;
+    let w = [1.0 - w1 - w2, w1, w2];
+    w.iter().all(|&k| k >= -1e-4).then_some(w)
+}
+
+#[test]
+fn a_face_thinner_than_a_texel_is_lit_along_its_whole_length() {
+    // A strip 1 m long and 4 mm wide, lit from above one end, baked with 10 mm texels: no
+    // texel centre lies on it, yet the lightmap must show the light falling off along it as the
+    // solution does (a shelf's front edge, a door frame, a window sill).
+    let dir = tempfile::tempdir().unwrap();
+    let toml = "version = 1\nunit = \"m\"\n[camera]\nposition = [0.5, 0.5, -2]\n\
+                look_at = [0.5, 0, 0.5]\nfov_y = 40\n[[material]]\nname = \"white\"\n\
+                type = \"lambert\"\ndiffuse = 0.5\n\
+                [[object]]\nname = \"strip\"\nmaterial = \"white\"\nshape = { type = \"quad\", \
+                origin = [0, 0, 0.5], edge_u = [0, 0, 0.004], edge_v = [1, 0, 0] }\n\
+                [[object]]\nname = \"light\"\nmaterial = \"white\"\nemission = [10, 10, 10]\n\
+                shape = { type = \"quad\", origin = [0, 0.3, 0.4], edge_u = [0.2, 0, 0], \
+                edge_v = [0, 0, 0.2] }\n";
+    let path = dir.path().join("strip.toml");
+    std::fs::write(&path, toml).unwrap();
+    let (scene, _) = twopass_scene::load(&path).unwrap();
+    let mut solver = Solver::new(&scene, Options::default()).unwrap();
+    solver.run(|_| std::ops::ControlFlow::Continue(()));
+    let solution = solver.solution();
+    let settings = LightmapSettings {
+        texel_size: Some(0.01),
+        padding: 2,
+    };
+    let lm = bake_lightmap(
+        TexelSource::Solution(&solution),
+        &scene,
+        &settings,
+        ColorMapping::auto(&solution),
+    )
+    .unwrap();
+    let strip = scene
+        .objects
+        .iter()
+        .position(|o| o.name == "strip")
+        .unwrap() as u32;
+    // The solution along the strip's middle line, from the scene's own triangles.
+    let solution_at = |p: Vec3| {
+        (0..scene.mesh.triangles.len() as u32)
+            .filter(|&t| scene.mesh.triangle_object[t as usize] == strip)
+            .find_map(|t| {
+                let corners =
+                    scene.mesh.triangles[t as usize].map(|i| scene.mesh.positions[i as usize]);
+                horizontal_barycentric(corners, p).map(|b| solution.radiance(t, b))
+            })
+            .unwrap()
+    };
+    // The lightmap there: the .glb's TEXCOORD_1, the texels sampled bilinearly as a GPU does.
+    let texel = |x: f32, y: f32| {
+        let (x, y) = (
+            (x.max(0.0) as u32).min(lm.width - 1),
+            (y.max(0.0) as u32).min(lm.height - 1),
+        );
+        lm.radiance.pixels()[(y * lm.width + x) as usize]
+    };
+    let lightmap_at = |p: Vec3| {
+        triangles(&lm)
+            .into_iter()
+            .filter(|(name, _, _)| name == "strip")
+            .find_map(|(_, pos, uv)| {
+                horizontal_barycentric(pos, p).map(|b| {
+                    // In texels, texel centres at half-integers.
+                    let q =
+                        uv[0].as_vec2() * b[0] + uv[1].as_vec2() * b[1] + uv[2].as_vec2() * b[2]
+                            - Vec2::splat(0.5);
+                    let (x0, y0) = (q.x.floor(), q.y.floor());
+                    let (fx, fy) = (q.x - x0, q.y - y0);
+                    let top = texel(x0, y0) * (1.0 - fx) + texel(x0 + 1.0, y0) * fx;
+                    let bottom = texel(x0, y0 + 1.0) * (1.0 - fx) + texel(x0 + 1.0, y0 + 1.0) * fx;
+                    top * (1.0 - fy) + bottom * fy
+                })
+            })
+            .unwrap()
+    };
+    let points: Vec<Vec3> = (1..20)
+        .map(|k| Vec3::new(k as f32 * 0.05, 0.0, 0.502))
+        .collect();
+    let sol: Vec<f32> = points.iter().map(|&p| solution_at(p).y).collect();
+    // The light falls off along the strip (so a constant per triangle could not pass).
+    assert!(sol[1] > 4.0 * sol[18], "{sol:?}");
+    for (p, s) in points.iter().zip(&sol) {
+        let l = lightmap_at(*p).y;
+        assert!(
+            (l - s).abs() <= 0.03 * s + 1e-4,
+            "at x = {}: lightmap {l}, solution {s}",
+            p.x
+        );
+    }
 }

@@ -48,8 +48,12 @@ fn a_room_is_baked_rendered_measured_and_its_reference_cached() {
         floor > 0.0 && (f(&noise["rel_rmse"]) - floor).abs() < 1e-3 * floor,
         "{noise}"
     );
-    assert!(f(&room["bake"]["seconds"]) > 0.0);
-    assert!(f(&room["bake"]["peak_memory_mib"]) > 1.0);
+    let bakes = room["bakes"].as_array().unwrap();
+    assert_eq!(bakes.len(), 1);
+    assert!(f(&bakes[0]["seconds"]) > 0.0);
+    assert!(f(&bakes[0]["peak_memory_mib"]) > 1.0);
+    // The bake's default gathers the lightmap.
+    assert!(bakes[0]["gather_rays"].as_u64().unwrap() > 0);
     let images = room["images"].as_array().unwrap();
     let sources: Vec<&str> = images
         .iter()
@@ -123,6 +127,52 @@ fn a_room_is_baked_rendered_measured_and_its_reference_cached() {
     // Another seed is another reference.
     let third = common::ok_json(&bench(out, "--seed 1 --json"));
     assert_eq!(third["rooms"][0]["reference"]["cached"], false);
+}
+
+#[test]
+fn gathers_bakes_once_per_setting_and_measures_each() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path();
+    let report = common::ok_json(&bench(out, "--gathers off,8 --json"));
+    let room = &report["rooms"][0];
+    let bakes = room["bakes"].as_array().unwrap();
+    let settings: Vec<&str> = bakes
+        .iter()
+        .map(|b| b["gather"].as_str().unwrap())
+        .collect();
+    assert_eq!(settings, ["off", "8"]);
+    // No gather, no gather rays; eight rays at most per texel (and the shadow rays) for the
+    // other.
+    assert!(bakes[0]["gather_rays"].is_null(), "{}", bakes[0]);
+    assert!(bakes[1]["gather_rays"].as_u64().unwrap() > 0);
+    assert!(
+        out.join("terminator/bake-gather-8/terminator.lightmap.glb")
+            .is_file()
+    );
+    let images = room["images"].as_array().unwrap();
+    let sources: Vec<(&str, u64)> = images
+        .iter()
+        .map(|i| (i["source"].as_str().unwrap(), i["bake"].as_u64().unwrap()))
+        .collect();
+    assert_eq!(
+        sources,
+        [
+            ("lightmap g=off", 0),
+            ("element bake g=off", 0),
+            ("lightmap g=8", 1),
+            ("element bake g=8", 1)
+        ]
+    );
+    for name in ["lightmap-gather-off.exr", "lightmap-gather-8.exr"] {
+        assert!(out.join("terminator").join(name).is_file(), "{name}");
+    }
+    // A setting that is not one is a usage error before anything is baked.
+    let o = cli("bench bakes --rooms terminator --gathers 0 --out")
+        .arg(out)
+        .run();
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("`0` is not off, auto or a ray count"), "{err}");
 }
 
 #[test]

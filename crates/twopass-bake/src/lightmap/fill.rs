@@ -9,7 +9,7 @@ use twopass_scene::{DiffuseRadiance, RadianceEstimate, RadianceEstimator, Scene}
 
 use super::filter::{Guide, denoise};
 use super::layout::{Layout, Region};
-use super::raster::for_each_texel;
+use super::raster::{for_each_overlapped_texel, for_each_texel};
 use super::settings::{AtlasSource, Resolved};
 
 /// Where the texels' light comes from.
@@ -51,52 +51,116 @@ pub const MAX_BACK_FACES: f32 = 0.1;
 /// balance texels of very different cost.
 const GATHER_CHUNK: usize = 64;
 
-/// The texel centres of `region` that lie on its triangles (the last triangle drawn owns a
-/// texel on a shared edge), and for every triangle that covers no texel centre (a sliver), its
-/// centroid's texel if no other triangle owns it.
+/// Share of a texel by which a sample outside its texel's centre is pulled from the triangle's
+/// edge toward its centroid: a point exactly on an edge shared with another surface (a wall
+/// meeting the floor) would start its gather rays on that surface.
+const EDGE_INSET: f32 = 0.05;
+
+/// The texels of `region` its triangles touch (conservative rasterization), each with the
+/// point it is lit at. A texel whose centre lies on a triangle takes that point (the last
+/// triangle drawn owns a texel centre on a shared edge). A texel a triangle only overlaps
+/// (at a chart's border, or on a face thinner than a texel) takes the point of the touching
+/// triangles nearest its centre, pulled [`EDGE_INSET`] texels inside: the renderer's bilinear
+/// lookup reads border texels, so they hold the light at the border, not a copy of their
+/// inner neighbours', and a face thinner than a texel is lit along its whole length.
 fn rasterize(region: &Region, layout: &Layout) -> Vec<Sample> {
     let [w, h] = region.size;
-    let mut owner: Vec<Option<(u32, [f32; 3])>> = vec![None; (w * h) as usize];
+    // Per texel: the triangle, the barycentrics, and the squared distance (texels) from the
+    // centre to the point (0 for a centre on the triangle).
+    let mut owner: Vec<Option<(u32, [f32; 3], f32)>> = vec![None; (w * h) as usize];
     let origin = Vec2::new(region.at[0] as f32, region.at[1] as f32);
     for &t in &region.triangles {
         let [a, b, c] = layout.corners[t as usize].map(|p| p - origin);
-        let mut any = false;
         for_each_texel(
             [a, b, c],
             [w, h],
             |bary| bary.iter().all(|&k| k >= -1e-5),
             |x, y, bary| {
-                owner[(y * w + x) as usize] = Some((t, bary.map(|k| k.max(0.0))));
-                any = true;
+                owner[(y * w + x) as usize] = Some((t, bary.map(|k| k.max(0.0)), 0.0));
             },
         );
-        if (b - a).perp_dot(c - a).abs() <= f32::MIN_POSITIVE {
-            continue;
-        }
-        if !any {
-            // A sliver may cover no texel centre: its centroid's texel still gets its light.
-            let centroid = ((a + b + c) / 3.0).max(Vec2::ZERO);
-            let (x, y) = (
-                (centroid.x as u32).min(w - 1),
-                (centroid.y as u32).min(h - 1),
-            );
+    }
+    for &t in &region.triangles {
+        let corners = layout.corners[t as usize].map(|p| p - origin);
+        for_each_overlapped_texel(corners, [w, h], |x, y| {
             let i = (y * w + x) as usize;
-            if owner[i].is_none() {
-                owner[i] = Some((t, [1.0 / 3.0; 3]));
+            if owner[i].is_some_and(|(_, _, d)| d == 0.0) {
+                return;
             }
-        }
+            let centre = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+            let (point, bary) = inset_closest_point(corners, centre);
+            let d = point.distance_squared(centre);
+            if owner[i].is_none_or(|(_, _, best)| d < best) {
+                owner[i] = Some((t, bary, d.max(f32::MIN_POSITIVE)));
+            }
+        });
     }
     owner
         .iter()
         .enumerate()
         .filter_map(|(i, o)| {
-            o.map(|(triangle, barycentric)| Sample {
+            o.map(|(triangle, barycentric, _)| Sample {
                 texel: i as u32,
                 triangle,
                 barycentric,
             })
         })
         .collect()
+}
+
+/// The point of triangle `[a, b, c]` nearest `p` (all in texels), moved [`EDGE_INSET`] texels
+/// toward the centroid (at most half way), and its barycentrics.
+fn inset_closest_point([a, b, c]: [Vec2; 3], p: Vec2) -> (Vec2, [f32; 3]) {
+    let q = closest_point_on_triangle([a, b, c], p);
+    let centroid = (a + b + c) / 3.0;
+    let to_centroid = centroid - q;
+    let length = to_centroid.length();
+    let q = if length > 0.0 {
+        q + to_centroid * (EDGE_INSET / length).min(0.5)
+    } else {
+        q
+    };
+    let det = (b - a).perp_dot(c - a);
+    let w1 = (q - a).perp_dot(c - a) / det;
+    let w2 = (b - a).perp_dot(q - a) / det;
+    let bary = [1.0 - w1 - w2, w1, w2].map(|k| k.clamp(0.0, 1.0));
+    let sum: f32 = bary.iter().sum();
+    (q, bary.map(|k| k / sum))
+}
+
+/// The point of triangle `[a, b, c]` nearest `p` (Ericson, *Real-Time Collision Detection*,
+/// 5.1.5, in the plane).
+fn closest_point_on_triangle([a, b, c]: [Vec2; 3], p: Vec2) -> Vec2 {
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return a;
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        return a + ab * (d1 / (d1 - d3));
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        return a + ac * (d2 / (d2 - d6));
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    }
+    // Inside: p itself (its barycentrics are all positive).
+    let denom = 1.0 / (va + vb + vc);
+    a + ab * (vb * denom) + ac * (vc * denom)
 }
 
 /// Fills one region: every covered texel from `source`, then `s.padding` rings of dilation.

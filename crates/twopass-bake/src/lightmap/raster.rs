@@ -60,6 +60,81 @@ pub(super) fn for_each_texel(
     }
 }
 
+/// Calls `visit(x, y)` for every texel of a grid of `size` texels whose square
+/// `[x, x + 1] x [y, y + 1]` overlaps triangle `[a, b, c]` (texel units) with positive area or
+/// along an edge: conservative rasterization. Each row's candidates are the texels over the
+/// triangle's extent within the row's band (its edges clipped to the band, and its corners
+/// inside it); a candidate is kept unless one of the triangle's edge lines separates it (the
+/// separating-axis test, whose other two axes the band and the extent already decide). A
+/// triangle of zero area visits nothing.
+pub(super) fn for_each_overlapped_texel(
+    [a, b, c]: [Vec2; 3],
+    size: [u32; 2],
+    mut visit: impl FnMut(u32, u32),
+) {
+    let det = (b - a).perp_dot(c - a);
+    if det.abs() <= f32::MIN_POSITIVE {
+        return;
+    }
+    // Inward edge normals (the third corner on the positive side) and their lines' offsets.
+    let sign = det.signum();
+    let edges = [(a, b), (b, c), (c, a)].map(|(p, q)| {
+        let n = (q - p).perp() * sign;
+        (n, n.dot(p))
+    });
+    let (w, h) = (size[0] as f32, size[1] as f32);
+    let lo_y = a.y.min(b.y).min(c.y).floor().max(0.0);
+    let hi_y = a.y.max(b.y).max(c.y).ceil().min(h);
+    let mut y = lo_y;
+    while y < hi_y {
+        let (band_lo, band_hi) = (y, y + 1.0);
+        let (mut x0, mut x1) = (f32::INFINITY, f32::NEG_INFINITY);
+        for (p, q) in [(a, b), (b, c), (c, a)] {
+            // The part of edge p-q inside the band, by its parameter range.
+            let (mut t0, mut t1) = (0.0f32, 1.0f32);
+            let dy = q.y - p.y;
+            if dy == 0.0 {
+                if p.y < band_lo || p.y > band_hi {
+                    continue;
+                }
+            } else {
+                let (ta, tb) = ((band_lo - p.y) / dy, (band_hi - p.y) / dy);
+                t0 = t0.max(ta.min(tb));
+                t1 = t1.min(ta.max(tb));
+                if t0 > t1 {
+                    continue;
+                }
+            }
+            for t in [t0, t1] {
+                let x = p.x + t * (q.x - p.x);
+                x0 = x0.min(x);
+                x1 = x1.max(x);
+            }
+        }
+        if x0 <= x1 {
+            let from = x0.floor().max(0.0);
+            let to = (x1.floor() + 1.0).min(w);
+            let mut x = from;
+            while x < to {
+                let square = [
+                    Vec2::new(x, band_lo),
+                    Vec2::new(x + 1.0, band_lo),
+                    Vec2::new(x, band_hi),
+                    Vec2::new(x + 1.0, band_hi),
+                ];
+                let separated = edges
+                    .iter()
+                    .any(|&(n, d)| square.iter().all(|&s| n.dot(s) < d));
+                if !separated {
+                    visit(x as u32, y as u32);
+                }
+                x += 1.0;
+            }
+        }
+        y += 1.0;
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -123,5 +198,90 @@ mod tests {
         let mut candidates = 0u64;
         for_each_texel(t, [4100, 4100], |_| true, |_, _, _| candidates += 1);
         assert!(candidates < 8 * 4096, "{candidates} texels tested");
+    }
+
+    /// Whether the texel square at `(x, y)` and the triangle overlap, by sampling the square
+    /// finely and testing each sample against the triangle (with a little slack for samples on
+    /// an edge).
+    fn overlaps_by_sampling([a, b, c]: [Vec2; 3], x: u32, y: u32) -> bool {
+        let det = (b - a).perp_dot(c - a);
+        let k = 48;
+        (0..=k).any(|i| {
+            (0..=k).any(|j| {
+                let p = Vec2::new(
+                    x as f32 + i as f32 / k as f32,
+                    y as f32 + j as f32 / k as f32,
+                );
+                let w1 = (p - a).perp_dot(c - a) / det;
+                let w2 = (b - a).perp_dot(p - a) / det;
+                [1.0 - w1 - w2, w1, w2].iter().all(|&w| w >= -1e-6)
+            })
+        })
+    }
+
+    #[test]
+    fn conservative_rasterization_finds_every_texel_the_triangle_touches_and_no_other() {
+        let mut seed = 11u64;
+        let mut next = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let size = [23, 19];
+        for k in 0..300 {
+            // Slivers thinner than a texel, shallow edges and ordinary triangles.
+            let t = if k % 3 == 0 {
+                let p = Vec2::new(next() * 20.0, next() * 16.0);
+                let d = Vec2::new(next() * 12.0 - 6.0, next() * 12.0 - 6.0);
+                [p, p + d, p + d * 0.5 + d.perp().normalize_or_zero() * 0.05]
+            } else {
+                [(); 3].map(|_| Vec2::new(next() * 26.0 - 2.0, next() * 22.0 - 2.0))
+            };
+            let mut found = Vec::new();
+            for_each_overlapped_texel(t, size, |x, y| found.push((x, y)));
+            let mut expected = Vec::new();
+            for y in 0..size[1] {
+                for x in 0..size[0] {
+                    if overlaps_by_sampling(t, x, y) {
+                        expected.push((x, y));
+                    }
+                }
+            }
+            // Sampling at 1/48 of a texel can miss a corner that only just pokes into a
+            // square; every texel it finds must be found, and nothing far from the triangle.
+            for e in &expected {
+                assert!(found.contains(e), "triangle {t:?}: texel {e:?} missed");
+            }
+            let extra = found.iter().filter(|f| !expected.contains(f)).count();
+            assert!(
+                extra <= 2,
+                "triangle {t:?}: {extra} texels it does not touch"
+            );
+        }
+    }
+
+    #[test]
+    fn a_sliver_thinner_than_a_texel_touches_every_texel_along_its_length() {
+        // 0.05 texels tall and 10 long, between two rows of texel centres (the square at x = 12
+        // touches its vertical edge).
+        let t = [
+            Vec2::new(2.0, 3.1),
+            Vec2::new(12.0, 3.1),
+            Vec2::new(12.0, 3.15),
+        ];
+        let mut found = Vec::new();
+        for_each_overlapped_texel(t, [20, 20], |x, y| found.push((x, y)));
+        let expected: Vec<(u32, u32)> = (2..=12).map(|x| (x, 3)).collect();
+        assert_eq!(found, expected);
+        // Its centres: none.
+        let mut centres = 0;
+        for_each_texel(
+            t,
+            [20, 20],
+            |b| b.iter().all(|&k| k >= 0.0),
+            |_, _, _| centres += 1,
+        );
+        assert_eq!(centres, 0);
     }
 }

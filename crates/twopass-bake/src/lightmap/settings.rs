@@ -46,7 +46,8 @@ pub struct Lightmap {
     pub radiance: Image,
     /// Charts in the atlas (1 when the scene's own texture coordinates are used).
     pub charts: usize,
-    /// Texels whose centre lies on a triangle (the rest are padding, dilated or empty).
+    /// Texels a triangle touches, each lit at its own point (the rest are padding, dilated or
+    /// empty).
     pub covered_texels: usize,
     /// Closest-hit rays a final gather traced (0 without one).
     pub rays: u64,

@@ -178,8 +178,13 @@ impl HierarchicalSolver<'_> {
             let t = vert.triangle as usize;
             let (rho, e) = (self.tri_rho[t], self.tri_emission[t]);
             let w = weight[v].max(f64::MIN_POSITIVE);
-            let d = rho * sum[v][0] / w;
-            let i = rho * sum[v][1] / w;
+            // A corner's value is a point value plus its leaf's uniform shift, and a negative
+            // shift (the links' interpolants overshooting the leaf's mean) can outweigh a
+            // small point value: where the light is nearly zero (a contact shadow), the mean
+            // of such corners can fall below zero. Irradiance cannot; what the vertices show
+            // is clamped (the leaves' power, and so the transport, is unchanged).
+            let d = rho * (sum[v][0] / w).max(DVec3::ZERO);
+            let i = rho * (sum[v][1] / w).max(DVec3::ZERO);
             radiosity.push((e + d + i).as_vec3());
             direct.push(d.as_vec3());
             indirect.push(i.as_vec3());

@@ -5,7 +5,8 @@
 //! For each room, in `OUT/<room>/`: the room's scene and OBJ (`<room>.toml`, `<room>.obj`);
 //! its converged reference (`reference`: the path tracer in a child process, cached); one
 //! `twopass bake <room>.toml --lightmap --output OUT/<room>/bake ARGS` in a child process
-//! (`ARGS` are the bench's arguments after `--`), timed and measured for peak memory; then two
+//! (`ARGS` are the bench's arguments after `--`; with `--gathers`, one bake per setting, in
+//! `bake-gather-<G>/`), timed and measured for peak memory; then two
 //! renders from it (`render --bake ... --method radiosity`, children too): `lightmap.exr`
 //! from `<room>.lightmap.glb` and `element-bake.exr` from `<room>.bake`, each measured against
 //! the reference (`metric`). The report (`report`) goes to `OUT/bench-bakes.json` and stdout.
@@ -61,6 +62,11 @@ pub struct BakesArgs {
     /// Seed of the rooms' layouts (`--seed` seeds the reference, the bake and the renders).
     #[arg(long, default_value_t = 0)]
     pub room_seed: u64,
+    /// The final gather's trade: bake every room once per setting given (`off`, `auto` or a
+    /// ray count, comma separated: `--gathers off,16,64,auto`), each with `--gather` set
+    /// to it, and measure the renders of each; without it, one bake with the bake's default.
+    #[arg(long, value_delimiter = ',', value_name = "off|auto|N", value_parser = parse_gather)]
+    pub gathers: Vec<String>,
     /// Folder of the rooms, references, bakes, renders and `bench-bakes.json`
     /// [default: --output, else bench-bakes].
     #[arg(long, value_name = "DIR")]
@@ -76,6 +82,16 @@ fn parse_room(s: &str) -> Result<RoomKind, String> {
         let names: Vec<&str> = RoomKind::ALL.iter().map(|k| k.name()).collect();
         format!("no room `{s}`; the rooms are {}", names.join(", "))
     })
+}
+
+fn parse_gather(s: &str) -> Result<String, String> {
+    match s {
+        "off" | "auto" => Ok(s.to_owned()),
+        _ => match s.parse::<u32>() {
+            Ok(n) if n >= 1 => Ok(n.to_string()),
+            _ => Err(format!("`{s}` is not off, auto or a ray count")),
+        },
+    }
 }
 
 /// `--threads N` for a child when the bench was given it.
@@ -140,6 +156,15 @@ fn progress(ctx: &Context, line: std::fmt::Arguments) {
     if ctx.chatty() {
         errln!("{line}");
     }
+}
+
+/// Rays the final gather of the bake whose manifest is at `path` traced (closest-hit and
+/// shadow rays), if the manifest says it gathered.
+fn gather_rays(path: &Path) -> Option<u64> {
+    let text = std::fs::read(path).ok()?;
+    let manifest: serde_json::Value = serde_json::from_slice(&text).ok()?;
+    let g = &manifest["lightmap"]["gather"];
+    Some(g["rays"].as_u64()? + g["shadow_rays"].as_u64().unwrap_or(0))
 }
 
 /// Writes one room, renders or finds its reference, bakes it, renders the bake and measures.
@@ -217,72 +242,103 @@ fn measure_scene(
         );
     }
 
-    let bake_dir = dir.join("bake");
-    match std::fs::remove_dir_all(&bake_dir) {
-        Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
-            return Err(CliError::io(&bake_dir, e));
-        }
-        _ => {}
-    }
-    let mut bake: Vec<OsString> = vec![
-        "bake".into(),
-        scene_path.clone().into(),
-        "--lightmap".into(),
-    ];
-    bake.extend(["--output".into(), bake_dir.clone().into()]);
-    bake.extend([
-        "--seed".into(),
-        ctx.seed.to_string().into(),
-        "--quiet".into(),
-    ]);
-    bake.extend(threads_args(ctx));
-    bake.extend(args.bake_args.iter().cloned());
-    progress(ctx, format_args!("{name}: bake"));
-    let baked = run_twopass(&bake)?;
-
+    let gathers: Vec<Option<&str>> = if args.gathers.is_empty() {
+        vec![None]
+    } else {
+        args.gathers.iter().map(|g| Some(g.as_str())).collect()
+    };
+    let mut bakes = Vec::new();
     let mut images = Vec::new();
-    for (source, file, exr) in [
-        ("lightmap", format!("{name}.lightmap.glb"), "lightmap.exr"),
-        ("element bake", format!("{name}.bake"), "element-bake.exr"),
-    ] {
-        let bake_file = bake_dir.join(file);
-        if !bake_file.is_file() {
-            progress(
-                ctx,
-                format_args!(
-                    "{name}: the bake wrote no {}; not measured",
-                    bake_file.display()
-                ),
-            );
-            continue;
+    for gather in gathers {
+        let (bake_dir, suffix) = match gather {
+            None => (dir.join("bake"), String::new()),
+            Some(g) => (dir.join(format!("bake-gather-{g}")), format!("-gather-{g}")),
+        };
+        match std::fs::remove_dir_all(&bake_dir) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                return Err(CliError::io(&bake_dir, e));
+            }
+            _ => {}
         }
-        let exr = dir.join(exr);
-        let mut render: Vec<OsString> = vec!["render".into(), scene_path.clone().into()];
-        render.extend(["--bake".into(), bake_file.clone().into()]);
-        let words = format!(
-            "--method radiosity --spp {} --seed {} --quiet",
-            args.render_spp, ctx.seed
+        let mut bake: Vec<OsString> = vec![
+            "bake".into(),
+            scene_path.clone().into(),
+            "--lightmap".into(),
+        ];
+        bake.extend(["--output".into(), bake_dir.clone().into()]);
+        bake.extend([
+            "--seed".into(),
+            ctx.seed.to_string().into(),
+            "--quiet".into(),
+        ]);
+        if let Some(g) = gather {
+            bake.extend(["--gather".into(), g.into()]);
+        }
+        bake.extend(threads_args(ctx));
+        bake.extend(args.bake_args.iter().cloned());
+        progress(
+            ctx,
+            format_args!(
+                "{name}: bake{}",
+                gather.map_or(String::new(), |g| format!(" --gather {g}"))
+            ),
         );
-        render.extend(words.split_whitespace().map(OsString::from));
-        render.extend(threads_args(ctx));
-        render.extend(["--output".into(), exr.clone().into()]);
-        progress(ctx, format_args!("{name}: render from the {source}"));
-        let rendered = run_twopass(&render)?;
-        let image = twopass_composite::write::read_exr(&exr)?;
-        let error = measure(
-            &image,
-            &reference.image,
-            &objects,
-            &names,
-            args.min_region_pixels,
-        )?;
-        images.push(ImageReport {
-            source,
-            bake_file: bake_file.display().to_string(),
-            exr: exr.display().to_string(),
-            render_seconds: rendered.seconds,
-            error,
+        let baked = run_twopass(&bake)?;
+        let index = bakes.len();
+        bakes.push(BakeReport {
+            gather: gather.map(str::to_owned),
+            gather_rays: gather_rays(&bake_dir.join(format!("{name}.manifest.json"))),
+            dir: bake_dir.display().to_string(),
+            seconds: baked.seconds,
+            peak_memory_mib: mib(baked.peak_bytes),
         });
+        for (source, file, exr) in [
+            ("lightmap", format!("{name}.lightmap.glb"), "lightmap"),
+            ("element bake", format!("{name}.bake"), "element-bake"),
+        ] {
+            let bake_file = bake_dir.join(file);
+            if !bake_file.is_file() {
+                progress(
+                    ctx,
+                    format_args!(
+                        "{name}: the bake wrote no {}; not measured",
+                        bake_file.display()
+                    ),
+                );
+                continue;
+            }
+            let exr = dir.join(format!("{exr}{suffix}.exr"));
+            let mut render: Vec<OsString> = vec!["render".into(), scene_path.clone().into()];
+            render.extend(["--bake".into(), bake_file.clone().into()]);
+            let words = format!(
+                "--method radiosity --spp {} --seed {} --quiet",
+                args.render_spp, ctx.seed
+            );
+            render.extend(words.split_whitespace().map(OsString::from));
+            render.extend(threads_args(ctx));
+            render.extend(["--output".into(), exr.clone().into()]);
+            progress(ctx, format_args!("{name}: render from the {source}"));
+            let rendered = run_twopass(&render)?;
+            let image = twopass_composite::write::read_exr(&exr)?;
+            let error = measure(
+                &image,
+                &reference.image,
+                &objects,
+                &names,
+                args.min_region_pixels,
+            )?;
+            images.push(ImageReport {
+                source: match gather {
+                    None => source.to_owned(),
+                    Some(g) => format!("{source} g={g}"),
+                },
+                bake: index,
+                bake_file: bake_file.display().to_string(),
+                exr: exr.display().to_string(),
+                render_seconds: rendered.seconds,
+                error,
+            });
+        }
     }
     let noise = measure(
         &reference.half,
@@ -307,11 +363,7 @@ fn measure_scene(
             mean_luminance,
             noise,
         },
-        bake: BakeReport {
-            dir: bake_dir.display().to_string(),
-            seconds: baked.seconds,
-            peak_memory_mib: mib(baked.peak_bytes),
-        },
+        bakes,
         images,
     })
 }

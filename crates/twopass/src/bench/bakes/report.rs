@@ -86,9 +86,9 @@ pub struct RoomReport {
     pub objects: usize,
     /// The converged reference.
     pub reference: ReferenceReport,
-    /// The bake under test.
-    pub bake: BakeReport,
-    /// The images rendered from the bake, measured against the reference.
+    /// The bakes under test: one, or one per `--gathers` setting.
+    pub bakes: Vec<BakeReport>,
+    /// The images rendered from the bakes, measured against the reference.
     pub images: Vec<ImageReport>,
 }
 
@@ -110,9 +110,15 @@ pub struct ReferenceReport {
     pub noise: ImageError,
 }
 
-/// The bake's cost, measured on the child process.
+/// A bake's cost, measured on the child process.
 #[derive(Debug, Serialize)]
 pub struct BakeReport {
+    /// The `--gather` it was given by `--gathers` (`None`: the bake's default or the bake
+    /// arguments').
+    pub gather: Option<String>,
+    /// Rays its final gather traced (closest-hit and shadow rays, from its manifest), if it
+    /// gathered.
+    pub gather_rays: Option<u64>,
     /// Folder of its outputs.
     pub dir: String,
     /// Wall-clock seconds of the whole `twopass bake` process.
@@ -121,11 +127,14 @@ pub struct BakeReport {
     pub peak_memory_mib: Option<f64>,
 }
 
-/// One image rendered from the bake.
+/// One image rendered from a bake.
 #[derive(Debug, Serialize)]
 pub struct ImageReport {
-    /// What it was rendered from: `lightmap` or `element bake`.
-    pub source: &'static str,
+    /// What it was rendered from: `lightmap` or `element bake`, with ` g=G` for a bake of
+    /// `--gathers` setting G.
+    pub source: String,
+    /// Index of its bake in the room's `bakes`.
+    pub bake: usize,
     /// The bake file given to `render --bake`.
     pub bake_file: String,
     /// The rendered EXR.
@@ -158,7 +167,7 @@ fn worst(error: &ImageError) -> String {
 /// Prints one room's table: its images, then its worst regions.
 pub fn print_room(r: &RoomReport, min_pixels: u64) -> Result<(), CliError> {
     outln!(
-        "\n{}: {} triangles, {} objects; reference {} ({} s, noise {}); bake {:.1} s, peak {} MiB",
+        "\n{}: {} triangles, {} objects; reference {} ({} s, noise {}); {}",
         r.room,
         r.triangles,
         r.objects,
@@ -169,11 +178,21 @@ pub fn print_room(r: &RoomReport, min_pixels: u64) -> Result<(), CliError> {
         },
         format_args!("{:.1}", r.reference.seconds),
         pct(r.reference.noise_rel_rmse),
-        r.bake.seconds,
-        fmt_mib(r.bake.peak_memory_mib)
+        r.bakes
+            .iter()
+            .map(|b| format!(
+                "bake{} {:.1} s, peak {} MiB",
+                b.gather
+                    .as_ref()
+                    .map_or(String::new(), |g| format!(" g={g}")),
+                b.seconds,
+                fmt_mib(b.peak_memory_mib)
+            ))
+            .collect::<Vec<_>>()
+            .join("; ")
     );
     outln!(
-        "{:<13} {:>9} {:>8} {:>8} {:>8}  worst region",
+        "{:<18} {:>9} {:>8} {:>8} {:>8}  worst region",
         "image",
         "rel RMSE",
         "mean",
@@ -183,11 +202,11 @@ pub fn print_room(r: &RoomReport, min_pixels: u64) -> Result<(), CliError> {
     for (source, e) in r
         .images
         .iter()
-        .map(|i| (i.source, &i.error))
+        .map(|i| (i.source.as_str(), &i.error))
         .chain([("(ref. noise)", &r.reference.noise)])
     {
         outln!(
-            "{:<13} {:>9} {:>8} {:>8} {:>8}  {}",
+            "{:<18} {:>9} {:>8} {:>8} {:>8}  {}",
             source,
             pct(e.rel_rmse),
             format!("{:+.1} %", 100.0 * e.mean_error),
@@ -217,7 +236,7 @@ pub fn print_room(r: &RoomReport, min_pixels: u64) -> Result<(), CliError> {
         "ref mean"
     );
     for i in &r.images {
-        out!(" {:>13}", i.source);
+        out!(" {:>15}", i.source);
     }
     outln!();
     for (name, pixels, mean, _) in names.iter().take(REGIONS_SHOWN) {
@@ -225,7 +244,7 @@ pub fn print_room(r: &RoomReport, min_pixels: u64) -> Result<(), CliError> {
         for i in &r.images {
             let e = i.error.regions.iter().find(|g| g.object == *name);
             out!(
-                " {:>13}",
+                " {:>15}",
                 e.map_or("-".to_owned(), |g| format!("{:+.1} %", 100.0 * g.error))
             );
         }
@@ -248,7 +267,7 @@ pub fn print_summary(report: &BakesReport) -> Result<(), CliError> {
         report.wall_seconds
     );
     outln!(
-        "{:<11} {:<13} {:>9} {:>8} {:>8} {:>8} {:>7} {:>8}  worst region",
+        "{:<11} {:<18} {:>9} {:>8} {:>8} {:>8} {:>7} {:>8} {:>9}  worst region",
         "room",
         "image",
         "rel RMSE",
@@ -256,32 +275,37 @@ pub fn print_summary(report: &BakesReport) -> Result<(), CliError> {
         ">10 %",
         "p95",
         "bake s",
-        "peak MiB"
+        "peak MiB",
+        "gather Mrays"
     );
     for r in &report.rooms {
         for i in &r.images {
+            let b = &r.bakes[i.bake];
             outln!(
-                "{:<11} {:<13} {:>9} {:>8} {:>8} {:>8} {:>7.1} {:>8}  {}",
+                "{:<11} {:<18} {:>9} {:>8} {:>8} {:>8} {:>7.1} {:>8} {:>9}  {}",
                 r.room,
                 i.source,
                 pct(i.error.rel_rmse),
                 format!("{:+.1} %", 100.0 * i.error.mean_error),
                 pct(i.error.share_off),
                 pct(i.error.p95_deviation),
-                r.bake.seconds,
-                fmt_mib(r.bake.peak_memory_mib),
+                b.seconds,
+                fmt_mib(b.peak_memory_mib),
+                b.gather_rays
+                    .map_or("-".to_owned(), |n| format!("{:.1}", n as f64 / 1e6)),
                 worst(&i.error)
             );
         }
         let e = &r.reference.noise;
         outln!(
-            "{:<11} {:<13} {:>9} {:>8} {:>8} {:>8} {:>7} {:>8}  {}",
+            "{:<11} {:<18} {:>9} {:>8} {:>8} {:>8} {:>7} {:>8} {:>9}  {}",
             r.room,
             "(ref. noise)",
             pct(e.rel_rmse),
             format!("{:+.1} %", 100.0 * e.mean_error),
             pct(e.share_off),
             pct(e.p95_deviation),
+            "",
             "",
             "",
             worst(e)
