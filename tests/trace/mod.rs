@@ -12,3 +12,4 @@ mod gather;
 mod gathered;
 mod hybrid;
 mod optics;
+mod share;

@@ -45,14 +45,15 @@ pub mod whitted;
 
 pub use film::{Layer, LayerImages, Radiance};
 pub use render::{
-    AdaptiveSampling, BUDGET_FLOOR, BUDGET_SMOOTHING, RenderOutput, RenderSettings, RenderStats,
-    SampleBudget, render, render_budgeted,
+    AdaptiveSampling, BUDGET_FLOOR, BUDGET_SMOOTHING, LightShare, RenderOutput, RenderSettings,
+    RenderStats, SampleBudget, ShareOutput, TileShare, add_light, light_image, render,
+    render_budgeted, render_share, tile_origins,
 };
 
 pub use counters::{RenderProgress, Tally};
 pub use emitters::Lights;
 pub use integrator::{Integrator, SampleState};
-pub use light_tracing::{CausticScope, LightImage, LightTracer, LightTracingSettings};
+pub use light_tracing::{CausticScope, LightImage, LightTracer, LightTracingSettings, Splat};
 pub use reference::{Caustics, Reference, ReferenceSettings};
 pub use sampler::Sampler;
 pub use whitted::{Whitted, WhittedSettings};

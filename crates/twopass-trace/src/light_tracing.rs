@@ -128,8 +128,42 @@ pub struct LightTracer {
     choice: EmitterChoice,
 }
 
-/// One splat: pixel index, layer, value (radiance times N).
-type Splat = (u32, Layer, Rgb);
+/// One splat: pixel index (row-major), layer, value (radiance times the number of paths).
+pub type Splat = (u32, Layer, Rgb);
+
+/// The chunks of `paths` light paths: the unit in which paths are traced and their splats
+/// added in order, so a range of chunks is a share of the pass that any process can trace.
+pub fn light_chunks(paths: u64) -> u64 {
+    paths.div_ceil(CHUNK)
+}
+
+/// Adds `splats` (in path order) to `layers`, counting the non-finite ones in `non_finite`
+/// instead: the one sum of a light tracing pass, whether its chunks were traced here or in
+/// other processes.
+pub fn add_splats(layers: &mut LayerImages, splats: &[Splat], non_finite: &mut u64) {
+    for &(pixel, layer, value) in splats {
+        if value.is_finite() {
+            layers.images[layer.index()].pixels_mut()[pixel as usize] += value;
+        } else {
+            *non_finite += 1;
+        }
+    }
+}
+
+/// Divides the summed splats of `paths` light paths by `paths`: each pixel's mean radiance.
+/// A value that overflowed is zeroed and counted in `non_finite`.
+pub fn finish_splats(layers: &mut LayerImages, paths: u64, non_finite: &mut u64) {
+    let scale = if paths > 0 { 1.0 / paths as f32 } else { 0.0 };
+    for img in &mut layers.images {
+        for p in img.pixels_mut() {
+            *p *= scale;
+            if !p.is_finite() {
+                *p = Rgb::ZERO;
+                *non_finite += 1;
+            }
+        }
+    }
+}
 
 impl LightTracer {
     /// The light tracer of `scene`, or `None` when it has nothing to do: no emitter or no
@@ -176,17 +210,86 @@ impl LightTracer {
         progress: &RenderProgress,
         progress_units: u64,
     ) -> LightImage {
-        let (width, height) = (camera.width, camera.height);
-        let mut layers = LayerImages::new(width, height);
+        let mut layers = LayerImages::new(camera.width, camera.height);
         let mut tally = Tally::default();
         let mut non_finite = 0;
-        let chunks = paths.div_ceil(CHUNK);
+        let all = 0..light_chunks(paths);
+        self.trace_chunks(
+            scene,
+            camera,
+            paths,
+            seed,
+            all,
+            progress,
+            progress_units,
+            |s, t| {
+                tally.add(t);
+                add_splats(&mut layers, &s, &mut non_finite);
+            },
+        );
+        finish_splats(&mut layers, paths, &mut non_finite);
+        LightImage {
+            layers,
+            paths,
+            tally,
+            non_finite,
+        }
+    }
+
+    /// The splats of chunks `chunks` (see [`light_chunks`]) of a pass of `paths` light paths,
+    /// in path order, and their rays: one process's share of [`LightTracer::trace`], which
+    /// [`add_splats`] over every share in chunk order, then [`finish_splats`], turn into the
+    /// pass's image bit for bit.
+    #[allow(clippy::too_many_arguments)]
+    pub fn trace_share(
+        &self,
+        scene: &Scene,
+        camera: &Camera,
+        paths: u64,
+        seed: u64,
+        chunks: std::ops::Range<u64>,
+        progress: &RenderProgress,
+        progress_units: u64,
+    ) -> (Vec<Splat>, Tally) {
+        let mut all = Vec::new();
+        let mut tally = Tally::default();
+        self.trace_chunks(
+            scene,
+            camera,
+            paths,
+            seed,
+            chunks,
+            progress,
+            progress_units,
+            |s, t| {
+                tally.add(t);
+                all.extend(s);
+            },
+        );
+        (all, tally)
+    }
+
+    /// Traces the paths of `chunks` batch by batch, handing each chunk's splats (in path
+    /// order) and rays to `sink` in chunk order.
+    #[allow(clippy::too_many_arguments)]
+    fn trace_chunks(
+        &self,
+        scene: &Scene,
+        camera: &Camera,
+        paths: u64,
+        seed: u64,
+        chunks: std::ops::Range<u64>,
+        progress: &RenderProgress,
+        progress_units: u64,
+        mut sink: impl FnMut(Vec<Splat>, Tally),
+    ) {
         let seed = seed ^ LIGHT_SEED_MIX;
         let view = PixelImportance::new(camera);
+        let count = chunks.end.saturating_sub(chunks.start);
         let mut done_units = 0;
-        let mut first = 0;
-        while first < chunks {
-            let last = (first + BATCH).min(chunks);
+        let mut first = chunks.start;
+        while first < chunks.end {
+            let last = (first + BATCH).min(chunks.end);
             let results: Vec<(Vec<Splat>, Tally)> = (first..last)
                 .into_par_iter()
                 .map(|c| {
@@ -200,35 +303,12 @@ impl LightTracer {
                 })
                 .collect();
             for (splats, t) in results {
-                tally.add(t);
-                for (pixel, layer, value) in splats {
-                    if value.is_finite() {
-                        layers.images[layer.index()].pixels_mut()[pixel as usize] += value;
-                    } else {
-                        non_finite += 1;
-                    }
-                }
+                sink(splats, t);
             }
-            let units = progress_units * last / chunks.max(1);
+            let units = progress_units * (last - chunks.start) / count.max(1);
             progress.add_done(units - done_units);
             done_units = units;
             first = last;
-        }
-        let scale = if paths > 0 { 1.0 / paths as f32 } else { 0.0 };
-        for img in &mut layers.images {
-            for p in img.pixels_mut() {
-                *p *= scale;
-                if !p.is_finite() {
-                    *p = Rgb::ZERO;
-                    non_finite += 1;
-                }
-            }
-        }
-        LightImage {
-            layers,
-            paths,
-            tally,
-            non_finite,
         }
     }
 

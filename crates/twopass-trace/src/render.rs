@@ -19,6 +19,7 @@ use crate::counters::RenderProgress;
 use crate::counters::Tally;
 use crate::film::{LayerImages, Radiance};
 use crate::integrator::{Integrator, SampleState};
+use crate::light_tracing::{Splat, add_splats, finish_splats, light_chunks};
 use crate::sampler::{Sampler, stratum};
 
 /// Sampling settings of a render.
@@ -391,6 +392,110 @@ pub fn render_budgeted(
         .then(|| render_with(scene, camera, integrator, settings, Some(budget), progress))
 }
 
+/// The square tiles of a `width` x `height` render with tiles of `tile` pixels (at least 1),
+/// by their top-left corners in row-major order: the render loop's unit of work, and what
+/// [`render_share`] splits among processes.
+pub fn tile_origins(width: u32, height: u32, tile: u32) -> Vec<(u32, u32)> {
+    let tile = tile.max(1);
+    (0..height.div_ceil(tile))
+        .flat_map(|ty| (0..width.div_ceil(tile)).map(move |tx| (tx * tile, ty * tile)))
+        .collect()
+}
+
+/// The tiles one of several processes renders ([`render_share`]).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct TileShare {
+    /// Indices into [`tile_origins`] of the render's size and tile edge.
+    pub tiles: std::ops::Range<usize>,
+    /// Which run of the light tracing pass's chunks this share traces, `(i, n)`: the i-th
+    /// (from 0) of `n` equal runs. A light path's splats land on any pixel, so the pass is
+    /// split by its paths, not by tiles; every share of a split render takes one run.
+    pub light: (u32, u32),
+}
+
+/// One share's run of the light tracing pass: its splats in path order.
+#[derive(Debug, Clone)]
+pub struct LightShare {
+    /// Splats of the share's paths, in path order.
+    pub splats: Vec<Splat>,
+    /// Light paths of the whole pass (each share's splats are divided by it).
+    pub paths: u64,
+}
+
+/// What one share of a render computed.
+#[derive(Debug, Clone)]
+pub struct ShareOutput {
+    /// The camera pass, full size: the share's tiles hold exactly what [`render`] computes
+    /// there before it adds the light tracing pass; every other pixel is zero.
+    pub layers: LayerImages,
+    /// The share's run of the light tracing pass, when the integrator has one;
+    /// [`light_image`] over every share's, in share order, gives the pass's image.
+    pub light: Option<LightShare>,
+    /// What this share measured (its own samples, rays and time).
+    pub stats: RenderStats,
+}
+
+/// Renders the tiles of `share` alone (see [`render`]): each pixel's value is bit for bit
+/// what [`render`] gives it, because every random stream is keyed by (seed, pixel, sample).
+/// `None` with adaptive sampling, whose refinement of a pixel depends on its neighbours' first
+/// pass and so on the whole image.
+pub fn render_share(
+    scene: &Scene,
+    camera: &Camera,
+    integrator: &dyn Integrator,
+    settings: &RenderSettings,
+    share: &TileShare,
+    progress: &RenderProgress,
+) -> Option<ShareOutput> {
+    if settings
+        .adaptive
+        .is_some_and(|a| a.base.max(1) < settings.samples_per_pixel)
+    {
+        return None;
+    }
+    let (out, light) = render_core(
+        scene,
+        camera,
+        integrator,
+        settings,
+        None,
+        Some(share),
+        progress,
+    );
+    Some(ShareOutput {
+        layers: out.layers,
+        light,
+        stats: out.stats,
+    })
+}
+
+/// The light tracing pass's image from the splats of its shares (in share order: the order of
+/// their chunks) and its number of paths: the sum [`render`] takes, bit for bit.
+pub fn light_image<'a>(
+    width: u32,
+    height: u32,
+    paths: u64,
+    shares: impl IntoIterator<Item = &'a [Splat]>,
+) -> LayerImages {
+    let mut layers = LayerImages::new(width, height);
+    let mut non_finite = 0;
+    for splats in shares {
+        add_splats(&mut layers, splats, &mut non_finite);
+    }
+    finish_splats(&mut layers, paths, &mut non_finite);
+    layers
+}
+
+/// Adds the light tracing pass `light` to the camera pass `layers`, pixel by pixel: the one
+/// sum [`render`] and the assembly of a split render both take, so both give the same bits.
+pub fn add_light(layers: &mut LayerImages, light: &LayerImages) {
+    for (img, add) in layers.images.iter_mut().zip(&light.images) {
+        for (p, a) in img.pixels_mut().iter_mut().zip(add.pixels()) {
+            *p += *a;
+        }
+    }
+}
+
 fn render_with(
     scene: &Scene,
     camera: &Camera,
@@ -399,6 +504,20 @@ fn render_with(
     budget: Option<&SampleBudget>,
     progress: &RenderProgress,
 ) -> RenderOutput {
+    render_core(scene, camera, integrator, settings, budget, None, progress).0
+}
+
+/// The render loop; with a `share`, only its tiles and its run of the light tracing pass,
+/// whose splats are returned apart instead of added.
+fn render_core(
+    scene: &Scene,
+    camera: &Camera,
+    integrator: &dyn Integrator,
+    settings: &RenderSettings,
+    budget: Option<&SampleBudget>,
+    share: Option<&TileShare>,
+    progress: &RenderProgress,
+) -> (RenderOutput, Option<LightShare>) {
     let start = Instant::now();
     let (width, height) = (camera.width, camera.height);
     let spp = match budget {
@@ -418,12 +537,18 @@ fn render_with(
             ..a
         })
         .filter(|a| a.base < spp && budget.is_none());
-    let passes = 1 + u64::from(light.is_some()) + u64::from(adaptive.is_some());
-    progress.start(passes * pixels);
+    let all_tiles = tile_origins(width, height, tile);
+    let tiles = match share {
+        Some(s) => &all_tiles[s.tiles.start.min(all_tiles.len())..s.tiles.end.min(all_tiles.len())],
+        None => &all_tiles[..],
+    };
+    let share_pixels: u64 = tiles
+        .iter()
+        .map(|&(x, y)| u64::from(tile.min(width - x)) * u64::from(tile.min(height - y)))
+        .sum();
+    let passes = 1 + u64::from(adaptive.is_some());
+    progress.start(passes * share_pixels + u64::from(light.is_some()) * pixels);
 
-    let tiles: Vec<(u32, u32)> = (0..height.div_ceil(tile))
-        .flat_map(|ty| (0..width.div_ceil(tile)).map(move |tx| (tx * tile, ty * tile)))
-        .collect();
     let pass = Pass {
         scene,
         camera,
@@ -483,20 +608,28 @@ fn render_with(
         gather(second, &mut layers, &mut spread, &|i| refine[i]);
     }
     let mut light_paths = 0;
+    let mut apart = None;
     if let Some(tracer) = light {
         let paths = match budget {
             Some(b) => tracer.paths_for_samples(b.total()),
             None => tracer.paths_for(camera, spp),
         };
-        let lit = tracer.trace(scene, camera, paths, settings.seed, progress, pixels);
-        for (img, add) in layers.images.iter_mut().zip(&lit.layers.images) {
-            for (p, a) in img.pixels_mut().iter_mut().zip(add.pixels()) {
-                *p += *a;
-            }
+        if let Some(share) = share {
+            let chunks = light_chunks(paths);
+            let (i, n) = (u64::from(share.light.0), u64::from(share.light.1.max(1)));
+            let run = chunks * i / n..chunks * (i + 1) / n;
+            let (splats, t) =
+                tracer.trace_share(scene, camera, paths, settings.seed, run, progress, pixels);
+            tally.add(t);
+            light_paths = paths;
+            apart = Some(LightShare { splats, paths });
+        } else {
+            let lit = tracer.trace(scene, camera, paths, settings.seed, progress, pixels);
+            add_light(&mut layers, &lit.layers);
+            tally.add(lit.tally);
+            non_finite += lit.non_finite;
+            light_paths = lit.paths;
         }
-        tally.add(lit.tally);
-        non_finite += lit.non_finite;
-        light_paths = lit.paths;
     }
     debug_assert!(
         layers
@@ -504,7 +637,7 @@ fn render_with(
             .iter()
             .all(|i| i.pixels().iter().all(|p: &Rgb| p.is_finite()))
     );
-    RenderOutput {
+    let out = RenderOutput {
         layers,
         stats: RenderStats {
             method: integrator.name(),
@@ -519,5 +652,6 @@ fn render_with(
             light_paths,
             elapsed: start.elapsed(),
         },
-    }
+    };
+    (out, apart)
 }

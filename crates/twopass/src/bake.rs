@@ -105,6 +105,15 @@ pub struct BakeArgs {
     /// solution, plus 64 shadow rays) or N (at most N gather rays per texel, 1 to 65536).
     #[arg(long, default_value = "auto", value_name = "off|auto|N", value_parser = parse_gather)]
     pub gather: Gather,
+    /// Gather the I-th of N shards (`--part`) of the final gather's points (lightmap texels,
+    /// vertices) over the solution of this `.bake` file (a solve's, written with `--format
+    /// bake --gather off`), for the same scene, into a part file for `twopass merge`
+    /// (`--output`: a `.part` file, or a folder, default `parts`).
+    #[arg(long, value_name = "BAKE", requires = "part")]
+    pub from: Option<PathBuf>,
+    /// With `--from`: which shard, I/N (points whose key is I - 1 modulo N).
+    #[arg(long, value_name = "I/N", value_parser = crate::part::parse_part, requires = "from")]
+    pub part: Option<crate::part::PartIndex>,
     /// Vertices and patch pairs sampled for the residual report.
     #[arg(long, default_value_t = 200, value_name = "N", value_parser = parse_residual_samples)]
     pub residual_samples: usize,
@@ -132,7 +141,7 @@ pub enum Gather {
 
 impl Gather {
     /// The gather's settings, `None` when off.
-    fn settings(self, seed: u64) -> Option<GatherSettings> {
+    pub(crate) fn settings(self, seed: u64) -> Option<GatherSettings> {
         let default = GatherSettings {
             seed,
             ..GatherSettings::default()
@@ -311,7 +320,55 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
         residuals_time,
     );
     manifest.timings.load_s = load_time.as_secs_f64();
+    let set = BakeSet {
+        dir,
+        scene: &scene,
+        solution: &solution,
+        shown,
+        gatherer: gatherer.as_ref(),
+        estimator,
+        started,
+    };
+    write_set(args, ctx, &set, manifest)
+}
 
+/// What [`write_set`] writes from: the scene, the solution and the one the element outputs
+/// show (gathered or not), the final gather (its settings for the manifest, and the estimates
+/// themselves through `estimator`, which `twopass merge` replays from part files).
+pub(crate) struct BakeSet<'a> {
+    /// The output folder (created, and held by the caller).
+    pub dir: &'a Path,
+    /// The scene.
+    pub scene: &'a twopass_scene::Scene,
+    /// The radiosity solution.
+    pub solution: &'a twopass_radiosity::Solution,
+    /// The solution the element-mesh outputs show.
+    pub shown: &'a twopass_radiosity::Solution,
+    /// The final gather, when the bake gathers.
+    pub gatherer: Option<&'a Gatherer<'a>>,
+    /// Where the gathered points' estimates come from.
+    pub estimator: Option<&'a dyn RadianceEstimator>,
+    /// When the command started.
+    pub started: Instant,
+}
+
+/// Writes the selected outputs of `set` and, last, the manifest (`manifest`, completed with
+/// the files, the colour mapping, the lightmap and the timings).
+pub(crate) fn write_set(
+    args: &BakeArgs,
+    ctx: &Context,
+    set: &BakeSet<'_>,
+    mut manifest: Manifest,
+) -> Result<(), CliError> {
+    let BakeSet {
+        dir,
+        scene,
+        solution,
+        shown,
+        gatherer,
+        estimator,
+        started,
+    } = *set;
     let stem = args
         .scene
         .file_stem()
@@ -344,14 +401,14 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
         let path = dir.join(format!("{stem}.{}", format.extension()));
         let bytes = match format {
             Format::Glb => {
-                let glb = bake::encode_glb(shown, &scene, mapping)?;
+                let glb = bake::encode_glb(shown, scene, mapping)?;
                 manifest.color = Some(color_record(glb.clamped_vertices));
                 glb.bytes
             }
-            Format::Ply => bake::encode_ply(shown, &scene, mapping)?,
-            Format::Bake => bake::encode_bake(shown, &scene)?,
+            Format::Ply => bake::encode_ply(shown, scene, mapping)?,
+            Format::Bake => bake::encode_bake(shown, scene)?,
             Format::VertexGlb => {
-                let glb = bake::encode_vertex_glb(&solution, &scene, mapping, estimator)?;
+                let glb = bake::encode_vertex_glb(solution, scene, mapping, estimator)?;
                 if manifest.color.is_none() {
                     manifest.color = Some(color_record(glb.clamped_vertices));
                 }
@@ -378,9 +435,9 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
         };
         let source = match estimator {
             Some(g) => TexelSource::Gather(g),
-            None => TexelSource::Solution(&solution),
+            None => TexelSource::Solution(solution),
         };
-        let lm = bake::bake_lightmap(source, &scene, &settings, mapping)?;
+        let lm = bake::bake_lightmap(source, scene, &settings, mapping)?;
         let seconds = started.elapsed().as_secs_f64();
         let files = [
             ("lightmap", "glb", Some(&lm.glb)),
@@ -445,7 +502,7 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
 /// Holds `dir` for this bake (an advisory lock on the folder itself, released when the
 /// returned handle drops, also when the process dies), so two bakes into one folder never mix
 /// their files: the second waits for the first to finish, then writes its whole set.
-fn lock_folder(dir: &Path, ctx: &Context) -> Result<std::fs::File, CliError> {
+pub(crate) fn lock_folder(dir: &Path, ctx: &Context) -> Result<std::fs::File, CliError> {
     let folder = std::fs::File::open(dir).map_err(|e| CliError::io(dir, e))?;
     match folder.try_lock() {
         Ok(()) => {}

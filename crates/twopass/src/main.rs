@@ -17,10 +17,12 @@ mod error;
 mod figure;
 mod info;
 mod output;
+mod part;
 mod pipeline;
 mod plan;
 mod preset;
 mod render;
+mod slurm;
 mod solve;
 mod view;
 
@@ -61,6 +63,13 @@ enum Command {
     Bench(bench::BenchCommand),
     /// Write a static three.js page that shows a lightmap bake from the scene's camera.
     View(view::ViewArgs),
+    /// Assemble the part files of `render --part` or `bake --from --part` into the outputs
+    /// the single-process command writes, bit for bit.
+    Merge(part::merge::MergeArgs),
+    /// Run a render or a bake on a Slurm cluster: the solve as one job, the parts as a job
+    /// array after it, the merge after the array; and how far a submitted job is.
+    #[command(subcommand)]
+    Slurm(slurm::SlurmCommand),
 }
 
 fn main() -> ExitCode {
@@ -106,8 +115,13 @@ fn run(cli: Cli) -> Result<(), CliError> {
         Command::BrdfCheck(args) => brdf_check::run(args, &cli.ctx),
         Command::Render(args) => render::run(args, &cli.ctx),
         Command::Compare(args) => compare::run(args, &cli.ctx),
-        Command::Bake(args) => bake::run(args, &cli.ctx),
+        Command::Bake(args) => match (&args.from, args.part) {
+            (Some(from), Some(part)) => part::bake::write_part(args, from, part, &cli.ctx),
+            _ => bake::run(args, &cli.ctx),
+        },
         Command::Bench(cmd) => bench::run(cmd, &cli.ctx),
         Command::View(args) => view::run(args, &cli.ctx),
+        Command::Merge(args) => part::merge::run(args, &cli.ctx),
+        Command::Slurm(cmd) => slurm::run(cmd, &cli.ctx),
     })
 }

@@ -74,6 +74,11 @@ pub struct RenderArgs {
     /// The presets file (default: `<stem>.presets.toml` beside the scene).
     #[arg(long, value_name = "FILE", requires = "preset")]
     pub presets: Option<PathBuf>,
+    /// Render only the I-th of N parts of the image (contiguous runs of its 16-pixel tiles)
+    /// into a part file for `twopass merge` (`--output`: a `.part` file, or a folder for
+    /// `<stem>-<method>.<I>-of-<N>.part`, default `parts`).
+    #[arg(long, value_name = "I/N", value_parser = crate::part::parse_part)]
+    pub part: Option<crate::part::PartIndex>,
 }
 
 #[derive(Debug, Serialize)]
@@ -124,6 +129,9 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
         },
         |p| p.render,
     );
+    if args.part.is_some() {
+        crate::part::render::check(&knobs, args.preset.as_deref())?;
+    }
     let preset_solve = preset
         .as_ref()
         .and_then(|p| p.radiosity.as_ref())
@@ -193,6 +201,20 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
         knobs.whitted(),
     );
     let settings = knobs.settings(ctx.seed);
+    if let Some(part) = args.part {
+        let job = crate::part::render::RenderJob {
+            scene_path: &args.scene,
+            scene: &scene,
+            camera: &camera,
+            method,
+            knobs,
+            radiosity: crate::part::render::radiosity_source(method, args.bake.as_deref(), solve)?,
+            png: args.png,
+            exposure: args.exposure,
+            started,
+        };
+        return crate::part::render::write_part(&job, integrator.as_ref(), &settings, part, ctx);
+    }
     let out = render_with_bar(
         &scene,
         &camera,
@@ -280,9 +302,11 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
 
 /// The files `render` writes: the multi-layer EXR and the tone-mapped PNG, each when asked for.
 #[derive(Debug, PartialEq, Eq)]
-struct Targets {
-    exr: Option<PathBuf>,
-    png: Option<PathBuf>,
+pub(crate) struct Targets {
+    /// The multi-layer EXR.
+    pub exr: Option<PathBuf>,
+    /// The tone-mapped PNG.
+    pub png: Option<PathBuf>,
 }
 
 /// Extensions that name an image file rather than a directory for `--output`.
@@ -294,7 +318,7 @@ const IMAGE_EXTENSIONS: [&str; 10] = [
 /// it), `x.png` is the PNG alone, and a path without an image extension (or ending in `/`) is
 /// a directory for `<stem>-<method>.exr` (and `.png`); without `--output`, the current one. An
 /// image format `render` cannot write is a usage error.
-fn targets(
+pub(crate) fn targets(
     output: Option<&Path>,
     scene: &Path,
     method: RenderMethod,
