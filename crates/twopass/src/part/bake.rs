@@ -128,10 +128,7 @@ fn ask_every_point(
 
 /// The bake flags that shape the gathered outputs, as a command line `merge` parses again.
 fn bake_flags(args: &BakeArgs) -> Vec<String> {
-    let name = |f: &Format| {
-        f.to_possible_value()
-            .map_or_else(String::new, |v| v.get_name().to_owned())
-    };
+    let name = |f: &Format| name_of(*f);
     let mut flags = vec![
         "--format".to_owned(),
         args.format.iter().map(name).collect::<Vec<_>>().join(","),
@@ -151,7 +148,16 @@ fn bake_flags(args: &BakeArgs) -> Vec<String> {
     if let Some(e) = args.exposure {
         flags.extend(["--exposure".into(), format!("{e:e}")]);
     }
+    if let Some(q) = args.lightmap_quantity {
+        flags.extend(["--lightmap-quantity".into(), name_of(q)]);
+    }
     flags
+}
+
+/// The command-line name of a value of a `clap::ValueEnum`.
+fn name_of(v: impl ValueEnum) -> String {
+    v.to_possible_value()
+        .map_or_else(String::new, |v| v.get_name().to_owned())
 }
 
 #[derive(Serialize)]
