@@ -15,22 +15,28 @@ use twopass_scene::{DiffuseRadiance, Scene};
 
 const TEXEL: f32 = 5.0;
 
+/// The lightmap of `solution` over `scene` at `texel` scene units per texel, 2 texels of
+/// padding, the scene's default quantity, texels from the solution.
+fn bake_solution(scene: &Scene, solution: &Solution, texel: f32) -> Lightmap {
+    let settings = LightmapSettings {
+        texel_size: Some(texel),
+        padding: 2,
+        quantity: None,
+    };
+    bake_lightmap(
+        TexelSource::Solution(solution),
+        scene,
+        &settings,
+        ColorMapping::auto(solution),
+    )
+    .unwrap()
+}
+
 fn baked() -> &'static (Scene, Solution, Lightmap) {
     static BAKED: OnceLock<(Scene, Solution, Lightmap)> = OnceLock::new();
     BAKED.get_or_init(|| {
         let (scene, solution) = cornell(60.0);
-        let settings = LightmapSettings {
-            texel_size: Some(TEXEL),
-            padding: 2,
-            quantity: None,
-        };
-        let lm = bake_lightmap(
-            TexelSource::Solution(&solution),
-            &scene,
-            &settings,
-            ColorMapping::auto(&solution),
-        )
-        .unwrap();
+        let lm = bake_solution(&scene, &solution, TEXEL);
         (scene, solution, lm)
     })
 }
@@ -290,18 +296,7 @@ fn bake_obj(scene: &Scene) -> Lightmap {
     let mut solver = Solver::new(scene, Options::default()).unwrap();
     solver.run(|_| std::ops::ControlFlow::Continue(()));
     let solution = solver.solution();
-    let settings = LightmapSettings {
-        texel_size: Some(0.01),
-        padding: 2,
-        quantity: None,
-    };
-    bake_lightmap(
-        TexelSource::Solution(&solution),
-        scene,
-        &settings,
-        ColorMapping::auto(&solution),
-    )
-    .unwrap()
+    bake_solution(scene, &solution, 0.01)
 }
 
 #[test]
@@ -356,18 +351,7 @@ fn curved_surfaces_unwrap_into_few_charts_that_carry_their_power() {
     // area over its atlas area, and the lightmap's power matches the element mesh's.
     let (scene, solution) = solved("scenes/cornell-spheres.toml", 60.0);
     let texel = 2.0;
-    let settings = LightmapSettings {
-        texel_size: Some(texel),
-        padding: 2,
-        quantity: None,
-    };
-    let lm = bake_lightmap(
-        TexelSource::Solution(&solution),
-        &scene,
-        &settings,
-        ColorMapping::auto(&solution),
-    )
-    .unwrap();
+    let lm = bake_solution(&scene, &solution, texel);
     assert!(
         lm.charts * 100 < scene.mesh.triangles.len(),
         "{} charts for {} triangles",
@@ -420,18 +404,7 @@ fn a_face_thinner_than_a_texel_is_lit_along_its_whole_length() {
     let mut solver = Solver::new(&scene, Options::default()).unwrap();
     solver.run(|_| std::ops::ControlFlow::Continue(()));
     let solution = solver.solution();
-    let settings = LightmapSettings {
-        texel_size: Some(0.01),
-        padding: 2,
-        quantity: None,
-    };
-    let lm = bake_lightmap(
-        TexelSource::Solution(&solution),
-        &scene,
-        &settings,
-        ColorMapping::auto(&solution),
-    )
-    .unwrap();
+    let lm = bake_solution(&scene, &solution, 0.01);
     let strip = scene
         .objects
         .iter()
