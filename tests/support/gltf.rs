@@ -11,7 +11,7 @@ use json::validation::USize64;
 /// A glTF document under construction with its binary buffer.
 #[derive(Default)]
 pub struct GltfWriter {
-    /// The document (push more objects into it directly where the helpers do not reach).
+    /// The document (push objects into it directly for what the builder methods do not write).
     pub root: json::Root,
     /// The binary buffer's bytes.
     pub bin: Vec<u8>,
