@@ -12,4 +12,5 @@ mod gather;
 mod gathered;
 mod hybrid;
 mod optics;
+mod photons;
 mod share;

@@ -25,6 +25,9 @@
 //! the caustics per pixel ([`crate::light_tracing::CausticScope::FirstDiffuse`]: L S+ D E),
 //! the gather rays leave out the emission they reach through a delta path, which is exactly
 //! that path class; the rest of the solution they reach through mirrors and glass they keep.
+//! At the points it sees through mirrors and glass, caustic photons
+//! ([`crate::photons::CausticPhotons`], [`Gatherer::with_caustic_photons`]) give that light
+//! instead, and the gather rays leave it out the same way.
 //!
 //! **Near hits.** A landing nearer than [`GatherSettings::near_distance`] (by default the
 //! radiosity pass's element edge) takes one more bounce instead of the solution's value there:
@@ -60,6 +63,7 @@ use twopass_scene::{DiffuseRadiance, Hit, RadianceEstimate, RadianceEstimator, S
 use crate::counters::Tally;
 use crate::emitters::{EmitterChoice, Lights};
 use crate::integrator::{Shading, irradiance_from};
+use crate::photons::CausticPhotons;
 use crate::sampler::Sampler;
 
 /// Stream separating a point's shadow-ray numbers from its gather rays' (the gather rays use
@@ -162,6 +166,8 @@ pub struct Gatherer<'a> {
     /// Per object: whether its surface is closed (every edge, by position, shared by exactly
     /// two of its triangles), so that only a point inside it can see its back.
     closed: Vec<bool>,
+    /// The caustic photons, for the per-pixel gather's points seen through mirrors and glass.
+    caustics: Option<CausticPhotons>,
     settings: GatherSettings,
 }
 
@@ -208,6 +214,7 @@ impl<'a> Gatherer<'a> {
                 .unwrap_or(scene.bounds.diagonal() / NEAR_PER_DIAGONAL)
                 .max(0.0),
             closed: closed_objects(scene),
+            caustics: None,
             deadline: None,
             late: AtomicU64::new(0),
             settings: GatherSettings {
@@ -225,6 +232,34 @@ impl<'a> Gatherer<'a> {
     pub fn with_deadline(mut self, deadline: Instant) -> Self {
         self.deadline = Some(deadline);
         self
+    }
+
+    /// The same gather, with `photons` for the light that reaches diffuse points through
+    /// mirrors and glass (L S+ D) where no light tracer connects to them: the per-pixel
+    /// gather's points seen through a delta surface.
+    pub fn with_caustic_photons(mut self, photons: CausticPhotons) -> Self {
+        self.caustics = Some(photons);
+        self
+    }
+
+    /// Whether the gather has caustic photons.
+    pub fn has_caustic_photons(&self) -> bool {
+        self.caustics.is_some()
+    }
+
+    /// The diffusely reflected caustic at the shading point `s` from the photons, rho / pi E,
+    /// W/(m^2 sr): zero without photons, on a back face or on a surface without a diffuse
+    /// part. The gather rays at `s` must then leave out the emission they reach through delta
+    /// paths (`caustics_elsewhere`), which is this light.
+    pub(crate) fn caustic_radiance(&self, s: &Shading<'_>) -> Rgb {
+        match &self.caustics {
+            Some(photons) if s.hit.front_face && s.material.reflects_diffusely() => {
+                s.material.diffuse_albedo()
+                    * photons.irradiance(s.hit.point.position, s.hit.point.normal)
+                    * std::f32::consts::FRAC_1_PI
+            }
+            _ => Rgb::ZERO,
+        }
     }
 
     /// Points that took the solution's value because the deadline had passed.

@@ -312,6 +312,34 @@ impl LightTracer {
         }
     }
 
+    /// The first segment of a light path: a point of an emitter chosen by power, uniform over
+    /// its area, and a direction toward the specular targets. Returns what the ray hit (if
+    /// anything), its direction, and the path's throughput there, L_e cos(theta_e) A /
+    /// (P(emitter) p(direction)), W: the flux one path carries (divided by the number of
+    /// paths, the estimator's). `None` for a direction the emitter does not send light into.
+    pub(crate) fn emit(
+        &self,
+        scene: &Scene,
+        sampler: &mut Sampler,
+        tally: &mut Tally,
+    ) -> Option<(Option<Hit>, Vec3, Rgb)> {
+        let e = self.choice.pick(sampler.next_f32());
+        let emitter = &scene.emitters[e];
+        let y = emitter.sample(scene, sampler.next_f32(), sampler.next_2d());
+        let (dir, pdf) = self
+            .targets
+            .direction(y.position.as_dvec3(), sampler.next_2d())?;
+        let dir = dir.as_vec3().normalize();
+        let cos_e = dir.dot(y.normal);
+        if cos_e <= 0.0 || pdf <= 0.0 {
+            return None;
+        }
+        let start =
+            emitter.radiance * (cos_e * emitter.area / (self.choice.probability(e) * pdf as f32));
+        tally.rays += 1;
+        Some((scene.intersect_from(&y, dir), dir, start))
+    }
+
     /// One light path: its splats (radiance times the number of paths) go to `splats`.
     fn path(
         &self,
@@ -322,25 +350,10 @@ impl LightTracer {
         splats: &mut Vec<Splat>,
     ) {
         let s = &self.settings;
-        let e = self.choice.pick(sampler.next_f32());
-        let emitter = &scene.emitters[e];
-        let y = emitter.sample(scene, sampler.next_f32(), sampler.next_2d());
-        let Some((dir, pdf)) = self
-            .targets
-            .direction(y.position.as_dvec3(), sampler.next_2d())
-        else {
+        let Some((mut hit, mut dir, start)) = self.emit(scene, sampler, tally) else {
             return;
         };
-        let mut dir = dir.as_vec3().normalize();
-        let cos_e = dir.dot(y.normal);
-        if cos_e <= 0.0 || pdf <= 0.0 {
-            return;
-        }
-        let start =
-            emitter.radiance * (cos_e * emitter.area / (self.choice.probability(e) * pdf as f32));
         let mut beta = start;
-        tally.rays += 1;
-        let mut hit = scene.intersect_from(&y, dir);
         let mut bounces = 0u32;
         let mut refracted = false;
         while let Some(h) = hit {
