@@ -69,7 +69,7 @@ use crate::diffuse::DiffuseSource;
 use crate::emitters::Lights;
 use crate::gather::{GatherSettings, Gatherer};
 use crate::light_tracing::{CausticScope, LightTracer, LightTracingSettings};
-use crate::photons::{CausticPhotons, PhotonSettings};
+use crate::photons::PhotonSettings;
 use crate::whitted::{Whitted, WhittedSettings};
 
 /// Radiosity alone, for rendering `scene`: camera rays shaded with the solution (interpolated per
@@ -108,21 +108,17 @@ pub fn gathered<'a>(
     solution: &'a dyn DiffuseRadiance,
     settings: WhittedSettings,
 ) -> Whitted<'a> {
-    let mut gatherer = Gatherer::new(
+    let gatherer = Gatherer::new(
         scene,
         solution,
         GatherSettings {
             max_depth: settings.max_depth,
+            // The caustics at the diffuse points seen through mirrors and glass (where the
+            // light tracer cannot connect) exist only when delta paths are followed.
+            photons: (settings.max_depth > 0).then(PhotonSettings::default),
             ..GatherSettings::default()
         },
     );
-    // The caustics at the diffuse points seen through mirrors and glass (where the light
-    // tracer cannot connect), only when the view-dependent terms follow delta paths there.
-    if settings.max_depth > 0
-        && let Some(photons) = CausticPhotons::build(scene, PhotonSettings::default())
-    {
-        gatherer = gatherer.with_caustic_photons(photons);
-    }
     let source = DiffuseSource::Gather {
         gatherer: Arc::new(gatherer),
         rays: settings.gather_rays,
