@@ -1,11 +1,15 @@
 //! The caustic photon map (`twopass_trace::photons`) against a closed form: a one-sided light
 //! facing up under a horizontal mirror lights the floor only through the mirror, as its mirror
-//! image would directly, so the photons' irradiance on the floor is the image source's.
+//! image would directly, so the photons' irradiance on the floor is the image source's, and
+//! the final gather counts that light once, from the photons or from its gather rays.
 
 use glam::Vec3;
+use twopass_scene::RadianceEstimator;
+use twopass_trace::gather::{GatherSettings, Gatherer};
 use twopass_trace::photons::{CausticPhotons, PhotonSettings};
 
 use super::common::scene;
+use super::gather::{Constant, floor_point};
 
 /// A 0.1 m square light at y = 1 facing up (radiance 100), a 10 m mirror at y = 2 facing down,
 /// a 10 m grey floor at y = 0: no direct light reaches the floor.
@@ -111,4 +115,60 @@ fn the_photon_map_does_not_depend_on_the_thread_count() {
             two.irradiance(p, Vec3::Y).to_array().map(f32::to_bits)
         );
     }
+}
+
+#[test]
+fn the_gather_counts_the_mirrored_light_once_and_smoother_with_photons() {
+    let s = scene(MIRRORED);
+    // The solution is the light's emission alone (object 2), so a floor point's indirect part
+    // is exactly the light reaching it through the mirror: rho / pi E_image.
+    let emission = Constant::new(&s, 100.0, &[2]);
+    let estimates = |photons: Option<PhotonSettings>| {
+        let g = Gatherer::new(
+            &s,
+            &emission,
+            GatherSettings {
+                photons,
+                min_rays: 256,
+                max_rays: 256,
+                ..GatherSettings::default()
+            },
+        );
+        assert_eq!(g.caustic_photons() > 0, photons.is_some());
+        (0..24u64)
+            .map(|k| {
+                let a = k as f32 * std::f32::consts::TAU / 24.0;
+                let (t, b) = floor_point(&s, 0.8 * a.cos(), 0.8 * a.sin());
+                let e = g.estimate(t, b, k);
+                assert_eq!(e.direct.y, 0.0, "no direct light reaches the floor");
+                f64::from(e.indirect.y)
+            })
+            .collect::<Vec<f64>>()
+    };
+    let stats = |v: &[f64]| {
+        let n = v.len() as f64;
+        let mean = v.iter().sum::<f64>() / n;
+        let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
+        (mean, (var / n).sqrt(), var.sqrt() / mean)
+    };
+    let want = 0.5 / std::f64::consts::PI * image_irradiance(Vec3::new(0.8, 0.0, 0.0));
+    let (photons, e1, spread1) = stats(&estimates(Some(PhotonSettings::default())));
+    let (rays, e2, spread2) = stats(&estimates(None));
+    eprintln!(
+        "floor at 0.8 m: photons {photons:.5} +- {e1:.5} (spread {spread1:.3}), gather rays \
+         {rays:.5} +- {e2:.5} (spread {spread2:.3}), closed form {want:.5}"
+    );
+    // Once each way: counting it twice would double it.
+    assert!(
+        (photons - want).abs() < 4.0 * e1,
+        "photons {photons} vs {want}"
+    );
+    assert!(
+        (rays - want).abs() < 4.0 * e2,
+        "gather rays {rays} vs {want}"
+    );
+    assert!(
+        spread1 < 0.5 * spread2,
+        "photons spread {spread1} vs gather rays {spread2}"
+    );
 }
