@@ -7,6 +7,7 @@ mod gltf;
 mod loader;
 mod materials;
 mod objects;
+mod texture;
 
 pub use entry::{load, load_toml, load_toml_with, load_with};
 pub use gltf::SMOOTH_ROUGHNESS;
