@@ -13,3 +13,4 @@ mod gathered;
 mod hybrid;
 mod optics;
 mod share;
+mod textured;
