@@ -92,7 +92,13 @@ shape = {{ type = "quad", origin = [0, 0, 0], edge_u = [1, 0, 0], edge_v = [0, 1
 fn checker_box(dir: &Path) -> Scene {
     let n = 8u32;
     let texels: Vec<u8> = (0..n * n)
-        .flat_map(|i| if (i % n + i / n) % 2 == 0 { RED } else { GREEN })
+        .flat_map(|i| {
+            if (i % n + i / n).is_multiple_of(2) {
+                RED
+            } else {
+                GREEN
+            }
+        })
         .collect();
     image::save_buffer(
         dir.join("checker.png"),

@@ -64,9 +64,9 @@ impl Texture {
 
     /// The area-weighted mean value over the triangle of texture space with corners `uv` (as
     /// `t` reads them: scaled, offset, wrapped). The level read is the one on which the
-    /// triangle spans about [`TEXELS_ACROSS`] texels (the full resolution for smaller ones);
+    /// triangle spans about 4 texels (the full resolution for smaller ones);
     /// the mean is the midpoint rule over a uniform subdivision of the triangle into n^2 equal
-    /// triangles, n = four times the texels across on that level (4 to [`MAX_SUBDIVISIONS`]),
+    /// triangles, n = four times the texels across on that level (4 to 16),
     /// reading the level bilinearly: exact for a value varying linearly over the triangle, and
     /// within the level's box filter of the exact mean otherwise.
     pub fn mean_over(&self, t: &AlbedoTexture, uv: [Vec2; 3]) -> Rgb {
@@ -182,7 +182,7 @@ mod tests {
             assert!((m.x - centroid).abs() < 1e-5, "{} vs {centroid}", m.x);
         }
         let (a, b) = (Rgb::new(0.8, 0.1, 0.1), Rgb::new(0.1, 0.7, 0.1));
-        let checker = texture(2, 2, |x, y| if (x + y) % 2 == 0 { a } else { b });
+        let checker = texture(2, 2, |x, y| if (x + y).is_multiple_of(2) { a } else { b });
         let t = AlbedoTexture {
             scale: Vec2::splat(8.0),
             ..AlbedoTexture::new(0)
