@@ -223,11 +223,20 @@ pub fn ambient_estimate(scene: &Scene) -> Rgb {
     }
     let mut rho_area = glam::DVec3::ZERO;
     for o in &scene.objects {
-        rho_area += o
-            .triangles
-            .clone()
-            .map(|t| scene.triangle_albedo(t).as_dvec3() * f64::from(scene.mesh.areas[t as usize]))
-            .sum::<glam::DVec3>();
+        let area = |t: u32| f64::from(scene.mesh.areas[t as usize]);
+        rho_area += if scene.has_textures() {
+            // Each triangle's texture mean.
+            o.triangles
+                .clone()
+                .map(|t| scene.triangle_albedo(t).as_dvec3() * area(t))
+                .sum::<glam::DVec3>()
+        } else {
+            let rho = scene.materials[o.material as usize]
+                .material
+                .diffuse_albedo()
+                .as_dvec3();
+            rho * o.triangles.clone().map(area).sum::<f64>()
+        };
     }
     let rho = rho_area / total_area;
     let power = scene
