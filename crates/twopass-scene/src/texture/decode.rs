@@ -5,7 +5,8 @@ use std::io::Cursor;
 
 use twopass_brdf::Rgb;
 
-use super::{MipLevel, Texture, pyramid};
+use super::pyramid;
+use super::raster::{MipLevel, Texture};
 
 /// Most texels of one texture (an 8192 x 8192 image): its linear copy and pyramid take about
 /// 1 GB. A larger image, such as a decompression bomb whose small file declares a huge

@@ -5,7 +5,7 @@
 use glam::Vec2;
 use twopass_brdf::Rgb;
 
-use super::{AlbedoTexture, Filter, MipLevel, Texture, Wrap};
+use super::raster::{AlbedoTexture, Filter, MipLevel, Texture, Wrap};
 
 /// Texels across a region, about, at the mip level its mean is read from: enough that the
 /// level's box filter blurs nothing the region's own size does not.

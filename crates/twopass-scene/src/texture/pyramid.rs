@@ -4,7 +4,7 @@
 
 use twopass_brdf::Rgb;
 
-use super::MipLevel;
+use super::raster::MipLevel;
 
 /// The pyramid from `base` down to 1 x 1.
 pub(super) fn build(base: MipLevel) -> Vec<MipLevel> {
