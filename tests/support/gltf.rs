@@ -221,6 +221,51 @@ impl GltfWriter {
         })
     }
 
+    /// Gives `material` a base colour texture: the image bytes `png` embedded in the binary
+    /// buffer (a buffer view, `image/png`), read from texture coordinate set `tex_coord`
+    /// through a sampler with nearest magnification and clamp-to-edge wrapping when
+    /// `nearest_clamped`, or without a sampler (glTF's defaults: repeat, linear).
+    pub fn base_colour_texture(
+        &mut self,
+        material: json::Index<json::Material>,
+        png: &[u8],
+        tex_coord: u32,
+        nearest_clamped: bool,
+    ) {
+        let view = self.view(png, None);
+        let source = self.root.push(json::Image {
+            buffer_view: Some(view),
+            mime_type: Some(json::image::MimeType("image/png".into())),
+            name: Some("albedo".into()),
+            uri: None,
+            extensions: None,
+            extras: None,
+        });
+        let sampler = nearest_clamped.then(|| {
+            self.root.push(json::texture::Sampler {
+                mag_filter: Some(Valid(json::texture::MagFilter::Nearest)),
+                wrap_s: Valid(json::texture::WrappingMode::ClampToEdge),
+                wrap_t: Valid(json::texture::WrappingMode::ClampToEdge),
+                ..Default::default()
+            })
+        });
+        let texture = self.root.push(json::Texture {
+            name: None,
+            sampler,
+            source,
+            extensions: None,
+            extras: None,
+        });
+        self.root.materials[material.value()]
+            .pbr_metallic_roughness
+            .base_color_texture = Some(json::texture::Info {
+            index: texture,
+            tex_coord,
+            extensions: None,
+            extras: None,
+        });
+    }
+
     /// A node with a name, an optional mesh and camera, a TRS transform and children.
     pub fn node(
         &mut self,

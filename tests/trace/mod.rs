@@ -14,3 +14,4 @@ mod hybrid;
 mod optics;
 mod photons;
 mod share;
+mod textured;

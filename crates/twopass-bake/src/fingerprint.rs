@@ -130,7 +130,9 @@ pub fn geometry_fingerprint(scene: &Scene) -> u64 {
 }
 
 /// Fingerprint of what the radiosity values depend on besides geometry: each object's emitted
-/// radiance and its material's diffuse reflectance (bit patterns), in object order.
+/// radiance and its material's diffuse reflectance (bit patterns), in object order, and in a
+/// scene with textures every material's texture reference, every texture's texels and every
+/// triangle's texture coordinates.
 pub fn lighting_fingerprint(scene: &Scene) -> u64 {
     let mut h = Fnv::new();
     h.u64(scene.objects.len() as u64);
@@ -141,6 +143,34 @@ pub fn lighting_fingerprint(scene: &Scene) -> u64 {
             .get(o.material as usize)
             .map_or(Vec3::ZERO, |m| m.material.diffuse_albedo());
         h.vec3(rho);
+    }
+    // Base colour textures: only a textured scene hashes them, so an untextured scene's
+    // fingerprint is what it was before textures were read.
+    if scene.has_textures() {
+        for m in &scene.materials {
+            match &m.albedo_texture {
+                Some(a) => {
+                    h.u32(a.texture + 1);
+                    h.bytes(format!("{:?}{:?}{:?}", a.wrap_u, a.wrap_v, a.filter).as_bytes());
+                    [a.scale, a.offset]
+                        .into_iter()
+                        .for_each(|v| h.vec3(v.extend(0.0)));
+                }
+                None => h.u32(0),
+            }
+        }
+        for t in &scene.textures {
+            let base = &t.levels[0];
+            h.u32(base.width);
+            h.u32(base.height);
+            base.texels.iter().for_each(|&c| h.vec3(c));
+        }
+        for uv in &scene.mesh.albedo_uvs {
+            match uv {
+                Some(c) => c.iter().for_each(|p| h.vec3(p.extend(1.0))),
+                None => h.u32(u32::MAX),
+            }
+        }
     }
     h.0
 }

@@ -30,7 +30,9 @@ pub fn gathered_solution(
                 .mesh
                 .barycentric(v.triangle, v.position.as_dvec3())
                 .map(|x| x.clamp(0.0, 1.0) as f32);
-            estimator.estimate(v.triangle, b, ELEMENT_KEYS + i as u64)
+            estimator
+                .estimate(v.triangle, b, ELEMENT_KEYS + i as u64)
+                .tinted(scene.albedo_tint(v.triangle, b))
         })
         .collect();
     let pi = std::f32::consts::PI;

@@ -125,7 +125,10 @@ pub fn encode_vertex_glb(
                 let e: Vec<RadianceEstimate> = first
                     .par_iter()
                     .enumerate()
-                    .map(|(i, &(t, b))| g.estimate(t, b, base + i as u64))
+                    .map(|(i, &(t, b))| {
+                        g.estimate(t, b, base + i as u64)
+                            .tinted(scene.albedo_tint(t, b))
+                    })
                     .collect();
                 (
                     e.iter().map(RadianceEstimate::total).collect(),

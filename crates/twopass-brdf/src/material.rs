@@ -236,6 +236,23 @@ impl Material {
         }
     }
 
+    /// The material with its diffuse reflectance and ambient coefficient multiplied per
+    /// channel by `tint` (each channel clamped to [0, 1]): a base colour texture's value where a
+    /// surface is shaded, the material's own reflectance being the texture's factor. Scaling
+    /// the diffuse part down keeps every constructor's bound (rho < 1, diffuse + specular <= 1);
+    /// the non-diffuse lobe is unchanged.
+    pub fn tinted(&self, tint: Rgb) -> Self {
+        let t = Rgb::from_array(
+            tint.to_array()
+                .map(|c| if c.is_nan() { 0.0 } else { c.clamp(0.0, 1.0) }),
+        );
+        Self {
+            diffuse: self.diffuse * t,
+            ambient: self.ambient * t,
+            lobe: self.lobe,
+        }
+    }
+
     /// The Lambertian reflectance rho per channel, in [0, 1): what radiosity reads.
     pub fn diffuse_albedo(&self) -> Rgb {
         self.diffuse
@@ -425,6 +442,23 @@ impl PhongShading {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A tint scales the diffuse part and the ambient coefficient channel by channel, clamps
+    /// out-of-range channels, and leaves the lobe alone.
+    #[test]
+    fn tint_scales_the_diffuse_part_only() {
+        let m = Material::blinn_phong(BlinnPhongParams {
+            diffuse: Rgb::new(0.5, 0.4, 0.2),
+            specular: Rgb::splat(0.3),
+            exponent: 20.0,
+            normalized: false,
+        })
+        .expect("valid");
+        let t = m.tinted(Rgb::new(0.5, 2.0, f32::NAN));
+        assert_eq!(t.diffuse_albedo(), Rgb::new(0.25, 0.4, 0.0));
+        assert_eq!(t.ambient(), Rgb::new(0.25, 0.4, 0.0));
+        assert_eq!(t.lobe(), m.lobe());
+    }
 
     /// A material with two bad parameters reports the first in the validators' order: diffuse,
     /// specular, Phong's ambient term, the exponent, then the normalized sum.

@@ -30,6 +30,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+mod albedo;
 mod ambient;
 pub mod cluster;
 pub mod element;

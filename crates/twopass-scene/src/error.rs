@@ -245,6 +245,22 @@ pub enum SceneError {
         /// What is wrong.
         problem: String,
     },
+    /// A material's base colour texture cannot be used: its file is missing or unreadable,
+    /// it is not a PNG or JPEG, it is corrupt, or its header declares more pixels than are
+    /// read ([`crate::MAX_TEXTURE_PIXELS`]).
+    #[error("{}{}: material `{material}`: texture {texture}: {problem}", path.display(), line_suffix(*line))]
+    Texture {
+        /// The file naming the texture (the MTL library, the glTF file).
+        path: PathBuf,
+        /// Line of the statement naming it (an MTL's `map_Kd`), when there is one.
+        line: Option<usize>,
+        /// The material.
+        material: String,
+        /// The texture: its file, or the glTF image by index and name.
+        texture: String,
+        /// What is wrong.
+        problem: String,
+    },
     /// An error in a file an object of the scene refers to (its OBJ mesh or MTL library),
     /// located at that object.
     #[error("{}:{line}: object `{object}`: {source}", path.display())]
@@ -345,6 +361,18 @@ pub enum Warning {
         /// The scene file.
         path: PathBuf,
     },
+    /// A texture statement or slot read only in part, or not at all (an MTL `map_Kd` option,
+    /// a texture on an object without texture coordinates), and what was done instead.
+    Texture {
+        /// The file naming the texture (MTL library, glTF file) or the object.
+        path: PathBuf,
+        /// Its line, when there is one.
+        line: Option<usize>,
+        /// The material or object.
+        at: String,
+        /// What is not used and what was done instead.
+        problem: String,
+    },
     /// Part of a glTF that twopass does not model (a texture, a lamp, a skin, a primitive of
     /// points or lines, ...), and what was done instead.
     Gltf {
@@ -424,6 +452,17 @@ impl fmt::Display for Warning {
                 path.display()
             ),
             Self::Gltf { path, at, problem } => write!(f, "{}: {at}: {problem}", path.display()),
+            Self::Texture {
+                path,
+                line,
+                at,
+                problem,
+            } => write!(
+                f,
+                "{}{}: {at}: {problem}",
+                path.display(),
+                line_suffix(*line)
+            ),
             Self::NoEmitters { path } => write!(
                 f,
                 "{}: nothing in the scene emits light: every render will be black",

@@ -19,6 +19,9 @@ pub const MAX_MTL_BYTES: u64 = 16 << 20;
 /// Largest glTF file (`.gltf` JSON or `.glb`) and largest external glTF buffer or image read,
 /// bytes (1 GiB each, as an OBJ).
 pub const MAX_GLTF_BYTES: u64 = 1 << 30;
+/// Largest texture file read, bytes (256 MiB; its decoded size is bounded by
+/// [`crate::MAX_TEXTURE_PIXELS`]).
+pub const MAX_TEXTURE_BYTES: u64 = 256 << 20;
 
 /// Which files a scene may make the loader read.
 ///
@@ -107,6 +110,7 @@ pub(crate) enum InputKind {
     Gltf,
     GltfBuffer,
     GltfImage,
+    Texture,
 }
 
 impl InputKind {
@@ -116,6 +120,7 @@ impl InputKind {
             Self::Obj => MAX_OBJ_BYTES,
             Self::Mtl => MAX_MTL_BYTES,
             Self::Gltf | Self::GltfBuffer | Self::GltfImage => MAX_GLTF_BYTES,
+            Self::Texture => MAX_TEXTURE_BYTES,
         }
     }
 
@@ -127,6 +132,7 @@ impl InputKind {
             Self::Gltf => "glTF file",
             Self::GltfBuffer => "glTF buffer",
             Self::GltfImage => "glTF image",
+            Self::Texture => "texture",
         }
     }
 }

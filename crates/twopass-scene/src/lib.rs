@@ -25,6 +25,7 @@
 //! ```
 
 mod accel;
+mod albedo;
 mod camera;
 pub mod description;
 mod error;
@@ -36,6 +37,7 @@ mod radiance;
 mod scene;
 pub mod shape;
 pub mod targets;
+pub mod texture;
 mod transform;
 mod unit;
 pub mod workload;
@@ -48,8 +50,8 @@ pub use camera::{Camera, CameraProblem};
 pub use error::{SceneError, Warning};
 pub use gltf_source::{GltfOrigin, GltfSource};
 pub use input::{
-    MAX_GLTF_BYTES, MAX_MTL_BYTES, MAX_OBJ_BYTES, MAX_SCENE_BYTES, ReadPolicy, printable,
-    read_bounded,
+    MAX_GLTF_BYTES, MAX_MTL_BYTES, MAX_OBJ_BYTES, MAX_SCENE_BYTES, MAX_TEXTURE_BYTES, ReadPolicy,
+    printable, read_bounded,
 };
 pub use load::{
     MAX_COORDINATE, MAX_EMITTED_POWER, MAX_TRIANGLES, SMOOTH_ROUGHNESS, SPHERE_TOLERANCE, load,
@@ -58,5 +60,6 @@ pub use load::{
 pub use radiance::{DiffuseRadiance, RadianceEstimate, RadianceEstimator};
 pub use scene::{Bounds, Emitter, Hit, Mesh, Object, Scene, SceneMaterial};
 pub use targets::SpecularTargets;
+pub use texture::{AlbedoTexture, MAX_TEXTURE_PIXELS, MAX_TEXTURE_SIDE, Texture};
 pub use transform::Transform;
 pub use unit::Unit;

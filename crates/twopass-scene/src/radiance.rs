@@ -36,6 +36,11 @@ pub trait DiffuseRadiance: Sync {
 
 /// Diffuse light leaving one surface point, estimated there (a final gather) rather than read
 /// from a precomputed solution: what a bake fills its lightmap texels and vertices with.
+///
+/// The light is reflected with the material's own diffuse reflectance (a texture's factor),
+/// so that E / pi is recovered by dividing by it whatever the texture holds there: the radiance
+/// of a textured surface is [`RadianceEstimate::tinted`] by the texture's value at the point
+/// ([`crate::Scene::albedo_tint`]).
 /// `twopass_trace::gather::Gatherer` implements it over a [`DiffuseRadiance`] solution.
 pub trait RadianceEstimator: Sync {
     /// The estimate at barycentrics `barycentric` of triangle `triangle`, toward any direction
@@ -68,6 +73,17 @@ pub struct RadianceEstimate {
 }
 
 impl RadianceEstimate {
+    /// The estimate with its reflected parts (direct, indirect and the error) multiplied by
+    /// `tint`, a base colour texture's value at the point; emission unchanged.
+    pub fn tinted(self, tint: Rgb) -> Self {
+        Self {
+            direct: self.direct * tint,
+            indirect: self.indirect * tint,
+            indirect_error: self.indirect_error * crate::texture::max_channel(tint),
+            ..self
+        }
+    }
+
     /// Emission + direct + indirect, W/(m^2 sr).
     pub fn total(&self) -> Rgb {
         self.emitted + self.direct + self.indirect

@@ -77,6 +77,10 @@ pub struct Mesh {
     /// Texture-coordinate indices of each triangle's corners (into [`Mesh::texcoords`]), or
     /// `None` for a triangle without them (built-in shapes, OBJ groups lacking `vt`).
     pub texcoord_indices: Vec<Option<[u32; 3]>>,
+    /// The coordinates a triangle's base colour texture is read at, per corner (glTF's
+    /// convention: (0, 0) the image's top left, v down), or `None` for a triangle without
+    /// them. Empty when no material of the scene has a texture, else one per triangle.
+    pub albedo_uvs: Vec<Option<[Vec2; 3]>>,
 }
 
 impl Mesh {
@@ -144,8 +148,11 @@ impl Mesh {
 pub struct SceneMaterial {
     /// Name in the scene file (MTL materials: `file.obj:name`).
     pub name: String,
-    /// The validated model parameters.
+    /// The validated model parameters; with a texture, its diffuse reflectance is the
+    /// factor the texture's value multiplies.
     pub material: Material,
+    /// The base colour texture, if any.
+    pub albedo_texture: Option<crate::texture::AlbedoTexture>,
 }
 
 /// One object of the scene: a contiguous run of triangles and vertices with one material.
@@ -229,6 +236,8 @@ pub struct Scene {
     pub emitters: Vec<Emitter>,
     /// The camera.
     pub camera: Camera,
+    /// The textures materials refer to ([`SceneMaterial::albedo_texture`]), each decoded once.
+    pub textures: Vec<crate::texture::Texture>,
     /// Bounds of all geometry.
     pub bounds: Bounds,
     /// A glTF scene's own document and data (`None` for other inputs): what a bake needs to
@@ -281,6 +290,7 @@ impl Scene {
             objects,
             emitters,
             camera,
+            textures: Vec::new(),
             bounds,
             gltf: None,
             accel,

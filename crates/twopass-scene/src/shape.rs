@@ -18,6 +18,9 @@ pub struct ShapeMesh {
     pub texcoords: Vec<glam::Vec2>,
     /// Texture-coordinate indices per triangle corner; empty, or one per triangle.
     pub texcoord_indices: Vec<[u32; 3]>,
+    /// The coordinates a base colour texture is read at, per triangle corner (glTF's
+    /// convention, v down); empty, or one per triangle.
+    pub albedo_uvs: Vec<[glam::Vec2; 3]>,
 }
 
 /// A parallelogram: two triangles over four shared vertices, front along `edge_u x edge_v`.

@@ -73,7 +73,7 @@ impl DiffuseSource<'_> {
     /// light tracing pass shows them per pixel instead). `at` and `tally` serve the sources that trace rays.
     pub(crate) fn diffuse(
         &self,
-        s: &Shading<'_>,
+        s: &Shading,
         without_focused: bool,
         at: SampleSite<'_>,
         tally: &mut Tally,

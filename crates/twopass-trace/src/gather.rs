@@ -296,7 +296,7 @@ impl<'a> Gatherer<'a> {
     /// through mirrors and glass is left to the light tracer.
     pub(crate) fn indirect_per_sample(
         &self,
-        s: &Shading<'_>,
+        s: &Shading,
         rays: u32,
         caustics_elsewhere: bool,
         (sampler, site): (&Sampler, u64),
@@ -319,7 +319,7 @@ impl<'a> Gatherer<'a> {
 
     /// The shading context of a point on the front of triangle `t`, seen along its shading
     /// normal.
-    fn shading_at(&self, t: u32, b: [f32; 3]) -> Shading<'a> {
+    fn shading_at(&self, t: u32, b: [f32; 3]) -> Shading {
         let hit = self.scene.surface_hit(t, b);
         Shading::new(self.scene, hit, -hit.shading_normal)
     }
@@ -331,7 +331,7 @@ impl<'a> Gatherer<'a> {
     /// ([`crate::light_tracing::CausticScope::FirstDiffuse`]).
     fn gather_ray(
         &self,
-        s: &Shading<'_>,
+        s: &Shading,
         u: Vec2,
         caustics_elsewhere: bool,
         sampler: &mut Sampler,
@@ -527,18 +527,30 @@ impl RadianceEstimator for Gatherer<'_> {
             let emitted = self.scene.objects[object as usize].emission;
             let total = self.solution.radiance(triangle, barycentric);
             let indirect = self.solution.indirect_radiance(triangle, barycentric);
+            // The solution's light holds the texture's mean over its elements: taken out
+            // again, as the estimate's caller puts the texture's value back.
+            let tint = self.scene.albedo_tint(triangle, barycentric);
+            let untint = |v: Rgb| {
+                Rgb::from_array(std::array::from_fn(|c| {
+                    if tint[c] > 0.0 { v[c] / tint[c] } else { 0.0 }
+                }))
+            };
             return RadianceEstimate {
                 emitted,
-                direct: (total - indirect - emitted).max(Rgb::ZERO),
-                indirect,
+                direct: untint((total - indirect - emitted).max(Rgb::ZERO)),
+                indirect: untint(indirect),
                 ..RadianceEstimate::default()
             };
         }
         let s = self.shading_at(triangle, barycentric);
         let mut tally = Tally::default();
-        let rho = s.material.diffuse_albedo();
+        // The material's own reflectance (a texture's factor): the caller tints the estimate
+        // with the texture's value at the point (`RadianceEstimate::tinted`), and an
+        // irradiance lightmap divides this back out.
+        let material = self.scene.material_of(triangle);
+        let rho = material.diffuse_albedo();
         let emitted = s.emitted;
-        if !s.material.reflects_diffusely() {
+        if !material.reflects_diffusely() {
             return RadianceEstimate {
                 emitted,
                 ..RadianceEstimate::default()

@@ -48,11 +48,12 @@ pub trait Integrator: Sync {
 /// What a shader needs at a hit: the material, the local shading frame and the outgoing
 /// direction in it.
 #[derive(Debug, Clone, Copy)]
-pub struct Shading<'a> {
+pub struct Shading {
     /// The hit.
     pub hit: Hit,
-    /// The hit surface's material.
-    pub material: &'a Material,
+    /// The hit surface's material at the hit: its diffuse part tinted by the base colour
+    /// texture there ([`Scene::material_at`]; the material itself when untextured).
+    pub material: Material,
     /// Local frame around the shading normal (on the geometric normal's side).
     pub frame: Frame,
     /// Direction toward the viewer (unit, local frame; z < 0 when seen from behind).
@@ -62,10 +63,10 @@ pub struct Shading<'a> {
     pub emitted: Rgb,
 }
 
-impl<'a> Shading<'a> {
+impl Shading {
     /// The shading context of `hit`, reached by a ray of unit direction `direction`.
-    pub fn new(scene: &'a Scene, hit: Hit, direction: Vec3) -> Self {
-        let material = &scene.materials[hit.material as usize].material;
+    pub fn new(scene: &Scene, hit: Hit, direction: Vec3) -> Self {
+        let material = scene.material_at(hit.point.triangle, hit.barycentric);
         let frame = Frame::from_normal(hit.shading_normal);
         let wo = frame.to_local(-direction);
         let emitted = if hit.front_face {
@@ -107,7 +108,7 @@ impl<'a> Shading<'a> {
 pub fn direct_light(
     scene: &Scene,
     lights: &Lights,
-    s: &Shading<'_>,
+    s: &Shading,
     grid: u32,
     sampler: &mut Sampler,
     tally: &mut Tally,
@@ -132,7 +133,7 @@ pub fn direct_light(
 pub fn irradiance_from(
     scene: &Scene,
     lights: &Lights,
-    s: &Shading<'_>,
+    s: &Shading,
     e: usize,
     grid: u32,
     sampler: &mut Sampler,
@@ -151,7 +152,7 @@ pub fn irradiance_from(
 fn emitter_light(
     scene: &Scene,
     lights: &Lights,
-    s: &Shading<'_>,
+    s: &Shading,
     e: usize,
     grid: u32,
     sampler: &mut Sampler,
@@ -197,12 +198,7 @@ fn emitter_light(
 
 /// The closest hit along a ray leaving the shading point in world direction `direction`,
 /// counted in `tally`.
-pub fn trace_from(
-    scene: &Scene,
-    s: &Shading<'_>,
-    direction: Vec3,
-    tally: &mut Tally,
-) -> Option<Hit> {
+pub fn trace_from(scene: &Scene, s: &Shading, direction: Vec3, tally: &mut Tally) -> Option<Hit> {
     tally.rays += 1;
     scene.intersect_from(&s.hit.point, direction)
 }

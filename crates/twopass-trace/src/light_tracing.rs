@@ -357,7 +357,7 @@ impl LightTracer {
         let mut bounces = 0u32;
         let mut refracted = false;
         while let Some(h) = hit {
-            let material = &scene.materials[h.material as usize].material;
+            let material = scene.material_at(h.point.triangle, h.barycentric);
             let frame = Frame::from_normal(h.shading_normal);
             let wo = frame.to_local(-dir);
             if let Some(lobe) = material.delta() {
@@ -437,7 +437,7 @@ impl LightTracer {
         tally: &mut Tally,
         splats: &mut Vec<Splat>,
     ) {
-        let material = &scene.materials[h.material as usize].material;
+        let material = scene.material_at(h.point.triangle, h.barycentric);
         let x = &h.point;
         let to_cam = view.camera.position - x.position;
         let d2 = to_cam.length_squared();

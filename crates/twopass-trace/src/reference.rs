@@ -166,7 +166,7 @@ impl Reference {
     fn next_event(
         &self,
         scene: &Scene,
-        s: &Shading<'_>,
+        s: &Shading,
         sampler: &mut Sampler,
         tally: &mut Tally,
     ) -> [Rgb; 2] {
@@ -190,7 +190,7 @@ impl Reference {
             return zero;
         }
         let wl = s.frame.to_local(wi);
-        let m: &Material = s.material;
+        let m: &Material = &s.material;
         let f_d = m.eval_diffuse(s.wo, wl);
         let f_g = m.eval_non_diffuse(s.wo, wl);
         if wl.z <= 0.0 || (f_d + f_g).max_element() <= 0.0 {
@@ -250,7 +250,7 @@ impl Integrator for Reference {
             if !s.scatters() || depth >= self.settings.max_depth {
                 break;
             }
-            let m = s.material;
+            let m = &s.material;
             if m.delta().is_none() {
                 let [d, g] = self.next_event(scene, &s, sampler, tally);
                 match split {
@@ -294,7 +294,7 @@ impl Integrator for Reference {
 }
 
 /// The layer split of everything a path gathers after its first scattering event.
-fn first_split(m: &Material, s: &Shading<'_>, bs: &BrdfSample) -> Split {
+fn first_split(m: &Material, s: &Shading, bs: &BrdfSample) -> Split {
     match bs.kind {
         SampleKind::SpecularReflection => Split {
             a: Layer::Reflection,

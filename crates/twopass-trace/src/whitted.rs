@@ -113,7 +113,7 @@ impl<'a> Whitted<'a> {
     fn shade(
         &self,
         scene: &Scene,
-        s: &Shading<'_>,
+        s: &Shading,
         (depth, site): (u32, u64),
         throughput: Rgb,
         sampler: &mut Sampler,
@@ -223,16 +223,20 @@ pub fn ambient_estimate(scene: &Scene) -> Rgb {
     }
     let mut rho_area = glam::DVec3::ZERO;
     for o in &scene.objects {
-        let rho = scene.materials[o.material as usize]
-            .material
-            .diffuse_albedo()
-            .as_dvec3();
-        let area: f64 = o
-            .triangles
-            .clone()
-            .map(|t| f64::from(scene.mesh.areas[t as usize]))
-            .sum();
-        rho_area += rho * area;
+        let area = |t: u32| f64::from(scene.mesh.areas[t as usize]);
+        rho_area += if scene.has_textures() {
+            // Each triangle's texture mean.
+            o.triangles
+                .clone()
+                .map(|t| scene.triangle_albedo(t).as_dvec3() * area(t))
+                .sum::<glam::DVec3>()
+        } else {
+            let rho = scene.materials[o.material as usize]
+                .material
+                .diffuse_albedo()
+                .as_dvec3();
+            rho * o.triangles.clone().map(area).sum::<f64>()
+        };
     }
     let rho = rho_area / total_area;
     let power = scene

@@ -16,5 +16,6 @@ mod parts;
 mod readme;
 mod render;
 mod slurm;
+mod textures;
 mod tradeoff;
 mod view;

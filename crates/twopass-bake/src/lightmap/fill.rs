@@ -190,7 +190,9 @@ pub(super) fn fill_region(
                         LightmapQuantity::Irradiance => {
                             let object = scene.mesh.triangle_object[p.triangle as usize];
                             let emitted = scene.objects[object as usize].emission;
-                            incoming(l - emitted, scene, p.triangle)
+                            // The solution reflects with the texture's mean over its elements:
+                            // the triangle's mean stands in for it.
+                            incoming(l - emitted, scene.triangle_albedo(p.triangle))
                         }
                     }
                 })
@@ -238,8 +240,13 @@ pub(super) fn fill_region(
             let indirect = denoise(&guides, &indirect, [w, h], s.texel_size);
             for ((p, e), ind) in samples.iter().zip(&estimates).zip(indirect) {
                 value[p.texel as usize] = match s.quantity {
-                    LightmapQuantity::Radiance => e.emitted + e.direct + ind,
-                    LightmapQuantity::Irradiance => incoming(e.direct + ind, scene, p.triangle),
+                    LightmapQuantity::Radiance => {
+                        e.emitted + (e.direct + ind) * scene.albedo_tint(p.triangle, p.barycentric)
+                    }
+                    LightmapQuantity::Irradiance => incoming(
+                        e.direct + ind,
+                        scene.material_of(p.triangle).diffuse_albedo(),
+                    ),
                 };
                 filled[p.texel as usize] = true;
             }
@@ -255,12 +262,14 @@ pub(super) fn fill_region(
     }
 }
 
-/// Irradiance over pi, W/(m^2 sr), from the radiance `reflected` (no emission) leaving
-/// triangle `t`: divided by its material's diffuse albedo per channel, 0 where that is 0 (no
-/// reflected light tells of the light that arrived), and never negative (the solution's
-/// interpolation may dip below the emission on an emitter's edge).
-fn incoming(reflected: Rgb, scene: &Scene, t: u32) -> Rgb {
-    let rho = scene.material_of(t).diffuse_albedo().to_array();
+/// Irradiance over pi, W/(m^2 sr), from the radiance `reflected` (no emission) a surface of
+/// diffuse reflectance `rho` sends: divided by it per channel, 0 where it is 0 (no reflected
+/// light tells of the light that arrived), and never negative (the solution's interpolation
+/// may dip below the emission on an emitter's edge). A final gather reflects with the
+/// material's own reflectance (a texture's factor, not its value), so the irradiance holds no
+/// texture: what an engine multiplies by its own.
+fn incoming(reflected: Rgb, rho: Rgb) -> Rgb {
+    let rho = rho.to_array();
     let r = reflected.to_array();
     Rgb::from_array(std::array::from_fn(|c| {
         if rho[c] > 0.0 {

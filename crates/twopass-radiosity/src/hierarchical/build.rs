@@ -5,6 +5,7 @@ use std::f64::consts::PI;
 use std::time::{Duration, Instant};
 
 use glam::DVec3;
+use rayon::prelude::*;
 use twopass_brdf::colour::luminance_f64;
 use twopass_scene::Scene;
 
@@ -95,6 +96,7 @@ impl<'s> HierarchicalSolver<'s> {
             error_threshold: 0.0,
             tri_rho,
             tri_emission,
+            node_rho: Vec::new(),
             links: Vec::new(),
             receivers: Vec::new(),
             gathered: Vec::new(),
@@ -190,6 +192,14 @@ impl<'s> HierarchicalSolver<'s> {
         self.exitance.resize(n, [DVec3::ZERO; 2]);
         self.spread.resize(n, 0.0);
         self.corners_in.resize(n, [[DVec3::ZERO; 4]; 2]);
+        if self.scene.has_textures() {
+            let (scene, mesh) = (self.scene, &self.mesh);
+            let new: Vec<DVec3> = (self.node_rho.len() as u32..n as u32)
+                .into_par_iter()
+                .map(|k| crate::albedo::node_albedo(scene, mesh, k))
+                .collect();
+            self.node_rho.extend(new);
+        }
         let c = self.clusters.nodes.len();
         self.cluster_gathered.resize(c, NOTHING);
         self.cluster_exitance.resize(c, [DVec3::ZERO; 2]);

@@ -102,7 +102,7 @@ impl HierarchicalSolver<'_> {
             let irr = (e[0] + e[1] + e[2] + r[0] + r[1] + r[2]) / 3.0 + e[3] + r[3];
             let a = f64::from(node.area);
             arrived += irr * a;
-            absorbed += irr * a * (DVec3::ONE - self.tri_rho[node.scene_triangle as usize]);
+            absorbed += irr * a * (DVec3::ONE - self.node_rho(n));
         }
         self.residual = after - before;
         self.bookkeeping.energy.absorbed = absorbed;

@@ -110,9 +110,16 @@ impl HierarchicalSolver<'_> {
     pub(super) fn rho_lum(&self, r: NodeRef) -> f64 {
         match r.kind() {
             Kind::Cluster(c) => self.clusters.nodes[c as usize].rho_max,
-            Kind::Surface(n) => {
-                luminance_f64(self.tri_rho[self.mesh.nodes[n as usize].scene_triangle as usize])
-            }
+            Kind::Surface(n) => luminance_f64(self.node_rho(n)),
+        }
+    }
+
+    /// The diffuse reflectance of surface node `n`: the texture's mean over it in a scene with
+    /// textures, its triangle's material's otherwise.
+    pub(super) fn node_rho(&self, n: u32) -> DVec3 {
+        match self.node_rho.get(n as usize) {
+            Some(&rho) => rho,
+            None => self.tri_rho[self.mesh.nodes[n as usize].scene_triangle as usize],
         }
     }
 

@@ -42,7 +42,7 @@ impl HierarchicalSolver<'_> {
         for n in self.mesh.leaves() {
             let node = &self.mesh.nodes[n as usize];
             let a = f64::from(node.area);
-            rho += self.tri_rho[node.scene_triangle as usize] * a;
+            rho += self.node_rho(n) * a;
             area += a;
         }
         ambient(self.residual.max(DVec3::ZERO), rho, area)
@@ -168,6 +168,10 @@ impl HierarchicalSolver<'_> {
             }
         }
         let ambient = self.ambient();
+        // Each vertex reflects with the mean of its leaves' reflectances (textured scenes).
+        let vertex_rho = (!self.node_rho.is_empty())
+            .then(|| crate::albedo::vertex_means(&self.mesh, |n| self.node_rho(n)));
+        let rho_of = |v: usize, t: usize| vertex_rho.as_ref().map_or(self.tri_rho[t], |r| r[v]);
         let (mut radiosity, mut direct, mut indirect, mut amb) = (
             Vec::with_capacity(nv),
             Vec::with_capacity(nv),
@@ -176,7 +180,7 @@ impl HierarchicalSolver<'_> {
         );
         for (v, vert) in self.mesh.vertices.iter().enumerate() {
             let t = vert.triangle as usize;
-            let (rho, e) = (self.tri_rho[t], self.tri_emission[t]);
+            let (rho, e) = (rho_of(v, t), self.tri_emission[t]);
             let w = weight[v].max(f64::MIN_POSITIVE);
             // A corner's value is a point value plus its leaf's uniform shift, and a negative
             // shift (the links' interpolants overshooting the leaf's mean) can outweigh a
@@ -217,7 +221,8 @@ impl HierarchicalSolver<'_> {
                 .vertices
                 .iter()
                 .zip(per_vertex)
-                .map(|(vert, &f)| (self.tri_rho[vert.triangle as usize] * f).as_vec3())
+                .enumerate()
+                .map(|(v, (vert, &f))| (rho_of(v, vert.triangle as usize) * f).as_vec3())
                 .collect();
             solution.with_focused_caustics(focused)
         } else {

@@ -179,7 +179,7 @@ impl HierarchicalSolver<'_> {
         // The light the leaf gets: its corners' linear interpolant plus the shifts of the
         // links above it (see [`Link::area_correction`](super::link::Link::area_correction)).
         let mean = |o: usize| (here[o][0] + here[o][1] + here[o][2]) / 3.0 + here[o][3];
-        let b = [self.tri_emission[t], self.tri_rho[t] * (mean(0) + mean(1))];
+        let b = [self.tri_emission[t], self.node_rho(n) * (mean(0) + mean(1))];
         self.corners_in[n as usize] = here;
         let y = luminance_f64(b[0] + b[1]);
         let area = f64::from(node.area);

@@ -62,6 +62,9 @@ pub struct HierarchicalSolver<'s> {
     /// Per scene triangle: reflectance and emitted exitance E = pi L_e.
     pub(super) tri_rho: Vec<DVec3>,
     pub(super) tri_emission: Vec<DVec3>,
+    /// Per surface node, in a scene with textures: the texture's mean reflectance over it
+    /// ([`crate::albedo::node_albedo`]); empty otherwise (the triangle's reflectance holds).
+    pub(super) node_rho: Vec<DVec3>,
     /// Links, sorted by receiver, and where each receiver's run starts.
     pub(super) links: Vec<Link>,
     pub(super) receivers: Vec<(NodeRef, u32)>,

@@ -117,6 +117,7 @@ impl<'s> ProgressiveSolver<'s> {
             mesh,
             element_size,
             rho: Vec::new(),
+            element_albedo: Default::default(),
             emission: Vec::new(),
             receiving: Vec::new(),
             receivers: Vec::new(),
@@ -145,13 +146,7 @@ impl<'s> ProgressiveSolver<'s> {
             .map(|p| f64::from(s.mesh.nodes[s.mesh.patches[p] as usize].area))
             .collect();
         s.patch_rho = (0..n)
-            .map(|p| {
-                let o = &scene.objects[s.object_of_patch(p) as usize];
-                scene.materials[o.material as usize]
-                    .material
-                    .diffuse_albedo()
-                    .as_dvec3()
-            })
+            .map(|p| crate::albedo::node_albedo(scene, &s.mesh, s.mesh.patches[p]))
             .collect();
         s.unshot_refl = vec![DVec3::ZERO; n];
         s.shot_emit = vec![DVec3::ZERO; n];
@@ -206,6 +201,9 @@ impl<'s> ProgressiveSolver<'s> {
             );
             self.received_emit.push(DVec3::ZERO);
             self.received_refl.push(DVec3::ZERO);
+        }
+        if let Some(rho) = self.element_albedo.vertex_albedo(self.scene, &self.mesh) {
+            self.rho = rho;
         }
     }
 

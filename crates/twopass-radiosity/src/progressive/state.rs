@@ -52,6 +52,8 @@ pub struct ProgressiveSolver<'s> {
     pub(super) element_size: f32,
     /// Per vertex: reflectance, emitted exitance E = pi L_e.
     pub(super) rho: Vec<DVec3>,
+    /// The elements' texture means the vertices' reflectances come from (textured scenes).
+    pub(super) element_albedo: crate::albedo::ElementAlbedo,
     pub(super) emission: Vec<DVec3>,
     /// Per vertex: where it receives ([`ProgressiveSolver::receiving_point`]), and there, with its
     /// error bound on its scene triangle, where its shadow rays start; computed once instead of

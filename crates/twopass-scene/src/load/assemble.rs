@@ -126,6 +126,9 @@ impl Loader {
         if mesh.triangles.is_empty() {
             return Err(SceneError::EmptyScene { path: self.path });
         }
+        if !mesh.albedo_uvs.is_empty() {
+            mesh.albedo_uvs.resize(mesh.triangles.len(), None);
+        }
         if objects
             .iter()
             .all(|o: &Object| o.emission.max_element() <= 0.0)
@@ -134,10 +137,9 @@ impl Loader {
                 path: self.path.clone(),
             });
         }
-        Ok((
-            Scene::assemble(self.path, unit, mesh, self.materials, objects, camera),
-            self.warnings,
-        ))
+        let mut scene = Scene::assemble(self.path, unit, mesh, self.materials, objects, camera);
+        scene.textures = self.textures;
+        Ok((scene, self.warnings))
     }
 
     /// Appends one object: transforms it, checks every number, drops degenerate triangles.
@@ -194,6 +196,22 @@ impl Loader {
         if has_uv {
             mesh.texcoords.extend_from_slice(&local.texcoords);
         }
+        let textured = self.materials[material as usize].albedo_texture.is_some();
+        let albedo_uvs = textured && local.albedo_uvs.len() == local.triangles.len();
+        if textured && !albedo_uvs {
+            self.warnings.push(Warning::Texture {
+                path: self.path.clone(),
+                line,
+                at: format!("object `{}`", printable(&name)),
+                problem: format!(
+                    "material `{}` has a base colour texture, but the object has no texture coordinates for it: its factor alone is the albedo",
+                    self.materials[material as usize].name
+                ),
+            });
+        }
+        if textured {
+            mesh.albedo_uvs.resize(tri_start as usize, None);
+        }
         let (mut dropped, mut first) = (0, 0);
         // Exact copies of a triangle of this object (the same three world corners, bit for
         // bit, in the same cyclic order) are dropped: a repeated face is a common export
@@ -212,10 +230,14 @@ impl Loader {
                 [0; 3]
             };
             let mut uv = has_uv.then(|| local.texcoord_indices[i].map(|k| k + uv_base));
+            let mut albedo_uv = albedo_uvs.then(|| local.albedo_uvs[i]);
             if transform.flips {
                 t.swap(1, 2);
                 nt.swap(1, 2);
                 if let Some(uv) = &mut uv {
+                    uv.swap(1, 2);
+                }
+                if let Some(uv) = &mut albedo_uv {
                     uv.swap(1, 2);
                 }
             }
@@ -244,6 +266,9 @@ impl Loader {
             mesh.triangles.push(t);
             mesh.normal_indices.push(nt);
             mesh.texcoord_indices.push(uv);
+            if textured {
+                mesh.albedo_uvs.push(albedo_uv);
+            }
             mesh.geometric_normals.push(n);
             mesh.areas.push((0.5 * twice_area) as f32);
             mesh.triangle_object.push(object);

@@ -89,6 +89,8 @@ pub fn load_toml_with(
         materials: Vec::new(),
         material_ids: HashMap::new(),
         used: Vec::new(),
+        textures: Vec::new(),
+        texture_ids: HashMap::new(),
     };
     let mut material_lines = Vec::new();
     for m in &file.materials {
@@ -142,6 +144,8 @@ fn load_bare_obj(path: &Path, policy: &ReadPolicy) -> Result<(Scene, Vec<Warning
         materials: Vec::new(),
         material_ids: HashMap::new(),
         used: Vec::new(),
+        textures: Vec::new(),
+        texture_ids: HashMap::new(),
     };
     let file = obj::load(path, policy)?;
     let materials = match &file.materials {

@@ -67,6 +67,9 @@ pub(super) struct Loader {
     pub(super) materials: Vec<SceneMaterial>,
     pub(super) material_ids: HashMap<String, u32>,
     pub(super) used: Vec<bool>,
+    /// The textures decoded so far, and their index by source (a file's path, a glTF image).
+    pub(super) textures: Vec<crate::texture::Texture>,
+    pub(super) texture_ids: HashMap<String, u32>,
 }
 
 /// For "unknown field `k`" inside a typed table (whose span covers the whole table), the offset
@@ -163,6 +166,7 @@ impl Loader {
         self.materials.push(SceneMaterial {
             name: printable(&name),
             material,
+            albedo_texture: None,
         });
         self.used.push(false);
         id

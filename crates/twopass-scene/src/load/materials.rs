@@ -9,7 +9,7 @@ use twopass_brdf::{
 
 use super::loader::{Loader, rgb};
 use crate::description::{FresnelDesc, MaterialDesc, Triple};
-use crate::error::SceneError;
+use crate::error::{SceneError, Warning};
 use crate::obj;
 
 impl Loader {
@@ -128,7 +128,29 @@ impl Loader {
             let name = format!("{file}:{}", m.name);
             let id = match self.material_ids.get(&name) {
                 Some(&id) => id,
-                None => self.add_material(name, material),
+                None => {
+                    let map = m.diffuse_texture.as_deref().and_then(|v| {
+                        obj::diffuse_map(v, &m.name, origins.get(i), obj_path, &mut self.warnings)
+                    });
+                    let texture = match map {
+                        Some(map) if material.reflects_diffusely() => {
+                            Some(self.mtl_texture(&map, &m.name)?)
+                        }
+                        Some(map) => {
+                            self.warnings.push(Warning::Texture {
+                                path: map.library.clone(),
+                                line: map.line,
+                                at: format!("MTL material `{}`", m.name),
+                                problem: "map_Kd on a material without a diffuse part (a mirror or glass): not used".into(),
+                            });
+                            None
+                        }
+                        None => None,
+                    };
+                    let id = self.add_material(name, material);
+                    self.materials[id as usize].albedo_texture = texture;
+                    id
+                }
             };
             out.push((id, emission));
         }

@@ -7,6 +7,9 @@ mod gltf;
 mod loader;
 mod materials;
 mod objects;
+mod texture;
+#[cfg(test)]
+mod texture_tests;
 
 pub use entry::{load, load_toml, load_toml_with, load_with};
 pub use gltf::SMOOTH_ROUGHNESS;

@@ -11,7 +11,8 @@ use crate::error::{SceneError, Warning};
 /// ignored. Mapping: `Kd` -> diffuse; `Ks` > 0 with `Ns` -> classic Blinn-Phong (the MTL
 /// specification's illumination models 2 and up use (N.H)^Ns); `illum` 4, 6, 7 with `Ni` ->
 /// smooth dielectric; `illum` 3 or 5 with `Ks` -> mirror of reflectance `Ks`; `Ke` -> emitted
-/// radiance. Reflectances >= 1 are clamped to 0.999 with a warning.
+/// radiance. Reflectances >= 1 are clamped to 0.999 with a warning. `map_Kd` is read by the
+/// loader ([`super::diffuse_map`]); the other texture maps are warned about.
 pub(crate) fn convert_material(
     m: &tobj::Material,
     origin: Option<&MtlOrigin>,
@@ -59,7 +60,6 @@ pub(crate) fn convert_material(
     let mut ignored: Vec<String> = m.unknown_param.keys().cloned().collect();
     for (key, present) in [
         ("map_Ka", m.ambient_texture.is_some()),
-        ("map_Kd", m.diffuse_texture.is_some()),
         ("map_Ks", m.specular_texture.is_some()),
         ("map_Bump", m.normal_texture.is_some()),
         ("map_Ns", m.shininess_texture.is_some()),

@@ -2,6 +2,7 @@
 //! the mapping of MTL materials onto ours.
 
 mod lines;
+mod map;
 mod material;
 mod model;
 mod mtl;
@@ -11,6 +12,7 @@ mod scan;
 #[cfg(test)]
 mod tests;
 
+pub(crate) use map::{DiffuseMap, diffuse_map};
 pub(crate) use material::convert_material;
 pub(crate) use model::MtlOrigin;
 pub(crate) use read::load;

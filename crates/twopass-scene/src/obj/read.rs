@@ -169,6 +169,16 @@ pub(crate) fn load(path: &Path, policy: &ReadPolicy) -> Result<ObjFile, SceneErr
         } else {
             (Vec::new(), Vec::new())
         };
+        // The same coordinates as a texture reads them (v down, glTF's convention).
+        let albedo_uvs = texcoord_indices
+            .iter()
+            .map(|c| {
+                c.map(|k| {
+                    let t = texcoords[k as usize];
+                    glam::Vec2::new(t.x, 1.0 - t.y)
+                })
+            })
+            .collect();
         out.push(ObjModel {
             name: m.name,
             mesh: ShapeMesh {
@@ -178,6 +188,7 @@ pub(crate) fn load(path: &Path, policy: &ReadPolicy) -> Result<ObjFile, SceneErr
                 normal_indices,
                 texcoords,
                 texcoord_indices,
+                albedo_uvs,
             },
             material: mesh.material_id,
             usemtl: scanned.get(k).and_then(|s| s.usemtl.clone()),

@@ -2,9 +2,10 @@
 
 use twopass_brdf::{ComplexIor, CookTorranceParams, FresnelModel, Material, Rgb};
 
-use super::read::quoted;
+use super::read::{GltfFile, quoted};
 use crate::error::{SceneError, Warning};
 use crate::load::loader::Loader;
+use crate::texture::{AlbedoTexture, Filter, Wrap};
 
 /// glTF `roughnessFactor` below which a metal is the smooth `conductor` (a delta reflection)
 /// rather than Cook-Torrance: alpha = roughness^2 < 0.0025, a highlight narrower than about
@@ -21,7 +22,8 @@ impl Loader {
     pub(super) fn gltf_material(
         &mut self,
         m: &gltf::Material<'_>,
-    ) -> Result<(Material, Rgb, String), SceneError> {
+        file: &GltfFile,
+    ) -> Result<(Material, Rgb, String, Option<AlbedoTexture>), SceneError> {
         let index = m.index().unwrap_or(0);
         let at = format!("material {index}{}", quoted(m.name()));
         let name = m
@@ -36,8 +38,16 @@ impl Loader {
                 problem,
             });
         };
+        let base_texture = pbr.base_color_texture();
+        let textured = base_texture.is_some()
+            && m.transmission()
+                .is_none_or(|t| t.transmission_factor() <= 0.0)
+            && pbr.metallic_factor() < 0.5;
         for (present, what) in [
-            (pbr.base_color_texture().is_some(), "baseColorTexture"),
+            (
+                base_texture.is_some() && !textured,
+                "baseColorTexture (on glass or a metal)",
+            ),
             (m.emissive_texture().is_some(), "emissiveTexture"),
             (
                 pbr.metallic_roughness_texture().is_some(),
@@ -54,7 +64,7 @@ impl Loader {
             warn(
                 self,
                 format!(
-                    "textures are not modelled yet: {} not used, the factors alone are (baseColorFactor as the albedo, emissiveFactor as the emission)",
+                    "textures other than a Lambertian's base colour are not modelled: {} not used, the factors alone are",
                     ignored.join(", ")
                 ),
             );
@@ -148,7 +158,72 @@ impl Loader {
         let strength = m.emissive_strength().unwrap_or(1.0);
         let emission = Rgb::from_array(m.emissive_factor().map(|c| c * strength));
         let emission = self.emission(emission, &name, None)?;
-        Ok((material, emission, name))
+        let texture = match base_texture.filter(|_| textured) {
+            Some(info) => Some(self.gltf_texture(file, &info.texture(), &name)?),
+            None => None,
+        };
+        Ok((material, emission, name, texture))
+    }
+
+    /// glTF texture `t` as a base colour texture of material `material`: its image decoded
+    /// once (from a buffer view, a data URI or a file), its sampler's wrap modes and
+    /// magnification filter (the minification filter is not used: a region's mean is read from
+    /// the box-filtered pyramid, a point at full resolution).
+    fn gltf_texture(
+        &mut self,
+        file: &GltfFile,
+        t: &gltf::Texture<'_>,
+        material: &str,
+    ) -> Result<AlbedoTexture, SceneError> {
+        let image = t.source();
+        let name = format!("image {}{}", image.index(), quoted(image.name()));
+        let index = image.index();
+        let id = self
+            .texture(
+                format!("glTF image {index}"),
+                name.clone(),
+                |_| match image.source() {
+                    gltf::image::Source::View { view, .. } => {
+                        let buffer = &file.buffers[view.buffer().index()];
+                        buffer
+                            .get(view.offset()..view.offset() + view.length())
+                            .map(<[u8]>::to_vec)
+                            .ok_or_else(|| {
+                                format!(
+                                    "its buffer view {} reaches past its buffer's {} bytes",
+                                    view.index(),
+                                    buffer.len()
+                                )
+                            })
+                    }
+                    gltf::image::Source::Uri { .. } => file.images[index]
+                        .as_ref()
+                        .map(|(bytes, _)| bytes.clone())
+                        .ok_or_else(|| "cannot be read (see the warning above)".to_owned()),
+                },
+            )
+            .map_err(|problem| SceneError::Texture {
+                path: self.path.clone(),
+                line: None,
+                material: material.to_owned(),
+                texture: name,
+                problem,
+            })?;
+        let sampler = t.sampler();
+        let wrap = |w: gltf::texture::WrappingMode| match w {
+            gltf::texture::WrappingMode::ClampToEdge => Wrap::ClampToEdge,
+            gltf::texture::WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
+            gltf::texture::WrappingMode::Repeat => Wrap::Repeat,
+        };
+        Ok(AlbedoTexture {
+            wrap_u: wrap(sampler.wrap_s()),
+            wrap_v: wrap(sampler.wrap_t()),
+            filter: match sampler.mag_filter() {
+                Some(gltf::texture::MagFilter::Nearest) => Filter::Nearest,
+                _ => Filter::Linear,
+            },
+            ..AlbedoTexture::new(id)
+        })
     }
 }
 

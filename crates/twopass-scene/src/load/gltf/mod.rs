@@ -12,9 +12,9 @@
 //! not in it). Indexed and non-indexed primitives are read; `NORMAL` gives smooth
 //! shading normals (flat shading without it); `TEXCOORD_1`, when present, is kept as the
 //! mesh's texture coordinates (the lightmap layout a bake uses if it is valid; stored v up,
-//! as an OBJ's, so `(u, 1 - v)` of glTF's). `TEXCOORD_0` is not read (textures are not
-//! modelled yet) but is kept in the user's asset a bake writes back. Units are metres, as glTF
-//! defines them.
+//! as an OBJ's, so `(u, 1 - v)` of glTF's). The set a material's `baseColorTexture` names
+//! (`texCoord`, `TEXCOORD_0` by default) is read as the mesh's albedo coordinates; every set
+//! is kept in the user's asset a bake writes back. Units are metres, as glTF defines them.
 //!
 //! **Camera.** The first camera met in that walk, at its node's world position, looking down
 //! its local -z with +y up; a perspective camera's `yfov` and `aspectRatio` (512 pixels high,
@@ -27,14 +27,14 @@
 //! | glTF | twopass |
 //! | --- | --- |
 //! | `KHR_materials_transmission` factor > 0 | `dielectric`, `ior` from `KHR_materials_ior` (1.5 without it); base colour, roughness and a factor < 1 are not modelled (warned) |
-//! | `metallicFactor` < 0.5 | `lambert`, albedo `baseColorFactor` (each channel clamped to 0.999, warned); roughness is not used and glTF's dielectric specular (F0 = 0.04) is left out: a Lambertian reflects all of the albedo diffusely |
+//! | `metallicFactor` < 0.5 | `lambert`, albedo `baseColorFactor` (each channel clamped to 0.999, warned) times the `baseColorTexture` (sRGB decoded to linear, its sampler's wrap modes and magnification filter; [`crate::texture`]); roughness is not used and glTF's dielectric specular (F0 = 0.04) is left out: a Lambertian reflects all of the albedo diffusely |
 //! | `metallicFactor` >= 0.5, `roughness` < [`SMOOTH_ROUGHNESS`] | `conductor` (a smooth mirror-like metal) |
 //! | `metallicFactor` >= 0.5, rougher | `cook_torrance` with no diffuse part, specular 1, Beckmann slope m = alpha = roughness^2 (glTF's GGX alpha, taken as Beckmann's m as Walter et al. 2007 match them) |
 //! | metal Fresnel | the complex index n = 1, k = 2 sqrt(F0 / (1 - F0)) per channel, with F0 = `baseColorFactor` (clamped to 0.999): its reflectance at normal incidence is exactly F0 |
 //! | `emissiveFactor` x `KHR_materials_emissive_strength` | emitted radiance L_e in W/(m^2 sr), one to one: glTF's emissive is display-referred linear radiance (1 is a surface shown at full white unexposed), taken as radiometric W/(m^2 sr) with no luminous-efficacy factor |
 //! | `metallicFactor` strictly between 0 and 1 | the nearer of the two (warned) |
 //! | a primitive without a material | the default grey Lambertian (albedo 0.5), warned (glTF's own default is a white rough metal, which would reflect no diffuse light) |
-//! | base colour, emissive, metallic-roughness, normal and occlusion textures, `alphaMode` other than `OPAQUE` | not used: the factors alone (a warning names the material) |
+//! | emissive, metallic-roughness, normal and occlusion textures, a base colour texture on glass or a metal, `alphaMode` other than `OPAQUE`, `KHR_texture_transform` | not used: the factors alone (a warning names the material) |
 //!
 //! **Not modelled, warned and skipped:** `KHR_lights_punctual` lamps (the scene is lit only by
 //! its emissive materials), skins (the node transforms' bind pose is used), morph targets (the
@@ -80,6 +80,8 @@ pub(super) fn load_gltf(
         materials: Vec::new(),
         material_ids: HashMap::new(),
         used: Vec::new(),
+        textures: Vec::new(),
+        texture_ids: HashMap::new(),
     };
     let file = read::read(path, policy, &mut ld.warnings)?;
     let walked = walk::walk(&mut ld, &file)?;

@@ -126,7 +126,7 @@ pub(super) fn read(
                             path: path.to_owned(),
                             at,
                             problem: format!(
-                                "cannot be read ({problem}); the scene does not use images, but an asset written back keeps only its URI"
+                                "cannot be read ({problem}); a material with it as its base colour texture cannot load, and an asset written back keeps only its URI"
                             ),
                         });
                         None

@@ -67,7 +67,7 @@ pub(super) fn walk(ld: &mut Loader, file: &GltfFile) -> Result<Walked, SceneErro
         .default_scene()
         .or_else(|| doc.scenes().next())
         .ok_or_else(|| ld.gltf_err("the document", "has no scene".into()))?;
-    let mut materials: HashMap<Option<usize>, (u32, Rgb)> = HashMap::new();
+    let mut materials: HashMap<Option<usize>, (u32, Rgb, Option<u32>)> = HashMap::new();
     let mut names: HashMap<String, usize> = HashMap::new();
     let mut walked = Walked {
         parts: Vec::new(),
@@ -137,31 +137,38 @@ pub(super) fn walk(ld: &mut Loader, file: &GltfFile) -> Result<Walked, SceneErro
                 quoted(mesh.name()),
                 primitive.index()
             );
-            let Some(shape) = read_primitive(ld, file, &primitive, &at)? else {
-                continue;
-            };
             let key = primitive.material().index();
-            let (material, emission) = match materials.get(&key) {
+            let (material, emission, set) = match materials.get(&key) {
                 Some(&m) => m,
                 None => {
                     let m = if key.is_some() {
-                        let (material, emission, name) = ld.gltf_material(&primitive.material())?;
+                        let (material, emission, name, texture) =
+                            ld.gltf_material(&primitive.material(), file)?;
                         let name = if ld.material_ids.contains_key(&name) {
                             format!("{name}#{}", key.unwrap_or(0))
                         } else {
                             name
                         };
-                        (ld.add_material(name, material), emission)
+                        let id = ld.add_material(name, material);
+                        ld.materials[id as usize].albedo_texture = texture;
+                        let set = texture.and_then(|_| {
+                            let pbr = primitive.material().pbr_metallic_roughness();
+                            pbr.base_color_texture().map(|i| i.tex_coord())
+                        });
+                        (id, emission, set)
                     } else {
                         ld.gltf_warn(
                             &at,
                             "has no material: the default grey Lambertian (glTF's own default, a white rough metal, would reflect no diffuse light)".into(),
                         );
-                        (ld.default_material(), Rgb::ZERO)
+                        (ld.default_material(), Rgb::ZERO, None)
                     };
                     materials.insert(key, m);
                     m
                 }
+            };
+            let Some(shape) = read_primitive(ld, file, &primitive, &at, set)? else {
+                continue;
             };
             ld.use_material(material);
             let base = node
@@ -254,6 +261,7 @@ fn read_primitive(
     file: &GltfFile,
     primitive: &gltf::Primitive<'_>,
     at: &str,
+    albedo_set: Option<u32>,
 ) -> Result<Option<ShapeMesh>, SceneError> {
     if primitive.mode() != gltf::mesh::Mode::Triangles {
         ld.gltf_warn(
@@ -368,6 +376,25 @@ fn read_primitive(
         }
         shape.texcoords = uv;
         shape.texcoord_indices = shape.triangles.clone();
+    }
+    if let Some(set) = albedo_set
+        && let Some(a) = primitive.get(&gltf::Semantic::TexCoords(set))
+    {
+        let what = format!("TEXCOORD_{set}");
+        let values = read_floats(file, &a, &what, Dimensions::Vec2, true).map_err(err)?;
+        same_count(a.count(), n, &what).map_err(err)?;
+        let uv: Vec<Vec2> = values
+            .chunks_exact(2)
+            .map(|c| Vec2::new(c[0], c[1]))
+            .collect();
+        if let Some((i, c)) = uv.iter().enumerate().find(|(_, c)| !c.is_finite()) {
+            return Err(err(format!("{what} {i} is not finite ({c})")));
+        }
+        shape.albedo_uvs = shape
+            .triangles
+            .iter()
+            .map(|t| t.map(|v| uv[v as usize]))
+            .collect();
     }
     Ok(Some(shape))
 }

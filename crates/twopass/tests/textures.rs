@@ -1,0 +1,102 @@
+//! Base colour textures a scene cannot use: each an input error (exit 1) naming the MTL
+//! library and line, the material, the texture file and the problem; never a panic.
+
+use std::path::Path;
+
+use crate::common::twopass;
+
+/// Writes `quad.obj` and `quad.mtl` (its `map_Kd` naming `texture` on line 3) into `dir`;
+/// returns the OBJ.
+fn quad_with(dir: &Path, texture: &str) -> std::path::PathBuf {
+    std::fs::write(
+        dir.join("quad.mtl"),
+        format!("newmtl checker\nKd 0.5 0.5 0.5\nmap_Kd {texture}\n"),
+    )
+    .unwrap();
+    let obj = dir.join("quad.obj");
+    std::fs::write(
+        &obj,
+        "mtllib quad.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n\
+         usemtl checker\nf 1/1 2/2 3/3\nf 1/1 3/3 4/4\n",
+    )
+    .unwrap();
+    obj
+}
+
+/// A PNG whose header declares `width` x `height` RGB pixels followed by one tiny image data
+/// chunk (a zlib stream of one zero byte): what a decompression bomb shows before it is
+/// decoded.
+fn png_header(width: u32, height: u32) -> Vec<u8> {
+    let mut out = Vec::new();
+    let mut e = png::Encoder::new(&mut out, width, height);
+    e.set_color(png::ColorType::Rgb);
+    e.set_depth(png::BitDepth::Eight);
+    let mut w = e.write_header().unwrap();
+    w.write_chunk(
+        png::chunk::IDAT,
+        &[0x78, 0x9c, 0x63, 0x00, 0x00, 0x00, 0x01, 0x00, 0x01],
+    )
+    .unwrap();
+    drop(w);
+    out
+}
+
+/// `twopass info` on the quad with `texture` fails with exit 1 and exactly `problem` after
+/// the location.
+fn refused(dir: &Path, texture: &str, problem: &str) {
+    let obj = quad_with(dir, texture);
+    let out = twopass(&["info".as_ref(), obj.as_os_str()]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    let expected = format!(
+        "{}:3: material `checker`: texture {}: {problem}",
+        dir.join("quad.mtl").display(),
+        dir.join(texture).display()
+    );
+    assert!(
+        stderr.contains(&expected),
+        "expected `{expected}` in:\n{stderr}"
+    );
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
+
+#[test]
+fn a_missing_texture_is_an_input_error() {
+    let dir = tempfile::tempdir().unwrap();
+    refused(
+        dir.path(),
+        "missing.png",
+        "cannot read: No such file or directory (os error 2)",
+    );
+}
+
+#[test]
+fn a_corrupt_png_is_an_input_error() {
+    let dir = tempfile::tempdir().unwrap();
+    // The signature and the start of the header chunk, cut short.
+    let mut bytes = png_header(4, 4);
+    bytes.truncate(20);
+    std::fs::write(dir.path().join("corrupt.png"), &bytes).unwrap();
+    refused(
+        dir.path(),
+        "corrupt.png",
+        "not a readable Png image: unexpected end of file",
+    );
+    std::fs::write(dir.path().join("text.png"), "not an image").unwrap();
+    refused(
+        dir.path(),
+        "text.png",
+        "not a PNG or JPEG image (its first bytes are neither signature)",
+    );
+}
+
+#[test]
+fn a_decompression_bomb_is_refused_from_its_header() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("bomb.png"), png_header(100_000, 100_000)).unwrap();
+    refused(
+        dir.path(),
+        "bomb.png",
+        "its header declares 100000 x 100000 pixels, more than the 67108864 pixels (32768 on a side) read at most; not decoded",
+    );
+}
