@@ -106,7 +106,10 @@ impl DiffuseSource<'_> {
                 );
                 r.add(Layer::Diffuse, indirect);
                 if photons {
-                    r.add(Layer::Diffuse, gatherer.caustic_radiance(s));
+                    r.add(
+                        Layer::Diffuse,
+                        gatherer.caustic_radiance(s, s.material.diffuse_albedo()),
+                    );
                 }
                 true
             }

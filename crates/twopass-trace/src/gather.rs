@@ -261,15 +261,14 @@ impl<'a> Gatherer<'a> {
         self.caustics.is_some()
     }
 
-    /// The diffusely reflected caustic at the shading point `s` from the photons, rho / pi E,
-    /// W/(m^2 sr): zero without photons, on a back face or on a surface without a diffuse
-    /// part. The gather rays at `s` must then leave out the emission they reach through delta
-    /// paths (`caustics_elsewhere`), which is this light.
-    pub(crate) fn caustic_radiance(&self, s: &Shading<'_>) -> Rgb {
+    /// The diffusely reflected caustic at the shading point `s` from the photons for a
+    /// diffuse reflectance `rho`, rho / pi E, W/(m^2 sr): zero without photons, on a back face
+    /// or on a surface without a diffuse part. The gather rays at `s` must then leave out the
+    /// emission they reach through delta paths (`caustics_elsewhere`), which is this light.
+    pub(crate) fn caustic_radiance(&self, s: &Shading, rho: Rgb) -> Rgb {
         match &self.caustics {
             Some(photons) if s.hit.front_face && s.material.reflects_diffusely() => {
-                s.material.diffuse_albedo()
-                    * photons.irradiance(s.hit.point.position, s.hit.point.normal)
+                rho * photons.irradiance(s.hit.point.position, s.hit.point.normal)
                     * std::f32::consts::FRAC_1_PI
             }
             _ => Rgb::ZERO,
@@ -576,7 +575,7 @@ impl RadianceEstimator for Gatherer<'_> {
         // with caustic photons, the gather rays leave out the emission they reach through
         // mirrors and glass and the photons give that light.
         let photons = self.has_caustic_photons();
-        let caustic = self.caustic_radiance(&s);
+        let caustic = self.caustic_radiance(&s, rho);
         let (mut sum, mut sum_y, mut sum_y2) = (Rgb::ZERO, 0.0f64, 0.0f64);
         let mut n = 0u32;
         let (mut hits, mut backs) = (0u32, 0u32);
