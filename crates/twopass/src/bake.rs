@@ -268,7 +268,12 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
         let (_, reason) = options.method.choose(&scene);
         errln!("radiosity: {} solver ({reason})", solver.method().name());
     }
-    let finish = solve.run(&mut solver, ctx);
+    let finish = solve
+        .run(&mut solver, ctx)
+        .map_err(|source| CliError::Solve {
+            path: args.scene.clone(),
+            source,
+        })?;
     let progress = solver.progress();
     let residuals_started = Instant::now();
     // Out of time: a token report rather than an overrun.

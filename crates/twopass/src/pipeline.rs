@@ -168,7 +168,12 @@ pub fn radiosity(
                     path: path.to_owned(),
                     source,
                 })?;
-            solve.run(&mut solver, ctx);
+            solve
+                .run(&mut solver, ctx)
+                .map_err(|source| CliError::Solve {
+                    path: path.to_owned(),
+                    source,
+                })?;
             Ok((Radiosity::Solution(Box::new(solver.solution())), "solve"))
         }
     }

@@ -114,6 +114,28 @@ fn options_out_of_range_are_usage_errors() {
             vec!["bench", "rays", s, "--seconds", "1e300"],
             vec!["--seconds"],
         ),
+        // Issue 43, finding 13: few enough elements for memory, but progressive refinement's
+        // pair loop (patches x vertices a sweep) would run for hours: refused with the estimate.
+        (
+            vec!["bake", s, "--element-size", "1.41"],
+            vec![
+                "element_size",
+                "at least 3.500e8 form factors a sweep",
+                "3.116e2 patches x 1.123e6 vertices",
+                "hierarchical solver",
+            ],
+        ),
+        (
+            vec![
+                "bake",
+                s,
+                "--solver",
+                "progressive",
+                "--element-size",
+                "1.07",
+            ],
+            vec!["element_size", "at least 6.078e8 form factors a sweep"],
+        ),
         // Valid syntax, but the scene's area makes it too many elements: refused up front.
         (
             vec!["bake", s, "--element-size", "1e-9"],
