@@ -163,6 +163,11 @@ impl Gather {
 /// vertex form factors of an ordinary mesh overshoot by well under this.
 const ENERGY_EXCESS_WARNING: f64 = 0.01;
 
+/// Peak memory of a lightmap bake per texel of surface, bytes: the atlas's layers, the
+/// rasterized triangle of each texel, the dilation and the encoded images (measured on the
+/// Cornell box at a texel size of 0.3, 21.5 million texels: 47 bytes each).
+const LIGHTMAP_BYTES_PER_TEXEL: f64 = 46.0;
+
 /// Most gather rays per texel `--gather` accepts.
 const MAX_GATHER_RAYS: u32 = 65_536;
 
@@ -207,6 +212,22 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
         && let Some(size) = args.texel_size
     {
         let smallest = bake::lightmap::smallest_texel_size(&scene);
+        // The charts cover the surface, so the atlas holds at least area / size^2 texels.
+        let need = scene.total_area() / f64::from(size).powi(2) * LIGHTMAP_BYTES_PER_TEXEL;
+        let limit = crate::context::memory_limit();
+        if size >= smallest && need > limit as f64 {
+            return Err(CliError::Usage(format!(
+                "--texel-size {size}: {} has {:.6e} square units of surface, at least {:.3e} \
+                 texels at that size, which need about {:.1} GiB ({LIGHTMAP_BYTES_PER_TEXEL} \
+                 bytes per texel), more than the {:.1} GiB a command may take here; give a \
+                 larger texel size",
+                args.scene.display(),
+                scene.total_area(),
+                need / LIGHTMAP_BYTES_PER_TEXEL,
+                need / f64::from(1u32 << 30),
+                limit as f64 / f64::from(1u32 << 30),
+            )));
+        }
         if size < smallest {
             return Err(CliError::Usage(format!(
                 "--texel-size {size}: {} has {:.6e} square units of surface, more than a \
