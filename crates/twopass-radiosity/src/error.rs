@@ -28,8 +28,8 @@ pub enum SolveError {
     /// than [`ENERGY_TOLERANCE`](crate::report::ENERGY_TOLERANCE)
     /// ([`crate::Solver::check_energy`]).
     EnergyCreated {
-        /// The solver that ran.
-        method: crate::options::Method,
+        /// The solver that ran, as the command line names it (`progressive`, `hierarchical`).
+        solver: &'static str,
         /// [`Energy::created_fraction`](crate::report::Energy::created_fraction): power
         /// created, as a fraction of the emitted.
         created: f64,
@@ -58,16 +58,16 @@ impl std::fmt::Display for SolveError {
                 *limit as f64 / f64::from(1u32 << 30)
             ),
             Self::EnergyCreated {
-                method,
+                solver,
                 created,
                 tolerance,
             } => write!(
                 f,
-                "the {} solver created {:.1} % of the emitted power (absorbed plus escaped \
+                "the {solver} solver created {:.1} % of the emitted power (absorbed plus escaped \
                  exceed the emitted by more than the {:.0} % tolerated): surfaces closer than \
                  the element mesh resolves, such as a light almost touching a wall or coincident \
-                 copies of a surface; nothing was written. Move them apart, or remove the copies",
-                method.name(),
+                 copies of a surface; its solution is refused. Move them apart, or remove the \
+                 copies",
                 100.0 * created,
                 100.0 * tolerance
             ),

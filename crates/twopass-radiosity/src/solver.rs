@@ -86,7 +86,7 @@ impl<'s> Solver<'s> {
             Ok(())
         } else {
             Err(SolveError::EnergyCreated {
-                method: self.method(),
+                solver: self.method().name(),
                 created,
                 tolerance: ENERGY_TOLERANCE,
             })
