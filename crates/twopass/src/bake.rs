@@ -196,6 +196,18 @@ fn parse_exposure(s: &str) -> Result<f32, String> {
     checked(s, positive_finite, "must be finite and > 0")
 }
 
+/// The lightmap settings the flags ask for (the library resolves the rest).
+fn lightmap_settings(args: &BakeArgs) -> bake::LightmapSettings {
+    bake::LightmapSettings {
+        texel_size: args.texel_size,
+        quantity: args.lightmap_quantity.map(|q| match q {
+            Quantity::Irradiance => bake::LightmapQuantity::Irradiance,
+            Quantity::Radiance => bake::LightmapQuantity::Radiance,
+        }),
+        ..bake::LightmapSettings::default()
+    }
+}
+
 /// Solves the scene and writes the selected outputs and the manifest.
 pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
     let started = Instant::now();
@@ -238,6 +250,17 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
                 side = bake::lightmap::MAX_LIGHTMAP_SIDE,
             )));
         }
+    }
+    // The atlas depends on the geometry alone: a texel size whose charts cannot be packed is
+    // refused before the solve too (the area bound above is only a floor).
+    if args.lightmap
+        && let Some(size) = args.texel_size
+        && let Err(e) = bake::lightmap_atlas_size(&scene, &lightmap_settings(args))
+    {
+        return Err(CliError::Usage(format!(
+            "--texel-size {size}: {}: {e}",
+            args.scene.display()
+        )));
     }
     let preset_solve = match &args.preset {
         Some(name) => {
@@ -451,14 +474,7 @@ pub(crate) fn write_set(
     }
     if args.lightmap {
         let started = Instant::now();
-        let settings = bake::LightmapSettings {
-            texel_size: args.texel_size,
-            quantity: args.lightmap_quantity.map(|q| match q {
-                Quantity::Irradiance => bake::LightmapQuantity::Irradiance,
-                Quantity::Radiance => bake::LightmapQuantity::Radiance,
-            }),
-            ..bake::LightmapSettings::default()
-        };
+        let settings = lightmap_settings(args);
         let source = match estimator {
             Some(g) => TexelSource::Gather(g),
             None => TexelSource::Solution(solution),
