@@ -290,6 +290,7 @@ fn unsupported_version_and_duplicates_are_refused() {
         SceneError::Version {
             found: 7,
             supported: 1,
+            line: 1,
             ..
         }
     ));

@@ -3,7 +3,7 @@
 //! The real scenes of `scenes/` and the OBJ/MTL fixtures of `tests/data/` are mutated token by
 //! token (numbers swapped for extreme values, words for control characters, lines deleted,
 //! duplicated or truncated) with proptest, and every mutant is loaded. A load must end in a
-//! scene or an error; a loaded scene is traced (a few pixels of Whitted, every value finite) and
+//! scene or an error that names its file and line ([`assert_located`]); a loaded scene is traced (a few pixels of Whitted, every value finite) and
 //! its radiosity solved for a few shots. Any panic fails the test, and proptest shrinks it to
 //! a smallest mutation.
 //!
@@ -185,12 +185,40 @@ fn runner() -> TestRunner {
     })
 }
 
-/// Whatever a load returned, use it as the CLI would: format the error, or trace and solve
-/// the scene. Panics (the test's failure) on a non-finite pixel.
-fn exercise(result: Result<(Scene, Vec<Warning>), SceneError>) {
+/// Panics unless the load error `e` says where it is: its message starts with a file of the
+/// case (`origin`, a scene file, or a file in the folder `origin`) and that file's line, as
+/// `FILE:LINE:`. An error about a whole file, with no statement to point at (an OBJ without
+/// faces, a scene without surfaces, a file refused before it is read), names the file alone.
+fn assert_located(e: &SceneError, origin: &Path) {
+    let m = e.to_string();
+    assert!(!m.is_empty());
+    let o = origin.display().to_string();
+    let rest = m
+        .strip_prefix(&o)
+        .unwrap_or_else(|| panic!("the error names no file of the case ({o}): {m}"));
+    // In a folder: the file's name, up to the colon after it.
+    let rest = match rest.strip_prefix('/') {
+        Some(name) => &name[name.find(':').unwrap_or(name.len())..],
+        None => rest,
+    };
+    let whole_file = matches!(e, SceneError::EmptyScene { .. } | SceneError::Input { .. });
+    let line = rest
+        .strip_prefix(':')
+        .map(|r| r.chars().take_while(char::is_ascii_digit).count())
+        .unwrap_or(0);
+    assert!(
+        line > 0 || (whole_file && rest.starts_with(": ")),
+        "the error names no line: {m}"
+    );
+}
+
+/// Whatever a load returned, use it as the CLI would: format the error (which must name its
+/// file and line, [`assert_located`]; `origin` is the case's scene file or mesh folder), or
+/// trace and solve the scene. Panics (the test's failure) on a non-finite pixel.
+fn exercise(result: Result<(Scene, Vec<Warning>), SceneError>, origin: &Path) {
     let (scene, warnings) = match result {
         Err(e) => {
-            assert!(!e.to_string().is_empty());
+            assert_located(&e, origin);
             return;
         }
         Ok(s) => s,
@@ -245,7 +273,7 @@ fn mutated_scenes_load_or_fail_cleanly() {
             let text = mutations.iter().fold(text.clone(), |t, m| apply(&t, m));
             dump(&[&path.display().to_string(), &text]);
             // Loaded as if from the scene's own path, so its mesh paths resolve.
-            exercise(twopass_scene::load_toml(&text, path));
+            exercise(twopass_scene::load_toml(&text, path), path);
             Ok(())
         })
         .unwrap();
@@ -290,7 +318,7 @@ fn mutated_meshes_load_or_fail_cleanly() {
             }
             let path = dir.path().join("mesh.obj");
             std::fs::write(&path, &obj).unwrap();
-            exercise(twopass_scene::load(&path));
+            exercise(twopass_scene::load(&path), dir.path());
             Ok(())
         })
         .unwrap();
@@ -307,7 +335,7 @@ fn every_fixture_loads_or_fails_cleanly() {
             path.extension().and_then(|e| e.to_str()),
             Some("toml" | "obj")
         ) {
-            exercise(twopass_scene::load(&path));
+            exercise(twopass_scene::load(&path), path.parent().unwrap());
             n += 1;
         }
     }

@@ -806,60 +806,69 @@ fn light_facing_a_wall(gap: f64) -> Scene {
 }
 
 #[test]
-fn a_light_against_a_wall_creates_no_power_or_the_report_says_so() {
+fn a_light_against_a_wall_creates_no_power_or_the_solve_is_refused() {
     // The vertex form factors of the wall's elements under the light see it as a whole
     // hemisphere, and interpolated over elements larger than the light they would receive
     // more than it sends. Progressive refinement delivers no more than each shot sends (within
-    // the 5 % it leaves for the form factors' discretization) down to gaps of 1e-3 of the
+    // the 5 % it leaves for the form factors' discretization) down to gaps of 1e-2 of the
     // room; closer, the adaptive re-estimates of the patches' light read the vertices' point
-    // values and create some, and the report says how much was kept out.
-    for gap in [1e-2, 1e-3, 1e-6] {
+    // values and create some, and the hierarchical solver's links do too. Whatever a solve
+    // creates beyond the tolerance, `check_energy` refuses, naming the share.
+    let solve = |gap: f64, method: Method| {
         let scene = light_facing_a_wall(gap);
         let mut solver = Solver::new(
             &scene,
             Options {
-                method: Method::Progressive,
+                method,
                 ..Options::default()
             },
         )
         .unwrap();
         solver.run(|_| ControlFlow::Continue(()));
         let energy = solver.progress().energy;
-        let (absorbed, emitted) = (energy.absorbed.x, energy.emitted.x);
-        let r = solver.residuals(100);
+        // The closed cube lets nothing out: what is absorbed is what was created beyond the
+        // emitted, less what is still unshot.
+        let created = (energy.absorbed.x - energy.emitted.x) / energy.emitted.x;
+        (created, solver.check_energy(), solver.residuals(100))
+    };
+    for method in [Method::Progressive, Method::Hierarchical] {
+        let (created, check, r) = solve(1e-2, method);
+        assert!(created < 1e-3, "{method:?}: created {created}");
+        assert_eq!(check, Ok(()), "{method:?}");
         assert!(
             r.energy_excess.is_finite() && r.energy_excess >= 0.0,
             "{r:?}"
         );
-        if gap >= 1e-3 {
-            assert!(
-                absorbed <= emitted * (1.0 + 0.05),
-                "gap {gap}: absorbed {absorbed} of {emitted} emitted"
-            );
-        } else {
-            assert!(r.energy_excess > 0.1, "gap {gap}: {r:?}");
+        let (created, check, _) = solve(1e-6, method);
+        assert!(created > 0.1, "{method:?}: created {created}");
+        match check {
+            Err(SolveError::EnergyCreated {
+                solver,
+                created: c,
+                tolerance,
+            }) => {
+                assert_eq!(
+                    (solver, tolerance),
+                    (method.name(), twopass_radiosity::ENERGY_TOLERANCE)
+                );
+                // The refusal's figure counts at least what was absorbed beyond the emitted
+                // (it adds what escaped, which in a closed room is light lost on the way).
+                assert!(c >= created - 1e-9, "{method:?}: {c} against {created}");
+                let message = SolveError::EnergyCreated {
+                    solver,
+                    created: c,
+                    tolerance,
+                }
+                .to_string();
+                assert!(
+                    message.contains(&format!("the {} solver created", method.name()))
+                        && message.contains("more than the 5 % tolerated"),
+                    "{message}"
+                );
+            }
+            other => panic!("{method:?}: {other:?}"),
         }
     }
-    let scene = light_facing_a_wall(1e-6);
-    let mut solver = Solver::new(
-        &scene,
-        Options {
-            method: Method::Hierarchical,
-            ..Options::default()
-        },
-    )
-    .unwrap();
-    solver.run(|_| ControlFlow::Continue(()));
-    let energy = solver.progress().energy;
-    let created = (energy.absorbed.x - energy.emitted.x) / energy.emitted.x;
-    let r = solver.residuals(100);
-    // What it created is what it reports (less what is still unshot).
-    assert!(created > 0.1, "{energy:?}");
-    assert!(
-        (r.energy_excess - created).abs() < 0.02,
-        "reported {} created {created}",
-        r.energy_excess
-    );
 }
 
 #[test]
@@ -878,5 +887,31 @@ fn an_ordinary_scene_has_no_excess() {
         solver.run(|_| ControlFlow::Continue(()));
         let r = solver.residuals(100);
         assert!(r.energy_excess < 1e-3, "{method:?}: {r:?}");
+        // Nothing created: absorbed plus escaped stay below the emitted (the rest is unshot).
+        let created = solver.progress().energy.created_fraction();
+        assert!(created < 0.0, "{method:?}: created {created}");
+        assert_eq!(solver.check_energy(), Ok(()));
+    }
+}
+
+#[test]
+fn the_generated_rooms_create_no_power() {
+    // Scenes nobody tuned the solvers on (small objects near walls and under a light among
+    // them), solved by the method their size chooses: what they create is the discretization's,
+    // well within the tolerance.
+    let dir = tempfile::tempdir().unwrap();
+    for kind in twopass_scene::workload::RoomKind::ALL {
+        let room = twopass_scene::workload::room(kind, &Default::default());
+        std::fs::write(dir.path().join(&room.mesh_file), &room.mesh).unwrap();
+        let path = dir.path().join(room.scene_file());
+        std::fs::write(&path, &room.scene).unwrap();
+        let (scene, _) = load(&path).unwrap();
+        let mut solver = Solver::new(&scene, Options::default()).unwrap();
+        solver.run(|_| ControlFlow::Continue(()));
+        let created = solver.progress().energy.created_fraction();
+        // Measured: the hierarchical solver's links between the near-light room's small
+        // objects and the light create 1.3 %, the spheres room's 0.4 %; the others none.
+        assert!(created < 0.02, "{}: created {created}", room.name);
+        assert_eq!(solver.check_energy(), Ok(()), "{}", room.name);
     }
 }

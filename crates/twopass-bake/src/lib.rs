@@ -85,7 +85,7 @@ pub use gathered::{ELEMENT_KEYS, gathered_solution};
 pub use gltf::{Glb, HDR_ATTRIBUTES, encode_glb};
 pub use lightmap::{
     AtlasSource, CameraRecord, Lightmap, LightmapQuantity, LightmapSettings, TexelSource,
-    bake_lightmap,
+    bake_lightmap, lightmap_atlas_size,
 };
 pub use lightmap_read::{LightmapRadiance, lightmap_exr_path, read_lightmap_glb};
 pub use manifest::{

@@ -1,7 +1,7 @@
-//! Why a solve cannot start ([`SolveError`]).
+//! Why a solve cannot start, or its result cannot be used ([`SolveError`]).
 
-/// Why a solve cannot start.
-#[derive(Debug, Clone, PartialEq, Eq)]
+/// Why a solve cannot start, or why its result cannot be used.
+#[derive(Debug, Clone, PartialEq)]
 #[non_exhaustive]
 pub enum SolveError {
     /// Nothing in the scene emits light: there is nothing to solve.
@@ -24,6 +24,18 @@ pub enum SolveError {
         /// [`Options::memory_limit`](crate::options::Options::memory_limit), bytes.
         limit: u64,
     },
+    /// The solve created power: its absorbed plus escaped power exceeds the emitted by more
+    /// than [`ENERGY_TOLERANCE`](crate::report::ENERGY_TOLERANCE)
+    /// ([`crate::Solver::check_energy`]).
+    EnergyCreated {
+        /// The solver that ran, as the command line names it (`progressive`, `hierarchical`).
+        solver: &'static str,
+        /// [`Energy::created_fraction`](crate::report::Energy::created_fraction): power
+        /// created, as a fraction of the emitted.
+        created: f64,
+        /// The tolerance it exceeds, a fraction of the emitted power.
+        tolerance: f64,
+    },
 }
 
 impl std::fmt::Display for SolveError {
@@ -44,6 +56,20 @@ impl std::fmt::Display for SolveError {
                  use a larger element size or the hierarchical solver",
                 *bytes as f64 / f64::from(1u32 << 30),
                 *limit as f64 / f64::from(1u32 << 30)
+            ),
+            Self::EnergyCreated {
+                solver,
+                created,
+                tolerance,
+            } => write!(
+                f,
+                "the {solver} solver created {:.1} % of the emitted power (absorbed plus escaped \
+                 exceed the emitted by more than the {:.0} % tolerated): surfaces closer than \
+                 the element mesh resolves, such as a light almost touching a wall or coincident \
+                 copies of a surface; its solution is refused. Move them apart, or remove the \
+                 copies",
+                100.0 * created,
+                100.0 * tolerance
             ),
         }
     }

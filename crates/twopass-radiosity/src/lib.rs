@@ -54,7 +54,9 @@ pub use options::{
     AdaptiveOptions, HierarchicalOptions, MAX_VISIBILITY_RAYS, MIN_LINK_TOLERANCE, Method, Options,
     SpecularOptions, Stop,
 };
-pub use progressive::{MAX_DENSE_VERTICES, MAX_ELEMENTS, ProgressiveSolver, dense_solve};
-pub use report::{Energy, Finish, Residuals, SolveProgress};
+pub use progressive::{
+    MAX_DENSE_VERTICES, MAX_ELEMENTS, MAX_SWEEP_FORM_FACTORS, ProgressiveSolver, dense_solve,
+};
+pub use report::{ENERGY_TOLERANCE, Energy, Finish, Residuals, SolveProgress};
 pub use solution::Solution;
 pub use solver::Solver;

@@ -11,7 +11,7 @@ use crate::error::SolveError;
 use crate::hierarchical::HierarchicalSolver;
 use crate::options::{Method, Options};
 use crate::progressive::ProgressiveSolver;
-use crate::report::{Finish, Residuals, SolveProgress};
+use crate::report::{ENERGY_TOLERANCE, Finish, Residuals, SolveProgress};
 use crate::solution::Solution;
 
 /// A radiosity solve of a scene by the method [`Options::method`] names: one interface for
@@ -70,6 +70,26 @@ impl<'s> Solver<'s> {
         match self {
             Self::Progressive(p) => p.solution(),
             Self::Hierarchical(h) => h.solution(),
+        }
+    }
+
+    /// The energy balance as an invariant: an error when the solve so far created more than
+    /// [`ENERGY_TOLERANCE`] of the emitted power ([`Energy::created_fraction`]), which happens
+    /// where surfaces are closer than the element mesh resolves. Call it after
+    /// [`Solver::run`] and before using the solution.
+    ///
+    /// [`Energy::created_fraction`]: crate::report::Energy::created_fraction
+    pub fn check_energy(&self) -> Result<(), SolveError> {
+        let created = self.progress().energy.created_fraction();
+        // Written so that a NaN fails too.
+        if created <= ENERGY_TOLERANCE {
+            Ok(())
+        } else {
+            Err(SolveError::EnergyCreated {
+                solver: self.method().name(),
+                created,
+                tolerance: ENERGY_TOLERANCE,
+            })
         }
     }
 

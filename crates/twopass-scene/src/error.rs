@@ -39,10 +39,12 @@ pub enum SceneError {
         message: String,
     },
     /// The scene's `version` is not one this build reads.
-    #[error("{}: scene version {found} is not supported (this build reads version {supported})", path.display())]
+    #[error("{}:{line}: scene version {found} is not supported (this build reads version {supported})", path.display())]
     Version {
         /// The scene file.
         path: PathBuf,
+        /// Line of the `version` key (1 when the key is not found as written).
+        line: usize,
         /// The version the file declares.
         found: u32,
         /// The version this build reads.

@@ -163,6 +163,11 @@ impl Gather {
 /// vertex form factors of an ordinary mesh overshoot by well under this.
 const ENERGY_EXCESS_WARNING: f64 = 0.01;
 
+/// Peak memory of a lightmap bake per texel of surface, bytes: the atlas's layers, the
+/// rasterized triangle of each texel, the dilation and the encoded images (measured on the
+/// Cornell box at a texel size of 0.3, 21.5 million texels: 47 bytes each).
+const LIGHTMAP_BYTES_PER_TEXEL: f64 = 46.0;
+
 /// Most gather rays per texel `--gather` accepts.
 const MAX_GATHER_RAYS: u32 = 65_536;
 
@@ -191,6 +196,18 @@ fn parse_exposure(s: &str) -> Result<f32, String> {
     checked(s, positive_finite, "must be finite and > 0")
 }
 
+/// The lightmap settings the flags ask for (the library resolves the rest).
+fn lightmap_settings(args: &BakeArgs) -> bake::LightmapSettings {
+    bake::LightmapSettings {
+        texel_size: args.texel_size,
+        quantity: args.lightmap_quantity.map(|q| match q {
+            Quantity::Irradiance => bake::LightmapQuantity::Irradiance,
+            Quantity::Radiance => bake::LightmapQuantity::Radiance,
+        }),
+        ..bake::LightmapSettings::default()
+    }
+}
+
 /// Solves the scene and writes the selected outputs and the manifest.
 pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
     let started = Instant::now();
@@ -207,6 +224,22 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
         && let Some(size) = args.texel_size
     {
         let smallest = bake::lightmap::smallest_texel_size(&scene);
+        // The charts cover the surface, so the atlas holds at least area / size^2 texels.
+        let need = scene.total_area() / f64::from(size).powi(2) * LIGHTMAP_BYTES_PER_TEXEL;
+        let limit = crate::context::memory_limit();
+        if size >= smallest && need > limit as f64 {
+            return Err(CliError::Usage(format!(
+                "--texel-size {size}: {} has {:.6e} square units of surface, at least {:.3e} \
+                 texels at that size, which need about {:.1} GiB ({LIGHTMAP_BYTES_PER_TEXEL} \
+                 bytes per texel), more than the {:.1} GiB a command may take here; give a \
+                 larger texel size",
+                args.scene.display(),
+                scene.total_area(),
+                need / LIGHTMAP_BYTES_PER_TEXEL,
+                need / f64::from(1u32 << 30),
+                limit as f64 / f64::from(1u32 << 30),
+            )));
+        }
         if size < smallest {
             return Err(CliError::Usage(format!(
                 "--texel-size {size}: {} has {:.6e} square units of surface, more than a \
@@ -217,6 +250,17 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
                 side = bake::lightmap::MAX_LIGHTMAP_SIDE,
             )));
         }
+    }
+    // The atlas depends on the geometry alone: a texel size whose charts cannot be packed is
+    // refused before the solve too (the area bound above is only a floor).
+    if args.lightmap
+        && let Some(size) = args.texel_size
+        && let Err(e) = bake::lightmap_atlas_size(&scene, &lightmap_settings(args))
+    {
+        return Err(CliError::Usage(format!(
+            "--texel-size {size}: {}: {e}",
+            args.scene.display()
+        )));
     }
     let preset_solve = match &args.preset {
         Some(name) => {
@@ -268,7 +312,12 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
         let (_, reason) = options.method.choose(&scene);
         errln!("radiosity: {} solver ({reason})", solver.method().name());
     }
-    let finish = solve.run(&mut solver, ctx);
+    let finish = solve
+        .run(&mut solver, ctx)
+        .map_err(|source| CliError::Solve {
+            path: args.scene.clone(),
+            source,
+        })?;
     let progress = solver.progress();
     let residuals_started = Instant::now();
     // Out of time: a token report rather than an overrun.
@@ -425,14 +474,7 @@ pub(crate) fn write_set(
     }
     if args.lightmap {
         let started = Instant::now();
-        let settings = bake::LightmapSettings {
-            texel_size: args.texel_size,
-            quantity: args.lightmap_quantity.map(|q| match q {
-                Quantity::Irradiance => bake::LightmapQuantity::Irradiance,
-                Quantity::Radiance => bake::LightmapQuantity::Radiance,
-            }),
-            ..bake::LightmapSettings::default()
-        };
+        let settings = lightmap_settings(args);
         let source = match estimator {
             Some(g) => TexelSource::Gather(g),
             None => TexelSource::Solution(solution),

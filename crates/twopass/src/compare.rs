@@ -206,6 +206,10 @@ fn solve_shared(
     let bar = ctx.progress(1, "radiosity");
     solver.run(|_| std::ops::ControlFlow::Continue(()));
     bar.finish_and_clear();
+    solver.check_energy().map_err(|source| CliError::Solve {
+        path: args.scene.clone(),
+        source,
+    })?;
     let p = solver.progress();
     let info = RadiosityInfo {
         solver: p.method.name(),

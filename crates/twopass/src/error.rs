@@ -28,7 +28,8 @@ pub enum CliError {
         /// What went wrong.
         message: String,
     },
-    /// A radiosity solve cannot start for this scene (no emitter, an option out of range).
+    /// A radiosity solve cannot start for this scene (no emitter, an option out of range), or
+    /// its result is refused (it created power).
     #[error("{}: {source}", path.display())]
     Solve {
         /// The scene file.

@@ -168,7 +168,12 @@ pub fn radiosity(
                     path: path.to_owned(),
                     source,
                 })?;
-            solve.run(&mut solver, ctx);
+            solve
+                .run(&mut solver, ctx)
+                .map_err(|source| CliError::Solve {
+                    path: path.to_owned(),
+                    source,
+                })?;
             Ok((Radiosity::Solution(Box::new(solver.solution())), "solve"))
         }
     }
@@ -333,9 +338,11 @@ pub fn integrator<'a>(
     }
 }
 
-/// Checks a bake file against the manifest of its set, when one lies beside it
-/// (`<stem>.manifest.json`, for `<stem>.lightmap.glb` and `.exr` too): a file whose size or CRC-32 differs from the manifest's record is
-/// from another bake (one interrupted between its files), and the set is refused.
+/// Checks a bake file's set against the manifest beside it, when there is one
+/// (`<stem>.manifest.json`, for `<stem>.lightmap.glb` and `.exr` too): every file the manifest
+/// seals, not only the one asked for, must be there with the recorded size and CRC-32. A set
+/// with a file from another bake (one interrupted between its files), a damaged file or a
+/// missing one is refused whole.
 pub fn check_in_set(file: &Path) -> Result<(), CliError> {
     let (Some(dir), Some(stem), Some(name)) = (file.parent(), file.file_stem(), file.file_name())
     else {
@@ -356,29 +363,75 @@ pub fn check_in_set(file: &Path) -> Result<(), CliError> {
             manifest_path.display()
         ))
     })?;
-    let Some(record) = manifest
+    if !manifest
         .files
         .iter()
-        .find(|f| f.path.file_name() == Some(name))
-    else {
-        return Ok(());
-    };
-    let bytes = twopass_scene::read_bounded(file, twopass_bake::MAX_BAKE_BYTES)
-        .map_err(|e| CliError::io(file, e))?;
-    let size_ok = record.bytes == bytes.len() as u64;
-    let crc_ok = record.crc32.is_none_or(|c| c == crc32fast::hash(&bytes));
-    if size_ok && crc_ok {
+        .any(|f| f.path.file_name() == Some(name))
+    {
         return Ok(());
     }
-    Err(CliError::Input(format!(
-        "{}: does not match its manifest {} ({} bytes, recorded {}{}): the bake set is mixed, \
-         probably from a bake stopped between its files; bake again",
-        file.display(),
-        manifest_path.display(),
-        bytes.len(),
-        record.bytes,
-        if crc_ok { "" } else { ", CRC-32 differs" }
-    )))
+    for record in &manifest.files {
+        if let Some(member) = record.path.file_name() {
+            check_record(&dir.join(member), record, &manifest_path)?;
+        }
+    }
+    Ok(())
+}
+
+/// Checks one file of a sealed set against its record: a regular file (opening a FIFO would
+/// block), of the recorded size, with the recorded CRC-32 (read in pieces: a set's images may
+/// be large).
+fn check_record(
+    path: &Path,
+    record: &twopass_bake::FileRecord,
+    manifest_path: &Path,
+) -> Result<(), CliError> {
+    use std::io::Read;
+    let refuse = |what: String| {
+        CliError::Input(format!(
+            "{}: does not match its manifest {} ({what}): the bake set is mixed or damaged, \
+             probably from a bake stopped between its files; bake again",
+            path.display(),
+            manifest_path.display()
+        ))
+    };
+    let meta = match std::fs::metadata(path) {
+        Ok(meta) => meta,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            return Err(refuse("missing".into()));
+        }
+        Err(e) => return Err(CliError::io(path, e)),
+    };
+    if !meta.is_file() {
+        return Err(refuse("not a regular file".into()));
+    }
+    if meta.len() != record.bytes {
+        return Err(refuse(format!(
+            "{} bytes, recorded {}",
+            meta.len(),
+            record.bytes
+        )));
+    }
+    let Some(crc) = record.crc32 else {
+        return Ok(());
+    };
+    let mut hasher = crc32fast::Hasher::new();
+    let mut reader = std::fs::File::open(path).map_err(|e| CliError::io(path, e))?;
+    let mut buffer = vec![0u8; 1 << 20];
+    loop {
+        let n = reader
+            .read(&mut buffer)
+            .map_err(|e| CliError::io(path, e))?;
+        if n == 0 {
+            break;
+        }
+        hasher.update(&buffer[..n]);
+    }
+    if hasher.finalize() == crc {
+        Ok(())
+    } else {
+        Err(refuse("its CRC-32 differs".into()))
+    }
 }
 
 #[cfg(test)]

@@ -10,7 +10,7 @@ use std::time::Duration;
 use clap::{Args, ValueEnum};
 use twopass_radiosity::{
     AdaptiveOptions, Finish, HierarchicalOptions, MAX_VISIBILITY_RAYS, MIN_LINK_TOLERANCE, Method,
-    Options, Solver, SpecularOptions, Stop, VisibilityRays,
+    Options, SolveError, Solver, SpecularOptions, Stop, VisibilityRays,
 };
 use twopass_scene::Scene;
 
@@ -164,8 +164,10 @@ impl SolveArgs {
         }
     }
 
-    /// Runs `solver` to its stop criteria with a progress bar over the unshot fraction.
-    pub fn run(&self, solver: &mut Solver<'_>, ctx: &Context) -> Finish {
+    /// Runs `solver` to its stop criteria with a progress bar over the unshot fraction, then
+    /// checks its energy balance ([`Solver::check_energy`]): a solve that created power is an
+    /// error, its solution unused.
+    pub fn run(&self, solver: &mut Solver<'_>, ctx: &Context) -> Result<Finish, SolveError> {
         let bar = ctx.progress(STEPS, "radiosity");
         let finish = solver.run(|p| {
             bar.set_position(bar_position(p.unshot_fraction, self.unshot));
@@ -173,7 +175,8 @@ impl SolveArgs {
             ControlFlow::Continue(())
         });
         bar.finish_and_clear();
-        finish
+        solver.check_energy()?;
+        Ok(finish)
     }
 }
 

@@ -119,6 +119,23 @@ fn a_texel_size_no_atlas_can_hold_is_refused_before_the_solve() {
         "the old set untouched"
     );
     assert!(!dir.join("cornell-box.lightmap.glb").exists());
+    // Above that area bound (0.17 mm) but too small for the charts once packed with their
+    // padding: refused before the solve as well, by the layout itself.
+    let out = common::bake_box(dir)
+        .words("--format bake --lightmap --texel-size 0.2")
+        .run();
+    common::assert_exit(&out, 2);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--texel-size 0.2")
+            && err.contains("the charts need more than 8192 x 8192 texels"),
+        "{err}"
+    );
+    assert_eq!(
+        std::fs::read(&manifest).unwrap(),
+        before,
+        "the old set untouched"
+    );
 }
 
 #[test]

@@ -114,6 +114,28 @@ fn options_out_of_range_are_usage_errors() {
             vec!["bench", "rays", s, "--seconds", "1e300"],
             vec!["--seconds"],
         ),
+        // Issue 43, finding 13: few enough elements for memory, but progressive refinement's
+        // pair loop (patches x vertices a sweep) would run for hours: refused with the estimate.
+        (
+            vec!["bake", s, "--element-size", "1.41"],
+            vec![
+                "element_size",
+                "at least 3.500e8 form factors a sweep",
+                "3.116e2 patches x 1.123e6 vertices",
+                "hierarchical solver",
+            ],
+        ),
+        (
+            vec![
+                "bake",
+                s,
+                "--solver",
+                "progressive",
+                "--element-size",
+                "1.07",
+            ],
+            vec!["element_size", "at least 6.078e8 form factors a sweep"],
+        ),
         // Valid syntax, but the scene's area makes it too many elements: refused up front.
         (
             vec!["bake", s, "--element-size", "1e-9"],
@@ -570,4 +592,34 @@ fn a_render_larger_than_the_memory_allows_is_refused_up_front() {
     assert!(err.contains("1024 x 1024") && err.contains("GiB"), "{err}");
     assert!(!dir.path().join("big.exr").exists());
     common::assert_ok(&run("256", "small.exr"));
+}
+
+/// Issue 43, the memory ceiling: a lightmap whose texels cannot fit the command's allowance
+/// (here 300 MB) is refused before the solve, naming the texel size and the memory.
+#[test]
+fn a_lightmap_larger_than_the_memory_allows_is_refused_up_front() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_twopass"))
+        .env("TWOPASS_MEMORY_LIMIT", "300000000")
+        .args(["bake", &cornell(), "--lightmap", "--texel-size", "0.3"])
+        .arg("-o")
+        .arg(dir.path().join("out"))
+        .output()
+        .unwrap();
+    common::assert_exit(&out, 2);
+    let err = String::from_utf8_lossy(&out.stderr);
+    // The box's 1.934346e6 mm^2 at 0.3 mm: 2.149e7 texels, 0.9 GiB at 46 bytes each.
+    assert!(
+        err.contains("--texel-size 0.3")
+            && err.contains("at least 2.149e7 texels")
+            && err.contains("about 0.9 GiB")
+            && err.contains("0.3 GiB a command may take"),
+        "{err}"
+    );
+    assert!(
+        !dir.path()
+            .join("out")
+            .join("cornell-box.manifest.json")
+            .exists()
+    );
 }

@@ -87,3 +87,43 @@ fn stale_temporaries_of_a_killed_run_are_removed() {
     assert!(fresh.exists(), "a temporary file that may be live is kept");
     assert!(foreign.exists(), "other programs' files are not touched");
 }
+
+/// Issue 43: `render --bake X` checks the whole set its manifest seals, not only X: a damaged
+/// `.ply` beside a good `.bake`, or a missing one, is refused naming it.
+#[test]
+fn render_from_a_bake_checks_every_file_of_its_set() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("set");
+    common::assert_ok(&bake(&dir, &[]));
+    let ply = dir.join("cornell-box.ply");
+    let render = |name: &str| {
+        render_box("radiosity", 8, 1)
+            .words("--bake")
+            .arg(dir.join("cornell-box.bake"))
+            .output(tmp.path().join(name))
+            .run()
+    };
+    common::assert_ok(&render("good.exr"));
+    // One byte changed, the size kept.
+    let mut bytes = std::fs::read(&ply).unwrap();
+    let last = bytes.len() - 1;
+    bytes[last] ^= 0xff;
+    std::fs::write(&ply, &bytes).unwrap();
+    for (name, problem) in [
+        ("damaged.exr", "its CRC-32 differs"),
+        ("missing.exr", "missing"),
+    ] {
+        if name == "missing.exr" {
+            std::fs::remove_file(&ply).unwrap();
+        }
+        let out = render(name);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{stderr}");
+        assert!(
+            stderr.contains("cornell-box.ply: does not match its manifest")
+                && stderr.contains(problem),
+            "{stderr}"
+        );
+        assert!(!tmp.path().join(name).exists());
+    }
+}

@@ -11,7 +11,7 @@ use twopass_scene::Scene;
 use super::asset::encode_asset_glb;
 use super::fill::{RegionTexels, TexelSource, fill_region};
 use super::glb::encode_lightmap_glb;
-use super::layout::{generated_layout, scene_layout};
+use super::layout::{Layout, generated_layout, scene_layout};
 use super::settings::{
     Lightmap, LightmapQuantity, LightmapSettings, Resolved, TEXELS_PER_DIAGONAL,
 };
@@ -47,25 +47,8 @@ pub fn bake_lightmap(
     settings: &LightmapSettings,
     mapping: ColorMapping,
 ) -> Result<Lightmap, BakeError> {
-    let s = Resolved {
-        texel_size: settings
-            .texel_size
-            .unwrap_or(scene.bounds.diagonal() / TEXELS_PER_DIAGONAL),
-        padding: settings.padding.max(1),
-        quantity: settings
-            .quantity
-            .unwrap_or_else(|| LightmapQuantity::for_scene(scene)),
-    };
-    if !(s.texel_size.is_finite() && s.texel_size > 0.0) {
-        return Err(BakeError::Encode {
-            path: PathBuf::from("lightmap"),
-            message: format!("texel size {} must be finite and > 0", s.texel_size),
-        });
-    }
-    let layout = match scene_layout(scene, &s) {
-        Ok(layout) => layout,
-        Err(why) => generated_layout(scene, &s, why)?,
-    };
+    let s = resolve(scene, settings)?;
+    let layout = lay_out(scene, &s)?;
     let (width, height) = (layout.width, layout.height);
     let filled: Vec<RegionTexels> = layout
         .regions
@@ -140,4 +123,44 @@ pub fn bake_lightmap(
         exr,
         png,
     })
+}
+
+/// The atlas: the scene's own texture coordinates where they serve, else generated charts.
+fn lay_out(scene: &Scene, s: &Resolved) -> Result<Layout, BakeError> {
+    match scene_layout(scene, s) {
+        Ok(layout) => Ok(layout),
+        Err(why) => generated_layout(scene, s, why),
+    }
+}
+
+/// The lightmap's atlas size (width, height, in texels) that [`bake_lightmap`] would make for
+/// `scene` with `settings`, or why it cannot make one (the charts need more than
+/// [`MAX_LIGHTMAP_SIDE`](super::MAX_LIGHTMAP_SIDE) texels a side): the layout depends on the
+/// geometry alone, so a front end can refuse a texel size before it solves.
+pub fn lightmap_atlas_size(
+    scene: &Scene,
+    settings: &LightmapSettings,
+) -> Result<(u32, u32), BakeError> {
+    let layout = lay_out(scene, &resolve(scene, settings)?)?;
+    Ok((layout.width, layout.height))
+}
+
+/// `settings` with the library's defaults filled in for `scene`, checked.
+fn resolve(scene: &Scene, settings: &LightmapSettings) -> Result<Resolved, BakeError> {
+    let s = Resolved {
+        texel_size: settings
+            .texel_size
+            .unwrap_or(scene.bounds.diagonal() / TEXELS_PER_DIAGONAL),
+        padding: settings.padding.max(1),
+        quantity: settings
+            .quantity
+            .unwrap_or_else(|| LightmapQuantity::for_scene(scene)),
+    };
+    if !(s.texel_size.is_finite() && s.texel_size > 0.0) {
+        return Err(BakeError::Encode {
+            path: PathBuf::from("lightmap"),
+            message: format!("texel size {} must be finite and > 0", s.texel_size),
+        });
+    }
+    Ok(s)
 }

@@ -54,7 +54,7 @@ mod raster;
 mod settings;
 
 pub use crate::weld::COPLANAR_COS;
-pub use bake::bake_lightmap;
+pub use bake::{bake_lightmap, lightmap_atlas_size};
 pub use fill::{MAX_BACK_FACES, TexelSource};
 pub use filter::FILTER;
 pub use glb::{CameraRecord, PNG_FORMULA};

@@ -9,7 +9,8 @@ use twopass_scene::Scene;
 
 use super::patch_elements::PatchElements;
 use super::state::{
-    BYTES_PER_ELEMENT, MAX_ELEMENTS, PAIR_CACHE_MAX_PATCHES, PAIR_UNKNOWN, ProgressiveSolver,
+    BYTES_PER_ELEMENT, MAX_ELEMENTS, MAX_SWEEP_FORM_FACTORS, PAIR_CACHE_MAX_PATCHES, PAIR_UNKNOWN,
+    ProgressiveSolver,
 };
 use crate::element::ElementMesh;
 use crate::error::SolveError;
@@ -55,7 +56,11 @@ impl<'s> ProgressiveSolver<'s> {
             })
             .collect();
         let part_area: f64 = part.iter().map(|p| p.0).sum();
-        for (name, v) in [("patch_size", patch_size), ("element_size", element_size)] {
+        let mut fewest = [0.0; 2];
+        for (i, (name, v)) in [("patch_size", patch_size), ("element_size", element_size)]
+            .into_iter()
+            .enumerate()
+        {
             let s = f64::from(v);
             let at_least: f64 = part
                 .iter()
@@ -65,6 +70,7 @@ impl<'s> ProgressiveSolver<'s> {
                         .max(1.0)
                 })
                 .sum();
+            fewest[i] = at_least;
             if at_least > MAX_ELEMENTS as f64 {
                 return Err(SolveError::Option {
                     name,
@@ -76,6 +82,25 @@ impl<'s> ProgressiveSolver<'s> {
                     ),
                 });
             }
+        }
+        // Every patch that holds light shoots to every vertex at least once: the work grows as
+        // patches x vertices, and a mesh that fits in memory can still take hours. A
+        // triangulation of E elements has at least E / 2 vertices, so this bound is a floor of
+        // one sweep's form factors.
+        let [patches_at_least, elements_at_least] = fewest;
+        let sweep = patches_at_least * (elements_at_least / 2.0);
+        if sweep > MAX_SWEEP_FORM_FACTORS {
+            return Err(SolveError::Option {
+                name: "element_size",
+                problem: format!(
+                    "{element_size} scene units (patches of {patch_size}) would have progressive \
+                     refinement compute at least {sweep:.3e} form factors a sweep (at least \
+                     {patches_at_least:.3e} patches x {:.3e} vertices), more than the \
+                     {MAX_SWEEP_FORM_FACTORS:.0e} it takes on; give a larger element size or use \
+                     the hierarchical solver",
+                    elements_at_least / 2.0
+                ),
+            });
         }
         // Bisection leaves of longest edge at most L have an area of L^2 / 8 or more: refuse
         // up front a mesh that would not fit instead of refining until the allocator gives up.

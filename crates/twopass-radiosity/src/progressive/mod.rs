@@ -18,4 +18,4 @@ mod shoot;
 mod state;
 
 pub use dense::{MAX_DENSE_VERTICES, dense_solve};
-pub use state::{MAX_ELEMENTS, ProgressiveSolver};
+pub use state::{MAX_ELEMENTS, MAX_SWEEP_FORM_FACTORS, ProgressiveSolver};

@@ -16,6 +16,14 @@ use crate::specular_receivers::SpecularReceivers;
 /// form-factor rows and radiosities); smaller patch or element sizes are refused up front.
 pub const MAX_ELEMENTS: usize = 4_000_000;
 
+/// Most form factors one sweep of progressive refinement (every patch shooting once to every
+/// vertex) may take, counted from the fewest patches and vertices the sizes can make: a solve
+/// converges in several sweeps, each a pair loop over patches x vertices, so a finer mesh is
+/// refused up front (with the estimate) rather than left running for hours. The largest mesh
+/// `twopass bench radiosity` measures (200,000 elements of the Cornell box, element size about
+/// 7.5 mm) makes about 1.2e7.
+pub const MAX_SWEEP_FORM_FACTORS: f64 = 1e8;
+
 /// Approximate bytes per element: the node, its share of vertices with their per-vertex sums
 /// and receiving points, the edge map and the patch lists.
 pub(super) const BYTES_PER_ELEMENT: f64 = 400.0;

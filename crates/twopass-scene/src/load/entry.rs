@@ -75,8 +75,17 @@ pub fn load_toml_with(
         }
     })?;
     if file.version != VERSION {
+        let line = text
+            .lines()
+            .position(|l| {
+                l.trim_start()
+                    .strip_prefix("version")
+                    .is_some_and(|rest| rest.trim_start().starts_with('='))
+            })
+            .map_or(1, |i| i + 1);
         return Err(SceneError::Version {
             path: path.to_owned(),
+            line,
             found: file.version,
             supported: VERSION,
         });
@@ -159,7 +168,7 @@ fn load_bare_obj(path: &Path, policy: &ReadPolicy) -> Result<(Scene, Vec<Warning
         });
     }
     for m in &file.models {
-        check_range(path, None, &m.name, &m.mesh.positions)?;
+        check_range(path, file.range_line, &m.name, &m.mesh.positions)?;
     }
     // Every vertex at one point: every triangle is degenerate. Said of the triangles, with
     // their lines, before a camera is made up to frame a point.
@@ -195,7 +204,9 @@ fn load_bare_obj(path: &Path, policy: &ReadPolicy) -> Result<(Scene, Vec<Warning
         parts.push(PlacedPart {
             part: Part {
                 name,
-                line: None,
+                // A group's refusals (every triangle degenerate, emission too strong) point
+                // at its first face.
+                line: m.first_face,
                 geometry: Geometry::Mesh(m.mesh),
                 material,
                 emission,

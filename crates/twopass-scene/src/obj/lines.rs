@@ -22,9 +22,18 @@ pub(super) fn first_non_finite(v: &[Vec3]) -> Option<(usize, f32)> {
 
 /// The 1-based line of the first `keyword` statement holding a non-finite number.
 pub(super) fn find_non_finite_line(text: &str, keyword: &str) -> Option<usize> {
+    find_value_line(text, keyword, |x| !x.is_finite())
+}
+
+/// The 1-based line of the first `keyword` statement holding a number `bad` is true of.
+pub(super) fn find_value_line(
+    text: &str,
+    keyword: &str,
+    bad: impl Fn(f32) -> bool,
+) -> Option<usize> {
     text.lines().enumerate().find_map(|(i, l)| {
         let mut it = l.split_whitespace();
-        (it.next() == Some(keyword) && it.any(|w| w.parse::<f32>().is_ok_and(|x| !x.is_finite())))
+        (it.next() == Some(keyword) && it.any(|w| w.parse::<f32>().is_ok_and(&bad)))
             .then_some(i + 1)
     })
 }

@@ -44,6 +44,9 @@ pub(crate) struct ObjFile {
     pub mtllibs: Vec<PathBuf>,
     /// The first library that could not be opened, if any.
     pub missing_mtl: Option<PathBuf>,
+    /// The 1-based line of the first `v` statement with a coordinate beyond
+    /// [`crate::MAX_COORDINATE`], if any: where a refusal of the positions points.
+    pub range_line: Option<usize>,
 }
 
 /// What the statement scan learned about one tobj model.

@@ -6,7 +6,9 @@ use std::path::Path;
 
 use glam::Vec3;
 
-use super::lines::{find_bad_line, find_non_finite_line, first_non_finite, triples};
+use super::lines::{
+    find_bad_line, find_non_finite_line, find_value_line, first_non_finite, triples,
+};
 use super::model::{MtlLib, ObjFile, ObjModel};
 use super::mtl::{MtlMaterials, load_mtl};
 use super::normalize::normalize;
@@ -26,7 +28,7 @@ pub(crate) fn load(path: &Path, policy: &ReadPolicy) -> Result<ObjFile, SceneErr
     let mut libs: Vec<MtlLib> = Vec::new();
     let mut mtllibs = Vec::new();
     let mut missing_mtl = None;
-    for line in text.lines() {
+    for (at, line) in text.lines().enumerate() {
         let trimmed = line.trim_start();
         if trimmed.split_whitespace().next() != Some("mtllib") {
             continue;
@@ -45,7 +47,17 @@ pub(crate) fn load(path: &Path, policy: &ReadPolicy) -> Result<ObjFile, SceneErr
         for name in names {
             let mtl_path = dir.join(name);
             mtllibs.push(mtl_path.clone());
-            match load_mtl(&mtl_path, policy)? {
+            // A library refused before it is read (not a regular file, too large, outside the
+            // confined folder) has no line of its own: the `mtllib` statement is where it is.
+            let loaded = load_mtl(&mtl_path, policy).map_err(|e| match e {
+                SceneError::Input { .. } | SceneError::Io { .. } => SceneError::Statement {
+                    path: path.to_owned(),
+                    line: at + 1,
+                    problem: format!("mtllib: {e}"),
+                },
+                located => located,
+            })?;
+            match loaded {
                 Some(((materials, map), found)) => {
                     let (all, all_map) = merged.get_or_insert_with(Default::default);
                     let offset = all.len();
@@ -211,5 +223,6 @@ pub(crate) fn load(path: &Path, policy: &ReadPolicy) -> Result<ObjFile, SceneErr
         origins,
         mtllibs,
         missing_mtl,
+        range_line: find_value_line(&text, "v", |c| c.abs() > crate::MAX_COORDINATE),
     })
 }
