@@ -30,6 +30,7 @@ pub mod description;
 mod error;
 mod gltf_source;
 mod input;
+pub mod lamp;
 mod load;
 mod obj;
 mod radiance;
@@ -51,6 +52,7 @@ pub use input::{
     MAX_GLTF_BYTES, MAX_MTL_BYTES, MAX_OBJ_BYTES, MAX_SCENE_BYTES, ReadPolicy, printable,
     read_bounded,
 };
+pub use lamp::{LUMINOUS_EFFICACY, Lamp, LampKind, LampLight, MAX_LAMP_INTENSITY, spot_falloff};
 pub use load::{
     MAX_COORDINATE, MAX_EMITTED_POWER, MAX_TRIANGLES, SMOOTH_ROUGHNESS, SPHERE_TOLERANCE, load,
     load_toml, load_toml_with, load_with,

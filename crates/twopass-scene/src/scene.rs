@@ -227,6 +227,8 @@ pub struct Scene {
     pub objects: Vec<Object>,
     /// The emitting objects.
     pub emitters: Vec<Emitter>,
+    /// The lamps: point, spot and directional lights (delta lights, never hit by a ray).
+    pub lamps: Vec<crate::lamp::Lamp>,
     /// The camera.
     pub camera: Camera,
     /// Bounds of all geometry.
@@ -245,6 +247,7 @@ impl Scene {
         mesh: Mesh,
         materials: Vec<SceneMaterial>,
         objects: Vec<Object>,
+        lamps: Vec<crate::lamp::Lamp>,
         camera: Camera,
     ) -> Self {
         let bounds = mesh.positions.iter().fold(Bounds::EMPTY, |b, p| b.grow(*p));
@@ -280,6 +283,7 @@ impl Scene {
             materials,
             objects,
             emitters,
+            lamps,
             camera,
             bounds,
             gltf: None,

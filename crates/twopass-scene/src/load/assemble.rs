@@ -129,13 +129,22 @@ impl Loader {
         if objects
             .iter()
             .all(|o: &Object| o.emission.max_element() <= 0.0)
+            && self.lamps.iter().all(|l| l.intensity.max_element() <= 0.0)
         {
             self.warnings.push(Warning::NoEmitters {
                 path: self.path.clone(),
             });
         }
         Ok((
-            Scene::assemble(self.path, unit, mesh, self.materials, objects, camera),
+            Scene::assemble(
+                self.path,
+                unit,
+                mesh,
+                self.materials,
+                objects,
+                self.lamps,
+                camera,
+            ),
             self.warnings,
         ))
     }

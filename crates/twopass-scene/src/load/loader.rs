@@ -67,6 +67,8 @@ pub(super) struct Loader {
     pub(super) materials: Vec<SceneMaterial>,
     pub(super) material_ids: HashMap<String, u32>,
     pub(super) used: Vec<bool>,
+    /// The lamps read so far.
+    pub(super) lamps: Vec<crate::lamp::Lamp>,
 }
 
 /// For "unknown field `k`" inside a typed table (whose span covers the whole table), the offset
