@@ -36,6 +36,7 @@ pub mod element;
 mod error;
 pub mod form_factor;
 mod hierarchical;
+mod lamps;
 mod mesh_error;
 mod options;
 mod progressive;

@@ -113,6 +113,20 @@ impl Lamp {
         })
     }
 
+    /// The radiant intensity (W/sr per channel) a point or spot lamp sends in unit direction
+    /// `direction` (from the lamp): I times the spot's falloff; zero for a directional lamp.
+    pub fn intensity_toward(&self, direction: Vec3) -> Rgb {
+        match self.kind {
+            LampKind::Point => self.intensity,
+            LampKind::Spot {
+                direction: axis,
+                cos_inner,
+                cos_outer,
+            } => self.intensity * spot_falloff(direction.dot(axis), cos_inner, cos_outer),
+            LampKind::Directional { .. } => Rgb::ZERO,
+        }
+    }
+
     /// The power the lamp emits, W per channel: 4 pi I for a point lamp; for a spot, I times
     /// the solid angle its falloff weighs, 2 pi ((1 - cos_inner) + (cos_inner - cos_outer) / 3)
     /// (the falloff t^2 is linear in t over the cosine); for a directional lamp, what crosses

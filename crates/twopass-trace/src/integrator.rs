@@ -96,7 +96,7 @@ impl<'a> Shading<'a> {
 }
 
 /// Direct light from every emitter at a shading point, with `grid` x `grid` stratified shadow
-/// rays per emitter, split into two parts by `brdf`, which returns two BRDF values (1/sr,
+/// rays per area emitter and one per lamp ([`crate::lamps::lamps_light`]), split into two parts by `brdf`, which returns two BRDF values (1/sr,
 /// without the cosine) for a local incident direction. Returns the two reflected radiances,
 /// W/(m^2 sr) per channel.
 ///
@@ -122,7 +122,8 @@ pub fn direct_light(
         out[0] += part[0];
         out[1] += part[1];
     }
-    out
+    let lamps = crate::lamps::lamps_light(scene, s, tally, &brdf);
+    [out[0] + lamps[0], out[1] + lamps[1]]
 }
 
 /// The irradiance (W/m^2 per channel) that emitter `e` (index into `Scene::emitters`) sends to

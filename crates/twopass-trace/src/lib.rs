@@ -37,6 +37,7 @@ pub mod film;
 pub mod gather;
 pub mod hybrid;
 pub mod integrator;
+pub mod lamps;
 pub mod light_tracing;
 pub mod reference;
 pub mod render;
