@@ -11,5 +11,6 @@ mod furnace;
 mod gather;
 mod gathered;
 mod hybrid;
+mod lamps;
 mod optics;
 mod share;

@@ -20,7 +20,10 @@ pub(crate) fn vertex_lamp_irradiance(
     from: usize,
 ) -> (Vec<DVec3>, u64) {
     if scene.lamps.is_empty() {
-        return (vec![DVec3::ZERO; mesh.vertices.len().saturating_sub(from)], 0);
+        return (
+            vec![DVec3::ZERO; mesh.vertices.len().saturating_sub(from)],
+            0,
+        );
     }
     let per_vertex: Vec<(DVec3, u64)> = mesh.vertices[from.min(mesh.vertices.len())..]
         .par_iter()

@@ -60,8 +60,8 @@ use twopass_scene::{DiffuseRadiance, Hit, RadianceEstimate, RadianceEstimator, S
 
 use crate::counters::Tally;
 use crate::emitters::{EmitterChoice, Light, Lights};
-use crate::lamps::{lamp_irradiance, lamps_irradiance};
 use crate::integrator::{Shading, irradiance_from};
+use crate::lamps::{lamp_irradiance, lamps_irradiance};
 use crate::sampler::Sampler;
 
 /// Stream separating a point's shadow-ray numbers from its gather rays' (the gather rays use
