@@ -142,6 +142,7 @@ impl<'s> HierarchicalSolver<'s> {
             .sum::<DVec3>()
             + s.lamp_power;
         s.error_threshold = h.link_tolerance * luminance_f64(s.emitted).max(f64::MIN_POSITIVE);
+        s.refine_for_lamps();
         // Before the first gather every node's exitance is its emission.
         s.push_pull();
         s.bookkeeping.energy.emitted = s.emitted;
