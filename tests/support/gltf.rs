@@ -294,7 +294,6 @@ impl GltfWriter {
             scale: Some(trs.s),
             extensions: Some(json::extensions::scene::Node {
                 khr_lights_punctual: Some(klp::KhrLightsPunctual { light }),
-                ..Default::default()
             }),
             ..Default::default()
         })

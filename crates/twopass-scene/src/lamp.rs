@@ -10,9 +10,6 @@
 use glam::Vec3;
 use twopass_brdf::Rgb;
 
-use crate::accel::{SHADOW_EPSILON, SurfacePoint};
-use crate::scene::{Bounds, Scene};
-
 /// Luminous efficacy (lm/W) by which glTF's photometric lamp intensities (candela for point
 /// and spot lamps, lux for directional ones) are divided to give radiometric ones (W/sr,
 /// W/m^2): the factor Blender's glTF exporter multiplies by in its default ("Standard")
@@ -130,8 +127,9 @@ impl Lamp {
     /// The power the lamp emits, W per channel: 4 pi I for a point lamp; for a spot, I times
     /// the solid angle its falloff weighs, 2 pi ((1 - cos_inner) + (cos_inner - cos_outer) / 3)
     /// (the falloff t^2 is linear in t over the cosine); for a directional lamp, what crosses
-    /// the bounding sphere of `bounds`: E pi R^2.
-    pub fn power(&self, bounds: &Bounds) -> Rgb {
+    /// the bounding sphere of a scene whose bounding box has diagonal `scene_diagonal` (scene
+    /// units): E pi R^2 with R half the diagonal.
+    pub fn power(&self, scene_diagonal: f32) -> Rgb {
         let tau = 2.0 * std::f32::consts::PI;
         match self.kind {
             LampKind::Point => self.intensity * (2.0 * tau),
@@ -151,7 +149,7 @@ impl Lamp {
                 self.intensity * (tau * solid)
             }
             LampKind::Directional { .. } => {
-                let r = 0.5 * bounds.diagonal();
+                let r = 0.5 * scene_diagonal;
                 self.intensity * (std::f32::consts::PI * r * r)
             }
         }
@@ -161,50 +159,6 @@ impl Lamp {
     /// but a directional one, whose power is only what crosses the scene).
     pub fn is_local(&self) -> bool {
         !matches!(self.kind, LampKind::Directional { .. })
-    }
-}
-
-impl Scene {
-    /// Whether anything blocks the light of `light` (found by [`Lamp::light_at`] at
-    /// `from`'s position) before it reaches surface point `from`: a shadow ray to the lamp,
-    /// or toward a directional lamp without end.
-    pub fn lamp_occluded(&self, from: &SurfacePoint, light: &LampLight) -> bool {
-        if light.distance.is_finite() {
-            self.occluded(from, from.position + light.direction * light.distance)
-        } else {
-            let o = from.spawn_origin(light.direction);
-            self.accel()
-                .any_hit(o, light.direction, f32::INFINITY * (1.0 - SHADOW_EPSILON))
-        }
-    }
-
-    /// The irradiance (W per scene unit squared per channel) that every lamp sends to the
-    /// front of surface point `at` whose receiving normal is `normal` (unit), shadows
-    /// included: the sum of I cos(theta) / r^2 and E cos(theta). Counts its shadow rays in
-    /// `rays`.
-    pub fn lamp_irradiance(&self, at: &SurfacePoint, normal: Vec3, rays: &mut u64) -> Rgb {
-        let mut sum = Rgb::ZERO;
-        for lamp in &self.lamps {
-            let Some(light) = lamp.light_at(at.position) else {
-                continue;
-            };
-            let cos = light.direction.dot(normal);
-            if cos <= 0.0 || light.direction.dot(at.normal) <= 0.0 {
-                continue;
-            }
-            *rays += 1;
-            if !self.lamp_occluded(at, &light) {
-                sum += light.irradiance * cos;
-            }
-        }
-        sum
-    }
-
-    /// Total power of the lamps, W per channel ([`Lamp::power`]).
-    pub fn lamp_power(&self) -> Rgb {
-        self.lamps
-            .iter()
-            .fold(Rgb::ZERO, |s, l| s + l.power(&self.bounds))
     }
 }
 
@@ -248,7 +202,7 @@ mod tests {
                 * 2.0
                 / f64::from(n);
             let expected = 2.0 * std::f64::consts::PI * sum;
-            let got = f64::from(lamp.power(&Bounds::EMPTY).x);
+            let got = f64::from(lamp.power(0.0).x);
             assert!(
                 (got - expected).abs() < 1e-3 * expected,
                 "{inner}..{outer}: {got} vs {expected}"

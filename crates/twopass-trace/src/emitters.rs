@@ -87,7 +87,12 @@ impl EmitterChoice {
             .emitters
             .iter()
             .map(|e| mean(e.power))
-            .chain(scene.lamps.iter().map(|l| mean(l.power(&scene.bounds))))
+            .chain(
+                scene
+                    .lamps
+                    .iter()
+                    .map(|l| mean(l.power(scene.bounds.diagonal()))),
+            )
             .collect();
         let total: f64 = weights.iter().sum();
         let n = weights.len();

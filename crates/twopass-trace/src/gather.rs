@@ -9,7 +9,7 @@
 //! **No double counting.** The point's radiance is L_e + rho / pi (E_direct + E_gather):
 //! - E_direct: light leaving the front of an emitter and reaching the point unoccluded
 //!   ([`crate::integrator::direct_light`]; mirrors and glass occlude shadow rays), and from
-//!   every lamp by one shadow ray each ([`crate::lamps`]);
+//!   every lamp by one shadow ray each ([`crate::integrator::lamps_irradiance`]);
 //! - E_gather: the gather rays. Where one lands on a diffuse surface first it takes the
 //!   solution's radiance there less the emission (the shadow rays counted that); where it
 //!   lands on a mirror or glass, it follows the delta path (one branch chosen by its weight)
@@ -60,8 +60,7 @@ use twopass_scene::{DiffuseRadiance, Hit, RadianceEstimate, RadianceEstimator, S
 
 use crate::counters::Tally;
 use crate::emitters::{EmitterChoice, Light, Lights};
-use crate::integrator::{Shading, irradiance_from};
-use crate::lamps::{lamp_irradiance, lamps_irradiance};
+use crate::integrator::{Shading, irradiance_from, lamp_irradiance, lamps_irradiance};
 use crate::sampler::Sampler;
 
 /// Stream separating a point's shadow-ray numbers from its gather rays' (the gather rays use

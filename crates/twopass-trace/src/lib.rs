@@ -37,7 +37,6 @@ pub mod film;
 pub mod gather;
 pub mod hybrid;
 pub mod integrator;
-pub mod lamps;
 pub mod light_tracing;
 pub mod reference;
 pub mod render;

@@ -39,8 +39,7 @@ use twopass_scene::{Hit, Ray, Scene, SurfacePoint};
 use crate::counters::Tally;
 use crate::emitters::{EmitterChoice, Light};
 use crate::film::{Layer, Radiance};
-use crate::integrator::{Integrator, SampleState, Shading};
-use crate::lamps::lamp_light;
+use crate::integrator::{Integrator, SampleState, Shading, lamp_light};
 use crate::light_tracing::{CausticScope, LightTracer, LightTracingSettings};
 use crate::sampler::Sampler;
 

@@ -46,7 +46,7 @@ struct LampInfo {
 }
 
 impl LampInfo {
-    fn of(lamp: &twopass_scene::Lamp, bounds: &twopass_scene::Bounds) -> Self {
+    fn of(lamp: &twopass_scene::Lamp, scene_diagonal: f32) -> Self {
         use twopass_scene::LampKind;
         let (kind, position, direction, cone_degrees) = match lamp.kind {
             LampKind::Point => ("point", Some(lamp.position.to_array()), None, None),
@@ -71,7 +71,7 @@ impl LampInfo {
             direction,
             cone_degrees,
             intensity: lamp.intensity.to_array(),
-            power: lamp.power(bounds).to_array(),
+            power: lamp.power(scene_diagonal).to_array(),
         }
     }
 
@@ -150,7 +150,7 @@ pub fn run(args: &InfoArgs, ctx: &Context) -> Result<(), CliError> {
         lamps: scene
             .lamps
             .iter()
-            .map(|l| LampInfo::of(l, &scene.bounds))
+            .map(|l| LampInfo::of(l, scene.bounds.diagonal()))
             .collect(),
         bounds_min: scene.bounds.min.to_array(),
         bounds_max: scene.bounds.max.to_array(),

@@ -26,9 +26,8 @@ pub(super) fn lamp_of(
     };
     let colour = Rgb::from_array(light.color());
     let value = light.intensity();
-    if !(value.is_finite() && value >= 0.0)
-        || !colour.to_array().iter().all(|c| c.is_finite() && *c >= 0.0)
-    {
+    let valid = |c: &f32| c.is_finite() && *c >= 0.0;
+    if !(valid(&value) && colour.to_array().iter().all(valid)) {
         return Err(err(format!(
             "intensity {value} and color {colour} must be finite and non-negative"
         )));

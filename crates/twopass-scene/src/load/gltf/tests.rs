@@ -488,7 +488,7 @@ fn khr_lights_punctual_lamps_load_placed_aimed_and_in_watts() {
     let bulb = by_name("Bulb");
     assert_eq!(bulb.kind, LampKind::Point);
     assert!((bulb.position - Vec3::new(1.0, 2.0, 8.0)).length() < 1e-6);
-    let power = bulb.power(&scene.bounds);
+    let power = bulb.power(scene.bounds.diagonal());
     assert!((power.x - watts).abs() < 1e-4 * watts, "{power}");
     let spot = by_name("Spot");
     let LampKind::Spot {
