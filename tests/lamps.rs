@@ -10,7 +10,30 @@ use glam::{DVec3, Vec3};
 use twopass_radiosity::{Method, Options, Solver, Stop};
 use twopass_scene::{Scene, load_toml};
 
-const RHO: f64 = 0.5;
+/// The plane's reflectance in [`plane_under`].
+pub(crate) const RHO: f64 = 0.5;
+
+/// glTF's spot falloff, written from the `KHR_lights_punctual` specification: with the
+/// cosines of the cone's half angles, `t = clamp((cd - cos_outer) / max(0.001, cos_inner -
+/// cos_outer), 0, 1)` and the intensity scaled by `t^2`.
+pub(crate) fn gltf_falloff(cd: f64, inner_deg: f64, outer_deg: f64) -> f64 {
+    let (ci, co) = (inner_deg.to_radians().cos(), outer_deg.to_radians().cos());
+    let scale = 1.0 / (ci - co).max(0.001);
+    let t = (cd * scale - co * scale).clamp(0.0, 1.0);
+    t * t
+}
+
+/// Whether point `p` of the plane lies in the blocker's shadow under a directional lamp
+/// travelling along (1, -2, 0): the blocker's square moved by +0.25 in x (x in [0, 0.5],
+/// |z| < 0.25); `None` within `margin` of the shadow's edges.
+pub(crate) fn in_blocker_shadow(p: Vec3, margin: f64) -> Option<bool> {
+    let p = p.as_dvec3();
+    let (dx, dz) = ((p.x - 0.25).abs() - 0.25, p.z.abs() - 0.25);
+    if dx.abs() < margin || dz.abs() < margin {
+        return None;
+    }
+    Some(dx < 0.0 && dz < 0.0)
+}
 
 const METHODS: [Method; 2] = [Method::Progressive, Method::Hierarchical];
 
@@ -18,9 +41,10 @@ fn scene(text: &str) -> Scene {
     load_toml(text, Path::new("lamps.toml")).unwrap().0
 }
 
-/// A 4 x 4 grey plane at y = 0 lit by the `[[light]]` table `light`; with `blocker`, a black
-/// square 0.5 wide at y = 0.5 over the origin, facing down.
-fn plane_under(light: &str, blocker: bool) -> Scene {
+/// A 4 x 4 grey plane at y = 0 (reflectance [`RHO`]) seen from above by a 32 x 32 camera,
+/// lit by the `[[light]]` table `light`; with `blocker`, a black square 0.5 wide at y = 0.5
+/// over the origin, facing down.
+pub(crate) fn plane_under(light: &str, blocker: bool) -> Scene {
     let blocker = if blocker {
         "[[object]]\nname = \"blocker\"\nmaterial = \"black\"\n\
          shape = { type = \"quad\", origin = [-0.25, 0.5, -0.25], edge_u = [0.5, 0, 0], edge_v = [0, 0, 0.5] }\n"
@@ -29,7 +53,7 @@ fn plane_under(light: &str, blocker: bool) -> Scene {
     };
     scene(&format!(
         "version = 1\n\
-         [camera]\nposition = [0, 3, 2.5]\nlook_at = [0, 0, 0]\nfov_y = 50\n\
+         [camera]\nposition = [0, 3, 2.5]\nlook_at = [0, 0, 0]\nfov_y = 50\nresolution = [32, 32]\n\
          [[material]]\nname = \"grey\"\ntype = \"lambert\"\ndiffuse = {RHO}\n\
          [[material]]\nname = \"black\"\ntype = \"lambert\"\ndiffuse = 0\n\
          [[object]]\nname = \"plane\"\nmaterial = \"grey\"\n\
@@ -121,16 +145,13 @@ fn the_solution_under_a_spot_follows_the_gltf_falloff() {
         ),
         false,
     );
-    // KHR_lights_punctual: t = clamp((cd - cos_outer) / max(0.001, cos_inner - cos_outer)).
-    let (ci, co) = (inner.to_radians().cos(), outer.to_radians().cos());
     let mut fading = 0;
     let n = vertices_match(&s, RHO * i / (h * h), |p| {
         let p = p.as_dvec3();
         let r = (p.x * p.x + h * h + p.z * p.z).sqrt();
-        let cd = h / r;
-        let t = ((cd - co) / (ci - co).max(0.001)).clamp(0.0, 1.0);
-        fading += usize::from(t > 0.0 && t < 1.0);
-        Some(RHO * i * t * t * cd / (r * r))
+        let f = gltf_falloff(h / r, inner, outer);
+        fading += usize::from(f > 0.0 && f < 1.0);
+        Some(RHO * i * f * (h / r) / (r * r))
     });
     assert!(
         fading > 20 && n.iter().all(|&n| n > 200),
@@ -145,17 +166,11 @@ fn the_solution_under_a_directional_lamp_is_rho_e_cos_outside_a_sharp_shadow() {
         &format!("[[light]]\nkind = \"directional\"\ndirection = [1, -2, 0]\nirradiance = {e}\n"),
         true,
     );
-    // The blocker's shadow: its square moved by +0.25 in x (x in [0, 0.5], |z| < 0.25);
-    // vertices on its edges (the element mesh has some there) are skipped.
+    // Vertices on the shadow's edges (the element mesh has some there) are skipped.
     let cos = 2.0 / 5f64.sqrt();
     let mut dark = 0;
     let n = vertices_match(&s, RHO * e * cos, |p| {
-        let p = p.as_dvec3();
-        let (dx, dz) = ((p.x - 0.25).abs() - 0.25, p.z.abs() - 0.25);
-        if dx.abs() < 1e-3 || dz.abs() < 1e-3 {
-            return None;
-        }
-        let inside = dx < 0.0 && dz < 0.0;
+        let inside = in_blocker_shadow(p, 1e-3)?;
         dark += usize::from(inside);
         Some(if inside { 0.0 } else { RHO * e * cos })
     });

@@ -4,36 +4,15 @@
 //! box lit by a point lamp; a lamp lying on a surface puts no NaN in the image; one and two
 //! threads give the same image.
 
-use glam::{Vec2, Vec3};
-use twopass_scene::{Ray, Scene};
+use glam::Vec3;
+use twopass_scene::Scene;
 use twopass_trace::{
     Layer, Reference, ReferenceSettings, RenderProgress, RenderSettings, WhittedSettings, render,
 };
 
-use super::common::scene;
+use super::common::{pixel_means, scene};
 use super::gathered::{Agreement, pixels_where, solve};
-
-const RHO: f64 = 0.5;
-
-/// A 4 x 4 grey plane at y = 0 seen from above, lit by the `[[light]]` table `light`; with
-/// `blocker`, a black square 0.5 wide at y = 0.5 over the origin, facing down.
-fn plane_under(light: &str, blocker: bool) -> Scene {
-    let blocker = if blocker {
-        "[[object]]\nname = \"blocker\"\nmaterial = \"black\"\n\
-         shape = { type = \"quad\", origin = [-0.25, 0.5, -0.25], edge_u = [0.5, 0, 0], edge_v = [0, 0, 0.5] }\n"
-    } else {
-        ""
-    };
-    scene(&format!(
-        "version = 1\n\
-         [camera]\nposition = [0, 3, 2.5]\nlook_at = [0, 0, 0]\nfov_y = 50\nresolution = [32, 32]\n\
-         [[material]]\nname = \"grey\"\ntype = \"lambert\"\ndiffuse = {RHO}\n\
-         [[material]]\nname = \"black\"\ntype = \"lambert\"\ndiffuse = 0\n\
-         [[object]]\nname = \"plane\"\nmaterial = \"grey\"\n\
-         shape = {{ type = \"quad\", origin = [-2, 0, -2], edge_u = [0, 0, 4], edge_v = [4, 0, 0] }}\n\
-         {blocker}{light}"
-    ))
-}
+use crate::lamps::{RHO, gltf_falloff, in_blocker_shadow, plane_under};
 
 /// Renders without jitter: every sample of a pixel lands on the centre of its stratum.
 fn settings(spp: u32, seed: u64) -> RenderSettings {
@@ -46,32 +25,14 @@ fn settings(spp: u32, seed: u64) -> RenderSettings {
     }
 }
 
-/// Per pixel, the mean of `radiance` (W/(m^2 sr)) over the points of the plane a render of
-/// `spp` samples without jitter sees (the centres of the pixel's k x k strata); `None` where
-/// one of them misses the plane or `radiance` declines it.
+/// Per pixel, the mean of `radiance` (W/(m^2 sr)) over the points of the plane (object 0,
+/// seen from the front) a render of `spp` samples without jitter sees.
 fn expected(scene: &Scene, spp: u32, radiance: impl Fn(Vec3) -> Option<f64>) -> Vec<Option<f64>> {
-    let cam = scene.camera;
-    let k = spp.isqrt().max(1);
-    let mut out = Vec::new();
-    for y in 0..cam.height {
-        for x in 0..cam.width {
-            let mut sum = Some(0.0);
-            for s in 0..k * k {
-                let offset = Vec2::new(
-                    ((s % k) as f32 + 0.5) / k as f32,
-                    ((s / k) as f32 + 0.5) / k as f32,
-                );
-                let d = cam.direction(Vec2::new(x as f32, y as f32) + offset);
-                let hit = scene.intersect(&Ray::new(cam.position, d));
-                let value = hit
-                    .filter(|h| h.object == 0 && h.front_face)
-                    .and_then(|h| radiance(h.point.position));
-                sum = sum.zip(value).map(|(a, b)| a + b);
-            }
-            out.push(sum.map(|t| t / f64::from(k * k)));
-        }
-    }
-    out
+    pixel_means(scene, spp, |h| {
+        (h.object == 0 && h.front_face)
+            .then_some(h.point.position)
+            .and_then(&radiance)
+    })
 }
 
 /// The path tracer's image (composite, red channel) at 4 spp against `exact`: with one lamp
@@ -102,16 +63,6 @@ fn reference_matches(scene: &Scene, exact: &[Option<f64>]) -> usize {
         }
     }
     n
-}
-
-/// glTF's spot falloff, written from the `KHR_lights_punctual` specification: with the
-/// cosines of the cone's half angles, `t = clamp((cd - cos_outer) / max(0.001, cos_inner -
-/// cos_outer), 0, 1)` and the intensity scaled by `t^2`.
-fn gltf_falloff(cd: f64, inner_deg: f64, outer_deg: f64) -> f64 {
-    let (ci, co) = (inner_deg.to_radians().cos(), outer_deg.to_radians().cos());
-    let scale = 1.0 / (ci - co).max(0.001);
-    let t = (cd * scale - co * scale).clamp(0.0, 1.0);
-    t * t
 }
 
 #[test]
@@ -166,15 +117,10 @@ fn a_directional_lamp_gives_e_cos_theta_and_a_sharp_shadow() {
         true,
     );
     let cos = 2.0 / 5f64.sqrt();
-    let margin = 1e-3;
     let mut shadowed = 0;
     let exact = expected(&s, 4, |p| {
-        let p = p.as_dvec3();
-        let (dx, dz) = ((p.x - 0.25).abs() - 0.25, p.z.abs() - 0.25);
-        if dx.abs() < margin || dz.abs() < margin {
-            return None;
-        }
-        Some(if dx < 0.0 && dz < 0.0 {
+        let inside = in_blocker_shadow(p, 1e-3)?;
+        Some(if inside {
             0.0
         } else {
             RHO / std::f64::consts::PI * e * cos

@@ -7,7 +7,7 @@
 use glam::Vec3;
 use twopass_brdf::{ComplexIor, FresnelModel, Lobe};
 use twopass_composite::Image;
-use twopass_scene::Scene;
+use twopass_scene::{LampKind, Scene};
 
 /// Which scene fingerprint a bake file disagrees with.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -130,7 +130,8 @@ pub fn geometry_fingerprint(scene: &Scene) -> u64 {
 }
 
 /// Fingerprint of what the radiosity values depend on besides geometry: each object's emitted
-/// radiance and its material's diffuse reflectance (bit patterns), in object order.
+/// radiance and its material's diffuse reflectance (bit patterns), in object order, then the
+/// lamps (kind, aim, position, intensity) when there are any.
 pub fn lighting_fingerprint(scene: &Scene) -> u64 {
     let mut h = Fnv::new();
     h.u64(scene.objects.len() as u64);
@@ -141,6 +142,32 @@ pub fn lighting_fingerprint(scene: &Scene) -> u64 {
             .get(o.material as usize)
             .map_or(Vec3::ZERO, |m| m.material.diffuse_albedo());
         h.vec3(rho);
+    }
+    // The lamps: kind, aim, position and intensity. Hashed only when there are any, so a
+    // scene without lamps keeps the fingerprint its bakes were written with.
+    if !scene.lamps.is_empty() {
+        h.u64(scene.lamps.len() as u64);
+        for l in &scene.lamps {
+            match l.kind {
+                LampKind::Point => h.u32(0),
+                LampKind::Spot {
+                    direction,
+                    cos_inner,
+                    cos_outer,
+                } => {
+                    h.u32(1);
+                    h.vec3(direction);
+                    h.f32(cos_inner);
+                    h.f32(cos_outer);
+                }
+                LampKind::Directional { direction } => {
+                    h.u32(2);
+                    h.vec3(direction);
+                }
+            }
+            h.vec3(l.position);
+            h.vec3(l.intensity);
+        }
     }
     h.0
 }
