@@ -14,14 +14,15 @@ use crate::on_threads;
 
 /// A solution that is `value` on every triangle of the objects in `lit` and zero elsewhere
 /// (radiance W/(m^2 sr), indirect part the same).
-struct Constant {
+pub(super) struct Constant {
     value: Rgb,
     lit: Vec<u32>,
     triangle_object: Vec<u32>,
 }
 
 impl Constant {
-    fn new(scene: &Scene, value: f32, lit: &[u32]) -> Self {
+    /// `value` on the objects `lit` of `scene`, zero elsewhere.
+    pub(super) fn new(scene: &Scene, value: f32, lit: &[u32]) -> Self {
         Self {
             value: Rgb::splat(value),
             lit: lit.to_vec(),
@@ -51,7 +52,7 @@ fn floor_under_square(emission: f32) -> Scene {
 }
 
 /// The point of the floor straight under (x, z): its triangle and barycentrics.
-fn floor_point(scene: &Scene, x: f32, z: f32) -> (u32, [f32; 3]) {
+pub(super) fn floor_point(scene: &Scene, x: f32, z: f32) -> (u32, [f32; 3]) {
     let hit = scene
         .intersect(&twopass_scene::Ray::new(
             glam::Vec3::new(x, 0.25, z),

@@ -13,4 +13,5 @@ mod gathered;
 mod hybrid;
 mod lamps;
 mod optics;
+mod photons;
 mod share;

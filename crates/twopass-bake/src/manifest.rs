@@ -293,6 +293,10 @@ pub struct GatherRecord {
     /// ran out before their gather.
     #[serde(default)]
     pub late_points: u64,
+    /// Caustic photons the gather estimated the light through mirrors and glass from (0: the
+    /// scene has none, or the gather rays found that light).
+    #[serde(default)]
+    pub caustic_photons: u64,
 }
 
 fn seconds(d: Duration) -> f64 {

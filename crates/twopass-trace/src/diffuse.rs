@@ -92,16 +92,22 @@ impl DiffuseSource<'_> {
             DiffuseSource::Gather { ref gatherer, rays } => {
                 r.add(Layer::Emission, s.emitted);
                 // The light tracer connects its paths only at surfaces without a delta lobe
-                // (at one with a lobe it follows the lobe instead).
-                let caustics_elsewhere = without_focused && s.material.delta().is_none();
+                // (at one with a lobe it follows the lobe instead) that the camera sees
+                // directly; elsewhere the caustic photons, when there are any, give that
+                // light, and the gather rays find it only by chance (fireflies) otherwise.
+                let traced = without_focused && s.material.delta().is_none();
+                let photons = !traced && gatherer.has_caustic_photons();
                 let indirect = gatherer.indirect_per_sample(
                     s,
                     rays,
-                    caustics_elsewhere,
+                    traced || photons,
                     (at.sampler, at.site),
                     tally,
                 );
                 r.add(Layer::Diffuse, indirect);
+                if photons {
+                    r.add(Layer::Diffuse, gatherer.caustic_radiance(s));
+                }
                 true
             }
             DiffuseSource::Ambient { ambient } => {

@@ -13,9 +13,12 @@
 //! - E_gather: the gather rays. Where one lands on a diffuse surface first it takes the
 //!   solution's radiance there less the emission (the shadow rays counted that); where it
 //!   lands on a mirror or glass, it follows the delta path (one branch chosen by its weight)
-//!   and takes the whole solution's radiance, emission included, where the path ends on a
-//!   diffuse surface (no shadow ray found that light: light focused by glass, L S+ D, reaches
-//!   the point this way, noisily but in full).
+//!   and takes the whole solution's radiance where the path ends on a diffuse surface, less
+//!   the emission when the scene has caustic photons ([`GatherSettings::photons`]): then the
+//!   light an emitter sends onto the point through mirrors and glass (L S+ D, which no shadow
+//!   ray finds) is the photons' density estimate, smooth where a few gather rays would carry
+//!   all of a small emitter's light (without photons the gather rays take that emission too,
+//!   noisily but in full).
 //!
 //! The point's own value in the solution is not used at all.
 //!
@@ -26,6 +29,9 @@
 //! the caustics per pixel ([`crate::light_tracing::CausticScope::FirstDiffuse`]: L S+ D E),
 //! the gather rays leave out the emission they reach through a delta path, which is exactly
 //! that path class; the rest of the solution they reach through mirrors and glass they keep.
+//! At the points it sees through mirrors and glass, caustic photons
+//! ([`crate::photons::CausticPhotons`], [`GatherSettings::photons`]) give that light
+//! instead, and the gather rays leave it out the same way.
 //!
 //! **Near hits.** A landing nearer than [`GatherSettings::near_distance`] (by default the
 //! radiosity pass's element edge) takes one more bounce instead of the solution's value there:
@@ -61,6 +67,7 @@ use twopass_scene::{DiffuseRadiance, Hit, RadianceEstimate, RadianceEstimator, S
 use crate::counters::Tally;
 use crate::emitters::{EmitterChoice, Light, Lights};
 use crate::integrator::{Shading, irradiance_from, lamp_irradiance, lamps_irradiance};
+use crate::photons::{CausticPhotons, PhotonSettings};
 use crate::sampler::Sampler;
 
 /// Stream separating a point's shadow-ray numbers from its gather rays' (the gather rays use
@@ -131,9 +138,14 @@ pub struct GatherSettings {
     /// over [`NEAR_PER_DIAGONAL`] (the radiosity pass's default element edge); 0: never.
     #[default(None)]
     pub near_distance: Option<f32>,
-    /// Seed of every point's random sequence.
+    /// Seed of every point's random sequence (and of the caustic photons').
     #[default(0)]
     pub seed: u64,
+    /// Caustic photons for the light that reaches a point through mirrors and glass (L S+ D),
+    /// which gather rays find only by chance when the emitter is small; `None`: gather rays
+    /// alone. Built only for scenes with an emitter and a mirror or glass.
+    #[default(Some(PhotonSettings::default()))]
+    pub photons: Option<PhotonSettings>,
 }
 
 /// Most bounces a near hit takes before reading the solution ([`GatherSettings::near_distance`]):
@@ -163,6 +175,8 @@ pub struct Gatherer<'a> {
     /// Per object: whether its surface is closed (every edge, by position, shared by exactly
     /// two of its triangles), so that only a point inside it can see its back.
     closed: Vec<bool>,
+    /// The caustic photons, for the per-pixel gather's points seen through mirrors and glass.
+    caustics: Option<CausticPhotons>,
     settings: GatherSettings,
 }
 
@@ -209,6 +223,15 @@ impl<'a> Gatherer<'a> {
                 .unwrap_or(scene.bounds.diagonal() / NEAR_PER_DIAGONAL)
                 .max(0.0),
             closed: closed_objects(scene),
+            caustics: settings.photons.and_then(|p| {
+                CausticPhotons::build(
+                    scene,
+                    PhotonSettings {
+                        seed: settings.seed,
+                        ..p
+                    },
+                )
+            }),
             deadline: None,
             late: AtomicU64::new(0),
             settings: GatherSettings {
@@ -226,6 +249,32 @@ impl<'a> Gatherer<'a> {
     pub fn with_deadline(mut self, deadline: Instant) -> Self {
         self.deadline = Some(deadline);
         self
+    }
+
+    /// Caustic photons the gather estimates the light through mirrors and glass from (0:
+    /// none).
+    pub fn caustic_photons(&self) -> usize {
+        self.caustics.as_ref().map_or(0, CausticPhotons::len)
+    }
+
+    /// Whether the gather has caustic photons.
+    pub fn has_caustic_photons(&self) -> bool {
+        self.caustics.is_some()
+    }
+
+    /// The diffusely reflected caustic at the shading point `s` from the photons, rho / pi E,
+    /// W/(m^2 sr): zero without photons, on a back face or on a surface without a diffuse
+    /// part. The gather rays at `s` must then leave out the emission they reach through delta
+    /// paths (`caustics_elsewhere`), which is this light.
+    pub(crate) fn caustic_radiance(&self, s: &Shading<'_>) -> Rgb {
+        match &self.caustics {
+            Some(photons) if s.hit.front_face && s.material.reflects_diffusely() => {
+                s.material.diffuse_albedo()
+                    * photons.irradiance(s.hit.point.position, s.hit.point.normal)
+                    * std::f32::consts::FRAC_1_PI
+            }
+            _ => Rgb::ZERO,
+        }
     }
 
     /// Points that took the solution's value because the deadline had passed.
@@ -517,7 +566,11 @@ impl RadianceEstimator for Gatherer<'_> {
         irradiance += lamps_irradiance(self.scene, &s, &mut tally);
         let direct = rho * irradiance * std::f32::consts::FRAC_1_PI;
 
-        // Indirect: cosine-weighted gather rays, E = pi mean(L), so rho / pi E = rho mean(L).
+        // Indirect: cosine-weighted gather rays, E = pi mean(L), so rho / pi E = rho mean(L);
+        // with caustic photons, the gather rays leave out the emission they reach through
+        // mirrors and glass and the photons give that light.
+        let photons = self.has_caustic_photons();
+        let caustic = self.caustic_radiance(&s);
         let (mut sum, mut sum_y, mut sum_y2) = (Rgb::ZERO, 0.0f64, 0.0f64);
         let mut n = 0u32;
         let (mut hits, mut backs) = (0u32, 0u32);
@@ -526,7 +579,7 @@ impl RadianceEstimator for Gatherer<'_> {
             for i in n..n + batch {
                 let mut sampler = Sampler::new(self.settings.seed, key, u64::from(i));
                 let u = sampler.next_2d();
-                let (l, first) = self.gather_ray(&s, u, false, &mut sampler, &mut tally);
+                let (l, first) = self.gather_ray(&s, u, photons, &mut sampler, &mut tally);
                 hits += u32::from(first != FirstHit::Nothing);
                 backs += u32::from(first == FirstHit::Back);
                 if !l.is_finite() {
@@ -541,10 +594,10 @@ impl RadianceEstimator for Gatherer<'_> {
             let mean = sum_y / f64::from(n);
             let variance = (sum_y2 / f64::from(n) - mean * mean).max(0.0) / f64::from(n.max(2) - 1);
             let error = variance.sqrt();
-            let total = mean + f64::from(luminance(direct + emitted));
+            let total = mean + f64::from(luminance(direct + emitted + caustic));
             if n >= self.settings.max_rays || error <= f64::from(self.settings.target_error) * total
             {
-                let indirect = rho * sum / n as f32;
+                let indirect = rho * sum / n as f32 + caustic;
                 return RadianceEstimate {
                     emitted,
                     direct,

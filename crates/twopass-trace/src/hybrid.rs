@@ -30,7 +30,7 @@
 //! | L ... D y x, y near x | gather rays: more bounces near x (a shadow ray and a ray each, [`crate::gather::NEAR_BOUNCES`] at most), then the solution less emission | solution at x | solution's indirect part at x |
 //! | L ... D y S+ x: diffuse light through mirrors and glass | gather rays: the delta path followed, the solution less emission where it ends | solution at x | solution's indirect part at x |
 //! | L S+ x, x the camera's first hit | light tracer ([`CausticScope::FirstDiffuse`]); the gather rays leave the emission at a delta path's end out | with glass in S+: light tracer ([`CausticScope::Focused`]), the solution's focused part left out at x; with mirrors only: solution at x | as hybrid-classic, in the indirect part |
-//! | L S+ x, x seen through mirrors or glass | gather rays: the emission where the delta path ends | solution at x (the blurred caustic shown whole) | solution's indirect part at x |
+//! | L S+ x, x seen through mirrors or glass | caustic photons ([`crate::photons`]); the gather rays leave the emission at a delta path's end out | solution at x (the blurred caustic shown whole) | solution's indirect part at x |
 //! | L ... S+ E: seen in mirrors and glass | Whitted recursion, then the above at x | Whitted recursion, then the above | Whitted recursion, then the above |
 //! | L G E: glossy highlights | shadow rays | shadow rays | shadow rays |
 //! | L ... D G E, L ... S G E | not shown | not shown | not shown |
@@ -40,7 +40,11 @@
 //! bounce, scaled by rho and averaged over the hemisphere. The gather rays per camera sample
 //! ([`WhittedSettings::gather_rays`]) are stratified over the pixel's samples. Their noise is
 //! the price: highest where the solution holds small bright patches (a caustic's focus), which
-//! few gather rays find. On a scene whose materials are all Lambertian the classic hybrid
+//! few gather rays find. Where the camera sees a diffuse point through mirrors and glass, the
+//! light a small emitter sends onto it through a delta path would be found by few gather rays
+//! too (fireflies), and no light path can connect to the eye through the delta surface: a
+//! caustic photon map ([`crate::photons::CausticPhotons`], built once per integrator) gives
+//! that light there, blurred over its nearest photons (at most half an element edge). On a scene whose materials are all Lambertian the classic hybrid
 //! traces nothing and computes exactly what radiosity alone does (the same floating-point
 //! operations: the images are bit-identical, and a test says so).
 //!
@@ -65,6 +69,7 @@ use crate::diffuse::DiffuseSource;
 use crate::emitters::Lights;
 use crate::gather::{GatherSettings, Gatherer};
 use crate::light_tracing::{CausticScope, LightTracer, LightTracingSettings};
+use crate::photons::PhotonSettings;
 use crate::whitted::{Whitted, WhittedSettings};
 
 /// Radiosity alone, for rendering `scene`: camera rays shaded with the solution (interpolated per
@@ -108,6 +113,9 @@ pub fn gathered<'a>(
         solution,
         GatherSettings {
             max_depth: settings.max_depth,
+            // The caustics at the diffuse points seen through mirrors and glass (where the
+            // light tracer cannot connect) exist only when delta paths are followed.
+            photons: (settings.max_depth > 0).then(PhotonSettings::default),
             ..GatherSettings::default()
         },
     );

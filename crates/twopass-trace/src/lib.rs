@@ -38,6 +38,7 @@ pub mod gather;
 pub mod hybrid;
 pub mod integrator;
 pub mod light_tracing;
+pub mod photons;
 pub mod reference;
 pub mod render;
 pub mod sampler;

@@ -315,6 +315,61 @@ impl LightTracer {
         }
     }
 
+    /// The first segment of a light path from a light chosen by power: a point of an area
+    /// emitter, uniform over its area, or a point or spot lamp's position, and a direction
+    /// toward the specular targets. Returns what the ray hit (if anything), its direction, and
+    /// the path's throughput there, W: the flux one path carries (divided by the number of
+    /// paths, the estimator's): L_e cos(theta_e) A / (P(emitter) p(direction)) from an area,
+    /// I(w) / (P(lamp) p(direction)) from a lamp (a lamp sends I(w) dw as an area sends
+    /// L cos dA). `None` for a direction the light does not send light into, and for a
+    /// directional lamp, whose light through mirrors and glass is not traced.
+    pub(crate) fn emit(
+        &self,
+        scene: &Scene,
+        sampler: &mut Sampler,
+        tally: &mut Tally,
+    ) -> Option<(Option<Hit>, Vec3, Rgb)> {
+        let light = self.choice.pick(sampler.next_f32());
+        let chosen = self.choice.probability_of(light);
+        let (hit, dir, start) = match light {
+            Light::Area(e) => {
+                let emitter = &scene.emitters[e];
+                let y = emitter.sample(scene, sampler.next_f32(), sampler.next_2d());
+                let (dir, pdf) = self
+                    .targets
+                    .direction(y.position.as_dvec3(), sampler.next_2d())?;
+                let dir = dir.as_vec3().normalize();
+                let cos_e = dir.dot(y.normal);
+                if cos_e <= 0.0 || pdf <= 0.0 {
+                    return None;
+                }
+                let start = emitter.radiance * (cos_e * emitter.area / (chosen * pdf as f32));
+                tally.rays += 1;
+                (scene.intersect_from(&y, dir), dir, start)
+            }
+            Light::Lamp(l) => {
+                let lamp = &scene.lamps[l];
+                if !lamp.is_local() {
+                    return None;
+                }
+                // The number an area emitter's point takes, drawn so that the direction
+                // takes the same dimensions of the stream whichever light was picked.
+                sampler.next_f32();
+                let (dir, pdf) = self
+                    .targets
+                    .direction(lamp.position.as_dvec3(), sampler.next_2d())?;
+                let dir = dir.as_vec3().normalize();
+                if pdf <= 0.0 {
+                    return None;
+                }
+                let start = lamp.intensity_toward(dir) / (chosen * pdf as f32);
+                tally.rays += 1;
+                (scene.intersect(&Ray::new(lamp.position, dir)), dir, start)
+            }
+        };
+        (start.max_element() > 0.0).then_some((hit, dir, start))
+    }
+
     /// One light path: its splats (radiance times the number of paths) go to `splats`.
     fn path(
         &self,
@@ -325,56 +380,9 @@ impl LightTracer {
         splats: &mut Vec<Splat>,
     ) {
         let s = &self.settings;
-        let light = self.choice.pick(sampler.next_f32());
-        let chosen = self.choice.probability_of(light);
-        let (mut dir, start, mut hit) = match light {
-            Light::Area(e) => {
-                let emitter = &scene.emitters[e];
-                let y = emitter.sample(scene, sampler.next_f32(), sampler.next_2d());
-                let Some((dir, pdf)) = self
-                    .targets
-                    .direction(y.position.as_dvec3(), sampler.next_2d())
-                else {
-                    return;
-                };
-                let dir = dir.as_vec3().normalize();
-                let cos_e = dir.dot(y.normal);
-                if cos_e <= 0.0 || pdf <= 0.0 {
-                    return;
-                }
-                let start = emitter.radiance * (cos_e * emitter.area / (chosen * pdf as f32));
-                tally.rays += 1;
-                (dir, start, scene.intersect_from(&y, dir))
-            }
-            Light::Lamp(l) => {
-                // A point or spot lamp sends I(w) dw toward the targets: the flux weight is
-                // I(w) / pdf(w), as L cos dA is for an area. A directional lamp's light
-                // through mirrors and glass is not traced (its caustics are left out).
-                let lamp = &scene.lamps[l];
-                if !lamp.is_local() {
-                    return;
-                }
-                // The number an area emitter's point takes, drawn so that the direction
-                // takes the same dimensions of the stream whichever light was picked.
-                sampler.next_f32();
-                let Some((dir, pdf)) = self
-                    .targets
-                    .direction(lamp.position.as_dvec3(), sampler.next_2d())
-                else {
-                    return;
-                };
-                let dir = dir.as_vec3().normalize();
-                if pdf <= 0.0 {
-                    return;
-                }
-                let start = lamp.intensity_toward(dir) / (chosen * pdf as f32);
-                tally.rays += 1;
-                (dir, start, scene.intersect(&Ray::new(lamp.position, dir)))
-            }
-        };
-        if start.max_element() <= 0.0 {
+        let Some((mut hit, mut dir, start)) = self.emit(scene, sampler, tally) else {
             return;
-        }
+        };
         let mut beta = start;
         let mut bounces = 0u32;
         let mut refracted = false;

@@ -482,6 +482,7 @@ pub(crate) fn write_set(
                     shadow_rays: lm.shadow_rays,
                     rays_per_second: (lm.rays + lm.shadow_rays) as f64 / seconds.max(1e-9),
                     late_points: gatherer.late_points(),
+                    caustic_photons: gatherer.caustic_photons() as u64,
                 }
             }),
         });

@@ -16,12 +16,13 @@ use crate::pipeline::{MAX_DEPTH, RenderMethod};
 use crate::solve::SolveArgs;
 
 /// The arguments a preset sets, which conflict with `--preset`.
-pub const PRESET_SETS: [&str; 12] = [
+pub const PRESET_SETS: [&str; 13] = [
     "method",
     "spp",
     "adaptive",
     "depth",
     "shadow_grid",
+    "gather_rays",
     "unshot",
     "max_shots",
     "time_budget",
@@ -46,7 +47,21 @@ pub struct RenderKnobs {
     /// absent for `spp` everywhere.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub adaptive: Option<u32>,
+    /// Gather rays per camera sample and diffuse shading point of the gathered hybrid
+    /// ([`WhittedSettings::gather_rays`]); absent in a presets file: the default.
+    #[serde(default = "default_gather_rays")]
+    pub gather_rays: u32,
 }
+
+/// The gathered hybrid's default gather rays per camera sample, for presets files that
+/// predate the knob or do not set it.
+pub fn default_gather_rays() -> u32 {
+    WhittedSettings::default().gather_rays
+}
+
+/// Most gather rays per camera sample `--gather-rays` and a presets file accept: past this,
+/// more samples per pixel cost the same and also anti-alias.
+pub const MAX_GATHER_RAYS: u32 = 1024;
 
 impl RenderKnobs {
     /// The render loop's settings these knobs ask for, with the run's `seed`.
@@ -65,6 +80,7 @@ impl RenderKnobs {
         WhittedSettings {
             max_depth: self.depth,
             shadow_grid: self.shadow_grid,
+            gather_rays: self.gather_rays,
             ..WhittedSettings::default()
         }
     }
@@ -210,6 +226,12 @@ impl Preset {
         }
         if !(1..=64).contains(&r.shadow_grid) {
             return Err(format!("shadow_grid {} must be 1 to 64", r.shadow_grid));
+        }
+        if !(1..=MAX_GATHER_RAYS).contains(&r.gather_rays) {
+            return Err(format!(
+                "gather_rays {} must be 1 to {MAX_GATHER_RAYS}",
+                r.gather_rays
+            ));
         }
         if let Some(k) = &self.radiosity {
             if !(k.element_size.is_finite() && k.element_size > 0.0) {

@@ -58,6 +58,11 @@ pub struct RenderArgs {
     /// Shadow rays per emitter and hit, as an N x N stratified grid (Whitted and the hybrids).
     #[arg(long, default_value_t = WhittedSettings::default().shadow_grid, value_parser = clap::value_parser!(u32).range(1..=64))]
     pub shadow_grid: u32,
+    /// Gather rays per camera sample at every diffuse point the gathered hybrid (`hybrid`)
+    /// shades: its indirect light, read from the solution where they land. Stratified over the
+    /// pixel's samples, so a pixel gets `--spp` times this many.
+    #[arg(long, value_name = "N", default_value_t = WhittedSettings::default().gather_rays, value_parser = clap::value_parser!(u32).range(1..=i64::from(crate::preset::MAX_GATHER_RAYS)))]
+    pub gather_rays: u32,
     /// Also write a tone-mapped PNG beside the EXR.
     #[arg(long)]
     pub png: bool,
@@ -126,6 +131,7 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
             depth: args.depth,
             shadow_grid: args.shadow_grid,
             adaptive: args.adaptive,
+            gather_rays: args.gather_rays,
         },
         |p| p.render,
     );

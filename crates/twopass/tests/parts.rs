@@ -298,6 +298,41 @@ fn a_missing_duplicate_foreign_or_truncated_part_is_refused_by_name() {
 }
 
 #[test]
+fn parts_of_the_gathered_hybrid_with_other_gather_rays_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let bake = spheres_bake(d);
+    let part = |i: u32, rays: u32| {
+        let file = d.join(format!("g.{i}-of-2.rays{rays}.part"));
+        assert_ok(
+            &render(&bake, &format!("--part {i}/2 --gather-rays {rays}"))
+                .output(&file)
+                .run(),
+        );
+        file
+    };
+    let (p1, p2) = (part(1, 8), part(2, 2));
+    refused(
+        &[&p1, &p2],
+        d,
+        &format!(
+            "{}: another gather_rays: 2, not 8 as in {}; nothing merged",
+            p2.display(),
+            p1.display()
+        ),
+    );
+    // The same count in both merges.
+    let p2 = part(2, 8);
+    assert_ok(
+        &cli("merge --quiet")
+            .arg(&p1)
+            .arg(&p2)
+            .output(d.join("g.exr"))
+            .run(),
+    );
+}
+
+#[test]
 fn usage_errors_exit_2() {
     let dir = tempfile::tempdir().unwrap();
     let out = cli("merge").run();
@@ -322,6 +357,13 @@ fn usage_errors_exit_2() {
         "error: --part with --adaptive: adaptive sampling refines a pixel by its neighbours' \
          first pass over the whole image, so it cannot be split; render parts without it\n"
     );
+    // The gathered hybrid needs at least one gather ray per sample.
+    let out = cli("render")
+        .arg(repo(BOX))
+        .words("--width 8 --gather-rays 0")
+        .output(dir.path())
+        .run();
+    assert_exit(&out, 2);
     // A bake part gathers over a saved solution and needs something to gather.
     let out = cli("bake")
         .arg(repo(BOX))

@@ -223,6 +223,18 @@ fn missing_presets_and_unknown_names_are_clear_errors() {
         "{err}"
     );
 
+    // A preset's knobs are held to the ranges of the flags they stand for.
+    let measured = std::fs::read_to_string(repo("scenes/cornell-box.presets.toml")).unwrap();
+    let bad = measured.replacen("shadow_grid = ", "gather_rays = 0\nshadow_grid = ", 1);
+    assert_ne!(bad, measured, "the measured presets set a shadow grid");
+    std::fs::write(&file, bad).unwrap();
+    let (code, err) = render("draft", &file);
+    assert_eq!(code, Some(1));
+    assert!(
+        err.contains("x.presets.toml") && err.contains("gather_rays 0 must be 1 to 1024"),
+        "{err}"
+    );
+
     // A preset conflicts with the settings it sets.
     let o = cli("render")
         .arg(&scene)

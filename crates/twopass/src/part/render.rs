@@ -210,6 +210,7 @@ fn settings_of(job: &RenderJob<'_>, settings: &RenderSettings) -> Map<String, Va
         "seed": settings.seed,
         "depth": job.knobs.depth,
         "shadow_grid": job.knobs.shadow_grid,
+        "gather_rays": job.knobs.gather_rays,
         "tile_size": settings.tile_size,
         "jitter": settings.jitter,
         "radiosity": job.radiosity,

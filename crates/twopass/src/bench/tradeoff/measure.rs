@@ -208,6 +208,7 @@ fn row(
         adaptive_aa: run.render.adaptive,
         depth: run.render.depth,
         shadow_grid: run.render.shadow_grid,
+        gather_rays: run.render.gather_rays,
         element_size: k.map(|k| k.element_size),
         unshot: k.map(|k| k.unshot),
         visibility_min: k.map(|k| k.visibility_min),

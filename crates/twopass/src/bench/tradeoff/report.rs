@@ -20,6 +20,8 @@ pub(super) struct SweepRow {
     pub(super) adaptive_aa: Option<u32>,
     pub(super) depth: u32,
     pub(super) shadow_grid: u32,
+    /// Gather rays per camera sample (the gathered hybrid's; the others ignore it).
+    pub(super) gather_rays: u32,
     /// Radiosity settings (empty for Whitted and the path tracer).
     pub(super) element_size: Option<f32>,
     pub(super) unshot: Option<f64>,
@@ -161,7 +163,7 @@ pub(super) fn print_report(r: &TradeoffReport) -> Result<(), CliError> {
     }
     for p in &r.presets {
         outln!(
-            "preset {:<8} target {:>5.2} %{}: {} at {} spp{}, grid {}, depth {}{} -> {:.2} % in {:.3} s",
+            "preset {:<8} target {:>5.2} %{}: {} at {} spp{}, grid {}, depth {}{}{} -> {:.2} % in {:.3} s",
             p.name,
             100.0 * p.target_rel_rmse,
             if p.reached { "" } else { " (not reached)" },
@@ -172,6 +174,11 @@ pub(super) fn print_report(r: &TradeoffReport) -> Result<(), CliError> {
                 .map_or_else(String::new, |b| format!(" (adaptive from {b})")),
             p.render.shadow_grid,
             p.render.depth,
+            if p.method == crate::pipeline::RenderMethod::Hybrid {
+                format!(", gather rays {}", p.render.gather_rays)
+            } else {
+                String::new()
+            },
             p.radiosity.map_or_else(String::new, |k| format!(
                 ", elements {:.1}, unshot {:.0e}, visibility {}-{}, adaptive {}",
                 k.element_size, k.unshot, k.visibility_min, k.visibility_max, k.adaptive

@@ -29,6 +29,9 @@ pub(super) struct Sweep {
     pub(super) spps: Vec<u32>,
     pub(super) shadow_grids: Vec<u32>,
     pub(super) depths: Vec<u32>,
+    /// Gather rays per camera sample, crossed with the samples per pixel for the gathered
+    /// hybrid (whose indirect light they estimate).
+    pub(super) gather_rays: Vec<u32>,
     /// Samples per pixel crossed with the element sizes for the radiosity-based methods.
     pub(super) radiosity_spps: Vec<u32>,
     /// First-pass samples per pixel of adaptive anti-aliasing, tried beside every
@@ -48,6 +51,7 @@ impl Sweep {
                 depth: 8,
                 shadow_grid: 2,
                 adaptive: None,
+                gather_rays: crate::preset::default_gather_rays(),
             },
             base_divisor: 24.0,
             base_unshot: 1e-3,
@@ -60,6 +64,7 @@ impl Sweep {
             spps: vec![1, 4, 16],
             shadow_grids: vec![1, 2, 4],
             depths: vec![1, 2, 4, 8],
+            gather_rays: vec![2, 4, 8, 16],
             radiosity_spps: vec![1, 4, 16, 64],
             adaptive_base: Some(4),
             reference_spps: vec![1, 4, 16, 64, 256, 1024, 2048],
@@ -75,6 +80,7 @@ impl Sweep {
                 depth: 2,
                 shadow_grid: 1,
                 adaptive: None,
+                gather_rays: 2,
             },
             base_divisor: 8.0,
             base_unshot: 1e-2,
@@ -87,6 +93,7 @@ impl Sweep {
             spps: vec![1, 2],
             shadow_grids: vec![1],
             depths: vec![2],
+            gather_rays: vec![1, 2],
             radiosity_spps: vec![1],
             adaptive_base: None,
             reference_spps: vec![1, 4],
@@ -266,6 +273,18 @@ pub(super) fn plan_runs(
                         ..render
                     };
                     push("spp-shadow-grid-adaptive", render, solve);
+                }
+            }
+        }
+        if method == RenderMethod::Hybrid {
+            for &spp in &sweep.spps {
+                for &gather_rays in &sweep.gather_rays {
+                    let render = RenderKnobs {
+                        spp,
+                        gather_rays,
+                        ..base_render
+                    };
+                    push("spp-gather-rays", render, solve);
                 }
             }
         }
