@@ -426,7 +426,7 @@ impl Scene {
 /// The lamps' light at surface points (point, spot and directional lamps:
 /// [`crate::lamp`]).
 impl Scene {
-    /// Whether anything blocks the light of `light` (found by [`Lamp::light_at`] at
+    /// Whether anything blocks the light of `light` (found by [`Lamp::light_at`](crate::Lamp::light_at) at
     /// `from`'s position) before it reaches surface point `from`: a shadow ray to the lamp,
     /// or toward a directional lamp without end.
     pub fn lamp_occluded(&self, from: &SurfacePoint, light: &LampLight) -> bool {
@@ -461,7 +461,7 @@ impl Scene {
         sum
     }
 
-    /// Total power of the lamps, W per channel ([`Lamp::power`]).
+    /// Total power of the lamps, W per channel ([`Lamp::power`](crate::Lamp::power)).
     pub fn lamp_power(&self) -> Rgb {
         self.lamps
             .iter()
