@@ -1,5 +1,5 @@
 # Builds a small room in Blender headless and exports it as glTF binary, as an artist would:
-# a floor with an image texture, a crate, an emissive lamp plane, a point light and a camera.
+# a floor with an image texture, a crate, an emissive lamp plane, a point light of 250 W and a camera.
 # Usage: blender -b --factory-startup -P export_room.py -- OUT.glb
 import sys
 
@@ -43,6 +43,7 @@ lamp.name = "Lamp"
 lamp.data.materials.append(material("LampGlow", (0, 0, 0), emission=(1, 1, 1), strength=10.0))
 bpy.ops.object.light_add(type="POINT", location=(1, 1, 2))
 bpy.context.object.name = "Bulb"
+bpy.context.object.data.energy = 250.0
 bpy.ops.object.camera_add(location=(0, -6, 2), rotation=(1.3, 0, 0))
 bpy.context.object.name = "Cam"
 bpy.ops.export_scene.gltf(filepath=out, export_format="GLB", export_cameras=True, export_lights=True)

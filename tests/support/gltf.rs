@@ -287,6 +287,63 @@ impl GltfWriter {
         })
     }
 
+    /// A node holding `KHR_lights_punctual` light `light` of `kind` (`"point"`, `"spot"`,
+    /// `"directional"`), glTF's photometric `intensity` (cd, or lux for a directional light)
+    /// and `color`, `spot` the (inner, outer) cone angles in radians, placed by `trs`.
+    pub fn light_node(
+        &mut self,
+        name: &str,
+        kind: &str,
+        intensity: f32,
+        color: [f32; 3],
+        spot: Option<(f32, f32)>,
+        trs: Trs,
+    ) -> json::Index<json::Node> {
+        use json::extensions::scene::khr_lights_punctual as klp;
+        let type_ = match kind {
+            "point" => klp::Type::Point,
+            "spot" => klp::Type::Spot,
+            _ => klp::Type::Directional,
+        };
+        let ext = self.root.extensions.get_or_insert_with(Default::default);
+        let lights = &mut ext
+            .khr_lights_punctual
+            .get_or_insert_with(|| json::extensions::root::KhrLightsPunctual { lights: vec![] })
+            .lights;
+        lights.push(klp::Light {
+            color,
+            extensions: None,
+            extras: None,
+            intensity,
+            name: Some(format!("{name} light")),
+            range: None,
+            spot: spot.map(|(inner, outer)| klp::Spot {
+                inner_cone_angle: inner,
+                outer_cone_angle: outer,
+            }),
+            type_: Valid(type_),
+        });
+        let light = json::Index::new(lights.len() as u32 - 1);
+        if !self
+            .root
+            .extensions_used
+            .iter()
+            .any(|e| e == "KHR_lights_punctual")
+        {
+            self.root.extensions_used.push("KHR_lights_punctual".into());
+        }
+        self.root.push(json::Node {
+            name: Some(name.to_owned()),
+            translation: Some(trs.t),
+            rotation: Some(json::scene::UnitQuaternion(trs.r)),
+            scale: Some(trs.s),
+            extensions: Some(json::extensions::scene::Node {
+                khr_lights_punctual: Some(klp::KhrLightsPunctual { light }),
+            }),
+            ..Default::default()
+        })
+    }
+
     /// A perspective camera: vertical field of view (radians), aspect ratio (width / height).
     pub fn camera(&mut self, yfov: f32, aspect: Option<f32>) -> json::Index<json::Camera> {
         self.root.push(json::Camera {

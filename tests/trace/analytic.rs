@@ -2,14 +2,12 @@
 //! rho L_e F, with F the closed-form form factor from a differential area to a parallel
 //! rectangle (Howell's catalogue, C-11, combined over the four corner rectangles).
 
-use glam::Vec2;
-use twopass_scene::Ray;
 use twopass_trace::{
     Layer, Reference, ReferenceSettings, RenderProgress, RenderSettings, Whitted, WhittedSettings,
     render,
 };
 
-use super::common::{mean_and_error, scene};
+use super::common::{mean_and_error, pixel_means, scene};
 use crate::closed_form::corner_form_factor;
 
 const RHO: f32 = 0.5;
@@ -43,31 +41,14 @@ fn form_factor(x0: f64, x1: f64, z0: f64, z1: f64) -> f64 {
 /// pixel's mean, not its centre's value: the two differ by the light's curvature over a pixel,
 /// about 0.3 % of this image at 8 x 8, a bias a converged estimate shows.)
 fn expected(scene: &twopass_scene::Scene, spp: u32) -> Vec<Option<f64>> {
-    let cam = scene.camera;
-    let k = spp.isqrt().max(1);
-    let mut out = Vec::new();
-    for y in 0..cam.height {
-        for x in 0..cam.width {
-            let mut sum = Some(0.0);
-            for s in 0..k * k {
-                let offset = Vec2::new(
-                    ((s % k) as f32 + 0.5) / k as f32,
-                    ((s / k) as f32 + 0.5) / k as f32,
-                );
-                let d = cam.direction(Vec2::new(x as f32, y as f32) + offset);
-                let hit = scene.intersect(&Ray::new(cam.position, d));
-                let value = hit.filter(|h| h.object == 0 && h.front_face).map(|h| {
-                    let p = h.point.position.as_dvec3();
-                    let h2 = SIDE / 2.0;
-                    let f = form_factor(-h2 - p.x, h2 - p.x, -h2 - p.z, h2 - p.z);
-                    f64::from(RHO) * f64::from(L_E) * f
-                });
-                sum = sum.zip(value).map(|(a, b)| a + b);
-            }
-            out.push(sum.map(|t| t / f64::from(k * k)));
-        }
-    }
-    out
+    pixel_means(scene, spp, |h| {
+        (h.object == 0 && h.front_face).then(|| {
+            let p = h.point.position.as_dvec3();
+            let h2 = SIDE / 2.0;
+            let f = form_factor(-h2 - p.x, h2 - p.x, -h2 - p.z, h2 - p.z);
+            f64::from(RHO) * f64::from(L_E) * f
+        })
+    })
 }
 
 fn settings(spp: u32) -> RenderSettings {

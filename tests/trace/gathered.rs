@@ -56,7 +56,7 @@ fn run(
 }
 
 /// A converged-enough solve of `scene` with elements of `element_size` (scene units).
-fn solve(scene: &Scene, element_size: f32) -> twopass_radiosity::Solution {
+pub(super) fn solve(scene: &Scene, element_size: f32) -> twopass_radiosity::Solution {
     let options = twopass_radiosity::Options {
         element_size: Some(element_size),
         stop: twopass_radiosity::Stop {
@@ -71,7 +71,7 @@ fn solve(scene: &Scene, element_size: f32) -> twopass_radiosity::Solution {
 }
 
 /// The pixels whose centre's camera ray satisfies `keep` at its first hit.
-fn pixels_where(
+pub(super) fn pixels_where(
     scene: &Scene,
     camera: &Camera,
     keep: impl Fn(&twopass_scene::Hit) -> bool,
@@ -179,19 +179,19 @@ fn no_nan_or_infinity_reaches_the_image() {
 
 /// The gathered and the classic hybrid (16 spp, two renders each) and the path tracer (1024
 /// spp, two renders) over the pixels `region` of `scene` seen by `camera`.
-struct Agreement {
+pub(super) struct Agreement {
     /// The reference's region mean and its standard error.
-    reference: (f64, f64),
+    pub(super) reference: (f64, f64),
     /// The gathered hybrid's region mean and its standard error.
-    gathered: (f64, f64),
+    pub(super) gathered: (f64, f64),
     /// The classic hybrid's region mean.
     classic: f64,
     /// [`excess`] of the gathered and the classic hybrid.
-    excess: (f64, f64),
+    pub(super) excess: (f64, f64),
 }
 
 impl Agreement {
-    fn measure(
+    pub(super) fn measure(
         s: &Scene,
         camera: &Camera,
         solution: &dyn DiffuseRadiance,
@@ -229,7 +229,7 @@ impl Agreement {
     /// expectation when only noise separates them, within four of its standard deviations
     /// (about sqrt(3 / n): the numerator's relative spread sqrt(2 / n), the denominator's,
     /// from twice as many pair differences, sqrt(1 / n)).
-    fn assert_agrees(&self, name: &str, n: usize) {
+    pub(super) fn assert_agrees(&self, name: &str, n: usize) {
         let ((r, r_noise), (h, h_noise)) = (self.reference, self.gathered);
         eprintln!(
             "{name} ({n} px): reference {r:.5} +- {r_noise:.5}, gathered {h:.5} +- {h_noise:.5}, \
@@ -250,7 +250,7 @@ impl Agreement {
     }
 
     /// The standard error of the difference of the two region means.
-    fn sigma(&self) -> f64 {
+    pub(super) fn sigma(&self) -> f64 {
         self.reference.1.hypot(self.gathered.1)
     }
 }

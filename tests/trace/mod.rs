@@ -11,6 +11,7 @@ mod furnace;
 mod gather;
 mod gathered;
 mod hybrid;
+mod lamps;
 mod optics;
 mod photons;
 mod share;

@@ -7,7 +7,7 @@
 use glam::Vec3;
 use twopass_brdf::{ComplexIor, FresnelModel, Lobe};
 use twopass_composite::Image;
-use twopass_scene::Scene;
+use twopass_scene::{LampKind, Scene};
 
 /// Which scene fingerprint a bake file disagrees with.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -130,9 +130,10 @@ pub fn geometry_fingerprint(scene: &Scene) -> u64 {
 }
 
 /// Fingerprint of what the radiosity values depend on besides geometry: each object's emitted
-/// radiance and its material's diffuse reflectance (bit patterns), in object order, and in a
-/// scene with textures every material's texture reference, every texture's texels and every
-/// triangle's texture coordinates.
+/// radiance and its material's diffuse reflectance (bit patterns), in object order, in a scene
+/// with textures every material's texture reference, every texture's texels and every
+/// triangle's texture coordinates, then the lamps (kind, aim, position, intensity) when there
+/// are any.
 pub fn lighting_fingerprint(scene: &Scene) -> u64 {
     let mut h = Fnv::new();
     h.u64(scene.objects.len() as u64);
@@ -170,6 +171,32 @@ pub fn lighting_fingerprint(scene: &Scene) -> u64 {
                 Some(c) => c.iter().for_each(|p| h.vec3(p.extend(1.0))),
                 None => h.u32(u32::MAX),
             }
+        }
+    }
+    // The lamps: kind, aim, position and intensity. Hashed only when there are any, so a
+    // scene without lamps keeps the fingerprint its bakes were written with.
+    if !scene.lamps.is_empty() {
+        h.u64(scene.lamps.len() as u64);
+        for l in &scene.lamps {
+            match l.kind {
+                LampKind::Point => h.u32(0),
+                LampKind::Spot {
+                    direction,
+                    cos_inner,
+                    cos_outer,
+                } => {
+                    h.u32(1);
+                    h.vec3(direction);
+                    h.f32(cos_inner);
+                    h.f32(cos_outer);
+                }
+                LampKind::Directional { direction } => {
+                    h.u32(2);
+                    h.vec3(direction);
+                }
+            }
+            h.vec3(l.position);
+            h.vec3(l.intensity);
         }
     }
     h.0

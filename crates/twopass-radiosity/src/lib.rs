@@ -13,7 +13,10 @@
 //! computes only: files and file formats (the bake file, glTF, PLY) are twopass-bake's.
 //!
 //! Units: radiosity B and irradiance in W/m^2 per RGB channel with areas in the scene's units,
-//! radiance L = B / pi in W/(m^2 sr). Emitters are one-sided with exitance E = pi L_e.
+//! radiance L = B / pi in W/(m^2 sr). Emitters are one-sided with exitance E = pi L_e. Lamps
+//! (point, spot, directional) light every element vertex directly and exactly, I(w) cos / r^2
+//! or E cos with a shadow ray, and both solvers carry that light on as they carry a shot's;
+//! their power counts in the emitted power.
 //!
 //! ```no_run
 //! use twopass_radiosity::{Options, Solver};
@@ -37,6 +40,7 @@ pub mod element;
 mod error;
 pub mod form_factor;
 mod hierarchical;
+mod lamps;
 mod mesh_error;
 mod options;
 mod progressive;

@@ -25,6 +25,68 @@ pub struct SceneFile {
     /// The objects: built-in shapes or OBJ meshes.
     #[serde(default, rename = "object")]
     pub objects: Vec<Spanned<ObjectDesc>>,
+    /// The lamps: point, spot and directional lights.
+    #[serde(default, rename = "light")]
+    pub lights: Vec<Spanned<LightDesc>>,
+}
+
+/// `[[light]]`: a lamp; `kind` selects point, spot or directional. A point or spot lamp gives
+/// exactly one of `intensity` (W/sr) and `power` (W, as Blender states a lamp: intensity =
+/// power / (4 pi), for a spot too); a directional lamp gives `irradiance`. `colour` multiplies
+/// the value per channel (default 1).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum LightDesc {
+    /// Emits the same intensity in every direction.
+    Point {
+        /// Name in messages (default `light N`, N its 1-based index).
+        name: Option<String>,
+        /// Position, scene units.
+        position: [f32; 3],
+        /// Per-channel factor (default 1).
+        colour: Option<Triple>,
+        /// Radiant intensity, W/sr.
+        intensity: Option<f32>,
+        /// Emitted power, W (intensity = power / (4 pi)).
+        power: Option<f32>,
+    },
+    /// A cone of light around `direction` (or toward `look_at`).
+    Spot {
+        /// Name in messages (default `light N`).
+        name: Option<String>,
+        /// Position, scene units.
+        position: [f32; 3],
+        /// Axis of the cone (need not be unit); or give `look_at`.
+        direction: Option<[f32; 3]>,
+        /// A point on the axis, scene units; or give `direction`.
+        look_at: Option<[f32; 3]>,
+        /// Per-channel factor (default 1).
+        colour: Option<Triple>,
+        /// Radiant intensity on the axis, W/sr.
+        intensity: Option<f32>,
+        /// Power of the point lamp the spot is cut from, W (intensity = power / (4 pi)).
+        power: Option<f32>,
+        /// Half angle of full intensity, degrees (default 0).
+        inner_angle: Option<f32>,
+        /// Half angle past which no light leaves, degrees in (0, 90] (default 45).
+        outer_angle: Option<f32>,
+    },
+    /// Parallel light from infinitely far away, along `direction` (or from `position` toward
+    /// `look_at`).
+    Directional {
+        /// Name in messages (default `light N`).
+        name: Option<String>,
+        /// Direction the light travels (need not be unit).
+        direction: Option<[f32; 3]>,
+        /// With `look_at`: the light travels from here toward `look_at`.
+        position: Option<[f32; 3]>,
+        /// With `position`.
+        look_at: Option<[f32; 3]>,
+        /// Per-channel factor (default 1).
+        colour: Option<Triple>,
+        /// Irradiance on a surface facing the light, W/m^2 (scene units squared).
+        irradiance: f32,
+    },
 }
 
 /// `[camera]`: a pinhole camera. Give either `fov_y` or `focal_length` (+ `film_size`).

@@ -263,6 +263,21 @@ pub enum SceneError {
         /// What is wrong.
         problem: String,
     },
+    /// A `[[light]]` table that cannot be a lamp (a negative intensity, a zero direction, an
+    /// outer cone angle below the inner one, ...).
+    #[error("{}:{line}: light {index}{}: {problem}", path.display(), name.as_ref().map_or_else(String::new, |n| format!(" `{n}`")))]
+    Light {
+        /// The scene file.
+        path: PathBuf,
+        /// Line of the `[[light]]` table.
+        line: usize,
+        /// 1-based index of the table among the file's `[[light]]` tables.
+        index: usize,
+        /// Its `name`, when given.
+        name: Option<String>,
+        /// What is wrong.
+        problem: String,
+    },
     /// An error in a file an object of the scene refers to (its OBJ mesh or MTL library),
     /// located at that object.
     #[error("{}:{line}: object `{object}`: {source}", path.display())]
@@ -358,7 +373,8 @@ pub enum Warning {
         /// Image width / height.
         image: f32,
     },
-    /// Nothing in the scene emits light, so every render is black.
+    /// Nothing in the scene emits light (no emitting surface, no lamp), so every render is
+    /// black.
     NoEmitters {
         /// The scene file.
         path: PathBuf,

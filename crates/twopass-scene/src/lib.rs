@@ -1,6 +1,6 @@
 //! The scene layer of twopass: the scene file format (TOML, with OBJ/MTL meshes through tobj),
 //! validation once at load, the runtime [`Scene`] (indexed meshes, materials, objects,
-//! emitters, camera) and ray queries over an 8-wide BVH (obvhs builds a binary tree, collapsed
+//! emitters, lamps ([`lamp`]: point, spot and directional lights), camera) and ray queries over an 8-wide BVH (obvhs builds a binary tree, collapsed
 //! into 8-wide nodes with four-triangle leaves).
 //!
 //! After [`load`] returns `Ok`, every position and normal is finite, every triangle has a
@@ -31,6 +31,7 @@ pub mod description;
 mod error;
 mod gltf_source;
 mod input;
+pub mod lamp;
 mod load;
 mod obj;
 mod radiance;
@@ -53,6 +54,7 @@ pub use input::{
     MAX_GLTF_BYTES, MAX_MTL_BYTES, MAX_OBJ_BYTES, MAX_SCENE_BYTES, MAX_TEXTURE_BYTES, ReadPolicy,
     printable, read_bounded,
 };
+pub use lamp::{LUMINOUS_EFFICACY, Lamp, LampKind, LampLight, MAX_LAMP_INTENSITY, spot_falloff};
 pub use load::{
     MAX_COORDINATE, MAX_EMITTED_POWER, MAX_TRIANGLES, SMOOTH_ROUGHNESS, SPHERE_TOLERANCE, load,
     load_toml, load_toml_with, load_with,

@@ -10,6 +10,7 @@ use twopass_brdf::{Material, Rgb};
 
 use crate::accel::{Accel, Ray, SHADOW_EPSILON, SurfacePoint, TriangleHit};
 use crate::camera::Camera;
+use crate::lamp::LampLight;
 
 /// Rays one rayon job of [`Scene::intersect_batch`] and [`Scene::occluded_batch`] walks: enough
 /// to keep an interleaved walk full, few enough to spread over the threads.
@@ -234,6 +235,8 @@ pub struct Scene {
     pub objects: Vec<Object>,
     /// The emitting objects.
     pub emitters: Vec<Emitter>,
+    /// The lamps: point, spot and directional lights (delta lights, never hit by a ray).
+    pub lamps: Vec<crate::lamp::Lamp>,
     /// The camera.
     pub camera: Camera,
     /// The textures materials refer to ([`SceneMaterial::albedo_texture`]), each decoded once.
@@ -254,6 +257,7 @@ impl Scene {
         mesh: Mesh,
         materials: Vec<SceneMaterial>,
         objects: Vec<Object>,
+        lamps: Vec<crate::lamp::Lamp>,
         camera: Camera,
     ) -> Self {
         let bounds = mesh.positions.iter().fold(Bounds::EMPTY, |b, p| b.grow(*p));
@@ -289,6 +293,7 @@ impl Scene {
             materials,
             objects,
             emitters,
+            lamps,
             camera,
             textures: Vec::new(),
             bounds,
@@ -425,5 +430,51 @@ impl Scene {
                 self.accel.any_hit_many(&rays, out);
             });
         blocked
+    }
+}
+
+/// The lamps' light at surface points (point, spot and directional lamps:
+/// [`crate::lamp`]).
+impl Scene {
+    /// Whether anything blocks the light of `light` (found by [`Lamp::light_at`](crate::Lamp::light_at) at
+    /// `from`'s position) before it reaches surface point `from`: a shadow ray to the lamp,
+    /// or toward a directional lamp without end.
+    pub fn lamp_occluded(&self, from: &SurfacePoint, light: &LampLight) -> bool {
+        if light.distance.is_finite() {
+            self.occluded(from, from.position + light.direction * light.distance)
+        } else {
+            let o = from.spawn_origin(light.direction);
+            self.accel()
+                .any_hit(o, light.direction, f32::INFINITY * (1.0 - SHADOW_EPSILON))
+        }
+    }
+
+    /// The irradiance (W per scene unit squared per channel) that every lamp sends to the
+    /// front of surface point `at` whose receiving normal is `normal` (unit), shadows
+    /// included: the sum of I cos(theta) / r^2 and E cos(theta). Counts its shadow rays in
+    /// `rays`.
+    pub fn lamp_irradiance(&self, at: &SurfacePoint, normal: Vec3, rays: &mut u64) -> Rgb {
+        let mut sum = Rgb::ZERO;
+        for lamp in &self.lamps {
+            let Some(light) = lamp.light_at(at.position) else {
+                continue;
+            };
+            let cos = light.direction.dot(normal);
+            if cos <= 0.0 || light.direction.dot(at.normal) <= 0.0 {
+                continue;
+            }
+            *rays += 1;
+            if !self.lamp_occluded(at, &light) {
+                sum += light.irradiance * cos;
+            }
+        }
+        sum
+    }
+
+    /// Total power of the lamps, W per channel ([`Lamp::power`](crate::Lamp::power)).
+    pub fn lamp_power(&self) -> Rgb {
+        self.lamps
+            .iter()
+            .fold(Rgb::ZERO, |s, l| s + l.power(self.bounds.diagonal()))
     }
 }

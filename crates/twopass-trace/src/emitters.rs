@@ -57,23 +57,42 @@ impl Lights {
     }
 }
 
-/// Which emitter a path samples: each with probability proportional to its mean emitted power
-/// over the three channels (uniform when nothing emits power).
+/// A light [`EmitterChoice`] picked: an area emitter or a lamp.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Light {
+    /// Index into `Scene::emitters`.
+    Area(usize),
+    /// Index into `Scene::lamps`.
+    Lamp(usize),
+}
+
+/// Which light a path samples, among the area emitters and the lamps: each with probability
+/// proportional to its mean emitted power over the three channels (a lamp's
+/// [`Lamp::power`](twopass_scene::Lamp::power); uniform when nothing emits power).
 #[derive(Debug, Clone)]
 pub struct EmitterChoice {
-    /// Cumulative probabilities, last = 1.
+    /// Cumulative probabilities over the area emitters, then the lamps; last = 1.
     cdf: Vec<f32>,
-    /// Probability of each emitter.
+    /// Probability of each, in the same order.
     probability: Vec<f32>,
+    /// How many area emitters come first.
+    areas: usize,
 }
 
 impl EmitterChoice {
-    /// The choice among `scene`'s emitters.
+    /// The choice among `scene`'s emitters and lamps.
     pub fn new(scene: &Scene) -> Self {
+        let mean = |p: twopass_brdf::Rgb| f64::from((p.x + p.y + p.z) / 3.0).max(0.0);
         let weights: Vec<f64> = scene
             .emitters
             .iter()
-            .map(|e| f64::from((e.power.x + e.power.y + e.power.z) / 3.0).max(0.0))
+            .map(|e| mean(e.power))
+            .chain(
+                scene
+                    .lamps
+                    .iter()
+                    .map(|l| mean(l.power(scene.bounds.diagonal()))),
+            )
             .collect();
         let total: f64 = weights.iter().sum();
         let n = weights.len();
@@ -98,19 +117,41 @@ impl EmitterChoice {
         if let Some(last) = cdf.last_mut() {
             *last = 1.0;
         }
-        Self { cdf, probability }
+        Self {
+            cdf,
+            probability,
+            areas: scene.emitters.len(),
+        }
     }
 
-    /// The emitter (index into `Scene::emitters`) for `u` uniform in [0, 1); the scene must
-    /// have one.
-    pub fn pick(&self, u: f32) -> usize {
-        self.cdf
+    /// Whether there is nothing to choose (no emitter, no lamp).
+    pub fn is_empty(&self) -> bool {
+        self.cdf.is_empty()
+    }
+
+    /// The light for `u` uniform in [0, 1); the scene must have one ([`Self::is_empty`]).
+    pub fn pick(&self, u: f32) -> Light {
+        let i = self
+            .cdf
             .partition_point(|&c| c <= u)
-            .min(self.cdf.len() - 1)
+            .min(self.cdf.len() - 1);
+        if i < self.areas {
+            Light::Area(i)
+        } else {
+            Light::Lamp(i - self.areas)
+        }
     }
 
-    /// Probability of picking emitter `e`.
+    /// Probability of picking area emitter `e` (index into `Scene::emitters`).
     pub fn probability(&self, e: usize) -> f32 {
         self.probability[e]
+    }
+
+    /// Probability of picking `light`.
+    pub fn probability_of(&self, light: Light) -> f32 {
+        match light {
+            Light::Area(e) => self.probability[e],
+            Light::Lamp(l) => self.probability[self.areas + l],
+        }
     }
 }

@@ -8,7 +8,8 @@
 //!
 //! **No double counting.** The point's radiance is L_e + rho / pi (E_direct + E_gather):
 //! - E_direct: light leaving the front of an emitter and reaching the point unoccluded
-//!   ([`crate::integrator::direct_light`]; mirrors and glass occlude shadow rays);
+//!   ([`crate::integrator::direct_light`]; mirrors and glass occlude shadow rays), and from
+//!   every lamp by one shadow ray each ([`crate::integrator::lamps_irradiance`]);
 //! - E_gather: the gather rays. Where one lands on a diffuse surface first it takes the
 //!   solution's radiance there less the emission (the shadow rays counted that); where it
 //!   lands on a mirror or glass, it follows the delta path (one branch chosen by its weight)
@@ -64,8 +65,8 @@ use twopass_scene::workload::cosine_direction;
 use twopass_scene::{DiffuseRadiance, Hit, RadianceEstimate, RadianceEstimator, Scene};
 
 use crate::counters::Tally;
-use crate::emitters::{EmitterChoice, Lights};
-use crate::integrator::{Shading, irradiance_from};
+use crate::emitters::{EmitterChoice, Light, Lights};
+use crate::integrator::{Shading, irradiance_from, lamp_irradiance, lamps_irradiance};
 use crate::photons::{CausticPhotons, PhotonSettings};
 use crate::sampler::Sampler;
 
@@ -429,12 +430,16 @@ impl<'a> Gatherer<'a> {
             let (point, normal) = (hit.point, hit.shading_normal);
             let here = Shading::new(scene, hit, dir);
             weight *= here.material.diffuse_albedo();
-            if !scene.emitters.is_empty() {
-                let e = self.choice.pick(sampler.next_f32());
-                let p = self.choice.probability(e);
+            if !self.choice.is_empty() {
+                let light = self.choice.pick(sampler.next_f32());
+                let p = self.choice.probability_of(light);
                 if p > 0.0 {
-                    let irradiance =
-                        irradiance_from(scene, &self.lights, &here, e, 1, sampler, tally) / p;
+                    let irradiance = match light {
+                        Light::Area(e) => {
+                            irradiance_from(scene, &self.lights, &here, e, 1, sampler, tally)
+                        }
+                        Light::Lamp(l) => lamp_irradiance(scene, &here, l, tally),
+                    } / p;
                     sum += weight * irradiance * std::f32::consts::FRAC_1_PI;
                 }
             }
@@ -569,6 +574,7 @@ impl RadianceEstimator for Gatherer<'_> {
                 &mut tally,
             );
         }
+        irradiance += lamps_irradiance(self.scene, &s, &mut tally);
         let direct = rho * irradiance * std::f32::consts::FRAC_1_PI;
 
         // Indirect: cosine-weighted gather rays, E = pi mean(L), so rho / pi E = rho mean(L);

@@ -1,7 +1,7 @@
 //! The integrator boundary (ARCHITECTURE.md, "Architecture invariants"): one required method that
 //! turns a camera ray into layered radiance, plus the shared pieces every integrator uses: the
 //! shading context at a hit (local frame, one-sided surfaces) and direct lighting from the area
-//! emitters with stratified shadow rays. Visibility and ray-origin offsetting belong to the scene
+//! emitters with stratified shadow rays and from the lamps with one shadow ray each. Visibility and ray-origin offsetting belong to the scene
 //! (`Scene::intersect_from`, `Scene::occluded_between`); nothing here holds an epsilon. Integrators
 //! never spawn threads.
 
@@ -97,7 +97,7 @@ impl Shading {
 }
 
 /// Direct light from every emitter at a shading point, with `grid` x `grid` stratified shadow
-/// rays per emitter, split into two parts by `brdf`, which returns two BRDF values (1/sr,
+/// rays per area emitter and one per lamp ([`lamps_light`]), split into two parts by `brdf`, which returns two BRDF values (1/sr,
 /// without the cosine) for a local incident direction. Returns the two reflected radiances,
 /// W/(m^2 sr) per channel.
 ///
@@ -123,7 +123,8 @@ pub fn direct_light(
         out[0] += part[0];
         out[1] += part[1];
     }
-    out
+    let lamps = lamps_light(scene, s, tally, &brdf);
+    [out[0] + lamps[0], out[1] + lamps[1]]
 }
 
 /// The irradiance (W/m^2 per channel) that emitter `e` (index into `Scene::emitters`) sends to
@@ -194,6 +195,79 @@ fn emitter_light(
     }
     let scale = emitter.radiance * (emitter.area / n as f32);
     [sum[0] * scale, sum[1] * scale]
+}
+
+// Lamps (point, spot, directional: delta lights) by next-event estimation: one shadow ray per
+// lamp, no random number. A ray never hits a lamp, so no other strategy finds their light and
+// these estimates take no MIS weight.
+
+/// The radiance reflected toward the viewer from lamp `l` (index into `Scene::lamps`), split
+/// into two parts by `brdf`, which returns two BRDF values (1/sr, without the cosine) for a
+/// local incident direction: f I(w) cos(theta) / r^2 (point, spot) or f E cos(theta)
+/// (directional), zero when the lamp is behind the surface (by shading and geometric normal)
+/// or a shadow ray finds a blocker. W/(m^2 sr) per channel.
+pub fn lamp_light(
+    scene: &Scene,
+    s: &Shading,
+    l: usize,
+    tally: &mut Tally,
+    brdf: &impl Fn(Vec3) -> [Rgb; 2],
+) -> [Rgb; 2] {
+    let zero = [Rgb::ZERO; 2];
+    let x = s.hit.point;
+    let Some(light) = scene.lamps[l].light_at(x.position) else {
+        return zero;
+    };
+    if light.direction.dot(x.normal) <= 0.0 {
+        return zero;
+    }
+    let wl = s.frame.to_local(light.direction);
+    if wl.z <= 0.0 {
+        return zero;
+    }
+    let f = brdf(wl);
+    if f[0].max_element() <= 0.0 && f[1].max_element() <= 0.0 {
+        return zero;
+    }
+    tally.shadow_rays += 1;
+    if scene.lamp_occluded(&x, &light) {
+        return zero;
+    }
+    let e = light.irradiance * wl.z;
+    [f[0] * e, f[1] * e]
+}
+
+/// [`lamp_light`] summed over every lamp of the scene.
+pub fn lamps_light(
+    scene: &Scene,
+    s: &Shading,
+    tally: &mut Tally,
+    brdf: &impl Fn(Vec3) -> [Rgb; 2],
+) -> [Rgb; 2] {
+    let mut out = [Rgb::ZERO; 2];
+    for l in 0..scene.lamps.len() {
+        let [a, b] = lamp_light(scene, s, l, tally, brdf);
+        out[0] += a;
+        out[1] += b;
+    }
+    out
+}
+
+/// The irradiance (W/m^2 per channel) lamp `l` gives the front of the shading point, by the
+/// shading normal's cosine: [`lamp_light`] with the BRDF replaced by 1 (for a final gather,
+/// which multiplies by rho / pi).
+pub fn lamp_irradiance(scene: &Scene, s: &Shading, l: usize, tally: &mut Tally) -> Rgb {
+    if !s.hit.front_face {
+        return Rgb::ZERO;
+    }
+    lamp_light(scene, s, l, tally, &|_| [Rgb::ONE, Rgb::ZERO])[0]
+}
+
+/// [`lamp_irradiance`] summed over every lamp.
+pub fn lamps_irradiance(scene: &Scene, s: &Shading, tally: &mut Tally) -> Rgb {
+    (0..scene.lamps.len())
+        .map(|l| lamp_irradiance(scene, s, l, tally))
+        .fold(Rgb::ZERO, |a, b| a + b)
 }
 
 /// The closest hit along a ray leaving the shading point in world direction `direction`,

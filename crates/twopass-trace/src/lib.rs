@@ -1,8 +1,8 @@
 //! The view-dependent pass of twopass: the integrators and the render loop.
 //!
-//! - [`Whitted`]: Whitted-style ray tracing alone (shadow rays to the area emitters, the local
-//!   models of twopass-brdf, the Phong ambient term in place of interreflection, mirror
-//!   reflection and refraction followed recursively).
+//! - [`Whitted`]: Whitted-style ray tracing alone (shadow rays to the area emitters and the
+//!   lamps, the local models of twopass-brdf, the Phong ambient term in place of
+//!   interreflection, mirror reflection and refraction followed recursively).
 //! - [`hybrid::radiosity_only`], [`hybrid::gathered`] (the hybrid: a final gather over the
 //!   solution per pixel, [`gather`]), [`hybrid::hybrid`] (the classic hybrids, with
 //!   [`hybrid::DirectLight`]): the radiosity-based methods, reading a solution through

@@ -27,7 +27,9 @@
 //! **Estimator.** A light path starts at a point of an emitter chosen by power, uniform over
 //! its area, in a direction drawn from the cones its specular objects subtend
 //! ([`twopass_scene::SpecularTargets`]; a direction outside every cone cannot reach a specular
-//! surface first), with throughput L_e cos(theta_e) A / (P(emitter) p(direction)). Delta
+//! surface first), with throughput L_e cos(theta_e) A / (P(emitter) p(direction)); or at a
+//! point or spot lamp chosen by power, with throughput I(w) / (P(lamp) p(direction))
+//! (directional lamps send no light paths: their caustics are left out). Delta
 //! bounces carry power ([`twopass_brdf::delta::DeltaLobe::sample_flux`]). At a vertex x
 //! connected to the camera the pixel j that sees x gains
 //! beta f(x) |cos(theta_x)| / d^2 * W_j, with W_j = 1 / (A_pixel cos^3(theta_c)) the importance
@@ -50,10 +52,10 @@ use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use twopass_brdf::Rgb;
 use twopass_brdf::frame::Frame;
-use twopass_scene::{Camera, Hit, Scene, SpecularTargets};
+use twopass_scene::{Camera, Hit, Ray, Scene, SpecularTargets};
 
 use crate::counters::{RenderProgress, Tally};
-use crate::emitters::EmitterChoice;
+use crate::emitters::{EmitterChoice, Light};
 use crate::film::{Layer, LayerImages};
 use crate::sampler::Sampler;
 
@@ -170,13 +172,14 @@ impl LightTracer {
     /// specular object (then no path of its scope exists).
     pub fn new(scene: &Scene, settings: LightTracingSettings) -> Option<Self> {
         let targets = SpecularTargets::new(scene);
-        if targets.is_empty() || scene.emitters.is_empty() {
+        let choice = EmitterChoice::new(scene);
+        if targets.is_empty() || choice.is_empty() {
             return None;
         }
         Some(Self {
             settings,
             targets,
-            choice: EmitterChoice::new(scene),
+            choice,
         })
     }
 
@@ -312,32 +315,59 @@ impl LightTracer {
         }
     }
 
-    /// The first segment of a light path: a point of an emitter chosen by power, uniform over
-    /// its area, and a direction toward the specular targets. Returns what the ray hit (if
-    /// anything), its direction, and the path's throughput there, L_e cos(theta_e) A /
-    /// (P(emitter) p(direction)), W: the flux one path carries (divided by the number of
-    /// paths, the estimator's). `None` for a direction the emitter does not send light into.
+    /// The first segment of a light path from a light chosen by power: a point of an area
+    /// emitter, uniform over its area, or a point or spot lamp's position, and a direction
+    /// toward the specular targets. Returns what the ray hit (if anything), its direction, and
+    /// the path's throughput there, W: the flux one path carries (divided by the number of
+    /// paths, the estimator's): L_e cos(theta_e) A / (P(emitter) p(direction)) from an area,
+    /// I(w) / (P(lamp) p(direction)) from a lamp (a lamp sends I(w) dw as an area sends
+    /// L cos dA). `None` for a direction the light does not send light into, and for a
+    /// directional lamp, whose light through mirrors and glass is not traced.
     pub(crate) fn emit(
         &self,
         scene: &Scene,
         sampler: &mut Sampler,
         tally: &mut Tally,
     ) -> Option<(Option<Hit>, Vec3, Rgb)> {
-        let e = self.choice.pick(sampler.next_f32());
-        let emitter = &scene.emitters[e];
-        let y = emitter.sample(scene, sampler.next_f32(), sampler.next_2d());
-        let (dir, pdf) = self
-            .targets
-            .direction(y.position.as_dvec3(), sampler.next_2d())?;
-        let dir = dir.as_vec3().normalize();
-        let cos_e = dir.dot(y.normal);
-        if cos_e <= 0.0 || pdf <= 0.0 {
-            return None;
-        }
-        let start =
-            emitter.radiance * (cos_e * emitter.area / (self.choice.probability(e) * pdf as f32));
-        tally.rays += 1;
-        Some((scene.intersect_from(&y, dir), dir, start))
+        let light = self.choice.pick(sampler.next_f32());
+        let chosen = self.choice.probability_of(light);
+        let (hit, dir, start) = match light {
+            Light::Area(e) => {
+                let emitter = &scene.emitters[e];
+                let y = emitter.sample(scene, sampler.next_f32(), sampler.next_2d());
+                let (dir, pdf) = self
+                    .targets
+                    .direction(y.position.as_dvec3(), sampler.next_2d())?;
+                let dir = dir.as_vec3().normalize();
+                let cos_e = dir.dot(y.normal);
+                if cos_e <= 0.0 || pdf <= 0.0 {
+                    return None;
+                }
+                let start = emitter.radiance * (cos_e * emitter.area / (chosen * pdf as f32));
+                tally.rays += 1;
+                (scene.intersect_from(&y, dir), dir, start)
+            }
+            Light::Lamp(l) => {
+                let lamp = &scene.lamps[l];
+                if !lamp.is_local() {
+                    return None;
+                }
+                // The number an area emitter's point takes, drawn so that the direction
+                // takes the same dimensions of the stream whichever light was picked.
+                sampler.next_f32();
+                let (dir, pdf) = self
+                    .targets
+                    .direction(lamp.position.as_dvec3(), sampler.next_2d())?;
+                let dir = dir.as_vec3().normalize();
+                if pdf <= 0.0 {
+                    return None;
+                }
+                let start = lamp.intensity_toward(dir) / (chosen * pdf as f32);
+                tally.rays += 1;
+                (scene.intersect(&Ray::new(lamp.position, dir)), dir, start)
+            }
+        };
+        (start.max_element() > 0.0).then_some((hit, dir, start))
     }
 
     /// One light path: its splats (radiance times the number of paths) go to `splats`.

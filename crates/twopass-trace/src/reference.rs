@@ -16,7 +16,9 @@
 //!
 //! | `caustics` | | `LightTracing` | who counts the caustic paths (below) |
 //!
-//! Emitters are chosen for next-event estimation in proportion to their mean emitted power.
+//! Emitters and lamps are chosen for next-event estimation in proportion to their mean emitted
+//! power. A lamp (a delta light) is found by next-event estimation alone, without an MIS
+//! weight.
 //!
 //! **Caustics.** A path that sees a diffuse or glossy surface first and reaches the emitter
 //! through a mirror or glass last (E D ... S+ L) is found by a camera path only when its
@@ -35,9 +37,9 @@ use twopass_brdf::{BrdfSample, Material, Rgb, SampleKind};
 use twopass_scene::{Hit, Ray, Scene, SurfacePoint};
 
 use crate::counters::Tally;
-use crate::emitters::EmitterChoice;
+use crate::emitters::{EmitterChoice, Light};
 use crate::film::{Layer, Radiance};
-use crate::integrator::{Integrator, SampleState, Shading};
+use crate::integrator::{Integrator, SampleState, Shading, lamp_light};
 use crate::light_tracing::{CausticScope, LightTracer, LightTracingSettings};
 use crate::sampler::Sampler;
 
@@ -171,10 +173,21 @@ impl Reference {
         tally: &mut Tally,
     ) -> [Rgb; 2] {
         let zero = [Rgb::ZERO; 2];
-        if scene.emitters.is_empty() || !s.hit.front_face {
+        if self.choice.is_empty() || !s.hit.front_face {
             return zero;
         }
-        let e = self.choice.pick(sampler.next_f32());
+        let e = match self.choice.pick(sampler.next_f32()) {
+            Light::Area(e) => e,
+            Light::Lamp(l) => {
+                // A delta light: no BRDF sample reaches it, so no MIS weight.
+                let p = self.choice.probability_of(Light::Lamp(l));
+                let m = s.material;
+                let [d, g] = lamp_light(scene, s, l, tally, &|wl| {
+                    [m.eval_diffuse(s.wo, wl), m.eval_non_diffuse(s.wo, wl)]
+                });
+                return [d / p, g / p];
+            }
+        };
         let emitter = &scene.emitters[e];
         let pick = sampler.next_f32();
         let y = emitter.sample(scene, pick, sampler.next_2d());

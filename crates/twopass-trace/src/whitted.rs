@@ -213,7 +213,7 @@ impl Integrator for Whitted<'_> {
 
 /// A constant ambient radiance I_amb (W/(m^2 sr) per channel) for the classic Whitted tracer,
 /// from the scene alone: the indirect irradiance of a uniformly lit enclosure,
-/// E_ind = (sum of emitted power / total area) * rho / (1 - rho), with rho the area-weighted
+/// E_ind = (sum of emitted power, lamps included / total area) * rho / (1 - rho), with rho the area-weighted
 /// mean diffuse reflectance, as radiance E_ind / pi (the estimate behind the ambient term of
 /// progressive radiosity, Cohen et al. 1988, with the first bounce left to the shadow rays).
 pub fn ambient_estimate(scene: &Scene) -> Rgb {
@@ -242,7 +242,7 @@ pub fn ambient_estimate(scene: &Scene) -> Rgb {
     let power = scene
         .emitters
         .iter()
-        .fold(glam::DVec3::ZERO, |a, e| a + e.power.as_dvec3());
+        .fold(scene.lamp_power().as_dvec3(), |a, e| a + e.power.as_dvec3());
     let e_ind = power / total_area * rho / (glam::DVec3::ONE - rho);
     (e_ind / std::f64::consts::PI).as_vec3()
 }

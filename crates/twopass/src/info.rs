@@ -29,6 +29,81 @@ struct EmitterInfo {
 }
 
 #[derive(Serialize)]
+struct LampInfo {
+    name: String,
+    /// `point`, `spot` or `directional`.
+    kind: &'static str,
+    /// Scene units (point and spot lamps).
+    position: Option<[f32; 3]>,
+    /// Unit direction the light travels (spot: the cone's axis; directional).
+    direction: Option<[f32; 3]>,
+    /// Inner and outer cone half angles, degrees (spot lamps).
+    cone_degrees: Option<[f32; 2]>,
+    /// W/sr per channel (point, spot: on the axis), or W/m^2 (directional).
+    intensity: [f32; 3],
+    /// W per channel; a directional lamp's is what crosses the scene's bounding sphere.
+    power: [f32; 3],
+}
+
+impl LampInfo {
+    fn of(lamp: &twopass_scene::Lamp, scene_diagonal: f32) -> Self {
+        use twopass_scene::LampKind;
+        let (kind, position, direction, cone_degrees) = match lamp.kind {
+            LampKind::Point => ("point", Some(lamp.position.to_array()), None, None),
+            LampKind::Spot {
+                direction,
+                cos_inner,
+                cos_outer,
+            } => (
+                "spot",
+                Some(lamp.position.to_array()),
+                Some(direction.to_array()),
+                Some([cos_inner, cos_outer].map(|c| c.clamp(-1.0, 1.0).acos().to_degrees())),
+            ),
+            LampKind::Directional { direction } => {
+                ("directional", None, Some(direction.to_array()), None)
+            }
+        };
+        Self {
+            name: lamp.name.clone(),
+            kind,
+            position,
+            direction,
+            cone_degrees,
+            intensity: lamp.intensity.to_array(),
+            power: lamp.power(scene_diagonal).to_array(),
+        }
+    }
+
+    /// One line of `twopass info`'s text.
+    fn line(&self) -> String {
+        let v = |a: [f32; 3]| format!("({}, {}, {})", a[0], a[1], a[2]);
+        let e = |a: [f32; 3]| format!("({:.6e}, {:.6e}, {:.6e})", a[0], a[1], a[2]);
+        let mut s = format!("lamp       {}: {}", self.name, self.kind);
+        if let Some(p) = self.position {
+            s += &format!(" at {}", v(p));
+        }
+        if let Some(d) = self.direction {
+            s += &format!(" toward {}", v(d));
+        }
+        if let Some([inner, outer]) = self.cone_degrees {
+            s += &format!(", cone {inner:.2} to {outer:.2} degrees");
+        }
+        let unit = if self.kind == "directional" {
+            "W/m^2"
+        } else {
+            "W/sr"
+        };
+        s += &format!(
+            ", intensity {} {unit}, power {}",
+            e(self.intensity),
+            e(self.power)
+        );
+        s
+    }
+}
+
+#[derive(Serialize)]
 struct Info {
     scene: PathBuf,
     triangles: usize,
@@ -36,6 +111,7 @@ struct Info {
     objects: usize,
     materials_by_type: BTreeMap<String, usize>,
     emitters: Vec<EmitterInfo>,
+    lamps: Vec<LampInfo>,
     bounds_min: [f32; 3],
     bounds_max: [f32; 3],
     total_area: f64,
@@ -70,6 +146,11 @@ pub fn run(args: &InfoArgs, ctx: &Context) -> Result<(), CliError> {
                 area: e.area,
                 power: e.power.to_array(),
             })
+            .collect(),
+        lamps: scene
+            .lamps
+            .iter()
+            .map(|l| LampInfo::of(l, scene.bounds.diagonal()))
             .collect(),
         bounds_min: scene.bounds.min.to_array(),
         bounds_max: scene.bounds.max.to_array(),
@@ -138,6 +219,9 @@ pub fn run(args: &InfoArgs, ctx: &Context) -> Result<(), CliError> {
             e.power[1],
             e.power[2]
         );
+    }
+    for l in &info.lamps {
+        outln!("{}", l.line());
     }
     let say = |name: &str, d: &crate::plan::Decision| -> Result<(), CliError> {
         outln!(

@@ -41,7 +41,8 @@ pub struct SolverDecision {
     pub reason: String,
 }
 
-/// Decides the passes from the objects' materials and emission (unused materials don't count).
+/// Decides the passes from the objects' materials, emission and the lamps (unused materials
+/// don't count).
 pub fn plan(scene: &Scene) -> Plan {
     let used = || {
         scene
@@ -53,7 +54,8 @@ pub fn plan(scene: &Scene) -> Plan {
         .filter(|(_, m)| m.material.reflects_diffusely())
         .map(|(o, _)| o.name.as_str())
         .collect();
-    let emitters = scene.emitters.len();
+    let lamps = scene.lamps.len();
+    let emitters = scene.emitters.len() + lamps;
     let diffuse = match (diffuse_objects.len(), emitters) {
         (_, 0) => Decision {
             required: false,
@@ -65,7 +67,13 @@ pub fn plan(scene: &Scene) -> Plan {
         },
         (n, e) => Decision {
             required: true,
-            reason: format!("{n} diffusely reflecting object(s) lit by {e} emitter(s)"),
+            reason: match lamps {
+                0 => format!("{n} diffusely reflecting object(s) lit by {e} emitter(s)"),
+                l => format!(
+                    "{n} diffusely reflecting object(s) lit by {} emitter(s) and {l} lamp(s)",
+                    e - l
+                ),
+            },
         },
     };
     let mut lobes: Vec<String> = used()

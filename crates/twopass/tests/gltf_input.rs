@@ -11,7 +11,7 @@ use twopass_composite::tonemap::ToneMap;
 use twopass_composite::write::read_exr;
 use twopass_tests::gltf::{GltfWriter, MaterialSpec, Trs};
 
-use crate::common::{BOX, assert_exit, assert_ok, cli, repo};
+use crate::common::{self, BOX, assert_exit, assert_ok, cli, repo, twopass};
 
 /// The Cornell box (`scenes/cornell-box.toml`) as a `.glb` at `path`: one node and mesh per
 /// object, positions in metres, each material's albedo as a base colour (or `white` for every
@@ -253,12 +253,21 @@ fn a_blender_export_bakes_and_blender_imports_the_asset_back_with_its_lightmap()
         .output(&out_dir)
         .run();
     assert_ok(&out);
-    // The lamp is not modelled yet: a located warning, not silence. The checker texture is
-    // read (no warning names it).
+    // The checker texture is read (no warning names it).
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!err.contains("baseColorTexture"), "{err}");
-    let expected = "`Bulb`: KHR_lights_punctual point light";
-    assert!(err.contains(expected), "{expected}:\n{err}");
+    // The point lamp comes back with the wattage Blender shows: the exporter writes
+    // P / (4 pi) * 683 cd, read back as P / (4 pi) W/sr.
+    let v = common::ok_json(&twopass(&["info", glb.to_str().unwrap(), "--json"]));
+    let bulb = v["lamps"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|l| l["name"] == "Bulb")
+        .unwrap_or_else(|| panic!("no lamp `Bulb`: {v}"));
+    assert_eq!(bulb["kind"], "point");
+    let watts = bulb["power"][0].as_f64().unwrap();
+    assert!((watts - 250.0).abs() < 1e-3 * 250.0, "{bulb}");
     let asset = out_dir.join("room.lightmapped.glb");
     let imported = blender("check_asset.py", &asset).unwrap();
     let stdout = String::from_utf8_lossy(&imported.stdout);

@@ -8,6 +8,7 @@ mod bakes;
 mod cli;
 mod compare;
 mod gltf_input;
+mod lamps;
 mod lightmap;
 mod lightmap_render;
 mod limits;

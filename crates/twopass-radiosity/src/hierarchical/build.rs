@@ -15,6 +15,7 @@ use super::state::{BYTES_PER_CLUSTER, BYTES_PER_LINK, BYTES_PER_NODE, Hierarchic
 use crate::cluster::{Clusters, Kind, NodeRef};
 use crate::element::ElementMesh;
 use crate::error::SolveError;
+use crate::lamps::{lamp_power, vertex_lamp_irradiance};
 use crate::options::{MIN_LINK_TOLERANCE, Options, check_common, participating};
 use crate::report::Bookkeeping;
 use crate::specular::Specular;
@@ -24,7 +25,7 @@ impl<'s> HierarchicalSolver<'s> {
     /// Builds the cluster tree over the participating triangles. Objects that neither emit
     /// nor reflect diffusely still cast shadows.
     pub fn new(scene: &'s Scene, options: Options) -> Result<Self, SolveError> {
-        if scene.emitters.is_empty() {
+        if scene.emitters.is_empty() && scene.lamps.is_empty() {
             return Err(SolveError::NoEmitters);
         }
         let diag = scene.bounds.diagonal();
@@ -114,6 +115,8 @@ impl<'s> HierarchicalSolver<'s> {
             residual: DVec3::ZERO,
             residual_fraction: 1.0,
             emitted: DVec3::ZERO,
+            lamp: Vec::new(),
+            lamp_power: lamp_power(scene),
             bookkeeping: Bookkeeping::new(started, Duration::ZERO),
             iterations: 0,
             rays: 0,
@@ -138,8 +141,10 @@ impl<'s> HierarchicalSolver<'s> {
                 let node = &s.mesh.nodes[n as usize];
                 s.tri_emission[node.scene_triangle as usize] * f64::from(node.area)
             })
-            .sum();
+            .sum::<DVec3>()
+            + s.lamp_power;
         s.error_threshold = h.link_tolerance * luminance_f64(s.emitted).max(f64::MIN_POSITIVE);
+        s.refine_for_lamps();
         // Before the first gather every node's exitance is its emission.
         s.push_pull();
         s.bookkeeping.energy.emitted = s.emitted;
@@ -209,5 +214,9 @@ impl<'s> HierarchicalSolver<'s> {
             spec.sent.resize(n, None);
             self.specular_stale = true;
         }
+        // New vertices get the lamps' light at once, exactly, whatever split made them.
+        let (lamp, rays) = vertex_lamp_irradiance(self.scene, &self.mesh, self.lamp.len());
+        self.lamp.extend(lamp);
+        self.rays += rays;
     }
 }

@@ -93,8 +93,8 @@ impl HierarchicalSolver<'_> {
         self.push_pull();
         let after = self.leaf_power();
         self.shoot_specular();
-        // Energy: what the sources sent (their exitance before this gather) against what
-        // arrived, was absorbed, and is reflected but not yet passed on.
+        // Energy: what the sources sent (their exitance before this gather, and the lamps)
+        // against what arrived, was absorbed, and is reflected but not yet passed on.
         let (mut arrived, mut absorbed) = (DVec3::ZERO, DVec3::ZERO);
         for n in self.mesh.leaves() {
             let node = &self.mesh.nodes[n as usize];
@@ -106,8 +106,9 @@ impl HierarchicalSolver<'_> {
         }
         self.residual = after - before;
         self.bookkeeping.energy.absorbed = absorbed;
-        self.bookkeeping.energy.escaped = before - arrived;
-        self.bookkeeping.energy.excess = (arrived - before).max(DVec3::ZERO);
+        let sent = before + self.lamp_power;
+        self.bookkeeping.energy.escaped = sent - arrived;
+        self.bookkeeping.energy.excess = (arrived - sent).max(DVec3::ZERO);
         self.bookkeeping.energy.unshot = self.residual;
         self.bookkeeping.energy.emitted = self.emitted;
         self.residual_fraction =

@@ -40,6 +40,7 @@ mod build;
 mod directions;
 mod gather;
 mod geometry;
+mod lamps;
 mod link;
 mod links;
 mod output;

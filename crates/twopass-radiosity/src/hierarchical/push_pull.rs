@@ -166,8 +166,12 @@ impl HierarchicalSolver<'_> {
         let node = self.mesh.nodes[n as usize];
         let t = node.scene_triangle as usize;
         // What arrived through mirrors and glass, per vertex: reflected light (vertices made
-        // since the last splat get theirs at the next gather).
+        // since the last splat get theirs at the next gather). The lamps' direct light, per
+        // vertex: emitted light.
         for (k, &v) in node.vertices.iter().enumerate() {
+            if let Some(e) = self.lamp.get(v as usize) {
+                here[0][k] += *e;
+            }
             if let Some(e) = self
                 .specular
                 .as_ref()

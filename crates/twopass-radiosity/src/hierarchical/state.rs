@@ -100,8 +100,13 @@ pub struct HierarchicalSolver<'s> {
     /// Residual power of the last iteration per channel (signed), and its fraction.
     pub(super) residual: DVec3,
     pub(super) residual_fraction: f64,
-    /// Power the emitters send, W per channel.
+    /// Power the emitters send, W per channel (the lamps' included).
     pub(super) emitted: DVec3,
+    /// Per element-mesh vertex: the irradiance the lamps give it directly, W/m^2; a source
+    /// term every push-pull adds to the leaves' corners as emitted light.
+    pub(super) lamp: Vec<DVec3>,
+    /// Power the lamps send, W per channel ([`crate::lamps::lamp_power`]).
+    pub(super) lamp_power: DVec3,
     /// Rounds, time and power, kept as the other solver keeps them.
     pub(super) bookkeeping: Bookkeeping,
     /// Gather iterations so far.

@@ -14,7 +14,8 @@ use super::state::{
 };
 use crate::element::ElementMesh;
 use crate::error::SolveError;
-use crate::form_factor::RECEIVER_INSET;
+use crate::form_factor::receiving_point;
+use crate::lamps::{lamp_power, vertex_lamp_irradiance};
 use crate::options::{Options, check_common, participating};
 use crate::report::Bookkeeping;
 use crate::specular::Specular;
@@ -24,7 +25,7 @@ impl<'s> ProgressiveSolver<'s> {
     /// Meshes the scene into patches and elements and sets up the emitters' unshot power.
     /// Only objects that reflect diffusely or emit take part; others still cast shadows.
     pub fn new(scene: &'s Scene, options: Options) -> Result<Self, SolveError> {
-        if scene.emitters.is_empty() {
+        if scene.emitters.is_empty() && scene.lamps.is_empty() {
             return Err(SolveError::NoEmitters);
         }
         let diag = scene.bounds.diagonal();
@@ -146,6 +147,7 @@ impl<'s> ProgressiveSolver<'s> {
             emission: Vec::new(),
             receiving: Vec::new(),
             receivers: Vec::new(),
+            lamp: Vec::new(),
             received_emit: Vec::new(),
             received_refl: Vec::new(),
             specular,
@@ -190,7 +192,33 @@ impl<'s> ProgressiveSolver<'s> {
         }
         s.rebuild_patch_elements();
         s.resplat();
+        s.receive_lamps();
         Ok(s)
+    }
+
+    /// The lamps' light, already in the vertices' received light, as the patches' unshot
+    /// reflected radiosity: each patch receives its elements' areas times the mean of their
+    /// vertices' lamp irradiance, as from a shot. The lamps' power joins the emitted power;
+    /// what lands on no element (light leaving an open scene, the discretization of the
+    /// irradiance over the elements) is escaped.
+    fn receive_lamps(&mut self) {
+        let power = lamp_power(self.scene);
+        if power == DVec3::ZERO {
+            return;
+        }
+        self.bookkeeping.energy.emitted += power;
+        let mut arrived = DVec3::ZERO;
+        for p in 0..self.mesh.patches.len() {
+            let gained: DVec3 = self
+                .element_means(p, |v| self.lamp[v])
+                .map(|(e, a)| e * a)
+                .sum();
+            if gained != DVec3::ZERO {
+                arrived += gained;
+                self.receive(p, gained);
+            }
+        }
+        self.bookkeeping.energy.escaped += power - arrived;
     }
 
     fn object_of_patch(&self, p: usize) -> u32 {
@@ -205,8 +233,10 @@ impl<'s> ProgressiveSolver<'s> {
             * std::f64::consts::PI
     }
 
-    /// Extends the per-vertex arrays to new vertices (reflectance, emission; zero received).
+    /// Extends the per-vertex arrays to new vertices (reflectance, emission; received: the
+    /// lamps' light, exact at each new vertex, and nothing shot yet).
     pub(super) fn sync_vertices(&mut self) {
+        let old = self.rho.len();
         for v in self.rho.len()..self.mesh.vertices.len() {
             let o = &self.scene.objects[self.mesh.vertices[v].object as usize];
             self.rho.push(
@@ -230,24 +260,17 @@ impl<'s> ProgressiveSolver<'s> {
         if let Some(rho) = self.element_albedo.vertex_albedo(self.scene, &self.mesh) {
             self.rho = rho;
         }
+        let (lamp, rays) = vertex_lamp_irradiance(self.scene, &self.mesh, old);
+        for (v, e) in (old..).zip(lamp) {
+            self.received_emit[v] += e;
+            self.lamp.push(e);
+        }
+        self.rays += rays;
     }
 
-    /// Where vertex `v` receives, form factors and shadow rays alike: a hair inside its own
-    /// scene triangle ([`RECEIVER_INSET`] of the way to its centroid). A vertex on a junction
-    /// lies in the plane of the surface it meets, which it would see edge-on (F = 0), and half
-    /// of its shadow rays would start a rounding error behind that surface and find it
-    /// blocking; from inside its own surface it gets the limits both converge to.
+    /// Where vertex `v` receives ([`receiving_point`]).
     pub(super) fn receiving_point(&self, v: usize) -> DVec3 {
-        let vert = &self.mesh.vertices[v];
-        let centroid = self
-            .scene
-            .mesh
-            .corners(vert.triangle)
-            .iter()
-            .map(|c| c.as_dvec3())
-            .sum::<DVec3>()
-            / 3.0;
-        vert.position.as_dvec3() + (centroid - vert.position.as_dvec3()) * RECEIVER_INSET
+        receiving_point(self.scene, &self.mesh.vertices[v])
     }
 
     pub(super) fn rebuild_patch_elements(&mut self) {

@@ -1,4 +1,4 @@
-//! The dense reference: the full system (I - rho F W) B = E over the vertices, with the same
+//! The dense reference: the full system (I - rho F W) B = E + rho E_lamp over the vertices, with the same
 //! vertex-to-patch form factors F the shots use and W the patches' area weights, solved by LU
 //! decomposition (nalgebra). Progressive refinement converges to its solution.
 
@@ -21,7 +21,14 @@ pub fn dense_solve(solver: &mut ProgressiveSolver<'_>) -> Option<Vec<DVec3>> {
     let rows = solver.form_factor_rows();
     let weights = solver.patch_weights();
     let (rho, emission) = solver.vertex_terms();
-    let (rho, emission) = (rho.to_vec(), emission.to_vec());
+    // The lamps' direct light is a source term beside the emission: rho E_lamp.
+    let emission: Vec<DVec3> = emission
+        .iter()
+        .zip(rho)
+        .zip(solver.vertex_lamp_irradiance())
+        .map(|((&e, &r), &l)| e + r * l)
+        .collect();
+    let rho = rho.to_vec();
     // K[v][u] = sum_p F[p][v] W[p][u]: radiosity arriving at v per unit radiosity of u.
     let mut k = DMatrix::<f64>::zeros(n, n);
     for (row, w) in rows.iter().zip(&weights) {

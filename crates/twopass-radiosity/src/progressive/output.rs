@@ -165,6 +165,12 @@ impl ProgressiveSolver<'_> {
         (&self.rho, &self.emission)
     }
 
+    /// Per vertex: the irradiance the lamps give it directly, W/m^2 (a source term of the
+    /// radiosity system beside the emission: B = E + rho (E_lamp + sum F B)).
+    pub fn vertex_lamp_irradiance(&self) -> &[DVec3] {
+        &self.lamp
+    }
+
     /// Displayed radiosity of every vertex without the ambient term, W/m^2.
     pub fn vertex_radiosity(&self) -> Vec<DVec3> {
         (0..self.mesh.vertices.len())

@@ -98,7 +98,7 @@ impl ProgressiveSolver<'_> {
 
     /// Patch `q` receives `gained` (W per channel): it absorbs `1 - rho` of it and keeps the
     /// rest as unshot exitance.
-    fn receive(&mut self, q: usize, gained: DVec3) {
+    pub(super) fn receive(&mut self, q: usize, gained: DVec3) {
         let rho = self.patch_rho(q);
         self.bookkeeping.energy.absorbed += gained * (DVec3::ONE - rho);
         let a = self.patch_area(q);

@@ -68,6 +68,9 @@ pub struct ProgressiveSolver<'s> {
     /// once per shooter.
     pub(super) receiving: Vec<DVec3>,
     pub(super) receivers: Vec<SurfacePoint>,
+    /// Per vertex: irradiance from the lamps (shadows included), W/m^2; part of
+    /// `received_emit`, kept apart for the dense solve's source term.
+    pub(super) lamp: Vec<DVec3>,
     /// Per vertex: irradiance received from emitted and from reflected light, W/m^2.
     pub(super) received_emit: Vec<DVec3>,
     pub(super) received_refl: Vec<DVec3>,

@@ -132,12 +132,21 @@ impl Loader {
         if objects
             .iter()
             .all(|o: &Object| o.emission.max_element() <= 0.0)
+            && self.lamps.iter().all(|l| l.intensity.max_element() <= 0.0)
         {
             self.warnings.push(Warning::NoEmitters {
                 path: self.path.clone(),
             });
         }
-        let mut scene = Scene::assemble(self.path, unit, mesh, self.materials, objects, camera);
+        let mut scene = Scene::assemble(
+            self.path,
+            unit,
+            mesh,
+            self.materials,
+            objects,
+            self.lamps,
+            camera,
+        );
         scene.textures = self.textures;
         Ok((scene, self.warnings))
     }

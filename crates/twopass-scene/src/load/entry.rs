@@ -100,6 +100,7 @@ pub fn load_toml_with(
         used: Vec::new(),
         textures: Vec::new(),
         texture_ids: HashMap::new(),
+        lamps: Vec::new(),
     };
     let mut material_lines = Vec::new();
     for m in &file.materials {
@@ -131,6 +132,11 @@ pub fn load_toml_with(
         }
         ld.object(o.get_ref(), line, &mut parts)?;
     }
+    for (i, l) in file.lights.iter().enumerate() {
+        let line = ld.line(l);
+        let lamp = ld.lamp(l.get_ref(), line, i + 1)?;
+        ld.lamps.push(lamp);
+    }
     for (i, line) in material_lines.into_iter().enumerate() {
         if !ld.used[i] {
             ld.warnings.push(Warning::UnusedMaterial {
@@ -155,6 +161,7 @@ fn load_bare_obj(path: &Path, policy: &ReadPolicy) -> Result<(Scene, Vec<Warning
         used: Vec::new(),
         textures: Vec::new(),
         texture_ids: HashMap::new(),
+        lamps: Vec::new(),
     };
     let file = obj::load(path, policy)?;
     let materials = match &file.materials {

@@ -70,6 +70,8 @@ pub(super) struct Loader {
     /// The textures decoded so far, and their index by source (a file's path, a glTF image).
     pub(super) textures: Vec<crate::texture::Texture>,
     pub(super) texture_ids: HashMap<String, u32>,
+    /// The lamps read so far.
+    pub(super) lamps: Vec<crate::lamp::Lamp>,
 }
 
 /// For "unknown field `k`" inside a typed table (whose span covers the whole table), the offset

@@ -4,6 +4,7 @@ mod assemble;
 mod camera;
 mod entry;
 mod gltf;
+mod lamps;
 mod loader;
 mod materials;
 mod objects;

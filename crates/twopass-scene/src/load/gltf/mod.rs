@@ -36,8 +36,17 @@
 //! | a primitive without a material | the default grey Lambertian (albedo 0.5), warned (glTF's own default is a white rough metal, which would reflect no diffuse light) |
 //! | emissive, metallic-roughness, normal and occlusion textures, a base colour texture on glass or a metal, `alphaMode` other than `OPAQUE`, `KHR_texture_transform` | not used: the factors alone (a warning names the material) |
 //!
-//! **Not modelled, warned and skipped:** `KHR_lights_punctual` lamps (the scene is lit only by
-//! its emissive materials), skins (the node transforms' bind pose is used), morph targets (the
+//! **Lamps** (`KHR_lights_punctual`): each node with a light becomes a [`Lamp`](crate::Lamp)
+//! named after the node (else the light, else `node N`), at the node's world position, a spot
+//! or directional lamp aimed down the node's local -z. glTF's photometric intensities become
+//! radiometric ones divided by [`LUMINOUS_EFFICACY`](crate::LUMINOUS_EFFICACY) (683 lm/W):
+//! candela to W/sr for point and spot lamps, lux to W/m^2 for directional ones, times the
+//! light's `color`. Blender's exporter writes a point or spot lamp of P watts as
+//! P / (4 pi) * 683 cd and a sun of S W/m^2 as S * 683 lux, so they come back as P watts
+//! (4 pi I) and S W/m^2. The spot's cone angles and smooth falloff are glTF's; `range` is not
+//! modelled (warned: the light falls off as 1 / r^2 without a cut-off).
+//!
+//! **Not modelled, warned and skipped:** skins (the node transforms' bind pose is used), morph targets (the
 //! base shape is used), primitives of points or lines or triangle strips and fans (skipped),
 //! sparse accessors (the primitive is skipped), any other extension the file uses (ignored).
 //!
@@ -52,6 +61,7 @@
 //! Files: `read` (the file, its buffers and images, base64 data URIs), `material` (the table
 //! above), `walk` (the nodes, primitives and camera).
 
+mod lamp;
 mod material;
 mod read;
 mod walk;
@@ -82,6 +92,7 @@ pub(super) fn load_gltf(
         used: Vec::new(),
         textures: Vec::new(),
         texture_ids: HashMap::new(),
+        lamps: Vec::new(),
     };
     let file = read::read(path, policy, &mut ld.warnings)?;
     let walked = walk::walk(&mut ld, &file)?;

@@ -422,3 +422,95 @@ fn transmission_with_ior_is_a_dielectric_and_a_smooth_metal_a_conductor() {
         other => panic!("{other:?}"),
     }
 }
+
+#[test]
+fn khr_lights_punctual_lamps_load_placed_aimed_and_in_watts() {
+    use crate::{Lamp, LampKind};
+    let dir = tempfile::tempdir().unwrap();
+    let mut w = GltfWriter::new();
+    let grey = w.material("Grey", MaterialSpec::default());
+    let mesh = w.mesh("Tri", &TRIANGLE, None, None, None, &[0, 1, 2], Some(grey));
+    let floor = w.node("Floor", Some(mesh), None, Trs::default(), vec![]);
+    // A point lamp of 100 W as Blender writes it: 100 / (4 pi) * 683 cd, under a parent that
+    // moves it by (1, 2, 3).
+    let watts = 100.0f32;
+    let bulb = w.light_node(
+        "Bulb",
+        "point",
+        watts / (4.0 * std::f32::consts::PI) * 683.0,
+        [1.0, 1.0, 1.0],
+        None,
+        Trs {
+            t: [0.0, 0.0, 5.0],
+            ..Trs::default()
+        },
+    );
+    let holder = w.node(
+        "Holder",
+        None,
+        None,
+        Trs {
+            t: [1.0, 2.0, 3.0],
+            ..Trs::default()
+        },
+        vec![bulb],
+    );
+    // A spot turned 90 degrees about +y: its -z becomes -x.
+    let spot = w.light_node(
+        "Spot",
+        "spot",
+        683.0 * 2.0,
+        [1.0, 1.0, 1.0],
+        Some((0.25, 0.5)),
+        Trs {
+            r: quarter_turn_y(),
+            ..Trs::default()
+        },
+    );
+    // A sun of 3 W/m^2 (3 * 683 lux), tinted.
+    let sun = w.light_node(
+        "Sun",
+        "directional",
+        683.0 * 3.0,
+        [1.0, 0.5, 0.25],
+        None,
+        Trs::default(),
+    );
+    let path = write(dir.path(), "l.glb", &w.glb(vec![floor, holder, spot, sun]));
+    let (scene, warnings) = load(&path).unwrap();
+    assert!(
+        !warnings
+            .iter()
+            .any(|w| matches!(w, Warning::NoEmitters { .. })),
+        "{warnings:?}"
+    );
+    let by_name = |n: &str| -> &Lamp { scene.lamps.iter().find(|l| l.name == n).unwrap() };
+    let bulb = by_name("Bulb");
+    assert_eq!(bulb.kind, LampKind::Point);
+    assert!((bulb.position - Vec3::new(1.0, 2.0, 8.0)).length() < 1e-6);
+    let power = bulb.power(scene.bounds.diagonal());
+    assert!((power.x - watts).abs() < 1e-4 * watts, "{power}");
+    let spot = by_name("Spot");
+    let LampKind::Spot {
+        direction,
+        cos_inner,
+        cos_outer,
+    } = spot.kind
+    else {
+        panic!("{spot:?}")
+    };
+    assert!((direction - Vec3::NEG_X).length() < 1e-6, "{direction}");
+    assert_eq!((cos_inner, cos_outer), (0.25f32.cos(), 0.5f32.cos()));
+    assert!((spot.intensity.x - 2.0).abs() < 1e-6);
+    let sun = by_name("Sun");
+    assert_eq!(
+        sun.kind,
+        LampKind::Directional {
+            direction: Vec3::NEG_Z
+        }
+    );
+    let e = sun.intensity.to_array();
+    for (got, want) in e.iter().zip([3.0, 1.5, 0.75]) {
+        assert!((got - want).abs() < 1e-6, "{e:?}");
+    }
+}

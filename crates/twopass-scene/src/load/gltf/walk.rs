@@ -98,18 +98,8 @@ pub(super) fn walk(ld: &mut Loader, file: &GltfFile) -> Result<Walked, SceneErro
             stack.push((child, world));
         }
         if let Some(light) = node.light() {
-            let kind = match light.kind() {
-                gltf::khr_lights_punctual::Kind::Directional => "directional",
-                gltf::khr_lights_punctual::Kind::Point => "point",
-                gltf::khr_lights_punctual::Kind::Spot { .. } => "spot",
-            };
-            ld.gltf_warn(
-                &at,
-                format!(
-                    "KHR_lights_punctual {kind} light{} is not modelled yet: the scene is lit only by its emissive materials",
-                    quoted(light.name())
-                ),
-            );
+            let lamp = super::lamp::lamp_of(ld, &light, &node, world, &at)?;
+            ld.lamps.push(lamp);
         }
         if node.skin().is_some() {
             ld.gltf_warn(
