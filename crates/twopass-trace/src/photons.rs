@@ -38,6 +38,11 @@ use crate::counters::Tally;
 use crate::light_tracing::{CausticScope, LightTracer, LightTracingSettings};
 use crate::sampler::Sampler;
 
+/// The default radius cap ([`PhotonSettings::max_radius`]) is the scene's bounding-box
+/// diagonal over this: half the radiosity pass's default element edge (diagonal / 24), so the
+/// photons never blur a caustic more than the element mesh would.
+pub const RADIUS_PER_DIAGONAL: f32 = 48.0;
+
 /// Photons per parallel job; jobs are collected in order.
 const CHUNK: u64 = 4096;
 /// Mixed into the seed so that photons never share a stream with the light tracer's paths.
@@ -57,8 +62,7 @@ pub struct PhotonSettings {
     #[default(64)]
     pub nearest: usize,
     /// Largest radius an estimate gathers photons over, scene units; `None`: the scene's
-    /// bounding-box diagonal over 2 x [`crate::gather::NEAR_PER_DIAGONAL`] (half the radiosity
-    /// pass's default element edge).
+    /// bounding-box diagonal over [`RADIUS_PER_DIAGONAL`].
     #[default(None)]
     pub max_radius: Option<f32>,
     /// Most delta bounces before a photon is stored (deeper paths are dropped).
@@ -149,7 +153,7 @@ impl CausticPhotons {
         }
         let max_radius = settings
             .max_radius
-            .unwrap_or(scene.bounds.diagonal() / (2.0 * crate::gather::NEAR_PER_DIAGONAL))
+            .unwrap_or(scene.bounds.diagonal() / RADIUS_PER_DIAGONAL)
             .max(f32::MIN_POSITIVE);
         Some(Self {
             tree: ImmutableKdTree::new_from_slice(&positions),
