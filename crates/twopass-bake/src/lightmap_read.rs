@@ -36,6 +36,11 @@ pub struct LightmapRadiance {
     /// emitted radiance, so that the radiance is albedo x texel + emission; `None` for a
     /// radiance lightmap.
     reflect: Option<Vec<(Rgb, Rgb)>>,
+    /// For an irradiance lightmap of a textured scene, the base colour textures that multiply
+    /// the albedo per point (as an engine multiplies the lightmap by its own textures), and
+    /// per scene triangle its texture, sampler and texture coordinates; empty otherwise.
+    textures: Vec<twopass_scene::texture::Texture>,
+    tints: Vec<Option<(twopass_scene::texture::AlbedoTexture, [Vec2; 3])>>,
 }
 
 impl LightmapRadiance {
@@ -69,7 +74,8 @@ impl LightmapRadiance {
 
 impl DiffuseRadiance for LightmapRadiance {
     /// The lightmap bilinearly sampled at the point's `TEXCOORD_1`, W/(m^2 sr) (an irradiance
-    /// lightmap's E / pi times the albedo, plus the emission).
+    /// lightmap's E / pi times the albedo, its base colour texture's value at the point
+    /// included, plus the emission).
     fn radiance(&self, triangle: u32, barycentric: [f32; 3]) -> Rgb {
         let Some(c) = self.corners.get(triangle as usize) else {
             return Rgb::ZERO;
@@ -80,7 +86,16 @@ impl DiffuseRadiance for LightmapRadiance {
         }
         let texel = self.sample(p);
         match self.reflect.as_ref().and_then(|r| r.get(triangle as usize)) {
-            Some(&(albedo, emitted)) => albedo * texel + emitted,
+            Some(&(albedo, emitted)) => {
+                let tint = match self.tints.get(triangle as usize) {
+                    Some(Some((a, uv))) => self.textures[a.texture as usize].sample(
+                        a,
+                        uv[0] * barycentric[0] + uv[1] * barycentric[1] + uv[2] * barycentric[2],
+                    ),
+                    _ => Rgb::ONE,
+                };
+                albedo * tint * texel + emitted
+            }
             None => texel,
         }
     }
@@ -307,11 +322,21 @@ pub fn read_lightmap_glb(glb: &Path, scene: &Scene) -> Result<LightmapRadiance, 
             })
             .collect()
     });
+    let (textures, tints) = if reflect.is_some() && scene.has_textures() {
+        let tints = (0..m.triangles.len() as u32)
+            .map(|t| scene.albedo_texture_of(t).map(|(_, a, uv)| (*a, uv)))
+            .collect();
+        (scene.textures.clone(), tints)
+    } else {
+        (Vec::new(), Vec::new())
+    };
     Ok(LightmapRadiance {
         corners,
         image,
         exr,
         reflect,
+        textures,
+        tints,
     })
 }
 

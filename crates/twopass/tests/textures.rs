@@ -1,5 +1,7 @@
 //! Base colour textures a scene cannot use: each an input error (exit 1) naming the MTL
-//! library and line, the material, the texture file and the problem; never a panic.
+//! library and line, the material, the texture file and the problem; never a panic. And a
+//! textured floor rendered from its irradiance lightmap shows the texture, as from its radiance
+//! lightmap.
 
 use std::path::Path;
 
@@ -98,5 +100,122 @@ fn a_decompression_bomb_is_refused_from_its_header() {
         dir.path(),
         "bomb.png",
         "its header declares 100000 x 100000 pixels, more than the 67108864 pixels (32768 on a side) read at most; not decoded",
+    );
+}
+
+/// A 1 m floor (an OBJ whose `map_Kd` is an 8 x 8 red and green checker) under a square light,
+/// seen from above, written into `dir`; returns the scene file.
+fn checker_floor(dir: &Path) -> std::path::PathBuf {
+    let n = 8u32;
+    let texels: Vec<u8> = (0..n * n)
+        .flat_map(|i| {
+            if (i % n + i / n).is_multiple_of(2) {
+                [230u8, 30, 30]
+            } else {
+                [30, 230, 30]
+            }
+        })
+        .collect();
+    let mut png_bytes = Vec::new();
+    let mut e = png::Encoder::new(&mut png_bytes, n, n);
+    e.set_color(png::ColorType::Rgb);
+    e.set_depth(png::BitDepth::Eight);
+    e.write_header().unwrap().write_image_data(&texels).unwrap();
+    std::fs::write(dir.join("checker.png"), png_bytes).unwrap();
+    std::fs::write(
+        dir.join("floor.mtl"),
+        "newmtl checker\nKd 0.9 0.9 0.9\nmap_Kd checker.png\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("floor.obj"),
+        "mtllib floor.mtl\nv 0 0 0\nv 0 0 1\nv 1 0 1\nv 1 0 0\nvt 0 0\nvt 0 1\nvt 1 1\nvt 1 0\n\
+         usemtl checker\nf 1/1 2/2 3/3\nf 1/1 3/3 4/4\n",
+    )
+    .unwrap();
+    let scene = dir.join("floor.toml");
+    std::fs::write(
+        &scene,
+        "version = 1\n[camera]\nposition = [0.5, 1.2, 0.5]\nlook_at = [0.5, 0, 0.5]\n\
+         up = [0, 0, 1]\nfov_y = 40\nresolution = [64, 64]\n\
+         [[material]]\nname = \"white\"\ntype = \"lambert\"\ndiffuse = 0.5\n\
+         [[object]]\nname = \"floor\"\nshape = { type = \"obj\", file = \"floor.obj\" }\n\
+         [[object]]\nname = \"light\"\nmaterial = \"white\"\nemission = 10\n\
+         shape = { type = \"quad\", origin = [0.3, 2, 0.3], edge_u = [0.4, 0, 0], edge_v = [0, 0, 0.4] }\n",
+    )
+    .unwrap();
+    scene
+}
+
+#[test]
+fn a_render_from_an_irradiance_lightmap_multiplies_by_the_texture() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = checker_floor(d);
+    // The same floor from an irradiance lightmap (the texture applied per hit, as an engine
+    // does) and from a radiance lightmap (the texture baked into the texels): both show the
+    // checker, and agree pixel by pixel where a square's texels hold one colour.
+    let render = |quantity: &str| {
+        let out = d.join(quantity);
+        let o = twopass(&[
+            "bake".as_ref(),
+            scene.as_os_str(),
+            "--lightmap".as_ref(),
+            "--texel-size".as_ref(),
+            "0.01".as_ref(),
+            "--lightmap-quantity".as_ref(),
+            quantity.as_ref(),
+            "--quiet".as_ref(),
+            "-o".as_ref(),
+            out.as_os_str(),
+        ]);
+        assert_eq!(
+            o.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let exr = d.join(format!("{quantity}.exr"));
+        let o = twopass(&[
+            "render".as_ref(),
+            scene.as_os_str(),
+            "--method".as_ref(),
+            "radiosity".as_ref(),
+            "--bake".as_ref(),
+            out.join("floor.lightmap.glb").as_os_str(),
+            "--quiet".as_ref(),
+            "-o".as_ref(),
+            exr.as_os_str(),
+        ]);
+        assert_eq!(
+            o.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        twopass_composite::write::read_exr(&exr).unwrap()
+    };
+    let (irradiance, radiance) = (render("irradiance"), render("radiance"));
+    let (mut reds, mut greens, mut agree, mut compared) = (0, 0, 0, 0);
+    for (a, b) in irradiance.pixels().iter().zip(radiance.pixels()) {
+        if b.x > 3.0 * b.y {
+            reds += 1;
+        } else if b.y > 3.0 * b.x {
+            greens += 1;
+        } else {
+            continue; // a texel across a square's edge
+        }
+        compared += 1;
+        if (a.x - b.x).abs() <= 0.05 * b.x.max(b.y) && (a.y - b.y).abs() <= 0.05 * b.x.max(b.y) {
+            agree += 1;
+        }
+    }
+    assert!(
+        reds > 100 && greens > 100,
+        "the checker shows: {reds} red, {greens} green pixels"
+    );
+    assert!(
+        agree * 10 >= compared * 9,
+        "{agree} of {compared} pixels agree within 5 %"
     );
 }
