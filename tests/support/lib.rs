@@ -27,3 +27,38 @@ pub fn exr_text(attributes: &LayerAttributes, name: &str) -> String {
         other => panic!("{name}: {other:?}"),
     }
 }
+
+/// Writes a textured floor into `dir`: `floor.obj`, the 1 m square from (0, 0, 0) to (1, 0, 1)
+/// facing +y with texture coordinates (0, 0) to (1, 1) on its corners; `floor.mtl`, its
+/// material `checker` with `Kd` = `kd` and `map_Kd checker.png`; and `checker.png`, an `n` x
+/// `n` checker of the 8-bit sRGB colours `even` (where column + row is even) and `odd`.
+pub fn write_checker_floor(dir: &Path, n: u32, even: [u8; 3], odd: [u8; 3], kd: f32) {
+    let texels: Vec<u8> = (0..n * n)
+        .flat_map(|i| {
+            if (i % n + i / n).is_multiple_of(2) {
+                even
+            } else {
+                odd
+            }
+        })
+        .collect();
+    let mut png_bytes = Vec::new();
+    let mut e = png::Encoder::new(&mut png_bytes, n, n);
+    e.set_color(png::ColorType::Rgb);
+    e.set_depth(png::BitDepth::Eight);
+    e.write_header()
+        .and_then(|mut w| w.write_image_data(&texels))
+        .expect("a PNG encodes in memory");
+    std::fs::write(dir.join("checker.png"), png_bytes).expect("checker.png is written");
+    std::fs::write(
+        dir.join("floor.mtl"),
+        format!("newmtl checker\nKd {kd} {kd} {kd}\nmap_Kd checker.png\n"),
+    )
+    .expect("floor.mtl is written");
+    std::fs::write(
+        dir.join("floor.obj"),
+        "mtllib floor.mtl\nv 0 0 0\nv 0 0 1\nv 1 0 1\nv 1 0 0\nvt 0 0\nvt 0 1\nvt 1 1\nvt 1 0\n\
+         usemtl checker\nf 1/1 2/2 3/3\nf 1/1 3/3 4/4\n",
+    )
+    .expect("floor.obj is written");
+}

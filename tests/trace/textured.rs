@@ -90,35 +90,7 @@ shape = {{ type = "quad", origin = [0, 0, 0], edge_u = [1, 0, 0], edge_v = [0, 1
 
 /// The box with the checker floor, written into `dir`.
 fn checker_box(dir: &Path) -> Scene {
-    let n = 8u32;
-    let texels: Vec<u8> = (0..n * n)
-        .flat_map(|i| {
-            if (i % n + i / n).is_multiple_of(2) {
-                RED
-            } else {
-                GREEN
-            }
-        })
-        .collect();
-    image::save_buffer(
-        dir.join("checker.png"),
-        &texels,
-        n,
-        n,
-        image::ColorType::Rgb8,
-    )
-    .unwrap();
-    std::fs::write(
-        dir.join("floor.mtl"),
-        format!("newmtl checker\nKd {KD} {KD} {KD}\nmap_Kd checker.png\n"),
-    )
-    .unwrap();
-    std::fs::write(
-        dir.join("floor.obj"),
-        "mtllib floor.mtl\nv 0 0 0\nv 0 0 1\nv 1 0 1\nv 1 0 0\nvt 0 0\nvt 0 1\nvt 1 1\nvt 1 0\n\
-         usemtl checker\nf 1/1 2/2 3/3\nf 1/1 3/3 4/4\n",
-    )
-    .unwrap();
+    twopass_tests::write_checker_floor(dir, 8, RED, GREEN, KD);
     let path = dir.join("box.toml");
     let floor = "[[object]]\nname = \"floor\"\nshape = { type = \"obj\", file = \"floor.obj\" }\n";
     std::fs::write(&path, box_toml(floor, "")).unwrap();

@@ -439,13 +439,8 @@ impl LightTracer {
                 dir = next;
             }
             bounces += 1;
-            if bounces >= s.roulette_depth {
-                let survive = (beta.max_element() / start.max_element()).min(1.0);
-                // A NaN throughput ends the path.
-                if survive.is_nan() || sampler.next_f32() >= survive {
-                    return;
-                }
-                beta /= survive;
+            if bounces >= s.roulette_depth && !survives_roulette(&mut beta, start, sampler) {
+                return;
             }
             tally.rays += 1;
             hit = scene.intersect_from(&h.point, dir);
@@ -509,6 +504,18 @@ impl LightTracer {
             splats.push((pixel, Layer::DirectSpecular, beta * f_g * g));
         }
     }
+}
+
+/// Russian roulette on a light path's throughput `beta` relative to its start `start`: the path
+/// survives with probability min(1, max(beta) / max(start)), its throughput then divided by
+/// that probability so the estimate stays unbiased. A NaN throughput ends the path.
+pub(crate) fn survives_roulette(beta: &mut Rgb, start: Rgb, sampler: &mut Sampler) -> bool {
+    let survive = (beta.max_element() / start.max_element()).min(1.0);
+    if survive.is_nan() || sampler.next_f32() >= survive {
+        return false;
+    }
+    *beta /= survive;
+    true
 }
 
 /// Where a direction from the eye lands on the image, and the importance of that pixel.

@@ -35,7 +35,7 @@ use twopass_brdf::frame::Frame;
 use twopass_scene::Scene;
 
 use crate::counters::Tally;
-use crate::light_tracing::{CausticScope, LightTracer, LightTracingSettings};
+use crate::light_tracing::{CausticScope, LightTracer, LightTracingSettings, survives_roulette};
 use crate::sampler::Sampler;
 
 /// The default radius cap ([`PhotonSettings::max_radius`]) is the scene's bounding-box
@@ -244,13 +244,8 @@ fn trace_photon(
         beta *= b.weight;
         dir = frame.to_world(b.wi).normalize();
         bounces += 1;
-        if bounces >= settings.roulette_depth {
-            let survive = (beta.max_element() / start.max_element()).min(1.0);
-            // A NaN throughput ends the path.
-            if survive.is_nan() || sampler.next_f32() >= survive {
-                return None;
-            }
-            beta /= survive;
+        if bounces >= settings.roulette_depth && !survives_roulette(&mut beta, start, sampler) {
+            return None;
         }
         tally.rays += 1;
         hit = scene.intersect_from(&h.point, dir);

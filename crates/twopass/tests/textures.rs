@@ -106,33 +106,7 @@ fn a_decompression_bomb_is_refused_from_its_header() {
 /// A 1 m floor (an OBJ whose `map_Kd` is an 8 x 8 red and green checker) under a square light,
 /// seen from above, written into `dir`; returns the scene file.
 fn checker_floor(dir: &Path) -> std::path::PathBuf {
-    let n = 8u32;
-    let texels: Vec<u8> = (0..n * n)
-        .flat_map(|i| {
-            if (i % n + i / n).is_multiple_of(2) {
-                [230u8, 30, 30]
-            } else {
-                [30, 230, 30]
-            }
-        })
-        .collect();
-    let mut png_bytes = Vec::new();
-    let mut e = png::Encoder::new(&mut png_bytes, n, n);
-    e.set_color(png::ColorType::Rgb);
-    e.set_depth(png::BitDepth::Eight);
-    e.write_header().unwrap().write_image_data(&texels).unwrap();
-    std::fs::write(dir.join("checker.png"), png_bytes).unwrap();
-    std::fs::write(
-        dir.join("floor.mtl"),
-        "newmtl checker\nKd 0.9 0.9 0.9\nmap_Kd checker.png\n",
-    )
-    .unwrap();
-    std::fs::write(
-        dir.join("floor.obj"),
-        "mtllib floor.mtl\nv 0 0 0\nv 0 0 1\nv 1 0 1\nv 1 0 0\nvt 0 0\nvt 0 1\nvt 1 1\nvt 1 0\n\
-         usemtl checker\nf 1/1 2/2 3/3\nf 1/1 3/3 4/4\n",
-    )
-    .unwrap();
+    twopass_tests::write_checker_floor(dir, 8, [230, 30, 30], [30, 230, 30], 0.9);
     let scene = dir.join("floor.toml");
     std::fs::write(
         &scene,
