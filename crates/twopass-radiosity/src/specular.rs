@@ -29,7 +29,7 @@ use twopass_brdf::colour::luminance_f64;
 use twopass_brdf::frame::Frame;
 use twopass_brdf::random::{SplitMix64, hash, unit_f32, unit_f64};
 use twopass_scene::targets::specular_objects;
-use twopass_scene::{Scene, SpecularTargets, SurfacePoint};
+use twopass_scene::{Hit, LampKind, Ray, Scene, SpecularTargets};
 
 use crate::element::ElementMesh;
 use crate::options::{SpecularOptions, participating};
@@ -351,20 +351,91 @@ impl Specular {
                     return (None, 0);
                 }
                 let power = per_ray * (cos / std::f64::consts::PI / pdf);
-                self.follow(scene, &from, dir.as_vec3(), power, emitted, &mut rng)
+                let dir = dir.as_vec3();
+                let first = scene.intersect_from(&from, dir);
+                self.follow(scene, first, dir, power, emitted, &mut rng)
             })
             .collect();
         let rays = results.iter().map(|r| r.1).sum();
         (results.into_iter().filter_map(|r| r.0).collect(), rays)
     }
 
-    /// Follows a ray leaving `from` in `dir` with `power` (of which the fraction `emitted` per
-    /// channel is emission) through the delta surfaces; returns where it lands (after at least
-    /// one specular bounce, on the front of a surface that takes part) and the rays cast.
+    /// The lamps' light through the specular surfaces (point and spot lamps from their
+    /// position toward the targets' cones, directional lamps across their beam toward the
+    /// targets' discs, [`SpecularTargets::parallel`]), all of it emission. Each lamp gets the
+    /// share of [`SpecularOptions::rays`] its power has of `emitted` (the scene's whole
+    /// emitted luminance power, W), at least [`SpecularOptions::MIN_RAYS`]; its rays are
+    /// stratified over the (cone or disc, direction or point) square. Returns the deposits in
+    /// lamp and ray order and the rays cast; the same `key` gives the same deposits on any
+    /// number of threads.
+    pub fn shoot_lamps(&self, scene: &Scene, emitted: f64, key: u64) -> (Vec<Deposit>, u64) {
+        let back = f64::from(scene.bounds.diagonal()) * 2.0;
+        let mut deposits = Vec::new();
+        let mut cast = 0;
+        for (l, lamp) in scene.lamps.iter().enumerate() {
+            let power = luminance_f64(lamp.power(scene.bounds.diagonal()).as_dvec3());
+            if !(power > 0.0) {
+                continue;
+            }
+            let n = (f64::from(self.settings.rays) * power / emitted.max(f64::MIN_POSITIVE))
+                .ceil()
+                .clamp(
+                    f64::from(SpecularOptions::MIN_RAYS),
+                    f64::from(SpecularOptions::MAX_RAYS),
+                ) as u32;
+            let k = n.isqrt();
+            let lamp_key = hash(key ^ 0x1a3b_0000_0000 ^ l as u64);
+            let results: Vec<(Option<Deposit>, u64)> = (0..n)
+                .into_par_iter()
+                .with_min_len(64)
+                .map(|i| {
+                    let mut rng = SplitMix64::new(hash(lamp_key ^ u64::from(i)));
+                    let u = Vec2::new(rng.next_f32(), rng.next_f32());
+                    let u = if i < k * k { stratum(i, k, u) } else { u };
+                    let (ray, power) = match lamp.kind {
+                        LampKind::Directional { direction } => {
+                            let dir = direction.as_dvec3().normalize();
+                            let Some((point, density)) = self.targets.parallel(dir, u) else {
+                                return (None, 0);
+                            };
+                            // E dA / p(A) per ray, from outside the scene's bounds.
+                            let w = lamp.intensity.as_dvec3() / (density * f64::from(n));
+                            (Ray::new((point - dir * back).as_vec3(), dir.as_vec3()), w)
+                        }
+                        _ => {
+                            let x = lamp.position.as_dvec3();
+                            let Some((dir, pdf)) = self.targets.direction(x, u) else {
+                                return (None, 0);
+                            };
+                            let dir = dir.as_vec3().normalize();
+                            // I(w) dw / p(w) per ray.
+                            let w = lamp.intensity_toward(dir).as_dvec3() / (pdf * f64::from(n));
+                            (Ray::new(lamp.position, dir), w)
+                        }
+                    };
+                    if !(power.max_element() > 0.0) {
+                        return (None, 0);
+                    }
+                    let first = scene.intersect(&ray);
+                    self.follow(scene, first, ray.direction, power, DVec3::ONE, &mut rng)
+                })
+                .collect();
+            for (d, r) in results {
+                deposits.extend(d);
+                cast += r;
+            }
+        }
+        (deposits, cast)
+    }
+
+    /// Follows a ray that met `first` going in `dir` with `power` (of which the fraction
+    /// `emitted` per channel is emission) through the delta surfaces; returns where it lands
+    /// (after at least one specular bounce, on the front of a surface that takes part) and the
+    /// rays cast, the first one's included.
     fn follow(
         &self,
         scene: &Scene,
-        from: &SurfacePoint,
+        first: Option<Hit>,
         mut dir: Vec3,
         mut power: DVec3,
         emitted: DVec3,
@@ -372,7 +443,7 @@ impl Specular {
     ) -> (Option<Deposit>, u64) {
         let mut refracted = false;
         let mut rays = 1;
-        let Some(mut hit) = scene.intersect_from(from, dir) else {
+        let Some(mut hit) = first else {
             return (None, rays);
         };
         let mut bounces = 0;

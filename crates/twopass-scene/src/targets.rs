@@ -122,6 +122,48 @@ impl SpecularTargets {
         Some((dir, self.pdf(x, dir, total)))
     }
 
+    /// A point where a parallel beam travelling along unit `direction` crosses toward the
+    /// targets, for `u` in [0, 1)^2, and its density per unit area of the plane perpendicular
+    /// to `direction` (1 / scene units squared): each target's bounding sphere casts a disc
+    /// of its radius across the beam; a disc is chosen with probability proportional to its
+    /// area and the point drawn uniformly in it (concentric map, so a stratified `u` stays
+    /// stratified). The point lies in the plane through the chosen centre; where discs
+    /// overlap the density counts each disc holding the point. A ray through the point along
+    /// `direction` that misses every disc cannot reach a specular surface, so light from a
+    /// directional lamp needs no other ray. `None` when there is no target.
+    pub fn parallel(&self, direction: DVec3, u: Vec2) -> Option<(DVec3, f64)> {
+        use std::f64::consts::PI;
+        let total: f64 = self.targets.iter().map(|t| PI * t.radius * t.radius).sum();
+        if total.is_nan() || total <= 0.0 {
+            return None;
+        }
+        let target = f64::from(u.x) * total;
+        let mut acc = 0.0;
+        let mut picked = (self.targets[0], 0.5);
+        for (j, t) in self.targets.iter().enumerate() {
+            let w = PI * t.radius * t.radius;
+            if target < acc + w || j + 1 == self.targets.len() {
+                picked = (*t, ((target - acc) / w).clamp(0.0, 1.0 - 1e-12));
+                break;
+            }
+            acc += w;
+        }
+        let (t, ux) = picked;
+        let (a, b) = direction.any_orthonormal_pair();
+        let (r, phi) = (ux.sqrt() * t.radius, 2.0 * PI * f64::from(u.y));
+        let point = t.center + a * (r * phi.cos()) + b * (r * phi.sin());
+        let holding = self
+            .targets
+            .iter()
+            .filter(|o| {
+                let d = point - o.center;
+                (d - direction * d.dot(direction)).length_squared() <= o.radius * o.radius
+            })
+            .count()
+            .max(1);
+        Some((point, holding as f64 / total))
+    }
+
     /// Density (1/sr) of [`SpecularTargets::direction`] from `x` toward unit `dir`, given the
     /// cones' total solid angle `total`: each cone holding the direction adds its probability
     /// over its solid angle, (solid / total) / solid = 1 / total.
@@ -204,6 +246,54 @@ mod tests {
                 let (axis, c) = SpecularTargets::cone(tg, x);
                 d.dot(axis) >= c - 1e-9
             }));
+        }
+    }
+
+    /// The beam's density integrates to 1 over the plane across it (Monte Carlo over a square
+    /// holding both discs), and every drawn point lies in a disc: two overlapping spheres.
+    #[test]
+    fn parallel_density_is_normalised_over_overlapping_discs() {
+        let t = targets(&[
+            (DVec3::new(0.0, 0.0, 5.0), 1.0),
+            (DVec3::new(0.8, 0.3, 2.0), 1.5),
+        ]);
+        let dir = DVec3::new(0.0, 0.0, -1.0);
+        let density = |p: DVec3| {
+            let total: f64 = t
+                .targets
+                .iter()
+                .map(|o| std::f64::consts::PI * o.radius * o.radius)
+                .sum();
+            let holding = t
+                .targets
+                .iter()
+                .filter(|o| {
+                    let d = p - o.center;
+                    d.x * d.x + d.y * d.y <= o.radius * o.radius
+                })
+                .count();
+            holding as f64 / total
+        };
+        let (n, side) = (400, 5.0);
+        let mut integral = 0.0;
+        for i in 0..n {
+            for j in 0..n {
+                let p = DVec3::new(
+                    -2.5 + side * (f64::from(i) + 0.5) / f64::from(n),
+                    -2.5 + side * (f64::from(j) + 0.5) / f64::from(n),
+                    0.0,
+                );
+                integral += density(p);
+            }
+        }
+        integral *= (side / f64::from(n)).powi(2);
+        assert!((integral - 1.0).abs() < 0.01, "integral {integral}");
+        for i in 0..64 {
+            let u = Vec2::new((i % 8) as f32 / 8.0 + 0.01, (i / 8) as f32 / 8.0 + 0.02);
+            let (p, pdf) = t.parallel(dir, u).unwrap();
+            let flat = DVec3::new(p.x, p.y, 0.0);
+            assert!((pdf - density(flat)).abs() < 1e-12, "{pdf} at {p}");
+            assert!(pdf > 0.0);
         }
     }
 

@@ -28,8 +28,9 @@
 //! its area, in a direction drawn from the cones its specular objects subtend
 //! ([`twopass_scene::SpecularTargets`]; a direction outside every cone cannot reach a specular
 //! surface first), with throughput L_e cos(theta_e) A / (P(emitter) p(direction)); or at a
-//! point or spot lamp chosen by power, with throughput I(w) / (P(lamp) p(direction))
-//! (directional lamps send no light paths: their caustics are left out). Delta
+//! point or spot lamp chosen by power, with throughput I(w) / (P(lamp) p(direction)); or, from
+//! a directional lamp, outside the scene on a line through a point of the beam's cross-section
+//! drawn toward the specular objects, with throughput E / (P(lamp) p(area)). Delta
 //! bounces carry power ([`twopass_brdf::delta::DeltaLobe::sample_flux`]). At a vertex x
 //! connected to the camera the pixel j that sees x gains
 //! beta f(x) |cos(theta_x)| / d^2 * W_j, with W_j = 1 / (A_pixel cos^3(theta_c)) the importance
@@ -52,7 +53,7 @@ use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use twopass_brdf::Rgb;
 use twopass_brdf::frame::Frame;
-use twopass_scene::{Camera, Hit, Ray, Scene, SpecularTargets};
+use twopass_scene::{Camera, Hit, LampKind, Ray, Scene, SpecularTargets};
 
 use crate::counters::{RenderProgress, Tally};
 use crate::emitters::{EmitterChoice, Light};
@@ -321,8 +322,9 @@ impl LightTracer {
     /// the path's throughput there, W: the flux one path carries (divided by the number of
     /// paths, the estimator's): L_e cos(theta_e) A / (P(emitter) p(direction)) from an area,
     /// I(w) / (P(lamp) p(direction)) from a lamp (a lamp sends I(w) dw as an area sends
-    /// L cos dA). `None` for a direction the light does not send light into, and for a
-    /// directional lamp, whose light through mirrors and glass is not traced.
+    /// L cos dA), E / (P(lamp) p(A)) from a directional lamp (a point across its beam drawn
+    /// toward the targets, [`SpecularTargets::parallel`]). `None` for a direction the light
+    /// does not send light into.
     pub(crate) fn emit(
         &self,
         scene: &Scene,
@@ -349,8 +351,22 @@ impl LightTracer {
             }
             Light::Lamp(l) => {
                 let lamp = &scene.lamps[l];
-                if !lamp.is_local() {
-                    return None;
+                if let LampKind::Directional { direction } = lamp.kind {
+                    sampler.next_f32();
+                    let dir = direction.as_dvec3().normalize();
+                    let (point, density) = self.targets.parallel(dir, sampler.next_2d())?;
+                    if density <= 0.0 {
+                        return None;
+                    }
+                    // E dA / p(A): the beam's power through the sampled point. The ray starts
+                    // outside the scene's bounds, so whatever the beam meets first it meets.
+                    let start = lamp.intensity / (chosen * density as f32);
+                    let back = f64::from(scene.bounds.diagonal()) * 2.0;
+                    let origin = (point - dir * back).as_vec3();
+                    tally.rays += 1;
+                    let dir = dir.as_vec3();
+                    return (start.max_element() > 0.0)
+                        .then(|| (scene.intersect(&Ray::new(origin, dir)), dir, start));
                 }
                 // The number an area emitter's point takes, drawn so that the direction
                 // takes the same dimensions of the stream whichever light was picked.

@@ -2,12 +2,9 @@
 """twopass's reference path tracer against Mitsuba 3's `path` integrator, per sample, in one run.
 
 The script builds the scene of a twopass scene file (default `scenes/cornell-box.toml`) in
-Mitsuba 3 with `mi.load_dict`: each polygon becomes a triangle fan (`mi.Mesh`, flat normals, the
-file's vertex order, so the one-sided emitter faces where twopass's does), a `diffuse` BSDF per
-Lambert material, an `area` emitter with the object's RGB radiance, a `perspective` sensor with
-the file's camera (vertical field of view 2 atan(film height / 2 / focal length)), a `box` pixel
-filter (each sample counts in its own pixel only, as in twopass), the `independent` sampler, and
-the `path` integrator with twopass's path length settings: at most 64 segments (`max_depth` 64),
+Mitsuba 3 with `mi.load_dict`, converted by `mitsuba_scene.py` beside it (shapes, materials,
+emitters and camera: what it converts and how is written there), and renders it with the `path`
+integrator with twopass's path length settings: at most 64 segments (`max_depth` 64),
 Russian roulette after the third bounce (`rr_depth` 3). Both are unidirectional path tracers with
 next-event estimation and MIS with the power heuristic; twopass survives roulette with
 max(throughput) capped at 1, Mitsuba caps it at 0.95. Mitsuba's wheel ships Embree 3, which both
@@ -47,15 +44,15 @@ Not part of the test suite (Mitsuba is not a dependency of twopass). Usage, from
 
 import argparse
 import json
-import math
 import os
 import subprocess
 import sys
 import tempfile
 import time
-import tomllib
 
 import numpy as np
+
+from mitsuba_scene import scene_dict
 
 
 def read_exr(path):
@@ -73,59 +70,6 @@ def rel_rmse(x, r):
     """The project's error metric: relative RMSE over all pixels and channels."""
     x, r = x.astype(np.float64), r.astype(np.float64)
     return float(np.sqrt(np.mean((x - r) ** 2 / (r * r + 0.01))))
-
-
-def scene_dict(mi, scene_file, width, height):
-    """The twopass scene file as a Mitsuba scene dictionary (meshes as `mi.Mesh` objects)."""
-    with open(scene_file, "rb") as f:
-        s = tomllib.load(f)
-    cam = s["camera"]
-    film_w, film_h = cam.get("film_size", [25, 25])
-    fov_y = math.degrees(2.0 * math.atan(0.5 * film_h / cam["focal_length"]))
-    materials = {m["name"]: m for m in s["material"]}
-    d = {
-        "type": "scene",
-        "integrator": {"type": "path", "max_depth": 64, "rr_depth": 3, "hide_emitters": False},
-        "sensor": {
-            "type": "perspective",
-            "fov_axis": "y",
-            "fov": fov_y,
-            "to_world": mi.ScalarTransform4f().look_at(
-                origin=cam["position"], target=cam["look_at"], up=cam["up"]
-            ),
-            "sampler": {"type": "independent", "sample_count": 1},
-            "film": {
-                "type": "hdrfilm",
-                "width": width,
-                "height": height,
-                "rfilter": {"type": "box"},
-                "pixel_format": "rgb",
-            },
-        },
-    }
-    for i, obj in enumerate(s["object"]):
-        shape = obj["shape"]
-        if shape["type"] != "polygon":
-            raise SystemExit(f"object {obj['name']}: only polygons are converted")
-        m = materials[obj["material"]]
-        if m["type"] != "lambert":
-            raise SystemExit(f"material {m['name']}: only Lambert is converted")
-        v = np.asarray(shape["vertices"], np.float32)
-        faces = np.array([[0, k, k + 1] for k in range(1, len(v) - 1)], np.uint32)
-        props = mi.Properties()
-        props["bsdf"] = mi.load_dict({"type": "diffuse", "reflectance": {
-            "type": "rgb", "value": [float(c) for c in m["diffuse"]]}})
-        if "emission" in obj:
-            props["emitter"] = mi.load_dict({"type": "area", "radiance": {
-                "type": "rgb", "value": [float(c) for c in obj["emission"]]}})
-        props["face_normals"] = True
-        mesh = mi.Mesh(obj["name"], len(v), len(faces), props)
-        params = mi.traverse(mesh)
-        params["vertex_positions"] = v.ravel()
-        params["faces"] = faces.ravel()
-        params.update()
-        d[f"shape_{i:03d}_{obj['name']}"] = mesh
-    return d
 
 
 class Mitsuba:

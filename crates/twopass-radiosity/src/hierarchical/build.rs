@@ -7,6 +7,7 @@ use std::time::{Duration, Instant};
 use glam::DVec3;
 use rayon::prelude::*;
 use twopass_brdf::colour::luminance_f64;
+use twopass_brdf::random::hash;
 use twopass_scene::Scene;
 
 use super::directions::{DIRECTIONS, EMPTY, NOTHING, directions};
@@ -145,6 +146,16 @@ impl<'s> HierarchicalSolver<'s> {
             + s.lamp_power;
         s.error_threshold = h.link_tolerance * luminance_f64(s.emitted).max(f64::MIN_POSITIVE);
         s.refine_for_lamps();
+        // Lamp light through mirrors and glass: deposits the first gather splats.
+        if let Some(spec) = &mut s.specular {
+            let key = hash(s.options.seed ^ 0x1a3b_5bec_0000_0000);
+            let (deposits, rays) = spec
+                .transfer
+                .shoot_lamps(scene, luminance_f64(s.emitted), key);
+            s.rays += rays;
+            spec.keep(deposits, rays);
+            s.specular_stale = true;
+        }
         // Before the first gather every node's exitance is its emission.
         s.push_pull();
         s.bookkeeping.energy.emitted = s.emitted;

@@ -5,6 +5,8 @@ use std::sync::atomic::AtomicU8;
 use std::time::Instant;
 
 use glam::DVec3;
+use twopass_brdf::colour::luminance_f64;
+use twopass_brdf::random::hash;
 use twopass_scene::Scene;
 
 use super::patch_elements::PatchElements;
@@ -198,7 +200,8 @@ impl<'s> ProgressiveSolver<'s> {
 
     /// The lamps' light, already in the vertices' received light, as the patches' unshot
     /// reflected radiosity: each patch receives its elements' areas times the mean of their
-    /// vertices' lamp irradiance, as from a shot. The lamps' power joins the emitted power;
+    /// vertices' lamp irradiance, as from a shot, and what the lamps send through mirrors and
+    /// glass lands as a shot's specular transfer does. The lamps' power joins the emitted power;
     /// what lands on no element (light leaving an open scene, the discretization of the
     /// irradiance over the elements) is escaped.
     fn receive_lamps(&mut self) {
@@ -217,6 +220,13 @@ impl<'s> ProgressiveSolver<'s> {
                 arrived += gained;
                 self.receive(p, gained);
             }
+        }
+        // Lamp light through mirrors and glass: deposits as from a shot of the lamps.
+        if let Some(spec) = &self.specular {
+            let key = hash(self.options.seed ^ 0x1a3b_5bec_0000_0000);
+            let emitted = luminance_f64(self.bookkeeping.energy.emitted);
+            let (deposits, rays) = spec.transfer.shoot_lamps(self.scene, emitted, key);
+            arrived += self.land(deposits, rays);
         }
         self.bookkeeping.energy.escaped += power - arrived;
     }

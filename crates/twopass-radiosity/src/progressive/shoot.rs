@@ -8,6 +8,7 @@ use twopass_brdf::random::hash;
 
 use super::state::ProgressiveSolver;
 use crate::element::Node;
+use crate::specular::Deposit;
 
 /// How far above one the form factors of a shot may sum before the shot is scaled to deliver
 /// what it sends: the vertex form factors of an ordinary mesh sum to one within a few percent
@@ -185,14 +186,27 @@ impl ProgressiveSolver<'_> {
             .collect();
         let key = hash(self.options.seed ^ hash(0x5bec_0000_0000_0000 ^ self.shots) ^ p as u64);
         let emitted = luminance_f64(self.bookkeeping.energy.emitted);
-        let Some((mut deposits, rays)) = spec
+        let Some((deposits, rays)) = spec
             .transfer
             .shoot_changes(self.scene, &self.mesh, &changes, emitted, 0.0, key)
         else {
             return DVec3::ZERO;
         };
-        let spec = self.specular.as_mut().expect("the transfer shot");
-        spec.note_sent(&self.mesh, &changes);
+        self.specular
+            .as_mut()
+            .expect("the transfer shot")
+            .note_sent(&self.mesh, &changes);
+        self.land(deposits, rays)
+    }
+
+    /// Splats `deposits` of the specular transfer (from a shot that cast `rays`) onto the
+    /// vertices and hands what they bring to the receiving patches as unshot reflected
+    /// radiosity, as the form factors' transfer does; keeps them for later resplats. Returns
+    /// the power that arrived (W per channel).
+    pub(super) fn land(&mut self, mut deposits: Vec<Deposit>, rays: u64) -> DVec3 {
+        let Some(spec) = self.specular.as_mut() else {
+            return DVec3::ZERO;
+        };
         self.rays += rays;
         if deposits.is_empty() {
             spec.keep(deposits, rays);
