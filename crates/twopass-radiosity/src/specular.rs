@@ -374,7 +374,7 @@ impl Specular {
         let mut cast = 0;
         for (l, lamp) in scene.lamps.iter().enumerate() {
             let power = luminance_f64(lamp.power(scene.bounds.diagonal()).as_dvec3());
-            if !(power > 0.0) {
+            if power.is_nan() || power <= 0.0 {
                 continue;
             }
             let n = (f64::from(self.settings.rays) * power / emitted.max(f64::MIN_POSITIVE))
@@ -413,7 +413,7 @@ impl Specular {
                             (Ray::new(lamp.position, dir), w)
                         }
                     };
-                    if !(power.max_element() > 0.0) {
+                    if power.is_nan() || power.max_element() <= 0.0 {
                         return (None, 0);
                     }
                     let first = scene.intersect(&ray);
