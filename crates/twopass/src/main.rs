@@ -22,6 +22,7 @@ mod pipeline;
 mod plan;
 mod preset;
 mod render;
+mod render_plan;
 mod slurm;
 mod solve;
 mod view;

@@ -26,6 +26,7 @@ use crate::pipeline::{
 };
 use crate::plan::plan;
 use crate::preset::{PRESET_SETS, RadiosityKnobs, RenderKnobs};
+use crate::render_plan::{Goal, RenderPlan};
 use crate::solve::SolveArgs;
 
 /// Arguments of `twopass render`.
@@ -33,18 +34,27 @@ use crate::solve::SolveArgs;
 pub struct RenderArgs {
     /// Scene file (.toml), mesh (.obj) or glTF 2.0 (.gltf, .glb).
     pub scene: PathBuf,
-    /// The method.
-    #[arg(long, value_enum, default_value = "hybrid")]
-    pub method: RenderMethod,
+    /// The method [default: hybrid; with --target-error or --time-budget and no --method,
+    /// the planner picks the hybrid or the path tracer, whichever it measures to get there
+    /// first].
+    #[arg(long, value_enum)]
+    pub method: Option<RenderMethod>,
+    /// The planner's noise target: the fewest samples per pixel whose image noise (relative
+    /// RMSE), measured by two pilot renders, is at most this (0.02 is 2 %). With
+    /// `--time-budget` (the whole process, seconds), at most the samples that fit it.
+    #[arg(long, value_name = "FRACTION", value_parser = parse_target_error,
+          conflicts_with_all = ["spp", "adaptive", "preset", "part"])]
+    pub target_error: Option<f64>,
     /// Bake file from `twopass bake` for the radiosity-based methods (default: solve now): a
     /// `.bake` file, or a lightmap `<stem>.lightmap.glb` (its HDR `<stem>.lightmap.exr` beside
     /// it gives the light, sampled bilinearly at each hit's `TEXCOORD_1`; radiosity and hybrid
     /// only).
     #[arg(long, value_name = "FILE")]
     pub bake: Option<PathBuf>,
-    /// Samples per pixel (stratified).
-    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
-    pub spp: u32,
+    /// Samples per pixel (stratified) [default: 16; with --time-budget and no --spp, as many
+    /// as the planner measures to fit the budget].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+    pub spp: Option<u32>,
     /// Adaptive anti-aliasing: BASE samples per pixel everywhere first, then `--spp` only in
     /// pixels whose samples, or whose neighbours, differ by a luminance contrast of more than
     /// 5 % (edges, shadow boundaries, noise); the others keep their BASE-sample mean.
@@ -109,6 +119,9 @@ struct Summary {
     exr: Option<PathBuf>,
     png: Option<PathBuf>,
     skipped: Vec<String>,
+    /// The planner's measurements and choice (`--target-error`, `--time-budget`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    plan: Option<RenderPlan>,
 }
 
 /// Renders the scene and writes the EXR (and PNG).
@@ -124,10 +137,20 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
         .as_deref()
         .map(|name| crate::preset::load(&args.scene, args.presets.as_deref(), name))
         .transpose()?;
-    let method = preset.as_ref().map_or(args.method, |p| p.method);
-    let knobs = preset.as_ref().map_or(
+    let explicit = preset.as_ref().map(|p| p.method).or(args.method);
+    let mut method = explicit.unwrap_or(RenderMethod::Hybrid);
+    let budgeted = args.solve.time_budget.is_some()
+        && args.spp.is_none()
+        && args.adaptive.is_none()
+        && args.preset.is_none()
+        && args.part.is_none();
+    let goal = (args.target_error.is_some() || budgeted).then(|| Goal {
+        target_error: args.target_error,
+        time_budget: args.solve.time_budget.map(|d| d.as_secs_f64()),
+    });
+    let mut knobs = preset.as_ref().map_or(
         RenderKnobs {
-            spp: args.spp,
+            spp: args.spp.unwrap_or(DEFAULT_SPP),
             depth: args.depth,
             shadow_grid: args.shadow_grid,
             adaptive: args.adaptive,
@@ -156,9 +179,13 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
             args.bake.as_deref().unwrap_or(Path::new("")).display()
         )));
     }
-    let targets = targets(ctx.output.as_deref(), &args.scene, method, args.png)?;
-    let camera = ctx.camera(&scene.camera)?;
     let decisions = plan(&scene);
+    if goal.is_some() && explicit.is_none() && !decisions.diffuse.required {
+        method = RenderMethod::Reference;
+    }
+    // Checked now with the method so far; named again once the planner has chosen.
+    targets(ctx.output.as_deref(), &args.scene, method, args.png)?;
+    let camera = ctx.camera(&scene.camera)?;
     let mut skipped = Vec::new();
     if method.needs_radiosity() && !decisions.diffuse.required {
         return Err(CliError::Input(format!(
@@ -200,12 +227,41 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
         None
     };
     let radiosity_seconds = started.elapsed().as_secs_f64();
-    let integrator = integrator(
+    let mut integrator = integrator(
         method,
         &scene,
         solution.as_ref().map(|s| s.0.as_dyn()),
         knobs.whitted(),
     );
+    let render_plan = match goal {
+        Some(goal) => {
+            let reference = (explicit.is_none() && method != RenderMethod::Reference).then(|| {
+                crate::pipeline::integrator(RenderMethod::Reference, &scene, None, knobs.whitted())
+            });
+            let mut candidates = vec![(method, integrator.as_ref(), radiosity_seconds)];
+            if let Some(r) = &reference {
+                candidates.push((RenderMethod::Reference, r.as_ref(), 0.0));
+            }
+            let p = crate::render_plan::plan(
+                &scene,
+                &camera,
+                &candidates,
+                &knobs,
+                goal,
+                ctx.seed,
+                started,
+                ctx,
+            )?;
+            knobs.spp = p.choice().spp;
+            if p.choice().method != method {
+                method = p.choice().method;
+                integrator = reference.expect("the path tracer was a candidate");
+            }
+            Some(p)
+        }
+        None => None,
+    };
+    let targets = targets(ctx.output.as_deref(), &args.scene, method, args.png)?;
     let settings = knobs.settings(ctx.seed);
     if let Some(part) = args.part {
         let job = crate::part::render::RenderJob {
@@ -269,10 +325,14 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
         exr,
         png,
         skipped,
+        plan: render_plan,
     };
     crate::output::report(&summary, ctx, || {
         for s in &summary.skipped {
             outln!("{s}");
+        }
+        if let Some(p) = &summary.plan {
+            outln!("planned: {} (pilots {:.2} s)", p.reason, p.pilot_seconds);
         }
         if let Some(source) = summary.radiosity {
             outln!(
@@ -367,6 +427,18 @@ pub(crate) fn targets(
             path.display()
         ))),
     }
+}
+
+/// Samples per pixel of a render that names neither `--spp` nor a goal for the planner.
+pub const DEFAULT_SPP: u32 = 16;
+
+/// A noise target: a relative RMSE in (0, 1).
+fn parse_target_error(s: &str) -> Result<f64, String> {
+    checked(
+        s,
+        |x: &f64| *x > 0.0 && *x < 1.0,
+        "must be a fraction in (0, 1), e.g. 0.02 for 2 %",
+    )
 }
 
 /// Most stops of exposure either way: 2^64 spans far more than any radiance a scene can emit.

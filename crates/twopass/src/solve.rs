@@ -59,7 +59,8 @@ pub struct SolveArgs {
     pub max_shots: Option<u64>,
     /// Stop after this much wall-clock time, seconds: for `bake`, the whole process (loading,
     /// the solve, the residual report and the files); the result is usable but not
-    /// deterministic then.
+    /// deterministic then. For `render` without `--spp`, the solve stops at it too and the
+    /// planner gives the image the samples per pixel it measures to fit what is left.
     #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
     pub time_budget: Option<Duration>,
     /// Longest patch (shooter) edge, scene units [default: scene diagonal / 8].

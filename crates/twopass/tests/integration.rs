@@ -14,6 +14,7 @@ mod lightmap_render;
 mod limits;
 mod outputs;
 mod parts;
+mod planner;
 mod readme;
 mod render;
 mod slurm;

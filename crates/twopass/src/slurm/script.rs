@@ -11,6 +11,7 @@ use crate::context::Context;
 use crate::error::CliError;
 use crate::part::PartIndex;
 use crate::part::file::{part_path, stem};
+use crate::pipeline::RenderMethod;
 use crate::render::RenderArgs;
 use crate::solve::SolveArgs;
 
@@ -163,7 +164,7 @@ pub fn plan(kind: Kind, args: &SubmitArgs, ctx: &Context) -> Result<Plan, CliErr
                 Some(p) => {
                     crate::preset::load(&line.args.scene, line.args.presets.as_deref(), p)?.method
                 }
-                None => line.args.method,
+                None => line.args.method.unwrap_or(RenderMethod::Hybrid),
             };
             if line.args.adaptive.is_some() {
                 return Err(CliError::Usage(
