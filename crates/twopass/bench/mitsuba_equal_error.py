@@ -20,10 +20,11 @@ converts is written there), in one run:
    needs) until its error is at or below twopass's; the spp that gives twopass's error is
    interpolated on log spp against log error between the last two rungs, and its render time
    linearly in spp. Mitsuba's time is `mi.render` alone (scene loading, Python start and the
-   JIT excluded): the comparison is in Mitsuba's favour.
+   JIT excluded; wall and CPU seconds of its threads): the comparison is in Mitsuba's favour.
 
 It reports, per scene: twopass's error, wall and CPU seconds; Mitsuba's equal-error spp and
-render seconds; the ratio Mitsuba seconds / twopass seconds (above 1: twopass is faster). The
+render seconds (wall and CPU); the ratios Mitsuba / twopass (above 1: twopass is faster). On a
+loaded machine the CPU ratio is the steadier figure. The
 metric is the project's relative RMSE, `sqrt(mean((x - r)^2 / (r^2 + 0.01)))` over pixels and
 channels; both engines are measured against the same reference, so its noise counts the same
 for both (and the error it adds is printed).
@@ -51,6 +52,11 @@ import numpy as np
 from mitsuba_pt import read_exr, rel_rmse
 
 
+def self_cpu():
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime
+
+
 def child_cpu():
     r = resource.getrusage(resource.RUSAGE_CHILDREN)
     return r.ru_utime + r.ru_stime
@@ -69,7 +75,8 @@ def run_twopass(args, scene, extra, out):
 
 
 def run_mitsuba(args, scene, spp, seed, out, warm=True):
-    """Mitsuba's image at `spp` (rendered in a child process) and its `mi.render` seconds."""
+    """Mitsuba's image at `spp` (rendered in a child process), its `mi.render` seconds and the
+    CPU seconds of its threads meanwhile."""
     spec = {"scene": scene, "width": args.width, "spp": spp, "seed": seed, "out": out,
             "chunk": args.chunk, "warm": warm}
     env = dict(os.environ)
@@ -78,7 +85,7 @@ def run_mitsuba(args, scene, spp, seed, out, warm=True):
     cmd = [sys.executable, os.path.abspath(__file__), "--child", json.dumps(spec)]
     got = json.loads(subprocess.run(cmd, check=True, capture_output=True, text=True,
                                     env=env).stdout)
-    return np.load(out), got["seconds"]
+    return np.load(out), got["seconds"], got["cpu"]
 
 
 def image_height(scene_file, width):
@@ -107,15 +114,16 @@ def child(spec):
     if spec["warm"]:
         np.asarray(mi.render(scene, spp=sizes[0], seed=2**31 - 1))
     total = np.zeros((height, width, 3), np.float64)
-    seconds = 0.0
+    seconds, cpu = 0.0, 0.0
     for i, n in enumerate(sizes):
-        start = time.perf_counter()
+        start, cpu0 = time.perf_counter(), self_cpu()
         img = np.asarray(mi.render(scene, spp=n, seed=spec["seed"] * 65536 + i), np.float32)
         seconds += time.perf_counter() - start
+        cpu += self_cpu() - cpu0
         total += img[..., :3].astype(np.float64) * n
     dr.sync_thread()
     np.save(spec["out"], (total / spp).astype(np.float32))
-    print(json.dumps({"seconds": seconds}))
+    print(json.dumps({"seconds": seconds, "cpu": cpu}))
 
 
 def reference(args, scene, tmp):
@@ -124,8 +132,8 @@ def reference(args, scene, tmp):
     path = os.path.join(args.out, f"{stem}-mitsuba-{args.width}-{args.reference_spp}spp.npz")
     if not os.path.exists(path):
         half = args.reference_spp // 2
-        a, sa = run_mitsuba(args, scene, half, 1001, os.path.join(tmp, "a.npy"), warm=False)
-        b, sb = run_mitsuba(args, scene, half, 2002, os.path.join(tmp, "b.npy"), warm=False)
+        a, sa, _ = run_mitsuba(args, scene, half, 1001, os.path.join(tmp, "a.npy"), warm=False)
+        b, sb, _ = run_mitsuba(args, scene, half, 2002, os.path.join(tmp, "b.npy"), warm=False)
         np.savez(path, a=a, b=b, seconds=sa + sb)
     z = np.load(path)
     ref = 0.5 * (z["a"] + z["b"])
@@ -135,25 +143,26 @@ def reference(args, scene, tmp):
 
 
 def equal_error(args, scene, target, tmp):
-    """Mitsuba's rungs [(spp, error, seconds)] until its error reaches `target`, and the
-    interpolated (spp, seconds) at `target` (None if `--max-spp` is not enough)."""
+    """Mitsuba's rungs [(spp, error, seconds, CPU seconds)] until its error reaches `target`,
+    and the interpolated (spp, seconds, CPU seconds) at `target` (None if `--max-spp` is not
+    enough)."""
     rungs = []
     spp = 1
     while spp <= args.max_spp:
-        img, sec = run_mitsuba(args, scene, spp, 7 + spp, os.path.join(tmp, "m.npy"))
-        rungs.append((spp, rel_rmse(img, args.ref), sec))
+        img, sec, cpu = run_mitsuba(args, scene, spp, 7 + spp, os.path.join(tmp, "m.npy"))
+        rungs.append((spp, rel_rmse(img, args.ref), sec, cpu))
         if rungs[-1][1] <= target:
             break
         spp *= 2
     if rungs[-1][1] > target:
         return rungs, None
     if len(rungs) == 1:
-        return rungs, (rungs[0][0], rungs[0][2])
-    (s0, e0, t0), (s1, e1, t1) = rungs[-2], rungs[-1]
+        return rungs, (rungs[0][0], rungs[0][2], rungs[0][3])
+    (s0, e0, t0, c0), (s1, e1, t1, c1) = rungs[-2], rungs[-1]
     f = (math.log(e0) - math.log(target)) / max(math.log(e0) - math.log(e1), 1e-9)
     s = math.exp(math.log(s0) + f * (math.log(s1) - math.log(s0)))
-    t = t0 + (s - s0) / (s1 - s0) * (t1 - t0)
-    return rungs, (s, t)
+    w = (s - s0) / (s1 - s0)
+    return rungs, (s, t0 + w * (t1 - t0), c0 + w * (c1 - c0))
 
 
 def main():
@@ -210,10 +219,12 @@ def main():
                 print(f"{scene}: twopass {100 * err:.2f} % in {wall:.2f} s wall ({cpu:.2f} s "
                       f"CPU); Mitsuba above it at {args.max_spp} spp", flush=True)
             else:
-                row.update({"mitsuba_spp": at[0], "mitsuba_s": at[1], "ratio": at[1] / wall})
+                row.update({"mitsuba_spp": at[0], "mitsuba_s": at[1], "mitsuba_cpu_s": at[2],
+                            "ratio": at[1] / wall, "cpu_ratio": at[2] / cpu})
                 print(f"{scene}: twopass {100 * err:.2f} % in {wall:.2f} s wall ({cpu:.2f} s "
-                      f"CPU); Mitsuba {at[0]:.0f} spp in {at[1]:.2f} s: Mitsuba / twopass "
-                      f"{at[1] / wall:.2f}x", flush=True)
+                      f"CPU); Mitsuba {at[0]:.0f} spp in {at[1]:.2f} s ({at[2]:.2f} s CPU): "
+                      f"Mitsuba / twopass {at[1] / wall:.2f}x wall, {at[2] / cpu:.2f}x CPU",
+                      flush=True)
             rows.append(row)
     with open(os.path.join(args.out, "equal-error.json"), "w") as f:
         json.dump({"width": args.width, "reference_spp": args.reference_spp,

@@ -26,6 +26,10 @@ pub struct Room {
     pub objects: usize,
     /// Triangles of the loaded scene (OBJ and built-in shapes).
     pub triangles: usize,
+    /// Further OBJ meshes beside the scene file, as (file name, text): one per material other
+    /// than `grey` that OBJ groups were built in (glass and metal objects), each the scene's
+    /// object of that material.
+    pub other_meshes: Vec<(String, String)>,
     /// The room's inside, scene units (metres): the box the walls enclose, (min, max).
     pub interior: (Vec3, Vec3),
     /// The camera's position, scene units.
@@ -36,6 +40,18 @@ impl Room {
     /// The scene file's name, `<name>.toml`.
     pub fn scene_file(&self) -> String {
         format!("{}.toml", self.name)
+    }
+
+    /// Every mesh file the scene names, as (file name, text): [`Room::mesh_file`] first, then
+    /// [`Room::other_meshes`].
+    pub fn mesh_files(&self) -> Vec<(&str, &str)> {
+        std::iter::once((self.mesh_file.as_str(), self.mesh.as_str()))
+            .chain(
+                self.other_meshes
+                    .iter()
+                    .map(|(f, t)| (f.as_str(), t.as_str())),
+            )
+            .collect()
     }
 }
 
@@ -68,28 +84,60 @@ impl Default for RoomSettings {
 pub(super) struct RoomBuilder {
     name: &'static str,
     interior: (Vec3, Vec3),
-    obj: String,
+    obj: Obj,
+    /// OBJ meshes of other materials, by material name, in the order first used.
+    others: Vec<(&'static str, Obj)>,
     objects: String,
-    vertices: usize,
     groups: usize,
     builtins: usize,
     triangles: usize,
 }
 
+/// One OBJ file being written: its text and the vertices it holds so far.
+struct Obj {
+    text: String,
+    vertices: usize,
+}
+
+impl Obj {
+    fn new(room: &str) -> Self {
+        let mut text = String::new();
+        let _ = writeln!(
+            text,
+            "# twopass generated room `{room}`: positions and faces only"
+        );
+        Self { text, vertices: 0 }
+    }
+
+    /// Appends group `name` of `positions` and counter-clockwise (from the front) `triangles`.
+    fn group(&mut self, name: &str, positions: &[Vec3], triangles: &[[u32; 3]]) {
+        let _ = writeln!(self.text, "o {name}");
+        for p in positions {
+            let _ = writeln!(self.text, "v {} {} {}", p.x, p.y, p.z);
+        }
+        let base = self.vertices + 1;
+        for t in triangles {
+            let _ = writeln!(
+                self.text,
+                "f {} {} {}",
+                base + t[0] as usize,
+                base + t[1] as usize,
+                base + t[2] as usize
+            );
+        }
+        self.vertices += positions.len();
+    }
+}
+
 impl RoomBuilder {
     /// An empty room `name` whose walls will enclose `interior` (min, max).
     pub(super) fn new(name: &'static str, min: Vec3, max: Vec3) -> Self {
-        let mut obj = String::new();
-        let _ = writeln!(
-            obj,
-            "# twopass generated room `{name}`: positions and faces only"
-        );
         Self {
             name,
             interior: (min, max),
-            obj,
+            obj: Obj::new(name),
+            others: Vec::new(),
             objects: String::new(),
-            vertices: 0,
             groups: 0,
             builtins: 0,
             triangles: 0,
@@ -99,21 +147,28 @@ impl RoomBuilder {
     /// Appends an OBJ group `name` of `positions` and counter-clockwise (from the front)
     /// `triangles` indexing them.
     pub(super) fn group(&mut self, name: &str, positions: &[Vec3], triangles: &[[u32; 3]]) {
-        let _ = writeln!(self.obj, "o {name}");
-        for p in positions {
-            let _ = writeln!(self.obj, "v {} {} {}", p.x, p.y, p.z);
-        }
-        let base = self.vertices + 1;
-        for t in triangles {
-            let _ = writeln!(
-                self.obj,
-                "f {} {} {}",
-                base + t[0] as usize,
-                base + t[1] as usize,
-                base + t[2] as usize
-            );
-        }
-        self.vertices += positions.len();
+        self.obj.group(name, positions, triangles);
+        self.groups += 1;
+        self.triangles += triangles.len();
+    }
+
+    /// Appends an OBJ group as [`RoomBuilder::group`] does, into the mesh of `material` (a
+    /// `[[material]]` the finished scene defines): the scene's object `<material>` loads it.
+    pub(super) fn group_in(
+        &mut self,
+        material: &'static str,
+        name: &str,
+        positions: &[Vec3],
+        triangles: &[[u32; 3]],
+    ) {
+        let i = match self.others.iter().position(|(m, _)| *m == material) {
+            Some(i) => i,
+            None => {
+                self.others.push((material, Obj::new(self.name)));
+                self.others.len() - 1
+            }
+        };
+        self.others[i].1.group(name, positions, triangles);
         self.groups += 1;
         self.triangles += triangles.len();
     }
@@ -317,12 +372,22 @@ impl RoomBuilder {
             scene,
             "\n[[object]]\nname = \"room\"\nmaterial = \"grey\"\nshape = {{ type = \"obj\", file = \"{mesh_file}\" }}\n"
         );
+        let mut other_meshes = Vec::new();
+        for (material, obj) in self.others {
+            let file = format!("{}-{material}.obj", self.name);
+            let _ = write!(
+                scene,
+                "\n[[object]]\nname = \"{material}\"\nmaterial = \"{material}\"\nshape = {{ type = \"obj\", file = \"{file}\" }}\n"
+            );
+            other_meshes.push((file, obj.text));
+        }
         scene.push_str(&self.objects);
         Room {
             name: self.name,
             scene,
             mesh_file,
-            mesh: self.obj,
+            mesh: self.obj.text,
+            other_meshes,
             objects: self.groups + self.builtins,
             triangles: self.triangles,
             interior: self.interior,

@@ -12,8 +12,10 @@
 //! | `near-light` | small curved objects close to walls and very close under a small bright 1 x 1 light; albedo 0.8 (many bounces) |
 //! | `two-lights` | a 0.5 x 0.5 and a 3 x 3 light of different power, a red wall (0.6, 0.2, 0.2), a big sphere on the floor, a thin slab leaning on a wall |
 //! | `terminator` | one coarse sphere (icosphere level 2: 320 triangles) on a floor, lit at a slant, seen across its terminator (the sawtooth test) |
+//! | `chrome` | 16 x 8 x 16: glass, chrome and diffuse balls and thin chrome rings on a plate under seventeen strip lights, about 100k triangles (caustics, light seen through mirrors and glass, contact shadows, thin mirrors) |
 
 mod build;
+mod chrome;
 mod grazing;
 mod near_light;
 mod spheres;
@@ -35,16 +37,19 @@ pub enum RoomKind {
     TwoLights,
     /// One coarse sphere lit at a slant, seen across its terminator.
     Terminator,
+    /// Glass, chrome and diffuse balls and thin chrome rings on a plate under strip lights.
+    Chrome,
 }
 
 impl RoomKind {
     /// Every room, in the order the benchmark reports them.
-    pub const ALL: [RoomKind; 5] = [
+    pub const ALL: [RoomKind; 6] = [
         RoomKind::Spheres,
         RoomKind::Grazing,
         RoomKind::NearLight,
         RoomKind::TwoLights,
         RoomKind::Terminator,
+        RoomKind::Chrome,
     ];
 
     /// The room's name (its files' stem and its name on the command line).
@@ -55,6 +60,7 @@ impl RoomKind {
             RoomKind::NearLight => "near-light",
             RoomKind::TwoLights => "two-lights",
             RoomKind::Terminator => "terminator",
+            RoomKind::Chrome => "chrome",
         }
     }
 
@@ -72,6 +78,7 @@ pub fn room(kind: RoomKind, settings: &RoomSettings) -> Room {
         RoomKind::NearLight => near_light::near_light(settings),
         RoomKind::TwoLights => two_lights::two_lights(settings),
         RoomKind::Terminator => terminator::terminator(settings),
+        RoomKind::Chrome => chrome::chrome(settings),
     }
 }
 

@@ -7,7 +7,9 @@ use crate::scene::Scene;
 /// number of warnings.
 fn load(room: &Room) -> (Scene, usize) {
     let dir = tempfile::tempdir().unwrap();
-    std::fs::write(dir.path().join(&room.mesh_file), &room.mesh).unwrap();
+    for (file, text) in room.mesh_files() {
+        std::fs::write(dir.path().join(file), text).unwrap();
+    }
     let path = dir.path().join(room.scene_file());
     std::fs::write(&path, &room.scene).unwrap();
     let (scene, warnings) = crate::load(&path).unwrap_or_else(|e| panic!("{}: {e}", room.name));
@@ -40,6 +42,7 @@ fn every_room_loads_without_warnings_with_its_objects_and_the_camera_inside() {
         (RoomKind::NearLight,  6 + 6 + 1),
         (RoomKind::TwoLights,  5 + 1 + 1 + 1 + 2),
         (RoomKind::Terminator, 6 + 1 + 1),
+        (RoomKind::Chrome,     6 + 1 + 3 + 3 + 3 + 4 + 17),
     ];
     for (kind, objects) in expected {
         let room = room(kind, &RoomSettings::default());
@@ -162,4 +165,47 @@ fn resting_objects_touch_the_floor_and_the_slab_leans_on_its_wall() {
     // The shelves are 0.05 thick.
     let (lo, hi) = extent(&grazing, "room/shelf0");
     assert!((hi.y - lo.y - 0.05).abs() < 1e-5);
+}
+
+#[test]
+fn the_chrome_room_has_glass_and_mirror_balls_and_thin_rings_resting_on_the_plate() {
+    let room = room(RoomKind::Chrome, &RoomSettings::default());
+    let (scene, _) = load(&room);
+    // 3 glass balls of level 5 (20,480 triangles), 3 chrome and 3 diffuse of level 4 (5,120),
+    // 4 rings of 96 x 12 x 2, the walls' 6 x 8 x 8 x 2, the plate's 12, 17 strips of 2.
+    let want = 3 * 20_480 + 6 * 5_120 + 4 * 96 * 12 * 2 + 768 + 12 + 34;
+    assert_eq!(scene.mesh.triangles.len(), want);
+    let material = |name: &str| {
+        let o = scene.objects.iter().find(|o| o.name == name).unwrap();
+        scene.materials[o.material as usize].name.clone()
+    };
+    for (object, want) in [
+        ("glass/glass-ball-0", "glass"),
+        ("chrome/chrome-ball-2", "chrome"),
+        ("chrome/ring-3", "chrome"),
+        ("room/grey-ball-1", "grey"),
+    ] {
+        assert_eq!(material(object), want, "{object}");
+    }
+    for ball in [
+        "glass/glass-ball-1",
+        "chrome/chrome-ball-0",
+        "room/grey-ball-2",
+    ] {
+        let (lo, _) = extent(&scene, ball);
+        assert!((lo.y - 0.4).abs() < 1e-5, "{ball} floats at {}", lo.y);
+    }
+    // A ring stands upright, 2 (0.7 + 0.035) high; a torus's vertices lie between 0.7 - 0.035
+    // and 0.7 + 0.035 from its centre (the centre of its extent), whatever its turn.
+    for ring in ["chrome/ring-0", "chrome/ring-3"] {
+        let (lo, hi) = extent(&scene, ring);
+        assert!(((hi - lo).y - 1.47).abs() < 1e-3, "{ring}: {lo} {hi}");
+        let o = scene.objects.iter().find(|o| o.name == ring).unwrap();
+        let p = &scene.mesh.positions[o.vertices.start as usize..o.vertices.end as usize];
+        let c = Vec3::new(0.5 * (lo.x + hi.x), 0.5 * (lo.y + hi.y), 0.5 * (lo.z + hi.z));
+        for v in p {
+            let d = (*v - c).length();
+            assert!((0.665 - 1e-3..=0.735 + 1e-3).contains(&d), "{ring}: {d}");
+        }
+    }
 }

@@ -182,10 +182,13 @@ fn measure_room(
         resolution: args.size,
     };
     let room = room(kind, &settings);
-    crate::output::write_atomic(&dir.join(&room.mesh_file), room.mesh.as_bytes())?;
+    for (file, text) in room.mesh_files() {
+        crate::output::write_atomic(&dir.join(file), text.as_bytes())?;
+    }
     let scene_path = dir.join(room.scene_file());
     crate::output::write_atomic(&scene_path, room.scene.as_bytes())?;
-    let key = ReferenceKey::new(&room.scene, &room.mesh, args.reference_spp, ctx.seed);
+    let meshes: String = room.mesh_files().iter().map(|m| m.1).collect();
+    let key = ReferenceKey::new(&room.scene, &meshes, args.reference_spp, ctx.seed);
     measure_scene(name, &dir, &scene_path, key, args, ctx)
 }
 
