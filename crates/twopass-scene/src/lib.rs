@@ -37,6 +37,7 @@ mod obj;
 mod radiance;
 mod scene;
 pub mod shape;
+pub mod sky;
 pub mod targets;
 pub mod texture;
 mod transform;
@@ -61,6 +62,10 @@ pub use load::{
 };
 pub use radiance::{DiffuseRadiance, RadianceEstimate, RadianceEstimator};
 pub use scene::{Bounds, Emitter, Hit, Mesh, Object, Scene, SceneMaterial};
+pub use sky::irradiance::SKY_GRID;
+pub use sky::{
+    Daylight, PORTAL_SHARE, Portal, SUN_DIAMETER_DEGREES, Sky, SkyKind, Sun, TURBIDITY_RANGE,
+};
 pub use targets::SpecularTargets;
 pub use texture::{AlbedoTexture, MAX_TEXTURE_PIXELS, MAX_TEXTURE_SIDE, Texture};
 pub use transform::Transform;

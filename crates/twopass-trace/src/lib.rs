@@ -42,6 +42,7 @@ pub mod photons;
 pub mod reference;
 pub mod render;
 pub mod sampler;
+pub mod sky;
 pub mod whitted;
 
 pub use film::{Layer, LayerImages, Radiance};

@@ -7,7 +7,8 @@
 //! (reflecting in its own colour: exact complex Fresnel per channel) and smooth dielectric
 //! (Snell refraction with exact Fresnel weights and total internal reflection), until
 //! [`WhittedSettings::max_depth`] or until the path's throughput falls under
-//! [`WhittedSettings::min_throughput`]. Rays that leave the scene see black.
+//! [`WhittedSettings::min_throughput`]. Rays that leave the scene see the sky (black without
+//! one); the sky lights the shading points by shadow rays ([`crate::sky::sky_light`]).
 //!
 //! | setting | unit | default | meaning |
 //! | --- | --- | --- | --- |
@@ -182,6 +183,8 @@ impl<'a> Whitted<'a> {
                     let child_site = site.wrapping_mul(2).wrapping_add(branch);
                     let l = self.shade(scene, &child, (depth + 1, child_site), t, sampler, tally);
                     r.add(layer, ray.weight * l.total());
+                } else {
+                    r.add(layer, ray.weight * crate::sky::escaped(scene, dir));
                 }
             }
         }
@@ -202,7 +205,7 @@ impl Integrator for Whitted<'_> {
         let SampleState { sampler, tally } = sample;
         tally.rays += 1;
         match scene.intersect(ray) {
-            None => Radiance::ZERO,
+            None => Radiance::single(Layer::Emission, crate::sky::escaped(scene, ray.direction)),
             Some(hit) => {
                 let s = Shading::new(scene, hit, ray.direction);
                 self.shade(scene, &s, (0, 1), Rgb::ONE, sampler, tally)
