@@ -97,8 +97,8 @@ impl Shading {
 }
 
 /// Direct light from every emitter at a shading point, with `grid` x `grid` stratified shadow
-/// rays per area emitter, one per lamp ([`lamps_light`]) and `grid` x `grid` each for the
-/// sky's sun and dome ([`crate::sky::sky_light`]), split into two parts by `brdf`, which returns two BRDF values (1/sr,
+/// rays per area emitter and one per lamp ([`lamps_light`]) (the sky's light is
+/// `crate::sky::sky_light`'s), split into two parts by `brdf`, which returns two BRDF values (1/sr,
 /// without the cosine) for a local incident direction. Returns the two reflected radiances,
 /// W/(m^2 sr) per channel.
 ///
@@ -125,8 +125,7 @@ pub fn direct_light(
         out[1] += part[1];
     }
     let lamps = lamps_light(scene, s, tally, &brdf);
-    let sky = crate::sky::sky_light(scene, s, grid, sampler, tally, &brdf);
-    [out[0] + lamps[0] + sky[0], out[1] + lamps[1] + sky[1]]
+    [out[0] + lamps[0], out[1] + lamps[1]]
 }
 
 /// The irradiance (W/m^2 per channel) that emitter `e` (index into `Scene::emitters`) sends to

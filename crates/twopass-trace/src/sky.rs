@@ -120,7 +120,7 @@ pub fn sky_light_pdf(sky: &Sky, x: Vec3, normal: Vec3, dir: Vec3) -> f32 {
 /// probability [`Sky::sun_share`], else the dome, and the whole sky's radiance in the sampled
 /// direction over the mixture's density ([`sky_light_pdf`]). Split by `brdf` as
 /// [`sky_light`]; W/(m^2 sr) per channel.
-pub(crate) fn sky_mis(
+pub fn sky_mis(
     scene: &Scene,
     s: &Shading,
     sampler: &mut Sampler,

@@ -14,7 +14,7 @@
 //! | --- | --- | --- | --- |
 //! | `max_depth` | bounces | 8 | delta bounces followed after the camera hit |
 //! | `min_throughput` | dimensionless | 1e-3 | a branch whose largest channel weight falls below is cut |
-//! | `shadow_grid` | samples per axis | 4 | shadow rays per emitter per shading point: grid^2 |
+//! | `shadow_grid` | samples per axis | 4 | shadow rays per emitter per shading point: grid^2 (and as many for the sky's sun and for its dome) |
 //! | `caustic_paths` | light paths per camera sample | 1 | the hybrids' per-pixel caustics ([`crate::hybrid`]); 0: off |
 //! | `gather_rays` | rays per camera sample and shading point | 8 | the gathered hybrid's indirect light ([`crate::hybrid::gathered`]) |
 
@@ -136,28 +136,24 @@ impl<'a> Whitted<'a> {
             .diffuse(s, per_pixel_caustics, at, tally, &mut r);
         let need_diffuse = direct_diffuse && m.reflects_diffusely();
         if s.hit.front_face && (need_diffuse || glossy) {
-            let [d, g] = direct_light(
-                scene,
-                &self.lights,
-                s,
-                self.settings.shadow_grid,
-                sampler,
-                tally,
-                |wi| {
-                    [
-                        if need_diffuse {
-                            m.eval_diffuse(s.wo, wi)
-                        } else {
-                            Rgb::ZERO
-                        },
-                        if glossy {
-                            m.eval_non_diffuse(s.wo, wi)
-                        } else {
-                            Rgb::ZERO
-                        },
-                    ]
-                },
-            );
+            let brdf = |wi| {
+                [
+                    if need_diffuse {
+                        m.eval_diffuse(s.wo, wi)
+                    } else {
+                        Rgb::ZERO
+                    },
+                    if glossy {
+                        m.eval_non_diffuse(s.wo, wi)
+                    } else {
+                        Rgb::ZERO
+                    },
+                ]
+            };
+            let grid = self.settings.shadow_grid;
+            let [d, g] = direct_light(scene, &self.lights, s, grid, sampler, tally, brdf);
+            let [sd, sg] = crate::sky::sky_light(scene, s, grid, sampler, tally, &brdf);
+            let (d, g) = (d + sd, g + sg);
             r.add(Layer::Diffuse, d);
             r.add(Layer::DirectSpecular, g);
         }

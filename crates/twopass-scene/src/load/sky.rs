@@ -167,7 +167,7 @@ impl Loader {
             edge_u: Vec3::from_array(p.edge_u),
             edge_v: Vec3::from_array(p.edge_v),
         };
-        if !(portal.area() > 0.0) {
+        if portal.area().partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
             return Err(err(
                 "`edge_u` and `edge_v` are parallel or zero: the portal has no area".into(),
             ));

@@ -1,6 +1,6 @@
 //! The sky: light from infinitely far away in every direction a ray escapes the scene by, from
 //! a `[sky]` table. A uniform environment (the same radiance from the whole sphere), or a clear
-//! daylight sky (Preetham et al. 1999, [`preetham`]) over the upper hemisphere with a sun of
+//! daylight sky (Preetham et al. 1999, the `preetham` module) over the upper hemisphere with a sun of
 //! finite angular size (a disc of uniform radiance). Optional portals ([`Portal`]: the
 //! windows through which an interior sees the sky) make sampling aim at them.
 //!
