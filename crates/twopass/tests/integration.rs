@@ -16,6 +16,7 @@ mod outputs;
 mod parts;
 mod readme;
 mod render;
+mod sky;
 mod slurm;
 mod textures;
 mod tradeoff;

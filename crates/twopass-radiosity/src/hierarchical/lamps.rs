@@ -66,10 +66,22 @@ impl HierarchicalSolver<'_> {
         let corners = self.mesh.corners(n);
         let normals = node.vertices.map(|v| self.mesh.vertices[v as usize].normal);
         let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        // Without a sky the corners' exact lamp light is at hand; a sky's per-vertex light
+        // holds the dome's noisy estimate, so then the corners are probed like the lattice.
+        let sky = self.scene.sky.is_some();
+        if !sky {
+            for v in node.vertices {
+                let y = luminance_f64(rho * self.lamp[v as usize]);
+                (lo, hi) = (lo.min(y), hi.max(y));
+            }
+        }
         let mut rays = 0;
         for i in 0..=m {
             for j in 0..=m - i {
                 let k = m - i - j;
+                if !sky && (i == m || j == m || k == m) {
+                    continue;
+                }
                 let w = [i, j, k].map(|x| f64::from(x) / f64::from(m));
                 let p = corners[0] * w[0] + corners[1] * w[1] + corners[2] * w[2];
                 let normal = (normals[0] * w[0] as f32
