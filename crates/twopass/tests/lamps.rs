@@ -96,10 +96,16 @@ fn info_lists_the_lamps_and_plans_a_scene_lit_by_lamps_alone() {
     let p = lamps[0]["power"][0].as_f64().unwrap();
     assert!((p - 100.0).abs() < 1e-3, "{p}");
     // Lit by lamps alone, the scene renders; nothing is refused as unlit.
-    for method in ["radiosity", "hybrid"] {
-        let out_dir = dir.path().join(method);
+    renders_lit(dir.path(), &path, &["radiosity", "hybrid"]);
+}
+
+/// The scene at `path` renders with each of `methods` (into folders of `dir`), and nothing
+/// refuses it as unlit.
+pub(crate) fn renders_lit(dir: &Path, path: &Path, methods: &[&str]) {
+    for method in methods {
+        let out_dir = dir.join(method);
         let out = cli("render")
-            .arg(&path)
+            .arg(path)
             .words(&format!("--method {method} --spp 4"))
             .output(&out_dir)
             .run();

@@ -2,8 +2,8 @@
 //! file, line, table and key; `info` says whether the sky is in use and plans a scene lit by
 //! the sky alone, which renders and is not refused as unlit.
 
-use crate::common::{assert_ok, cli, ok_json, twopass};
-use crate::lamps::{floor_with, info_fails, write};
+use crate::common::{assert_ok, ok_json, twopass};
+use crate::lamps::{floor_with, info_fails, renders_lit, write};
 
 #[test]
 fn bad_sky_tables_exit_1_naming_the_line_table_and_key() {
@@ -61,15 +61,5 @@ fn info_says_when_the_sky_is_in_use_and_a_sky_alone_lights_a_render() {
     }
     let v = ok_json(&twopass(&["info", path.to_str().unwrap(), "--json"]));
     assert_eq!(v["plan"]["sky"]["required"], true);
-    for method in ["radiosity", "hybrid", "reference"] {
-        let out_dir = dir.path().join(method);
-        let out = cli("render")
-            .arg(&path)
-            .words(&format!("--method {method} --spp 4"))
-            .output(&out_dir)
-            .run();
-        assert_ok(&out);
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert!(!err.contains("nothing emits light"), "{err}");
-    }
+    renders_lit(dir.path(), &path, &["radiosity", "hybrid", "reference"]);
 }
