@@ -1,6 +1,7 @@
 //! The scene layer of twopass: the scene file format (TOML, with OBJ/MTL meshes through tobj),
 //! validation once at load, the runtime [`Scene`] (indexed meshes, materials, objects,
-//! emitters, lamps ([`lamp`]: point, spot and directional lights), camera) and ray queries over an 8-wide BVH (obvhs builds a binary tree, collapsed
+//! emitters, lamps ([`lamp`]: point, spot and directional lights), the sky ([`sky`]: uniform
+//! or Preetham daylight with a finite sun, portals), camera) and ray queries over an 8-wide BVH (obvhs builds a binary tree, collapsed
 //! into 8-wide nodes with four-triangle leaves).
 //!
 //! After [`load`] returns `Ok`, every position and normal is finite, every triangle has a

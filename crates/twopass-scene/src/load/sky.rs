@@ -239,6 +239,28 @@ mod tests {
     }
 
     #[test]
+    fn the_sun_stands_over_the_skys_own_up() {
+        // With +z up, elevation 90 is +z, and azimuth 90 at elevation 0 a quarter turn from
+        // the horizontal part of +x (the reference when up is along z) toward up x it.
+        let s = load("[sky]\nkind = \"daylight\"\nsun_elevation = 90\nup = [0, 0, 2]\n").unwrap();
+        let sky = s.sky.unwrap();
+        assert_eq!(sky.up, Vec3::Z);
+        assert!((sky.sun.unwrap().direction - Vec3::Z).length() < 1e-6);
+        let s = load(
+            "[sky]\nkind = \"daylight\"\nsun_elevation = 0\nsun_azimuth = 90\nup = [0, 0, 1]\n",
+        )
+        .unwrap();
+        let SkyKind::Daylight(d) = &s.sky.as_ref().unwrap().kind else {
+            panic!("daylight")
+        };
+        assert!(
+            (d.sun_direction - Vec3::Y).length() < 1e-6,
+            "{}",
+            d.sun_direction
+        );
+    }
+
+    #[test]
     fn bad_sky_values_name_the_file_line_and_key() {
         // The [sky] table (or the first [[portal]]) starts at line 14 of the file.
         #[rustfmt::skip]
