@@ -13,6 +13,7 @@ mod hierarchical;
 mod lamps;
 mod radiosity;
 mod scenes;
+mod sky;
 mod specular;
 mod terminator;
 mod trace;

@@ -15,4 +15,5 @@ mod lamps;
 mod optics;
 mod photons;
 mod share;
+mod sky;
 mod textured;

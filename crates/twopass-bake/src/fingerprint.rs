@@ -199,6 +199,12 @@ pub fn lighting_fingerprint(scene: &Scene) -> u64 {
             h.vec3(l.intensity);
         }
     }
+    // The sky: its kind, parameters and portals (their `Debug` text prints every float
+    // exactly). Hashed only when there is one, as the lamps.
+    if let Some(sky) = &scene.sky {
+        h.bytes(b"sky");
+        h.bytes(format!("{sky:?}").as_bytes());
+    }
     h.0
 }
 

@@ -16,7 +16,9 @@
 //! radiance L = B / pi in W/(m^2 sr). Emitters are one-sided with exitance E = pi L_e. Lamps
 //! (point, spot, directional) light every element vertex directly and exactly, I(w) cos / r^2
 //! or E cos with a shadow ray, and both solvers carry that light on as they carry a shot's;
-//! their power counts in the emitted power.
+//! their power counts in the emitted power. The sky (and its sun) lights every vertex the same
+//! way, its irradiance estimated by stratified shadow rays keyed by the seed and the vertex;
+//! its power is what crosses the scene's bounding sphere.
 //!
 //! ```no_run
 //! use twopass_radiosity::{Options, Solver};

@@ -52,7 +52,7 @@ pub fn decide(scene: &Scene) -> (bool, String) {
             "no mirror, conductor or dielectric surface: all transfer is diffuse".into(),
         );
     }
-    if scene.emitters.is_empty() && scene.lamps.is_empty() {
+    if !scene.has_light() {
         return (false, "nothing emits light".into());
     }
     let takes_part = participating(scene);

@@ -28,6 +28,55 @@ pub struct SceneFile {
     /// The lamps: point, spot and directional lights.
     #[serde(default, rename = "light")]
     pub lights: Vec<Spanned<LightDesc>>,
+    /// The sky: light from every direction a ray escapes the scene by.
+    pub sky: Option<Spanned<SkyDesc>>,
+    /// Windows through which the sky lights an interior (sampling aims through them).
+    #[serde(default, rename = "portal")]
+    pub portals: Vec<Spanned<PortalDesc>>,
+}
+
+/// `[sky]`: a uniform environment or a clear daylight sky; `kind` selects which.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum SkyDesc {
+    /// The same radiance from every direction of the sphere.
+    Uniform {
+        /// Radiance, W/(m^2 sr) per channel (or one value for all three).
+        radiance: Triple,
+        /// Factor on the radiance (default 1).
+        scale: Option<f32>,
+    },
+    /// Preetham et al.'s clear sky with a sun of finite size.
+    Daylight {
+        /// Atmospheric turbidity, in [2, 10] (default 3).
+        turbidity: Option<f32>,
+        /// The sun's elevation above the horizon, degrees in [-90, 90]; or give
+        /// `sun_direction`.
+        sun_elevation: Option<f32>,
+        /// The sun's azimuth, degrees, from the horizontal part of +z toward +x (default 0).
+        sun_azimuth: Option<f32>,
+        /// Direction toward the sun (need not be unit); or give `sun_elevation`.
+        sun_direction: Option<[f32; 3]>,
+        /// The sun's angular diameter, degrees in (0, 45] (default 0.53).
+        sun_diameter: Option<f32>,
+        /// The zenith (need not be unit; default [0, 1, 0]).
+        up: Option<[f32; 3]>,
+        /// Factor on every radiance (default 1: luminance in cd/m^2 over 683 lm/W).
+        scale: Option<f32>,
+    },
+}
+
+/// `[[portal]]`: a parallelogram window through which the sky lights an interior, scene
+/// units.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PortalDesc {
+    /// One corner.
+    pub origin: [f32; 3],
+    /// First edge from `origin`.
+    pub edge_u: [f32; 3],
+    /// Second edge from `origin`.
+    pub edge_v: [f32; 3],
 }
 
 /// `[[light]]`: a lamp; `kind` selects point, spot or directional. A point or spot lamp gives

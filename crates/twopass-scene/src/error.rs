@@ -278,6 +278,19 @@ pub enum SceneError {
         /// What is wrong.
         problem: String,
     },
+    /// A `[sky]` or `[[portal]]` table that cannot be used (a turbidity outside the model's
+    /// range, a zero direction, a degenerate portal, ...).
+    #[error("{}:{line}: {table}: {problem}", path.display())]
+    Sky {
+        /// The scene file.
+        path: PathBuf,
+        /// Line of the table.
+        line: usize,
+        /// Which table: `sky`, or `portal N` (1-based).
+        table: String,
+        /// What is wrong, naming the key.
+        problem: String,
+    },
     /// An error in a file an object of the scene refers to (its OBJ mesh or MTL library),
     /// located at that object.
     #[error("{}:{line}: object `{object}`: {source}", path.display())]

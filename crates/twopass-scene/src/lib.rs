@@ -1,6 +1,7 @@
 //! The scene layer of twopass: the scene file format (TOML, with OBJ/MTL meshes through tobj),
 //! validation once at load, the runtime [`Scene`] (indexed meshes, materials, objects,
-//! emitters, lamps ([`lamp`]: point, spot and directional lights), camera) and ray queries over an 8-wide BVH (obvhs builds a binary tree, collapsed
+//! emitters, lamps ([`lamp`]: point, spot and directional lights), the sky ([`sky`]: uniform
+//! or Preetham daylight with a finite sun, portals), camera) and ray queries over an 8-wide BVH (obvhs builds a binary tree, collapsed
 //! into 8-wide nodes with four-triangle leaves).
 //!
 //! After [`load`] returns `Ok`, every position and normal is finite, every triangle has a
@@ -37,6 +38,7 @@ mod obj;
 mod radiance;
 mod scene;
 pub mod shape;
+pub mod sky;
 pub mod targets;
 pub mod texture;
 mod transform;
@@ -61,6 +63,10 @@ pub use load::{
 };
 pub use radiance::{DiffuseRadiance, RadianceEstimate, RadianceEstimator};
 pub use scene::{Bounds, Emitter, Hit, Mesh, Object, Scene, SceneMaterial};
+pub use sky::irradiance::SKY_GRID;
+pub use sky::{
+    Daylight, PORTAL_SHARE, Portal, SUN_DIAMETER_DEGREES, Sky, SkyKind, Sun, TURBIDITY_RANGE,
+};
 pub use targets::SpecularTargets;
 pub use texture::{AlbedoTexture, MAX_TEXTURE_PIXELS, MAX_TEXTURE_SIDE, Texture};
 pub use transform::Transform;

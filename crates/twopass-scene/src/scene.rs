@@ -237,6 +237,8 @@ pub struct Scene {
     pub emitters: Vec<Emitter>,
     /// The lamps: point, spot and directional lights (delta lights, never hit by a ray).
     pub lamps: Vec<crate::lamp::Lamp>,
+    /// The sky, lighting every ray that escapes the scene ([`crate::sky`]); `None`: black.
+    pub sky: Option<crate::sky::Sky>,
     /// The camera.
     pub camera: Camera,
     /// The textures materials refer to ([`SceneMaterial::albedo_texture`]), each decoded once.
@@ -294,6 +296,7 @@ impl Scene {
             objects,
             emitters,
             lamps,
+            sky: None,
             camera,
             textures: Vec::new(),
             bounds,
@@ -469,6 +472,11 @@ impl Scene {
             }
         }
         sum
+    }
+
+    /// Whether anything lights the scene: an emitting surface, a lamp or a sky.
+    pub fn has_light(&self) -> bool {
+        !self.emitters.is_empty() || !self.lamps.is_empty() || self.sky.is_some()
     }
 
     /// Total power of the lamps, W per channel ([`Lamp::power`](crate::Lamp::power)).

@@ -9,7 +9,9 @@
 //! **No double counting.** The point's radiance is L_e + rho / pi (E_direct + E_gather):
 //! - E_direct: light leaving the front of an emitter and reaching the point unoccluded
 //!   ([`crate::integrator::direct_light`]; mirrors and glass occlude shadow rays), and from
-//!   every lamp by one shadow ray each ([`crate::integrator::lamps_irradiance`]);
+//!   every lamp by one shadow ray each ([`crate::integrator::lamps_irradiance`]), and from
+//!   the sky by stratified directions over the sun's cone and the dome with a shadow ray each
+//!   ([`Scene::sky_irradiance`], keyed by the point);
 //! - E_gather: the gather rays. Where one lands on a diffuse surface first it takes the
 //!   solution's radiance there less the emission (the shadow rays counted that); where it
 //!   lands on a mirror or glass, it follows the delta path (one branch chosen by its weight)
@@ -19,6 +21,10 @@
 //!   ray finds) is the photons' density estimate, smooth where a few gather rays would carry
 //!   all of a small emitter's light (without photons the gather rays take that emission too,
 //!   noisily but in full).
+//!
+//! A gather ray that escapes the scene from the point carries nothing (the sky is in
+//! E_direct); one that escapes after a mirror or glass carries the sky's radiance (L S+ D
+//! from the sky: no shadow ray passes a delta surface, and no light path starts at the sky).
 //!
 //! The point's own value in the solution is not used at all.
 //!
@@ -74,6 +80,9 @@ use crate::sampler::Sampler;
 /// sample indices 0, 1, ... of the point's Sobol sequence; the shadow rays a sequence of their
 /// own).
 const DIRECT_STREAM: u64 = 0x5eed_d1ec_7000_0001;
+
+/// Mixed into the seed of a point's sky samples in the final gather.
+const SKY_STREAM: u64 = 0x5eed_5c1e_0000_0002;
 
 /// What a gather ray hit first.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -166,6 +175,9 @@ pub struct Gatherer<'a> {
     grids: Vec<u32>,
     /// Emitter choice by power, for the one shadow ray of a near hit's extra bounce.
     choice: EmitterChoice,
+    /// Samples per axis of the sky's sun and dome grids per point (about the square root of
+    /// [`GatherSettings::shadow_rays`]).
+    sky_grid: u32,
     /// Hits closer than this take one more bounce (scene units).
     near: f32,
     /// Past this instant, points take the solution's value instead of a gather (a time budget).
@@ -218,6 +230,7 @@ impl<'a> Gatherer<'a> {
             lights: Lights::new(scene),
             grids,
             choice: EmitterChoice::new(scene),
+            sky_grid: (f64::from(settings.shadow_rays).sqrt().round() as u32).max(1),
             near: settings
                 .near_distance
                 .unwrap_or(scene.bounds.diagonal() / NEAR_PER_DIAGONAL)
@@ -401,6 +414,9 @@ impl<'a> Gatherer<'a> {
             tally.rays += 1;
             if let Some(h) = scene.intersect_from(&here.hit.point, next) {
                 l += bs.weight * self.follow(h, next, caustics_elsewhere, sampler, tally);
+            } else {
+                // The sky through mirrors and glass (L S+ D): no shadow ray passes them.
+                l += bs.weight * crate::sky::escaped(scene, next);
             }
         }
         (l, first)
@@ -442,6 +458,10 @@ impl<'a> Gatherer<'a> {
                     } / p;
                     sum += weight * irradiance * std::f32::consts::FRAC_1_PI;
                 }
+            }
+            if scene.sky.is_some() {
+                let e = crate::sky::sky_irradiance(scene, &here, 1, sampler, tally);
+                sum += weight * e * std::f32::consts::FRAC_1_PI;
             }
             let bounce = cosine_direction(normal, sampler.next_2d());
             if bounce.dot(point.normal) <= 0.0 {
@@ -509,10 +529,10 @@ impl<'a> Gatherer<'a> {
             };
             let next = here.frame.to_world(bs.wi).normalize();
             tally.rays += 1;
-            let Some(h) = scene.intersect_from(&here.hit.point, next) else {
-                return sum;
-            };
             throughput *= bs.weight;
+            let Some(h) = scene.intersect_from(&here.hit.point, next) else {
+                return sum + throughput * crate::sky::escaped(scene, next);
+            };
             if throughput.max_element() <= 0.0 {
                 return sum;
             }
@@ -575,6 +595,18 @@ impl RadianceEstimator for Gatherer<'_> {
             );
         }
         irradiance += lamps_irradiance(self.scene, &s, &mut tally);
+        if self.scene.sky.is_some() {
+            let key = twopass_brdf::random::hash(self.settings.seed ^ SKY_STREAM ^ key);
+            let mut rays = 0;
+            irradiance += self.scene.sky_irradiance(
+                &s.hit.point,
+                s.hit.shading_normal,
+                key,
+                self.sky_grid,
+                &mut rays,
+            );
+            tally.shadow_rays += rays;
+        }
         let direct = rho * irradiance * std::f32::consts::FRAC_1_PI;
 
         // Indirect: cosine-weighted gather rays, E = pi mean(L), so rho / pi E = rho mean(L);

@@ -97,7 +97,8 @@ impl Shading {
 }
 
 /// Direct light from every emitter at a shading point, with `grid` x `grid` stratified shadow
-/// rays per area emitter and one per lamp ([`lamps_light`]), split into two parts by `brdf`, which returns two BRDF values (1/sr,
+/// rays per area emitter and one per lamp ([`lamps_light`]) (the sky's light is
+/// `crate::sky::sky_light`'s), split into two parts by `brdf`, which returns two BRDF values (1/sr,
 /// without the cosine) for a local incident direction. Returns the two reflected radiances,
 /// W/(m^2 sr) per channel.
 ///

@@ -13,6 +13,9 @@
 //!   progress, non-finite sample counting), producing named linear RGB [`Layer`]s that sum to
 //!   the image.
 //!
+//! Every integrator shows the sky ([`twopass_scene::Sky`]) on rays that leave the scene and
+//! samples its sun and dome with shadow rays ([`sky`]).
+//!
 //! Units: radiance in W/(m^2 sr) per linear RGB channel with areas in the scene's units (the
 //! emitters' L_e is given that way); BRDF values in 1/sr; pixel positions in pixels from the
 //! top-left corner.
@@ -42,6 +45,7 @@ pub mod photons;
 pub mod reference;
 pub mod render;
 pub mod sampler;
+pub mod sky;
 pub mod whitted;
 
 pub use film::{Layer, LayerImages, Radiance};

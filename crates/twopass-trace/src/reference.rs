@@ -18,7 +18,9 @@
 //!
 //! Emitters and lamps are chosen for next-event estimation in proportion to their mean emitted
 //! power. A lamp (a delta light) is found by next-event estimation alone, without an MIS
-//! weight.
+//! weight. The sky takes one light sample of its own at every diffuse or glossy vertex (the
+//! sun's cone or the dome, [`crate::sky::sky_mis`]) and a BRDF-sampled ray that escapes the
+//! scene takes the sky's radiance; both are weighed by the power heuristic.
 //!
 //! **Caustics.** A path that sees a diffuse or glossy surface first and reaches the emitter
 //! through a mirror or glass last (E D ... S+ L) is found by a camera path only when its
@@ -42,6 +44,7 @@ use crate::film::{Layer, Radiance};
 use crate::integrator::{Integrator, SampleState, Shading, lamp_light};
 use crate::light_tracing::{CausticScope, LightTracer, LightTracingSettings};
 use crate::sampler::Sampler;
+use crate::sky::{sky_light_pdf, sky_mis};
 
 /// Path length settings of the reference path tracer.
 #[derive(SmartDefault, Debug, Clone, Copy, PartialEq, Eq)]
@@ -173,9 +176,35 @@ impl Reference {
         tally: &mut Tally,
     ) -> [Rgb; 2] {
         let zero = [Rgb::ZERO; 2];
-        if self.choice.is_empty() || !s.hit.front_face {
+        if !s.hit.front_face {
             return zero;
         }
+        let m = s.material;
+        let sky = sky_mis(
+            scene,
+            s,
+            sampler,
+            tally,
+            &|wl| m.pdf(s.wo, wl),
+            &|wl| [m.eval_diffuse(s.wo, wl), m.eval_non_diffuse(s.wo, wl)],
+            power_heuristic,
+        );
+        if self.choice.is_empty() {
+            return sky;
+        }
+        let [d, g] = self.next_event_emitter(scene, s, sampler, tally);
+        [d + sky[0], g + sky[1]]
+    }
+
+    /// [`Self::next_event`]'s sample of one emitter or lamp.
+    fn next_event_emitter(
+        &self,
+        scene: &Scene,
+        s: &Shading,
+        sampler: &mut Sampler,
+        tally: &mut Tally,
+    ) -> [Rgb; 2] {
+        let zero = [Rgb::ZERO; 2];
         let e = match self.choice.pick(sampler.next_f32()) {
             Light::Area(e) => e,
             Light::Lamp(l) => {
@@ -239,7 +268,8 @@ impl Integrator for Reference {
         tally.rays += 1;
         let mut hit = scene.intersect(ray);
         // The previous vertex and how the current direction was sampled (for MIS on emitters).
-        let mut prev: Option<(SurfacePoint, f32, bool)> = None;
+        // With its shading normal, on which the sky's light density depends.
+        let mut prev: Option<(SurfacePoint, f32, bool, Vec3)> = None;
         let mut depth = 1;
         // Whether the camera's first vertex is a diffuse or glossy one: then a path reaching
         // the emitter through a delta bounce is the light tracer's.
@@ -252,9 +282,9 @@ impl Integrator for Reference {
 
             if s.emitted.max_element() > 0.0 {
                 let w = match prev {
-                    Some((_, _, true)) if seen_non_delta && self.light.is_some() => 0.0,
-                    None | Some((_, _, true)) => 1.0,
-                    Some((from, pdf_bsdf, false)) => {
+                    Some((_, _, true, _)) if seen_non_delta && self.light.is_some() => 0.0,
+                    None | Some((_, _, true, _)) => 1.0,
+                    Some((from, pdf_bsdf, false, _)) => {
                         power_heuristic(pdf_bsdf, self.light_pdf(scene, &from, &h, dir))
                     }
                 };
@@ -296,11 +326,27 @@ impl Integrator for Reference {
                 }
                 beta /= survive;
             }
-            prev = Some((h.point, bs.pdf, bs.kind.is_delta()));
+            prev = Some((h.point, bs.pdf, bs.kind.is_delta(), h.shading_normal));
             dir = wi;
             tally.rays += 1;
             hit = scene.intersect_from(&h.point, dir);
             depth += 1;
+            if hit.is_none()
+                && let Some(sky) = &scene.sky
+            {
+                // The sky, weighed against its light sample at the previous vertex. No light
+                // path starts at the sky, so the light tracer never counts it.
+                let w = match prev {
+                    None | Some((_, _, true, _)) => 1.0,
+                    Some((from, pdf_bsdf, false, normal)) => {
+                        power_heuristic(pdf_bsdf, sky_light_pdf(sky, from.position, normal, dir))
+                    }
+                };
+                deposit(&mut r, split, Layer::Emission, beta * sky.radiance(dir) * w);
+            }
+        }
+        if depth == 1 && hit.is_none() {
+            r.add(Layer::Emission, crate::sky::escaped(scene, dir));
         }
         r
     }

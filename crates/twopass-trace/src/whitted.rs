@@ -7,13 +7,14 @@
 //! (reflecting in its own colour: exact complex Fresnel per channel) and smooth dielectric
 //! (Snell refraction with exact Fresnel weights and total internal reflection), until
 //! [`WhittedSettings::max_depth`] or until the path's throughput falls under
-//! [`WhittedSettings::min_throughput`]. Rays that leave the scene see black.
+//! [`WhittedSettings::min_throughput`]. Rays that leave the scene see the sky (black without
+//! one); the sky lights the shading points by shadow rays ([`crate::sky::sky_light`]).
 //!
 //! | setting | unit | default | meaning |
 //! | --- | --- | --- | --- |
 //! | `max_depth` | bounces | 8 | delta bounces followed after the camera hit |
 //! | `min_throughput` | dimensionless | 1e-3 | a branch whose largest channel weight falls below is cut |
-//! | `shadow_grid` | samples per axis | 4 | shadow rays per emitter per shading point: grid^2 |
+//! | `shadow_grid` | samples per axis | 4 | shadow rays per emitter per shading point: grid^2 (and as many for the sky's sun and for its dome) |
 //! | `caustic_paths` | light paths per camera sample | 1 | the hybrids' per-pixel caustics ([`crate::hybrid`]); 0: off |
 //! | `gather_rays` | rays per camera sample and shading point | 8 | the gathered hybrid's indirect light ([`crate::hybrid::gathered`]) |
 
@@ -135,28 +136,24 @@ impl<'a> Whitted<'a> {
             .diffuse(s, per_pixel_caustics, at, tally, &mut r);
         let need_diffuse = direct_diffuse && m.reflects_diffusely();
         if s.hit.front_face && (need_diffuse || glossy) {
-            let [d, g] = direct_light(
-                scene,
-                &self.lights,
-                s,
-                self.settings.shadow_grid,
-                sampler,
-                tally,
-                |wi| {
-                    [
-                        if need_diffuse {
-                            m.eval_diffuse(s.wo, wi)
-                        } else {
-                            Rgb::ZERO
-                        },
-                        if glossy {
-                            m.eval_non_diffuse(s.wo, wi)
-                        } else {
-                            Rgb::ZERO
-                        },
-                    ]
-                },
-            );
+            let brdf = |wi| {
+                [
+                    if need_diffuse {
+                        m.eval_diffuse(s.wo, wi)
+                    } else {
+                        Rgb::ZERO
+                    },
+                    if glossy {
+                        m.eval_non_diffuse(s.wo, wi)
+                    } else {
+                        Rgb::ZERO
+                    },
+                ]
+            };
+            let grid = self.settings.shadow_grid;
+            let [d, g] = direct_light(scene, &self.lights, s, grid, sampler, tally, brdf);
+            let [sd, sg] = crate::sky::sky_light(scene, s, grid, sampler, tally, &brdf);
+            let (d, g) = (d + sd, g + sg);
             r.add(Layer::Diffuse, d);
             r.add(Layer::DirectSpecular, g);
         }
@@ -182,6 +179,8 @@ impl<'a> Whitted<'a> {
                     let child_site = site.wrapping_mul(2).wrapping_add(branch);
                     let l = self.shade(scene, &child, (depth + 1, child_site), t, sampler, tally);
                     r.add(layer, ray.weight * l.total());
+                } else {
+                    r.add(layer, ray.weight * crate::sky::escaped(scene, dir));
                 }
             }
         }
@@ -202,7 +201,7 @@ impl Integrator for Whitted<'_> {
         let SampleState { sampler, tally } = sample;
         tally.rays += 1;
         match scene.intersect(ray) {
-            None => Radiance::ZERO,
+            None => Radiance::single(Layer::Emission, crate::sky::escaped(scene, ray.direction)),
             Some(hit) => {
                 let s = Shading::new(scene, hit, ray.direction);
                 self.shade(scene, &s, (0, 1), Rgb::ONE, sampler, tally)

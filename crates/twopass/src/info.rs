@@ -235,6 +235,7 @@ pub fn run(args: &InfoArgs, ctx: &Context) -> Result<(), CliError> {
     say("specular pass", &info.plan.specular)?;
     say("specular transfer", &info.plan.specular_transfer)?;
     say("caustics", &info.plan.caustics)?;
+    say("sky", &info.plan.sky)?;
     if info.plan.diffuse.required {
         outln!(
             "radiosity         {}: {}",

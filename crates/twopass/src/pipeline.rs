@@ -105,7 +105,7 @@ pub fn load_lit(path: &Path, ctx: &Context) -> Result<Scene, CliError> {
             errln!("warning: {w}");
         }
     }
-    if scene.emitters.is_empty() && scene.lamps.is_empty() {
+    if !scene.has_light() {
         return Err(CliError::Input(format!(
             "{}: nothing emits light, every render would be black",
             path.display()

@@ -28,6 +28,9 @@ pub struct Plan {
     /// the camera sees, `twopass_trace::light_tracing`): needed when the specular transfer
     /// runs and a dielectric is among the specular objects.
     pub caustics: Decision,
+    /// The sky (`[sky]`): lights every ray that escapes the scene, in both passes; without one
+    /// nothing is sampled for it.
+    pub sky: Decision,
     /// The radiosity solver `--solver auto` runs, and why.
     pub solver: SolverDecision,
 }
@@ -55,7 +58,8 @@ pub fn plan(scene: &Scene) -> Plan {
         .map(|(o, _)| o.name.as_str())
         .collect();
     let lamps = scene.lamps.len();
-    let emitters = scene.emitters.len() + lamps;
+    let sky_lit = usize::from(scene.sky.is_some());
+    let emitters = scene.emitters.len() + lamps + sky_lit;
     let diffuse = match (diffuse_objects.len(), emitters) {
         (_, 0) => Decision {
             required: false,
@@ -67,11 +71,15 @@ pub fn plan(scene: &Scene) -> Plan {
         },
         (n, e) => Decision {
             required: true,
-            reason: match lamps {
-                0 => format!("{n} diffusely reflecting object(s) lit by {e} emitter(s)"),
-                l => format!(
+            reason: match (lamps, sky_lit) {
+                (0, 0) => format!("{n} diffusely reflecting object(s) lit by {e} emitter(s)"),
+                (l, 0) => format!(
                     "{n} diffusely reflecting object(s) lit by {} emitter(s) and {l} lamp(s)",
                     e - l
+                ),
+                (l, _) => format!(
+                    "{n} diffusely reflecting object(s) lit by {} emitter(s), {l} lamp(s) and the sky",
+                    e - l - 1
                 ),
             },
         },
@@ -144,11 +152,22 @@ pub fn plan(scene: &Scene) -> Plan {
         method: method.name().into(),
         reason,
     };
+    let sky = match &scene.sky {
+        Some(sky) => Decision {
+            required: true,
+            reason: sky.describe(),
+        },
+        None => Decision {
+            required: false,
+            reason: "no [sky] table: rays that leave the scene see black".into(),
+        },
+    };
     Plan {
         diffuse,
         specular,
         specular_transfer,
         caustics,
+        sky,
         solver,
     }
 }

@@ -17,6 +17,7 @@ mod parts;
 mod planner;
 mod readme;
 mod render;
+mod sky;
 mod slurm;
 mod textures;
 mod tradeoff;

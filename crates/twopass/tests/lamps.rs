@@ -6,8 +6,8 @@ use std::path::Path;
 
 use crate::common::{assert_exit, assert_ok, cli, ok_json, twopass};
 
-/// A grey floor seen from above (lines 1 to 6), then `lights`.
-fn floor_with(lights: &str) -> String {
+/// A grey floor seen from above (lines 1 to 14), then `lights` (or a `[sky]`).
+pub(crate) fn floor_with(lights: &str) -> String {
     format!(
         "version = 1\n\
          [camera]\nposition = [0, 2, 2]\nlook_at = [0, 0, 0]\nfov_y = 50\nresolution = [16, 16]\n\
@@ -18,7 +18,7 @@ fn floor_with(lights: &str) -> String {
     )
 }
 
-fn write(dir: &Path, text: &str) -> std::path::PathBuf {
+pub(crate) fn write(dir: &Path, text: &str) -> std::path::PathBuf {
     let path = dir.join("lamps.toml");
     std::fs::write(&path, text).unwrap();
     path
@@ -48,17 +48,23 @@ fn bad_light_tables_exit_1_naming_the_line_table_and_problem() {
          ":19: light 2: `colour` channel 1 must be finite and non-negative (got -1)"),
     ];
     for (bad, expected) in cases {
-        let path = write(dir.path(), &floor_with(&format!("{good}{bad}")));
-        let out = twopass(&["info", path.to_str().unwrap()]);
-        assert_exit(&out, 1);
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(
-            err.lines().next().unwrap_or(""),
-            format!("error: {}{expected}", path.display()),
-            "{bad}"
-        );
-        assert!(out.stdout.is_empty());
+        info_fails(dir.path(), &format!("{good}{bad}"), expected);
     }
+}
+
+/// `info` on the floor with `tables` ([`floor_with`]) exits 1, printing nothing on stdout
+/// and as the first line of stderr the scene's path followed by `expected`.
+pub(crate) fn info_fails(dir: &Path, tables: &str, expected: &str) {
+    let path = write(dir, &floor_with(tables));
+    let out = twopass(&["info", path.to_str().unwrap()]);
+    assert_exit(&out, 1);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(
+        err.lines().next().unwrap_or(""),
+        format!("error: {}{expected}", path.display()),
+        "{tables}"
+    );
+    assert!(out.stdout.is_empty());
 }
 
 #[test]
@@ -90,10 +96,16 @@ fn info_lists_the_lamps_and_plans_a_scene_lit_by_lamps_alone() {
     let p = lamps[0]["power"][0].as_f64().unwrap();
     assert!((p - 100.0).abs() < 1e-3, "{p}");
     // Lit by lamps alone, the scene renders; nothing is refused as unlit.
-    for method in ["radiosity", "hybrid"] {
-        let out_dir = dir.path().join(method);
+    renders_lit(dir.path(), &path, &["radiosity", "hybrid"]);
+}
+
+/// The scene at `path` renders with each of `methods` (into folders of `dir`), and nothing
+/// refuses it as unlit.
+pub(crate) fn renders_lit(dir: &Path, path: &Path, methods: &[&str]) {
+    for method in methods {
+        let out_dir = dir.join(method);
         let out = cli("render")
-            .arg(&path)
+            .arg(path)
             .words(&format!("--method {method} --spp 4"))
             .output(&out_dir)
             .run();

@@ -26,7 +26,7 @@ impl<'s> HierarchicalSolver<'s> {
     /// Builds the cluster tree over the participating triangles. Objects that neither emit
     /// nor reflect diffusely still cast shadows.
     pub fn new(scene: &'s Scene, options: Options) -> Result<Self, SolveError> {
-        if scene.emitters.is_empty() && scene.lamps.is_empty() {
+        if !scene.has_light() {
             return Err(SolveError::NoEmitters);
         }
         let diag = scene.bounds.diagonal();
@@ -225,8 +225,9 @@ impl<'s> HierarchicalSolver<'s> {
             spec.sent.resize(n, None);
             self.specular_stale = true;
         }
-        // New vertices get the lamps' light at once, exactly, whatever split made them.
-        let (lamp, rays) = vertex_lamp_irradiance(self.scene, &self.mesh, self.lamp.len());
+        // New vertices get the lamps' and the sky's light at once, whatever split made them.
+        let (lamp, rays) =
+            vertex_lamp_irradiance(self.scene, &self.mesh, self.lamp.len(), self.options.seed);
         self.lamp.extend(lamp);
         self.rays += rays;
     }

@@ -4,7 +4,9 @@
 //! before the first gather: a leaf whose reflected lamp light, rho E, spreads over its corners
 //! and centroid by more than the link error threshold over its area is split, down to the
 //! smallest element size. Shadow edges and the peak under a lamp get leaves as fine as the
-//! threshold asks; evenly lit surfaces keep their triangles.
+//! threshold asks; evenly lit surfaces keep their triangles. The sky's sun counts as a
+//! directional lamp at its centre here (its shadows are as sharp); the dome's smooth light is
+//! left to the links' refinement.
 
 use glam::DVec3;
 use rayon::prelude::*;
@@ -17,7 +19,7 @@ impl HierarchicalSolver<'_> {
     /// threshold, and the leaves that makes, until none does or they reach twice the smallest
     /// element size. Decided in parallel, split in leaf order: the same on any thread count.
     pub(super) fn refine_for_lamps(&mut self) {
-        if self.scene.lamps.is_empty() {
+        if self.scene.lamps.is_empty() && self.scene.sky.as_ref().is_none_or(|s| s.sun.is_none()) {
             return;
         }
         let mut todo: Vec<u32> = self.mesh.leaves().collect();
@@ -49,7 +51,7 @@ impl HierarchicalSolver<'_> {
     }
 
     /// The error of showing leaf `n`'s lamp light as the linear interpolant of its corners:
-    /// the range of rho E's luminance over its corners and a lattice of points inside (spaced
+    /// the range of rho E's luminance (lamps, and the sun at its centre) over its corners and a lattice of points inside (spaced
     /// at most [`LAMP_PROBES_PER_DIAGONAL`] times finer than the scene's diagonal, the centroid
     /// among them, each lit by a shadow ray per lamp) times its area, W (the units of a link's
     /// BF error). With the rays cast.
@@ -64,15 +66,20 @@ impl HierarchicalSolver<'_> {
         let corners = self.mesh.corners(n);
         let normals = node.vertices.map(|v| self.mesh.vertices[v as usize].normal);
         let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-        for v in node.vertices {
-            let y = luminance_f64(rho * self.lamp[v as usize]);
-            (lo, hi) = (lo.min(y), hi.max(y));
+        // Without a sky the corners' exact lamp light is at hand; a sky's per-vertex light
+        // holds the dome's noisy estimate, so then the corners are probed like the lattice.
+        let sky = self.scene.sky.is_some();
+        if !sky {
+            for v in node.vertices {
+                let y = luminance_f64(rho * self.lamp[v as usize]);
+                (lo, hi) = (lo.min(y), hi.max(y));
+            }
         }
         let mut rays = 0;
         for i in 0..=m {
             for j in 0..=m - i {
                 let k = m - i - j;
-                if i == m || j == m || k == m {
+                if !sky && (i == m || j == m || k == m) {
                     continue;
                 }
                 let w = [i, j, k].map(|x| f64::from(x) / f64::from(m));
@@ -86,7 +93,10 @@ impl HierarchicalSolver<'_> {
                     .scene
                     .mesh
                     .surface_point_at(node.scene_triangle, p.as_vec3());
-                let e = self.scene.lamp_irradiance(&at, normal, &mut rays);
+                // The sun as a directional lamp at its centre: deterministic, so the oracle
+                // splits where the light changes, not where a sky estimate's noise does.
+                let e = self.scene.lamp_irradiance(&at, normal, &mut rays)
+                    + self.scene.sun_centre_irradiance(&at, normal, &mut rays);
                 let y = luminance_f64(rho * e.as_dvec3());
                 (lo, hi) = (lo.min(y), hi.max(y));
             }

@@ -27,7 +27,7 @@ impl<'s> ProgressiveSolver<'s> {
     /// Meshes the scene into patches and elements and sets up the emitters' unshot power.
     /// Only objects that reflect diffusely or emit take part; others still cast shadows.
     pub fn new(scene: &'s Scene, options: Options) -> Result<Self, SolveError> {
-        if scene.emitters.is_empty() && scene.lamps.is_empty() {
+        if !scene.has_light() {
             return Err(SolveError::NoEmitters);
         }
         let diag = scene.bounds.diagonal();
@@ -270,7 +270,7 @@ impl<'s> ProgressiveSolver<'s> {
         if let Some(rho) = self.element_albedo.vertex_albedo(self.scene, &self.mesh) {
             self.rho = rho;
         }
-        let (lamp, rays) = vertex_lamp_irradiance(self.scene, &self.mesh, old);
+        let (lamp, rays) = vertex_lamp_irradiance(self.scene, &self.mesh, old, self.options.seed);
         for (v, e) in (old..).zip(lamp) {
             self.received_emit[v] += e;
             self.lamp.push(e);

@@ -133,6 +133,7 @@ impl Loader {
             .iter()
             .all(|o: &Object| o.emission.max_element() <= 0.0)
             && self.lamps.iter().all(|l| l.intensity.max_element() <= 0.0)
+            && self.sky.is_none()
         {
             self.warnings.push(Warning::NoEmitters {
                 path: self.path.clone(),
@@ -148,6 +149,7 @@ impl Loader {
             camera,
         );
         scene.textures = self.textures;
+        scene.sky = self.sky;
         Ok((scene, self.warnings))
     }
 

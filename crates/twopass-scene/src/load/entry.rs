@@ -101,6 +101,7 @@ pub fn load_toml_with(
         textures: Vec::new(),
         texture_ids: HashMap::new(),
         lamps: Vec::new(),
+        sky: None,
     };
     let mut material_lines = Vec::new();
     for m in &file.materials {
@@ -137,6 +138,7 @@ pub fn load_toml_with(
         let lamp = ld.lamp(l.get_ref(), line, i + 1)?;
         ld.lamps.push(lamp);
     }
+    ld.sky = ld.sky(file.sky.as_ref(), &file.portals)?;
     for (i, line) in material_lines.into_iter().enumerate() {
         if !ld.used[i] {
             ld.warnings.push(Warning::UnusedMaterial {
@@ -162,6 +164,7 @@ fn load_bare_obj(path: &Path, policy: &ReadPolicy) -> Result<(Scene, Vec<Warning
         textures: Vec::new(),
         texture_ids: HashMap::new(),
         lamps: Vec::new(),
+        sky: None,
     };
     let file = obj::load(path, policy)?;
     let materials = match &file.materials {

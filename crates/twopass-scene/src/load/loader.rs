@@ -72,6 +72,8 @@ pub(super) struct Loader {
     pub(super) texture_ids: HashMap<String, u32>,
     /// The lamps read so far.
     pub(super) lamps: Vec<crate::lamp::Lamp>,
+    /// The sky, when the file has one.
+    pub(super) sky: Option<crate::sky::Sky>,
 }
 
 /// For "unknown field `k`" inside a typed table (whose span covers the whole table), the offset

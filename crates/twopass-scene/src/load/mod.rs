@@ -8,6 +8,7 @@ mod lamps;
 mod loader;
 mod materials;
 mod objects;
+mod sky;
 mod texture;
 #[cfg(test)]
 mod texture_tests;

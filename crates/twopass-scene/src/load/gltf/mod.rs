@@ -93,6 +93,7 @@ pub(super) fn load_gltf(
         textures: Vec::new(),
         texture_ids: HashMap::new(),
         lamps: Vec::new(),
+        sky: None,
     };
     let file = read::read(path, policy, &mut ld.warnings)?;
     let walked = walk::walk(&mut ld, &file)?;
