@@ -93,7 +93,8 @@ fn f32_bytes(out: &mut Vec<u8>, values: impl IntoIterator<Item = f32>) {
 pub(crate) struct GlbBuilder {
     pub(crate) root: json::Root,
     bin: Vec<u8>,
-    nodes: Vec<json::Index<json::Node>>,
+    /// The root nodes of the document's one scene.
+    pub(crate) nodes: Vec<json::Index<json::Node>>,
 }
 
 /// One vertex stream of a primitive.

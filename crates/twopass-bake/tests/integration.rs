@@ -7,6 +7,7 @@ mod common;
 mod asset;
 mod bake;
 mod blender;
+mod camera;
 mod lightmap;
 mod quantity;
 mod validator;

@@ -14,6 +14,11 @@
 //! several nodes use gets one copy per node after the first (the copies share nothing but
 //! their names), since each use has its own place in the atlas.
 //!
+//! **The camera.** The scene's camera is the user's own camera node when it came from one
+//! (`GltfSource::camera_node`); otherwise (the default framing) it is added as a perspective
+//! camera on a new root node named [`CAMERA_NAME`](super::CAMERA_NAME) ([`GltfCamera`]). The
+//! user's camera nodes are never edited; `asset.extras.twopass.camera_node` names the node.
+//!
 //! **The lightmap's reference** (no glTF extension exists for lightmaps, and an unknown one
 //! would be a validator warning): the PNG is an image with a texture (bilinear, clamped), and
 //! every material a baked primitive uses gets `extras.lightMap = { "index": <texture>,
@@ -30,6 +35,7 @@ use glam::Vec2;
 use serde_json::{Value, json};
 use twopass_scene::{GltfSource, Scene};
 
+use super::camera::GltfCamera;
 use super::layout::Layout;
 use super::settings::{AtlasSource, LightmapQuantity, Resolved};
 use crate::colour::ColorMapping;
@@ -298,6 +304,10 @@ pub(super) fn encode_asset_glb(
             e.insert("lightMap".into(), reference.clone());
         }
     }
+    let camera_node = match src.camera_node {
+        Some(node) => node,
+        None => add_camera(&mut w, scene),
+    };
     let record = json!({
         "lightmap": s.quantity.png_formula(),
         "quantity": s.quantity.name(),
@@ -313,6 +323,7 @@ pub(super) fn encode_asset_glb(
         "padding_texels": s.padding,
         "atlas": layout.source.describe(),
         "exr_fingerprint": format!("{exr_fingerprint:016x}"),
+        "camera_node": camera_node,
     });
     let asset = &mut w.root["asset"];
     if let Some(o) = asset.as_object_mut() {
@@ -324,6 +335,22 @@ pub(super) fn encode_asset_glb(
     let bin_len = w.bin.len();
     w.root["buffers"] = json!([{ "byteLength": bin_len }]);
     finish(w)
+}
+
+/// Adds the scene's camera ([`GltfCamera`]) on a new root node of the document's scene and
+/// returns the node's index.
+fn add_camera(w: &mut Writer, scene: &Scene) -> usize {
+    let camera = GltfCamera::of(scene);
+    let index = w.push("cameras", camera.camera_json());
+    let node = w.push("nodes", camera.node_json(index));
+    let shown = w.root["scene"].as_u64().unwrap_or(0) as usize;
+    if let Some(s) = w.root["scenes"][shown].as_object_mut() {
+        let nodes = s.entry("nodes").or_insert_with(|| json!([]));
+        if let Some(list) = nodes.as_array_mut() {
+            list.push(json!(node));
+        }
+    }
+    node
 }
 
 /// Gives each baked primitive the generated atlas on a vertex list split by chart (module

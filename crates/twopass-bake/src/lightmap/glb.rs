@@ -7,6 +7,7 @@ use gltf_json as json;
 use serde::Serialize;
 use twopass_scene::Scene;
 
+use super::camera::{CAMERA_NAME, GltfCamera};
 use super::layout::Layout;
 use super::settings::Resolved;
 use crate::colour::ColorMapping;
@@ -36,6 +37,8 @@ struct LightmapExtrasBody<'a> {
     metres_per_scene_unit: f64,
     scene: &'a str,
     camera: CameraRecord,
+    /// The name of the glTF camera node that places the same camera.
+    camera_node: &'static str,
     /// The EXR's [`lightmap_fingerprint`](crate::fingerprint::lightmap_fingerprint), 16 hex
     /// digits: the `.glb` is read only with that EXR.
     exr_fingerprint: String,
@@ -155,6 +158,7 @@ pub(super) fn encode_lightmap_glb(
             material,
         );
     }
+    add_camera(&mut b, scene)?;
     let scene_name = scene.path.display().to_string();
     let atlas = layout.source.describe();
     let extras = LightmapExtras {
@@ -173,8 +177,28 @@ pub(super) fn encode_lightmap_glb(
             metres_per_scene_unit: to_metres,
             scene: &scene_name,
             camera: CameraRecord::of(scene),
+            camera_node: CAMERA_NAME,
             exr_fingerprint: format!("{exr_fingerprint:016x}"),
         },
     };
     b.finish(&scene_name, &extras)
+}
+
+/// Adds the scene's camera as a glTF perspective camera on a node of the scene
+/// ([`GltfCamera`]).
+fn add_camera(b: &mut GlbBuilder, scene: &Scene) -> Result<(), BakeError> {
+    let bad = |e: serde_json::Error| BakeError::Encode {
+        path: "lightmap glb".into(),
+        message: format!("the camera: {e}"),
+    };
+    let camera = GltfCamera::of(scene);
+    let index = b.root.cameras.len();
+    b.root
+        .cameras
+        .push(serde_json::from_value(camera.camera_json()).map_err(bad)?);
+    let node = b
+        .root
+        .push::<json::Node>(serde_json::from_value(camera.node_json(index)).map_err(bad)?);
+    b.nodes.push(node);
+    Ok(())
 }

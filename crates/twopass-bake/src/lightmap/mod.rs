@@ -46,6 +46,7 @@
 
 mod asset;
 mod bake;
+mod camera;
 mod fill;
 mod filter;
 mod glb;
@@ -55,6 +56,7 @@ mod settings;
 
 pub use crate::weld::COPLANAR_COS;
 pub use bake::{bake_lightmap, lightmap_atlas_size};
+pub use camera::{CAMERA_NAME, GltfCamera, ZNEAR_PER_DIAGONAL, camera_rotation};
 pub use fill::{MAX_BACK_FACES, TexelSource};
 pub use filter::FILTER;
 pub use glb::{CameraRecord, PNG_FORMULA};
