@@ -302,7 +302,7 @@ fn the_asset_comes_back_whole_with_the_lightmap_on_texcoord_1() {
             let blob = after.blob.as_deref().unwrap();
             assert_eq!(
                 &blob[view.offset()..view.offset() + view.length()],
-                lm.png.as_slice()
+                lm.rgbm.as_ref().unwrap().0.as_slice()
             );
         }
         other => panic!("{other:?}"),

@@ -30,6 +30,7 @@ fn blender_imports_the_lightmap_glb_at_real_size_with_its_lightmap() {
         texel_size: Some(5.0),
         padding: 2,
         quantity: None,
+        ..Default::default()
     };
     let lm = bake_lightmap(
         TexelSource::Solution(&solution),

@@ -10,5 +10,6 @@ mod blender;
 mod camera;
 mod lightmap;
 mod quantity;
+mod rgbm;
 mod validator;
 mod vertex;

@@ -409,6 +409,45 @@ pub fn encode_png(path: &Path, image: &Rgb8Image, description: Option<&str>) -> 
     Ok(buf)
 }
 
+/// Encodes 8-bit RGBA data that is not a colour image (an RGBM lightmap: linear values and a
+/// multiplier) as a PNG in memory: no `sRGB` or `gAMA` chunk, so no reader converts it, and an
+/// optional `Description` that says how to decode it. `rgba` holds `width * height` pixels
+/// of four bytes, rows top to bottom.
+pub fn encode_png_rgba(
+    path: &Path,
+    (width, height): (u32, u32),
+    rgba: &[u8],
+    description: Option<&str>,
+) -> Result<Vec<u8>> {
+    if width == 0 || height == 0 || rgba.len() as u64 != 4 * u64::from(width) * u64::from(height) {
+        return Err(CompositeError::Empty {
+            what: format!(
+                "RGBA data of {} bytes for a {width} x {height} image {}",
+                rgba.len(),
+                path.display()
+            ),
+        });
+    }
+    let err = |source| CompositeError::Png {
+        path: path.to_path_buf(),
+        source,
+    };
+    let mut buf = Vec::new();
+    {
+        let mut enc = png::Encoder::new(&mut buf, width, height);
+        enc.set_color(png::ColorType::Rgba);
+        enc.set_depth(png::BitDepth::Eight);
+        if let Some(d) = description {
+            enc.add_text_chunk("Description".into(), d.into())
+                .map_err(err)?;
+        }
+        let mut writer = enc.write_header().map_err(err)?;
+        writer.write_image_data(rgba).map_err(err)?;
+        writer.finish().map_err(err)?;
+    }
+    Ok(buf)
+}
+
 /// Writes an 8-bit sRGB image (a sheet, a false-colour image) as a PNG, atomically.
 /// `description` goes into a `Description` text chunk (say how the pixels were made).
 pub fn write_png(path: &Path, image: &Rgb8Image, description: Option<&str>) -> Result<()> {

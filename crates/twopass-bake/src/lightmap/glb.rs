@@ -9,8 +9,8 @@ use twopass_scene::Scene;
 
 use super::camera::{CAMERA_NAME, GltfCamera};
 use super::layout::Layout;
+use super::reference::Encoded;
 use super::settings::Resolved;
-use crate::colour::ColorMapping;
 use crate::error::BakeError;
 use crate::gltf::{Attribute, GlbBuilder};
 use crate::weld::SharedVertices;
@@ -42,6 +42,9 @@ struct LightmapExtrasBody<'a> {
     /// The EXR's [`lightmap_fingerprint`](crate::fingerprint::lightmap_fingerprint), 16 hex
     /// digits: the `.glb` is read only with that EXR.
     exr_fingerprint: String,
+    /// The texture engines take and how to decode it (module `reference`).
+    #[serde(flatten)]
+    engine_texture: serde_json::Value,
 }
 
 /// The scene's camera as the lightmap `.glb` records it (`asset.extras.twopass.camera`), so
@@ -95,15 +98,21 @@ pub(super) fn encode_lightmap_glb(
     scene: &Scene,
     layout: &Layout,
     s: &Resolved,
-    png: &[u8],
-    mapping: ColorMapping,
-    exr_fingerprint: u64,
+    encoded: &Encoded<'_>,
 ) -> Result<Vec<u8>, BakeError> {
     let m = &scene.mesh;
     let to_metres = scene.unit.metres();
     let mut b = GlbBuilder::new();
-    let texture = b.png_texture("twopass lightmap", png);
+    let texture = b.png_texture("twopass lightmap", encoded.png);
+    let engine_texture = match encoded.rgbm {
+        Some((png, _)) => b.png_texture("twopass lightmap (RGBM)", png),
+        None => texture,
+    };
+    let reference = json_raw(
+        &serde_json::json!({ "lightMap": encoded.material_entry(engine_texture.value(), s) }),
+    )?;
     let material = b.root.push(json::Material {
+        extras: Some(reference),
         name: Some("twopass lightmap (emissive, TEXCOORD_1)".into()),
         pbr_metallic_roughness: json::material::PbrMetallicRoughness {
             base_color_factor: json::material::PbrBaseColorFactor([0.0, 0.0, 0.0, 1.0]),
@@ -167,7 +176,7 @@ pub(super) fn encode_lightmap_glb(
             quantity: s.quantity.name(),
             texcoord: 1,
             atlas: &atlas,
-            exposure: mapping.exposure,
+            exposure: encoded.mapping.exposure,
             radiance_unit: "W/(m^2 sr)",
             texel_size: s.texel_size,
             texel_size_unit: scene.unit.symbol(),
@@ -178,7 +187,8 @@ pub(super) fn encode_lightmap_glb(
             scene: &scene_name,
             camera: CameraRecord::of(scene),
             camera_node: CAMERA_NAME,
-            exr_fingerprint: format!("{exr_fingerprint:016x}"),
+            exr_fingerprint: format!("{:016x}", encoded.exr_fingerprint),
+            engine_texture: encoded.record(engine_texture.value(), s),
         },
     };
     b.finish(&scene_name, &extras)
@@ -201,4 +211,12 @@ fn add_camera(b: &mut GlbBuilder, scene: &Scene) -> Result<(), BakeError> {
         .push::<json::Node>(serde_json::from_value(camera.node_json(index)).map_err(bad)?);
     b.nodes.push(node);
     Ok(())
+}
+
+/// `value` as the raw JSON of a glTF `extras`.
+fn json_raw(value: &serde_json::Value) -> Result<Box<serde_json::value::RawValue>, BakeError> {
+    serde_json::value::to_raw_value(value).map_err(|e| BakeError::Encode {
+        path: "lightmap glb".into(),
+        message: e.to_string(),
+    })
 }
