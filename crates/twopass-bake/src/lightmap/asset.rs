@@ -34,7 +34,7 @@ use glam::Vec2;
 use serde_json::{Value, json};
 use twopass_scene::{GltfSource, Scene};
 
-use super::camera::GltfCamera;
+use super::camera::{CameraRecord, GltfCamera};
 use super::layout::Layout;
 use super::reference::Encoded;
 use super::settings::{AtlasSource, Resolved};
@@ -307,6 +307,7 @@ pub(super) fn encode_asset_glb(
         "atlas": layout.source.describe(),
         "exr_fingerprint": format!("{:016x}", encoded.exr_fingerprint),
         "camera_node": camera_node,
+        "camera": serde_json::to_value(CameraRecord::of(scene)).map_err(|e| err(e.to_string()))?,
     });
     if let (Some(r), Value::Object(more)) = (record.as_object_mut(), encoded.record(texture, s)) {
         r.extend(more);

@@ -37,7 +37,7 @@ use crate::fingerprint::LIGHTMAP_FINGERPRINT;
 /// glTF wants sets numbered from 0), and one material: black base colour, metallic 0,
 /// roughness 1, and the PNG as `emissiveTexture` with `texCoord` 1 (emissive factor 1); its
 /// `asset.extras.twopass` say how the PNG encodes radiance (`exposure`) and where the scene's
-/// camera is ([`CameraRecord`](super::glb::CameraRecord)), also a glTF camera node. The
+/// camera is ([`CameraRecord`](super::CameraRecord)), also a glTF camera node. The
 /// material's `extras.lightMap` names the texture engines take (the RGBM PNG, embedded too,
 /// or the emissive sRGB PNG; module `reference`). Any
 /// glTF viewer then shows the baked light as the surface's emission without relighting it;

@@ -1,5 +1,6 @@
 //! The scene's camera as a glTF camera: a perspective camera and the node that places it, for
-//! the lightmap `.glb` and the user's asset written back.
+//! the lightmap `.glb` and the user's asset written back; and the same camera as the record
+//! of `asset.extras.twopass.camera` that the page of `twopass view` reads ([`CameraRecord`]).
 //!
 //! glTF cameras look down their node's local -Z with +Y up and +X to the image's right
 //! (glTF 2.0, "Cameras"), so the node's rotation is the matrix whose columns are the camera's
@@ -11,6 +12,7 @@
 //! whole scene lies between the planes.
 
 use glam::{DVec3, Mat3, Quat, Vec3};
+use serde::Serialize;
 use serde_json::{Value, json};
 use twopass_scene::Scene;
 
@@ -96,6 +98,45 @@ impl GltfCamera {
             "translation": self.translation.to_array(),
             "rotation": self.rotation.to_array(),
         })
+    }
+}
+
+/// The scene's camera as the lightmap `.glb` records it (`asset.extras.twopass.camera`), so
+/// a viewer (the page of `twopass view`) can show the bake from the view twopass renders.
+/// Positions in metres, in the `.glb`'s frame.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct CameraRecord {
+    /// Eye position, metres.
+    pub position: [f32; 3],
+    /// The point looked at, metres: on the viewing axis, as far along it as the centre of
+    /// the scene's bounding box (the point a viewer orbits around).
+    pub target: [f32; 3],
+    /// Unit image-up direction.
+    pub up: [f32; 3],
+    /// Vertical field of view, degrees.
+    pub vertical_fov_degrees: f32,
+    /// The scene's image width, pixels.
+    pub width: u32,
+    /// The scene's image height, pixels.
+    pub height: u32,
+}
+
+impl CameraRecord {
+    /// The record of `scene`'s camera.
+    pub fn of(scene: &Scene) -> Self {
+        let c = &scene.camera;
+        let m = scene.unit.metres();
+        let centre = (scene.bounds.min + scene.bounds.max) * 0.5;
+        let along = c.forward.dot(centre - c.position).max(f32::EPSILON);
+        let metres = |p: Vec3| (p.as_dvec3() * m).as_vec3().to_array();
+        Self {
+            position: metres(c.position),
+            target: metres(c.position + c.forward * along),
+            up: c.up.to_array(),
+            vertical_fov_degrees: c.fov_y.to_degrees(),
+            width: c.width,
+            height: c.height,
+        }
     }
 }
 

@@ -2,12 +2,12 @@
 //! emissive texture, and the extras that say how to read it back as radiance and where the
 //! scene's camera is.
 
-use glam::{Vec2, Vec3};
+use glam::Vec2;
 use gltf_json as json;
 use serde::Serialize;
 use twopass_scene::Scene;
 
-use super::camera::{CAMERA_NAME, GltfCamera};
+use super::camera::{CAMERA_NAME, CameraRecord, GltfCamera};
 use super::layout::Layout;
 use super::reference::Encoded;
 use super::settings::Resolved;
@@ -45,45 +45,6 @@ struct LightmapExtrasBody<'a> {
     /// The texture engines take and how to decode it (module `reference`).
     #[serde(flatten)]
     engine_texture: serde_json::Value,
-}
-
-/// The scene's camera as the lightmap `.glb` records it (`asset.extras.twopass.camera`), so
-/// a viewer (the page of `twopass view`) can show the bake from the view twopass renders.
-/// Positions in metres, in the `.glb`'s frame.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct CameraRecord {
-    /// Eye position, metres.
-    pub position: [f32; 3],
-    /// The point looked at, metres: on the viewing axis, as far along it as the centre of
-    /// the scene's bounding box (the point a viewer orbits around).
-    pub target: [f32; 3],
-    /// Unit image-up direction.
-    pub up: [f32; 3],
-    /// Vertical field of view, degrees.
-    pub vertical_fov_degrees: f32,
-    /// The scene's image width, pixels.
-    pub width: u32,
-    /// The scene's image height, pixels.
-    pub height: u32,
-}
-
-impl CameraRecord {
-    /// The record of `scene`'s camera.
-    pub fn of(scene: &Scene) -> Self {
-        let c = &scene.camera;
-        let m = scene.unit.metres();
-        let centre = (scene.bounds.min + scene.bounds.max) * 0.5;
-        let along = c.forward.dot(centre - c.position).max(f32::EPSILON);
-        let metres = |p: Vec3| (p.as_dvec3() * m).as_vec3().to_array();
-        Self {
-            position: metres(c.position),
-            target: metres(c.position + c.forward * along),
-            up: c.up.to_array(),
-            vertical_fov_degrees: c.fov_y.to_degrees(),
-            width: c.width,
-            height: c.height,
-        }
-    }
 }
 
 /// How the lightmap PNG encodes radiance, as recorded in the `.glb`.

@@ -60,10 +60,10 @@ mod settings;
 
 pub use crate::weld::COPLANAR_COS;
 pub use bake::{bake_lightmap, lightmap_atlas_size};
-pub use camera::{CAMERA_NAME, GltfCamera, ZNEAR_PER_DIAGONAL, camera_rotation};
+pub use camera::{CAMERA_NAME, CameraRecord, GltfCamera, ZNEAR_PER_DIAGONAL, camera_rotation};
 pub use fill::{MAX_BACK_FACES, TexelSource};
 pub use filter::FILTER;
-pub use glb::{CameraRecord, PNG_FORMULA};
+pub use glb::PNG_FORMULA;
 pub use layout::{MAX_AREA_DISTORTION, MAX_LIGHTMAP_SIDE, smallest_texel_size};
 pub use rgbm::{RGBM_FORMULA, Rgbm};
 pub use settings::{
