@@ -103,6 +103,10 @@ pub(crate) enum Attribute<'a> {
     Vec3(json::mesh::Semantic, &'a [Vec3]),
     /// `VEC2` floats (texture coordinates).
     Vec2(json::mesh::Semantic, &'a [glam::Vec2]),
+    /// Unsigned integers (an application-specific attribute: indices), exact: `SCALAR`
+    /// floats when every value is below 2^24, else `VEC2` unsigned shorts (low and high 16
+    /// bits). glTF allows no `UNSIGNED_INT` vertex attribute.
+    Index(json::mesh::Semantic, &'a [u32]),
 }
 
 impl GlbBuilder {
@@ -232,6 +236,20 @@ impl GlbBuilder {
                         self.accessor(&data, values.len(), T::Vec2, C::F32, ArrayBuffer, None);
                     (semantic.clone(), acc)
                 }
+                Attribute::Index(semantic, values) => {
+                    let n = values.len();
+                    let acc = if values.iter().all(|&v| v < 1 << 24) {
+                        f32_bytes(&mut data, values.iter().map(|&v| v as f32));
+                        self.accessor(&data, n, T::Scalar, C::F32, ArrayBuffer, None)
+                    } else {
+                        for &v in *values {
+                            data.extend((v as u16).to_le_bytes());
+                            data.extend(((v >> 16) as u16).to_le_bytes());
+                        }
+                        self.accessor(&data, n, T::Vec2, C::U16, ArrayBuffer, None)
+                    };
+                    (semantic.clone(), acc)
+                }
             };
             map.insert(Valid(semantic), accessor);
         }
@@ -273,29 +291,29 @@ impl GlbBuilder {
 
     /// The document as `.glb` bytes: one scene of every node, `asset.extras` = `extras`.
     /// A mesh of vertex radiance: positions (m), normals and the display colour `COLOR_0`,
-    /// then the HDR radiance, direct and indirect parts under [`HDR_ATTRIBUTES`].
+    /// then the HDR radiance, direct and indirect parts under [`HDR_ATTRIBUTES`], and, when
+    /// given, each vertex's index in the user's vertex list as [`SOURCE_INDEX`].
     pub(crate) fn vertex_radiance_mesh(
         &mut self,
         name: &str,
         [positions, normals, colours]: [&[Vec3]; 3],
         [radiance, direct, indirect]: [&[Vec3]; 3],
-        indices: &[u32],
+        (indices, sources): (&[u32], Option<&[u32]>),
         material: json::Index<json::Material>,
     ) {
         use json::mesh::Semantic as S;
-        self.mesh(
-            name,
-            &[
-                Attribute::Vec3(S::Positions, positions),
-                Attribute::Vec3(S::Normals, normals),
-                Attribute::Vec3(S::Colors(0), colours),
-                Attribute::Vec3(custom(HDR_ATTRIBUTES[0]), radiance),
-                Attribute::Vec3(custom(HDR_ATTRIBUTES[1]), direct),
-                Attribute::Vec3(custom(HDR_ATTRIBUTES[2]), indirect),
-            ],
-            indices,
-            material,
-        );
+        let mut attributes = vec![
+            Attribute::Vec3(S::Positions, positions),
+            Attribute::Vec3(S::Normals, normals),
+            Attribute::Vec3(S::Colors(0), colours),
+            Attribute::Vec3(custom(HDR_ATTRIBUTES[0]), radiance),
+            Attribute::Vec3(custom(HDR_ATTRIBUTES[1]), direct),
+            Attribute::Vec3(custom(HDR_ATTRIBUTES[2]), indirect),
+        ];
+        if let Some(sources) = sources {
+            attributes.push(Attribute::Index(custom(SOURCE_INDEX), sources));
+        }
+        self.mesh(name, &attributes, indices, material);
     }
 
     /// Closes a file of vertex-radiance meshes: the `extras` that say how to read them (the
@@ -429,6 +447,13 @@ pub(crate) fn unlit_vertex_colour_material(b: &mut GlbBuilder) -> json::Index<js
     material
 }
 
+/// The vertex attribute of the per-vertex bake on the user's mesh that names each vertex's
+/// index in the user's own vertex list: an OBJ's `v` statements (0-based, file order), a glTF
+/// primitive's accessor element, a built-in shape's vertex. Stored exactly: `SCALAR` floats
+/// holding integers when every index is below 2^24 (16,777,216), else `VEC2` unsigned shorts
+/// `(low, high)` with index = low + 65536 high (glTF allows no 32-bit integer attribute).
+pub const SOURCE_INDEX: &str = "_TWOPASS_SOURCE_INDEX";
+
 /// A radiance attribute semantic (`_RADIANCE`, ...).
 pub(crate) fn custom(name: &str) -> json::mesh::Semantic {
     json::mesh::Semantic::Extras(name.trim_start_matches('_').to_owned())
@@ -515,7 +540,7 @@ pub fn encode_glb(
             &name,
             [&positions, &normals, &colours],
             [&radiance, &direct, &indirect],
-            &part.indices,
+            (&part.indices, None),
             material,
         );
         n_vertices += part.vertices.len();

@@ -82,7 +82,7 @@ pub use fingerprint::{
 };
 pub use format::{BAKE_FORMAT_VERSION, MAX_BAKE_BYTES, decode_bake, encode_bake, read_bake};
 pub use gathered::{ELEMENT_KEYS, gathered_solution};
-pub use gltf::{Glb, HDR_ATTRIBUTES, encode_glb};
+pub use gltf::{Glb, HDR_ATTRIBUTES, SOURCE_INDEX, encode_glb};
 pub use lightmap::{
     AtlasSource, CameraRecord, Lightmap, LightmapEncoding, LightmapQuantity, LightmapSettings,
     TexelSource, bake_lightmap, lightmap_atlas_size,

@@ -13,3 +13,4 @@ mod quantity;
 mod rgbm;
 mod validator;
 mod vertex;
+mod vertex_source;
