@@ -548,3 +548,57 @@ pub fn encode_glb(
     }
     b.finish_vertex_radiance(scene, &mapping, clamped_vertices, (n_vertices, n_triangles))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The bytes of accessor `index` of `b` (tightly packed) and its component type and type.
+    fn accessor_bytes(b: &GlbBuilder, index: usize) -> (Vec<u8>, String) {
+        let a = &b.root.accessors[index];
+        let view = &b.root.buffer_views[a.buffer_view.unwrap().value()];
+        let start = view.byte_offset.map_or(0, |o| o.0 as usize);
+        let bytes = b.bin[start..start + view.byte_length.0 as usize].to_vec();
+        let kind = serde_json::to_string(&(&a.component_type, &a.type_)).unwrap();
+        (bytes, kind)
+    }
+
+    #[test]
+    fn source_indices_are_floats_below_2_pow_24_and_ushort_pairs_beyond() {
+        let mut b = GlbBuilder::new();
+        let material = unlit_vertex_colour_material(&mut b);
+        let p = [Vec3::ZERO, Vec3::X, Vec3::Y];
+        let small = [0, 7, (1 << 24) - 1];
+        let large = [3, 1 << 24, 0xDEAD_BEEF];
+        for sources in [&small, &large] {
+            b.mesh(
+                "m",
+                &[
+                    Attribute::Vec3(json::mesh::Semantic::Positions, &p),
+                    Attribute::Index(custom(SOURCE_INDEX), sources),
+                ],
+                &[0, 1, 2],
+                material,
+            );
+        }
+        // Accessors: positions, indices, ... per mesh; the source index is the second.
+        let (bytes, kind) = accessor_bytes(&b, 1);
+        assert_eq!(kind, "[5126,\"SCALAR\"]");
+        let floats: Vec<u32> = bytes
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes(c.try_into().unwrap()) as u32)
+            .collect();
+        assert_eq!(floats, small);
+        let (bytes, kind) = accessor_bytes(&b, 4);
+        assert_eq!(kind, "[5123,\"VEC2\"]");
+        let pairs: Vec<u32> = bytes
+            .chunks_exact(4)
+            .map(|c| {
+                let lo = u16::from_le_bytes([c[0], c[1]]);
+                let hi = u16::from_le_bytes([c[2], c[3]]);
+                u32::from(lo) + 65536 * u32::from(hi)
+            })
+            .collect();
+        assert_eq!(pairs, large);
+    }
+}
