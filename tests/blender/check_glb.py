@@ -1,10 +1,12 @@
 # Imports a twopass .glb headless and prints what Blender made of it as one JSON line
 # (prefix "TWOPASS_RESULT "): every mesh object's dimensions in metres, its UV maps, and the
-# images. Usage: blender -b --factory-startup -P check_glb.py -- FILE.glb
+# images, and every camera's vertical field of view (radians), aspect ratio, location and the
+# world directions of its view (-Z) and up (+Y) axes, in Blender's frame (z up). Usage: blender -b --factory-startup -P check_glb.py -- FILE.glb
 import json
 import sys
 
 import bpy
+import mathutils
 import numpy
 
 # Debian 12's Blender 3.4 glTF importer uses numpy.bool, which numpy 1.24 (Debian 12's)
@@ -52,8 +54,24 @@ def emission_source(material):
 
 
 materials = {m.name: emission_source(m) for m in bpy.data.materials}
+cameras = {}
+for o in bpy.context.scene.objects:
+    if o.type != "CAMERA":
+        continue
+    rotation = o.matrix_world.to_3x3().normalized()
+    render = bpy.context.scene.render
+    cameras[o.name] = {
+        "angle_y": o.data.angle_y,
+        "sensor_fit": o.data.sensor_fit,
+        "aspect": render.resolution_x / render.resolution_y,
+        "location": list(o.matrix_world.translation),
+        "forward": list(rotation @ mathutils.Vector((0.0, 0.0, -1.0))),
+        "up": list(rotation @ mathutils.Vector((0.0, 1.0, 0.0))),
+    }
 images = [{"name": i.name, "size": list(i.size)} for i in bpy.data.images]
 print(
     "TWOPASS_RESULT "
-    + json.dumps({"objects": objects, "images": images, "materials": materials})
+    + json.dumps(
+        {"objects": objects, "images": images, "materials": materials, "cameras": cameras}
+    )
 )

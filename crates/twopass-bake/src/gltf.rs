@@ -93,7 +93,8 @@ fn f32_bytes(out: &mut Vec<u8>, values: impl IntoIterator<Item = f32>) {
 pub(crate) struct GlbBuilder {
     pub(crate) root: json::Root,
     bin: Vec<u8>,
-    nodes: Vec<json::Index<json::Node>>,
+    /// The root nodes of the document's one scene.
+    pub(crate) nodes: Vec<json::Index<json::Node>>,
 }
 
 /// One vertex stream of a primitive.
@@ -102,6 +103,10 @@ pub(crate) enum Attribute<'a> {
     Vec3(json::mesh::Semantic, &'a [Vec3]),
     /// `VEC2` floats (texture coordinates).
     Vec2(json::mesh::Semantic, &'a [glam::Vec2]),
+    /// Unsigned integers (an application-specific attribute: indices), exact: `SCALAR`
+    /// floats when every value is below 2^24, else `VEC2` unsigned shorts (low and high 16
+    /// bits). glTF allows no `UNSIGNED_INT` vertex attribute.
+    Index(json::mesh::Semantic, &'a [u32]),
 }
 
 impl GlbBuilder {
@@ -231,6 +236,20 @@ impl GlbBuilder {
                         self.accessor(&data, values.len(), T::Vec2, C::F32, ArrayBuffer, None);
                     (semantic.clone(), acc)
                 }
+                Attribute::Index(semantic, values) => {
+                    let n = values.len();
+                    let acc = if values.iter().all(|&v| v < 1 << 24) {
+                        f32_bytes(&mut data, values.iter().map(|&v| v as f32));
+                        self.accessor(&data, n, T::Scalar, C::F32, ArrayBuffer, None)
+                    } else {
+                        for &v in *values {
+                            data.extend((v as u16).to_le_bytes());
+                            data.extend(((v >> 16) as u16).to_le_bytes());
+                        }
+                        self.accessor(&data, n, T::Vec2, C::U16, ArrayBuffer, None)
+                    };
+                    (semantic.clone(), acc)
+                }
             };
             map.insert(Valid(semantic), accessor);
         }
@@ -272,29 +291,29 @@ impl GlbBuilder {
 
     /// The document as `.glb` bytes: one scene of every node, `asset.extras` = `extras`.
     /// A mesh of vertex radiance: positions (m), normals and the display colour `COLOR_0`,
-    /// then the HDR radiance, direct and indirect parts under [`HDR_ATTRIBUTES`].
+    /// then the HDR radiance, direct and indirect parts under [`HDR_ATTRIBUTES`], and, when
+    /// given, each vertex's index in the user's vertex list as [`SOURCE_INDEX`].
     pub(crate) fn vertex_radiance_mesh(
         &mut self,
         name: &str,
         [positions, normals, colours]: [&[Vec3]; 3],
         [radiance, direct, indirect]: [&[Vec3]; 3],
-        indices: &[u32],
+        (indices, sources): (&[u32], Option<&[u32]>),
         material: json::Index<json::Material>,
     ) {
         use json::mesh::Semantic as S;
-        self.mesh(
-            name,
-            &[
-                Attribute::Vec3(S::Positions, positions),
-                Attribute::Vec3(S::Normals, normals),
-                Attribute::Vec3(S::Colors(0), colours),
-                Attribute::Vec3(custom(HDR_ATTRIBUTES[0]), radiance),
-                Attribute::Vec3(custom(HDR_ATTRIBUTES[1]), direct),
-                Attribute::Vec3(custom(HDR_ATTRIBUTES[2]), indirect),
-            ],
-            indices,
-            material,
-        );
+        let mut attributes = vec![
+            Attribute::Vec3(S::Positions, positions),
+            Attribute::Vec3(S::Normals, normals),
+            Attribute::Vec3(S::Colors(0), colours),
+            Attribute::Vec3(custom(HDR_ATTRIBUTES[0]), radiance),
+            Attribute::Vec3(custom(HDR_ATTRIBUTES[1]), direct),
+            Attribute::Vec3(custom(HDR_ATTRIBUTES[2]), indirect),
+        ];
+        if let Some(sources) = sources {
+            attributes.push(Attribute::Index(custom(SOURCE_INDEX), sources));
+        }
+        self.mesh(name, &attributes, indices, material);
     }
 
     /// Closes a file of vertex-radiance meshes: the `extras` that say how to read them (the
@@ -428,6 +447,13 @@ pub(crate) fn unlit_vertex_colour_material(b: &mut GlbBuilder) -> json::Index<js
     material
 }
 
+/// The vertex attribute of the per-vertex bake on the user's mesh that names each vertex's
+/// index in the user's own vertex list: an OBJ's `v` statements (0-based, file order), a glTF
+/// primitive's accessor element, a built-in shape's vertex. Stored exactly: `SCALAR` floats
+/// holding integers when every index is below 2^24 (16,777,216), else `VEC2` unsigned shorts
+/// `(low, high)` with index = low + 65536 high (glTF allows no 32-bit integer attribute).
+pub const SOURCE_INDEX: &str = "_TWOPASS_SOURCE_INDEX";
+
 /// A radiance attribute semantic (`_RADIANCE`, ...).
 pub(crate) fn custom(name: &str) -> json::mesh::Semantic {
     json::mesh::Semantic::Extras(name.trim_start_matches('_').to_owned())
@@ -514,11 +540,65 @@ pub fn encode_glb(
             &name,
             [&positions, &normals, &colours],
             [&radiance, &direct, &indirect],
-            &part.indices,
+            (&part.indices, None),
             material,
         );
         n_vertices += part.vertices.len();
         n_triangles += part.indices.len() / 3;
     }
     b.finish_vertex_radiance(scene, &mapping, clamped_vertices, (n_vertices, n_triangles))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The bytes of accessor `index` of `b` (tightly packed) and its component type and type.
+    fn accessor_bytes(b: &GlbBuilder, index: usize) -> (Vec<u8>, String) {
+        let a = &b.root.accessors[index];
+        let view = &b.root.buffer_views[a.buffer_view.unwrap().value()];
+        let start = view.byte_offset.map_or(0, |o| o.0 as usize);
+        let bytes = b.bin[start..start + view.byte_length.0 as usize].to_vec();
+        let kind = serde_json::to_string(&(&a.component_type, &a.type_)).unwrap();
+        (bytes, kind)
+    }
+
+    #[test]
+    fn source_indices_are_floats_below_2_pow_24_and_ushort_pairs_beyond() {
+        let mut b = GlbBuilder::new();
+        let material = unlit_vertex_colour_material(&mut b);
+        let p = [Vec3::ZERO, Vec3::X, Vec3::Y];
+        let small = [0, 7, (1 << 24) - 1];
+        let large = [3, 1 << 24, 0xDEAD_BEEF];
+        for sources in [&small, &large] {
+            b.mesh(
+                "m",
+                &[
+                    Attribute::Vec3(json::mesh::Semantic::Positions, &p),
+                    Attribute::Index(custom(SOURCE_INDEX), sources),
+                ],
+                &[0, 1, 2],
+                material,
+            );
+        }
+        // Accessors: positions, indices, ... per mesh; the source index is the second.
+        let (bytes, kind) = accessor_bytes(&b, 1);
+        assert_eq!(kind, "[5126,\"SCALAR\"]");
+        let floats: Vec<u32> = bytes
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes(c.try_into().unwrap()) as u32)
+            .collect();
+        assert_eq!(floats, small);
+        let (bytes, kind) = accessor_bytes(&b, 4);
+        assert_eq!(kind, "[5123,\"VEC2\"]");
+        let pairs: Vec<u32> = bytes
+            .chunks_exact(4)
+            .map(|c| {
+                let lo = u16::from_le_bytes([c[0], c[1]]);
+                let hi = u16::from_le_bytes([c[2], c[3]]);
+                u32::from(lo) + 65536 * u32::from(hi)
+            })
+            .collect();
+        assert_eq!(pairs, large);
+    }
 }

@@ -7,7 +7,7 @@
 //! | glTF 2.0 binary (`.glb`, [`encode_glb`]) | one mesh and node per scene object: `POSITION` (metres), `NORMAL`, `COLOR_0`, the HDR radiance `_RADIANCE` with its parts `_DIRECT` and `_INDIRECT` (custom float `VEC3` attributes, [`HDR_ATTRIBUTES`]), `u32` indices; one unlit material (`KHR_materials_unlit`) so an engine displays `COLOR_0` as it is | `COLOR_0 = min(1, exposure * L)` per linear RGB channel, float, for display (see [`ColorMapping`]); `_RADIANCE` etc. raw `L`, W/(m^2 sr) |
 //! | PLY, binary little endian ([`encode_ply`]) | every element vertex (`x y z nx ny nz` and `radiance_r/g/b`, `direct_r/g/b`, `indirect_r/g/b` as `float`; `red green blue` as `uchar`) and every element (`vertex_indices`, `uint`) | `radiance_*` etc. raw radiance `L`, W/(m^2 sr); `red green blue` an 8-bit sRGB display colour ([`display_colour`]) |
 //! | bake file ([`encode_bake`], [`decode_bake`], [`read_bake`]) | the element mesh and the per-vertex radiosity parts, bit for bit, with fingerprints of the scene it belongs to | radiosity `B`, W/m^2 |
-//! | lightmap ([`bake_lightmap`]) | the scene's own triangles (not the element mesh) as `.glb` with a generated UV atlas on `TEXCOORD_1` and the lightmap PNG as `emissiveTexture` (`texCoord` 1); the lightmap as EXR and PNG | EXR: raw `L`, W/(m^2 sr); PNG: sRGB of `min(1, exposure * L)` |
+//! | lightmap ([`bake_lightmap`]) | the scene's own triangles (not the element mesh) as `.glb` with a generated UV atlas on `TEXCOORD_1` and the lightmap PNG as `emissiveTexture` (`texCoord` 1); the lightmap as EXR and PNG, and (default) an RGBM PNG the `.glb`'s `extras.lightMap` names | EXR: raw `L`, W/(m^2 sr); PNG: sRGB of `min(1, exposure * L)`; RGBM: `L = multiplier * A * RGB` |
 //! | per-vertex `.glb` on the scene's own mesh ([`encode_vertex_glb`]) | the scene's own triangles and vertices with the solution sampled there: `POSITION` (metres), `NORMAL`, `COLOR_0`, `_RADIANCE`, `_DIRECT`, `_INDIRECT` | as the element-mesh `.glb` |
 //! | manifest (JSON, [`Manifest`]) | settings, timings per phase, rays, counts, unshot fraction, energy, residuals, files | |
 //!
@@ -82,10 +82,10 @@ pub use fingerprint::{
 };
 pub use format::{BAKE_FORMAT_VERSION, MAX_BAKE_BYTES, decode_bake, encode_bake, read_bake};
 pub use gathered::{ELEMENT_KEYS, gathered_solution};
-pub use gltf::{Glb, HDR_ATTRIBUTES, encode_glb};
+pub use gltf::{Glb, HDR_ATTRIBUTES, SOURCE_INDEX, encode_glb};
 pub use lightmap::{
-    AtlasSource, CameraRecord, Lightmap, LightmapQuantity, LightmapSettings, TexelSource,
-    bake_lightmap, lightmap_atlas_size,
+    AtlasSource, CameraRecord, Lightmap, LightmapEncoding, LightmapQuantity, LightmapSettings,
+    TexelSource, bake_lightmap, lightmap_atlas_size,
 };
 pub use lightmap_read::{LightmapRadiance, lightmap_exr_path, read_lightmap_glb};
 pub use manifest::{

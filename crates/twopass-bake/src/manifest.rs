@@ -255,11 +255,24 @@ pub struct LightmapRecord {
     pub quantity: String,
     /// How the PNG encodes the texels.
     pub png: String,
+    /// The texture the `.glb` files reference for engines: `rgbm` (`<stem>.lightmap.rgbm.png`,
+    /// HDR) or `srgb` (the PNG above); [`LightmapEncoding`](crate::LightmapEncoding). Older
+    /// manifests, without it, reference the sRGB PNG.
+    #[serde(default = "srgb")]
+    pub encoding: String,
+    /// The RGBM PNG's range multiplier: `value = multiplier * A * (R, G, B)`; `None` without
+    /// one.
+    #[serde(default)]
+    pub rgbm_multiplier: Option<f32>,
     /// Time to lay out, fill and encode the lightmap, seconds.
     pub seconds: f64,
     /// The final gather that filled the texels, or `None` when they show the solution.
     #[serde(default)]
     pub gather: Option<GatherRecord>,
+}
+
+fn srgb() -> String {
+    "srgb".into()
 }
 
 fn radiance() -> String {

@@ -30,6 +30,7 @@ fn blender_imports_the_lightmap_glb_at_real_size_with_its_lightmap() {
         texel_size: Some(5.0),
         padding: 2,
         quantity: None,
+        ..Default::default()
     };
     let lm = bake_lightmap(
         TexelSource::Solution(&solution),
@@ -93,4 +94,33 @@ fn blender_imports_the_lightmap_glb_at_real_size_with_its_lightmap() {
             .any(|m| m["image"].is_string() && m["uv_map"] == second_uv),
         "{r}"
     );
+    // The scene's camera, a glTF camera node: Blender finds one camera with the scene's
+    // vertical field of view, at the eye, looking along the scene's view with its up on top
+    // (glTF's (x, y, z) is Blender's (x, -z, y)).
+    let cameras = r["cameras"].as_object().unwrap();
+    assert_eq!(cameras.len(), 1, "{r}");
+    let cam = cameras.values().next().unwrap();
+    let c = &scene.camera;
+    let angle_y = cam["angle_y"].as_f64().unwrap();
+    assert!(
+        (angle_y - f64::from(c.fov_y)).abs() < 1e-5,
+        "{cam} vs {}",
+        c.fov_y
+    );
+    let blender = |v: glam::Vec3| [v.x, -v.z, v.y].map(f64::from);
+    let close = |key: &str, want: [f64; 3], tol: f64| {
+        let got: Vec<f64> = cam[key]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
+        for k in 0..3 {
+            assert!((got[k] - want[k]).abs() < tol, "{key}: {cam} vs {want:?}");
+        }
+    };
+    close("forward", blender(c.forward), 1e-5);
+    close("up", blender(c.up), 1e-5);
+    let metres = scene.unit.metres() as f32;
+    close("location", blender(c.position * metres), 1e-5);
 }

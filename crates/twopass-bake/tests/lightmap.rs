@@ -22,6 +22,7 @@ fn bake_solution(scene: &Scene, solution: &Solution, texel: f32) -> Lightmap {
         texel_size: Some(texel),
         padding: 2,
         quantity: None,
+        ..Default::default()
     };
     bake_lightmap(
         TexelSource::Solution(solution),

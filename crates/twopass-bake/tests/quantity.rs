@@ -33,6 +33,7 @@ fn radiance_is_albedo_times_irradiance_plus_emission() {
             texel_size: Some(8.0),
             padding: 2,
             quantity: Some(quantity),
+            ..Default::default()
         };
         bake_lightmap(
             TexelSource::Solution(&solution),

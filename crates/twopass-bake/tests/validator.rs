@@ -101,6 +101,7 @@ fn lightmap_glb_passes_the_khronos_validator() {
         texel_size: Some(10.0),
         padding: 2,
         quantity: None,
+        ..Default::default()
     };
     let lm = bake::bake_lightmap(
         bake::TexelSource::Solution(solution),

@@ -10,7 +10,8 @@
 //! written the way OpenEXR names layers in one part: the final image as plain `R`, `G`, `B`
 //! (what a viewer or a tool that reads "the" image shows first), and every layer beside it as
 //! channels `<layer>.R`, `<layer>.G`, `<layer>.B` (as Blender's multilayer files, tev and
-//! OpenEXR's tools read them); a single image is written as plain `R`, `G`, `B`. A render's
+//! OpenEXR's tools read them); a single image is written as plain `R`, `G`, `B`, and a
+//! render's final image alone as plain `R`, `G`, `B`, `A` ([`encode_exr_rgba`]). A render's
 //! [`RenderMetadata`] goes into the header as text attributes. PNGs are 8-bit sRGB with an `sRGB` chunk and, when
 //! given, a `Description` text chunk that says how they were tone mapped.
 
@@ -75,6 +76,7 @@ fn encode_exr(
     path: &Path,
     parts: &[(&str, &Image)],
     metadata: &[(&str, String)],
+    alpha: bool,
 ) -> Result<Vec<u8>> {
     let Some((_, first)) = parts.first() else {
         return Err(CompositeError::Empty {
@@ -108,6 +110,11 @@ fn encode_exr(
             })?;
             channels.push(ex::AnyChannel::new(text, ex::FlatSamples::F32(samples)));
         }
+    }
+    if alpha {
+        let opaque = vec![1.0f32; w as usize * h as usize];
+        let name = ex::Text::new_or_none("A").expect("a valid channel name");
+        channels.push(ex::AnyChannel::new(name, ex::FlatSamples::F32(opaque)));
     }
     let text = |value: &str, what: &str| {
         ex::Text::new_or_none(value).ok_or_else(|| CompositeError::LayerName {
@@ -150,7 +157,7 @@ fn encode_exr(
 /// Encodes one linear image as EXR bytes with channels `R`, `G`, `B` (32-bit float); `path`
 /// only names the file in errors.
 pub fn encode_exr_image(path: &Path, image: &Image) -> Result<Vec<u8>> {
-    encode_exr(path, &[("", image)], &[])
+    encode_exr(path, &[("", image)], &[], false)
 }
 
 /// [`encode_exr_image`] with `attributes` (name, value) as text attributes in the header,
@@ -160,7 +167,7 @@ pub fn encode_exr_image_with(
     image: &Image,
     attributes: &[(&str, String)],
 ) -> Result<Vec<u8>> {
-    encode_exr(path, &[("", image)], attributes)
+    encode_exr(path, &[("", image)], attributes, false)
 }
 
 /// What an EXR's header says, read without decoding a pixel.
@@ -218,6 +225,15 @@ pub fn final_layer(layers: &Layers) -> Option<&'static str> {
     [IMAGE, FINAL].into_iter().find(|n| layers.get(n).is_some())
 }
 
+/// A layer set's final image: the layer [`final_layer`] names or, when there is none, the sum
+/// of every layer (the passes split the light without overlap).
+fn final_image(layers: &Layers) -> Result<std::borrow::Cow<'_, Image>> {
+    Ok(match final_layer(layers) {
+        Some(name) => std::borrow::Cow::Borrowed(layers.require(name)?),
+        None => std::borrow::Cow::Owned(layers.sum_all()),
+    })
+}
+
 /// The layer name under which the twopass renderers put their merged image.
 pub const IMAGE: &str = "image";
 
@@ -230,18 +246,36 @@ pub fn encode_exr_layers(
     layers: &Layers,
     metadata: Option<&RenderMetadata>,
 ) -> Result<Vec<u8>> {
-    let sum;
-    let top = match final_layer(layers) {
-        Some(name) => layers.require(name)?,
-        None => {
-            sum = layers.sum_all();
-            &sum
-        }
-    };
-    let mut parts: Vec<(&str, &Image)> = vec![("", top)];
+    let top = final_image(layers)?;
+    let mut parts: Vec<(&str, &Image)> = vec![("", &top)];
     parts.extend(layers.iter());
     let attributes = metadata.map_or_else(Vec::new, |m| m.attributes().to_vec());
-    encode_exr(path, &parts, &attributes)
+    encode_exr(path, &parts, &attributes, false)
+}
+
+/// Encodes a layer set's final image alone as a plain RGBA EXR: channels `R`, `G`, `B` (the
+/// layer [`final_layer`] names, or the sum of every layer) and `A` = 1 (every pixel is
+/// covered: a ray leaving the scene still counts as the scene's background), 32-bit float,
+/// with `metadata` as header attributes. What any EXR reader opens as "the" image.
+pub fn encode_exr_rgba(
+    path: &Path,
+    layers: &Layers,
+    metadata: Option<&RenderMetadata>,
+) -> Result<Vec<u8>> {
+    let top = final_image(layers)?;
+    let attributes = metadata.map_or_else(Vec::new, |m| m.attributes().to_vec());
+    encode_exr(path, &[("", &top)], &attributes, true)
+}
+
+/// Writes a render's final image as a plain RGBA EXR with its metadata, atomically; see
+/// [`encode_exr_rgba`] ([`write_exr_render`] keeps every layer).
+pub fn write_exr_render_rgba(
+    path: &Path,
+    layers: &Layers,
+    metadata: &RenderMetadata,
+) -> Result<()> {
+    let bytes = encode_exr_rgba(path, layers, Some(metadata))?;
+    Ok(write_atomic(path, &bytes)?)
 }
 
 /// Writes every layer into one EXR, atomically: the final image as plain `R`, `G`, `B` and
@@ -404,6 +438,45 @@ pub fn encode_png(path: &Path, image: &Rgb8Image, description: Option<&str>) -> 
         }
         let mut writer = enc.write_header().map_err(err)?;
         writer.write_image_data(image.data()).map_err(err)?;
+        writer.finish().map_err(err)?;
+    }
+    Ok(buf)
+}
+
+/// Encodes 8-bit RGBA data that is not a colour image (an RGBM lightmap: linear values and a
+/// multiplier) as a PNG in memory: no `sRGB` or `gAMA` chunk, so no reader converts it, and an
+/// optional `Description` that says how to decode it. `rgba` holds `width * height` pixels
+/// of four bytes, rows top to bottom.
+pub fn encode_png_rgba(
+    path: &Path,
+    (width, height): (u32, u32),
+    rgba: &[u8],
+    description: Option<&str>,
+) -> Result<Vec<u8>> {
+    if width == 0 || height == 0 || rgba.len() as u64 != 4 * u64::from(width) * u64::from(height) {
+        return Err(CompositeError::Empty {
+            what: format!(
+                "RGBA data of {} bytes for a {width} x {height} image {}",
+                rgba.len(),
+                path.display()
+            ),
+        });
+    }
+    let err = |source| CompositeError::Png {
+        path: path.to_path_buf(),
+        source,
+    };
+    let mut buf = Vec::new();
+    {
+        let mut enc = png::Encoder::new(&mut buf, width, height);
+        enc.set_color(png::ColorType::Rgba);
+        enc.set_depth(png::BitDepth::Eight);
+        if let Some(d) = description {
+            enc.add_text_chunk("Description".into(), d.into())
+                .map_err(err)?;
+        }
+        let mut writer = enc.write_header().map_err(err)?;
+        writer.write_image_data(rgba).map_err(err)?;
         writer.finish().map_err(err)?;
     }
     Ok(buf)

@@ -30,6 +30,10 @@ pub struct GltfSource {
     pub images: Vec<Option<(Vec<u8>, String)>>,
     /// Per scene object, in [`Scene::objects`](crate::Scene::objects) order, where it comes from.
     pub origins: Vec<GltfOrigin>,
+    /// The node in the document's `nodes` whose perspective camera is the scene's camera, or
+    /// `None` when the scene is framed by the default camera (the document has none, or only
+    /// orthographic ones).
+    pub camera_node: Option<usize>,
 }
 
 impl std::fmt::Debug for GltfSource {
@@ -42,6 +46,7 @@ impl std::fmt::Debug for GltfSource {
             )
             .field("images", &self.images.len())
             .field("origins", &self.origins)
+            .field("camera_node", &self.camera_node)
             .finish()
     }
 }

@@ -82,6 +82,13 @@ pub struct Mesh {
     /// convention: (0, 0) the image's top left, v down), or `None` for a triangle without
     /// them. Empty when no material of the scene has a texture, else one per triangle.
     pub albedo_uvs: Vec<Option<[Vec2; 3]>>,
+    /// Each position's index in its source's own vertex list, so an output on the user's
+    /// mesh can name the user's vertex: an OBJ's `v` statements (0-based, file order), a glTF
+    /// primitive's accessor, a built-in shape's vertices (the index within its object).
+    pub source_vertices: Vec<u32>,
+    /// Whether each triangle's shading normal is its own flat normal because its input gave
+    /// none (an OBJ group without `vn`, a glTF primitive without `NORMAL`, a flat shape).
+    pub flat: Vec<bool>,
 }
 
 impl Mesh {

@@ -21,6 +21,10 @@ pub struct ShapeMesh {
     /// The coordinates a base colour texture is read at, per triangle corner (glTF's
     /// convention, v down); empty, or one per triangle.
     pub albedo_uvs: Vec<[glam::Vec2; 3]>,
+    /// Each position's index in the source's own vertex list (an OBJ's `v` statements,
+    /// 0-based, file order); empty when that is the position's own index (built-in shapes, a
+    /// glTF primitive's accessor).
+    pub source_vertices: Vec<u32>,
 }
 
 /// A parallelogram: two triangles over four shared vertices, front along `edge_u x edge_v`.

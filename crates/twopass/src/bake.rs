@@ -97,6 +97,20 @@ pub struct BakeArgs {
     /// [default: irradiance for a glTF scene, radiance otherwise].
     #[arg(long, value_enum, value_name = "QUANTITY", requires = "lightmap")]
     pub lightmap_quantity: Option<Quantity>,
+    /// The lightmap texture the `.glb` files reference for engines (the materials'
+    /// `extras.lightMap`): `rgbm` (HDR, nothing clipped: `<stem>.lightmap.rgbm.png`, an RGBA
+    /// PNG whose value is multiplier x A x RGB, the 8-bit values over 255 read linearly, the
+    /// multiplier in the `.glb` and the manifest) or `srgb` (the exposure-scaled sRGB PNG,
+    /// clipped at 1). The sRGB PNG is written either way, and stays the lightmap `.glb`'s
+    /// emissive texture.
+    #[arg(
+        long,
+        value_enum,
+        default_value = "rgbm",
+        value_name = "ENCODING",
+        requires = "lightmap"
+    )]
+    pub lightmap_encoding: Encoding,
     /// Lightmap texel edge on the surface, scene units [default: scene diagonal / 200].
     #[arg(long, value_name = "LENGTH", value_parser = parse_length, requires = "lightmap")]
     pub texel_size: Option<f32>,
@@ -126,6 +140,15 @@ pub enum Quantity {
     Irradiance,
     /// Outgoing radiance, W/(m^2 sr), albedo and emission included.
     Radiance,
+}
+
+/// How the lightmap texture engines take is encoded (`--lightmap-encoding`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Encoding {
+    /// RGBM: value = multiplier x A x RGB, linear, not clipped.
+    Rgbm,
+    /// The exposure-scaled sRGB PNG, clipped at 1.
+    Srgb,
 }
 
 /// The final gather a bake runs (`--gather`).
@@ -204,6 +227,10 @@ fn lightmap_settings(args: &BakeArgs) -> bake::LightmapSettings {
             Quantity::Irradiance => bake::LightmapQuantity::Irradiance,
             Quantity::Radiance => bake::LightmapQuantity::Radiance,
         }),
+        encoding: match args.lightmap_encoding {
+            Encoding::Rgbm => bake::LightmapEncoding::Rgbm,
+            Encoding::Srgb => bake::LightmapEncoding::Srgb,
+        },
         ..bake::LightmapSettings::default()
     }
 }
@@ -485,6 +512,7 @@ pub(crate) fn write_set(
             ("lightmap", "glb", Some(&lm.glb)),
             ("lightmap", "exr", Some(&lm.exr)),
             ("lightmap", "png", Some(&lm.png)),
+            ("lightmap", "rgbm.png", lm.rgbm.as_ref().map(|(png, _)| png)),
             // A glTF scene's own asset back, with the lightmap on TEXCOORD_1.
             ("lightmapped", "glb", lm.asset.as_ref()),
         ];
@@ -509,6 +537,8 @@ pub(crate) fn write_set(
             covered_texels: lm.covered_texels,
             quantity: lm.quantity.name().into(),
             png: lm.quantity.png_formula().into(),
+            encoding: lm.encoding.name().into(),
+            rgbm_multiplier: lm.rgbm.as_ref().map(|(_, m)| *m),
             seconds,
             gather: gatherer.as_ref().map(|gatherer| {
                 let g = gatherer.settings();

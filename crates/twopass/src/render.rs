@@ -15,7 +15,7 @@ use clap::Args;
 use serde::Serialize;
 use twopass_composite::RenderMetadata;
 use twopass_composite::tonemap::ToneMap;
-use twopass_composite::write::{write_exr_render, write_png_tonemapped};
+use twopass_composite::write::{write_exr_render, write_exr_render_rgba, write_png_tonemapped};
 use twopass_trace::WhittedSettings;
 
 use crate::args::checked;
@@ -76,6 +76,11 @@ pub struct RenderArgs {
     /// Also write a tone-mapped PNG beside the EXR.
     #[arg(long)]
     pub png: bool,
+    /// Write every layer into the EXR (the final image as plain R, G, B and each pass as
+    /// `<layer>.R/G/B`) instead of the plain RGBA image (R, G, B and A = 1) that any EXR
+    /// reader opens as the image.
+    #[arg(long)]
+    pub layers: bool,
     /// PNG exposure in stops (EV) [default: auto, the 99th-percentile luminance maps to 1].
     #[arg(long, allow_hyphen_values = true, value_parser = parse_stops)]
     pub exposure: Option<f32>,
@@ -272,6 +277,7 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
             knobs,
             radiosity: crate::part::render::radiosity_source(method, args.bake.as_deref(), solve)?,
             png: args.png,
+            layers: args.layers,
             exposure: args.exposure,
             started,
         };
@@ -292,7 +298,11 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
         // whole run (solve and render).
         let seconds = radiosity_seconds + out.stats.elapsed.as_secs_f64();
         let metadata = RenderMetadata::new(method.name(), knobs.spp, ctx.seed, seconds);
-        write_exr_render(exr, &layers, &metadata)?;
+        if args.layers {
+            write_exr_render(exr, &layers, &metadata)?;
+        } else {
+            write_exr_render_rgba(exr, &layers, &metadata)?;
+        }
     }
     if let Some(png) = &targets.png {
         let image = layers.require("image")?;
@@ -369,7 +379,7 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
 /// The files `render` writes: the multi-layer EXR and the tone-mapped PNG, each when asked for.
 #[derive(Debug, PartialEq, Eq)]
 pub(crate) struct Targets {
-    /// The multi-layer EXR.
+    /// The EXR (plain RGBA, or every layer with `--layers`).
     pub exr: Option<PathBuf>,
     /// The tone-mapped PNG.
     pub png: Option<PathBuf>,

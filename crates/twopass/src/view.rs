@@ -9,10 +9,18 @@
 //! from the network when the page runs. Browsers refuse ES modules from `file://`, so the page
 //! is opened through any static server (`python3 -m http.server --directory DIR`).
 //!
-//! The page shows the `.glb`'s lightmap PNG unlit on UV set 1, so a pixel is
-//! `sRGB(min(1, exposure * L))` with the bake's exposure: the tone map of `twopass render
-//! --exposure log2(exposure)` (the exposure is in the `.glb`'s `asset.extras.twopass`, with
-//! the camera).
+//! **What the page shows.** An irradiance lightmap of a glTF scene (`<stem>.lightmapped.glb`
+//! beside the lightmap, `quantity` irradiance) is shown the way an engine shows it: the
+//! user's own asset with its materials and base colour textures, each material's
+//! `material.lightMap` set to the texture its `extras.lightMap` names (UV channel 1,
+//! `lightMapIntensity` = the entry's intensity x the bake's exposure, x the RGBM multiplier
+//! with the RGBM texel read as `rgb * a` by a shader chunk), so three.js multiplies the
+//! irradiance by the albedo; its emission is scaled by the exposure too. Otherwise (a
+//! radiance lightmap, or a scene that is not glTF) the page shows the lightmap `.glb`'s sRGB
+//! PNG unlit on UV set 1. Either way a pixel is `sRGB(min(1, exposure * L))` with the bake's
+//! exposure: the tone map of `twopass render --exposure log2(exposure)` (the exposure is in
+//! the `.glb`'s `asset.extras.twopass`, with the camera). The page's mode is its
+//! `twopass-mode` meta tag: `lightmap` or `unlit`.
 
 use std::path::{Path, PathBuf};
 
@@ -33,7 +41,8 @@ pub struct ViewArgs {
     pub three: Option<PathBuf>,
 }
 
-/// The page's HTML; `@GLB@` is replaced by the `.glb`'s file name.
+/// The page's HTML; `@GLB@` is replaced by the `.glb`'s file name, `@MODE@` by the page's
+/// mode (`lightmap` or `unlit`).
 const INDEX_HTML: &str = include_str!("../view/index.html");
 /// The page's module.
 const VIEW_JS: &str = include_str!("../view/view.js");
@@ -54,6 +63,7 @@ const MAX_THREE_FILE: u64 = 64 << 20;
 #[derive(Debug, Serialize)]
 struct Summary {
     glb: PathBuf,
+    mode: &'static str,
     three_version: String,
     page: PathBuf,
     files: Vec<PathBuf>,
@@ -61,10 +71,8 @@ struct Summary {
 
 /// Writes the page for the lightmap bake in `args.bake_dir`.
 pub fn run(args: &ViewArgs, ctx: &Context) -> Result<(), CliError> {
-    let glb = find_lightmap(&args.bake_dir)?;
-    let bytes = twopass_scene::read_bounded(&glb, twopass_bake::MAX_BAKE_BYTES)
-        .map_err(|e| CliError::io(&glb, e))?;
-    check_camera(&glb, &bytes)?;
+    let lightmap = find_lightmap(&args.bake_dir)?;
+    let (glb, bytes, mode) = shown_glb(&lightmap)?;
     let three = args
         .three
         .clone()
@@ -114,20 +122,28 @@ pub fn run(args: &ViewArgs, ctx: &Context) -> Result<(), CliError> {
     write("view.js", VIEW_JS.as_bytes())?;
     write(
         "index.html",
-        INDEX_HTML.replace("@GLB@", &html_attr(&name)).as_bytes(),
+        INDEX_HTML
+            .replace("@GLB@", &html_attr(&name))
+            .replace("@MODE@", mode)
+            .as_bytes(),
     )?;
     let summary = Summary {
         glb,
+        mode,
         three_version,
         page: out.join("index.html"),
         files,
     };
     crate::output::report(&summary, ctx, || {
         outln!(
-            "wrote {} (three.js {}, the bake {})",
+            "wrote {} (three.js {}, the bake {}, {})",
             summary.page.display(),
             summary.three_version,
-            summary.glb.display()
+            summary.glb.display(),
+            match summary.mode {
+                LIGHTMAP_MODE => "the asset's own materials with material.lightMap",
+                _ => "the lightmap unlit",
+            }
         );
         outln!(
             "open it through a local server: python3 -m http.server --directory {}",
@@ -143,6 +159,38 @@ fn keep_permissions(source: &Path, copy: &Path) -> Result<(), CliError> {
         .map_err(|e| CliError::io(source, e))?
         .permissions();
     std::fs::set_permissions(copy, permissions).map_err(|e| CliError::io(copy, e))
+}
+
+/// The page's mode for the user's asset with an irradiance lightmap: its own materials with
+/// `material.lightMap`.
+const LIGHTMAP_MODE: &str = "lightmap";
+/// The page's mode for the lightmap `.glb`: the lightmap shown unlit.
+const UNLIT_MODE: &str = "unlit";
+
+/// The `.glb` the page shows for the lightmap bake `lightmap` (a `<stem>.lightmap.glb`), its
+/// bytes (checked: a camera record the page reads) and the page's mode: the
+/// `<stem>.lightmapped.glb` beside it when that holds an irradiance lightmap, else `lightmap`.
+fn shown_glb(lightmap: &Path) -> Result<(PathBuf, Vec<u8>, &'static str), CliError> {
+    let read = |path: &Path| -> Result<(Vec<u8>, serde_json::Value), CliError> {
+        let bytes = twopass_scene::read_bounded(path, twopass_bake::MAX_BAKE_BYTES)
+            .map_err(|e| CliError::io(path, e))?;
+        let json = check_camera(path, &bytes)?;
+        Ok((bytes, json))
+    };
+    let name = lightmap
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let stem = name.strip_suffix(".lightmap.glb").unwrap_or(&name);
+    let asset = lightmap.with_file_name(format!("{stem}.lightmapped.glb"));
+    if asset.is_file() {
+        let (bytes, json) = read(&asset)?;
+        if json["asset"]["extras"]["twopass"]["quantity"] == "irradiance" {
+            return Ok((asset, bytes, LIGHTMAP_MODE));
+        }
+    }
+    let (bytes, _) = read(lightmap)?;
+    Ok((lightmap.to_owned(), bytes, UNLIT_MODE))
 }
 
 /// The one `<stem>.lightmap.glb` in `dir`.
@@ -180,8 +228,8 @@ fn find_lightmap(dir: &Path) -> Result<PathBuf, CliError> {
 }
 
 /// Checks that the `.glb` is a glTF binary whose `asset.extras.twopass.camera` the page can
-/// read (a bake older than the record has none).
-fn check_camera(glb: &Path, bytes: &[u8]) -> Result<(), CliError> {
+/// read (a bake older than the record has none); returns its JSON.
+fn check_camera(glb: &Path, bytes: &[u8]) -> Result<serde_json::Value, CliError> {
     let bad = |why: &str| CliError::Input(format!("{}: {why}", glb.display()));
     let word = |at: usize| {
         bytes
@@ -209,7 +257,7 @@ fn check_camera(glb: &Path, bytes: &[u8]) -> Result<(), CliError> {
             "no asset.extras.twopass.camera (a bake from an older twopass); bake again",
         ));
     }
-    Ok(())
+    Ok(value)
 }
 
 /// The `version` of the `three` package at `dir`, or a clear error saying how to install it.

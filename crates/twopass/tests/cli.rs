@@ -188,8 +188,9 @@ fn bench_render_times_every_method_and_the_bake_frame_rate() {
 
 #[test]
 fn render_exr_says_how_it_was_made() {
-    // The EXR of `render` carries the final image as plain R, G, B and the render's method,
-    // samples, seed and version in its header, read back here by the exr crate itself.
+    // The EXR of `render` carries the final image as plain R, G, B, A (every layer too with
+    // `--layers`) and the render's method, samples, seed and version in its header, read back
+    // here by the exr crate itself.
     let dir = tempfile::tempdir().unwrap();
     let exr_path = dir.path().join("box.exr");
     let out = common::render_box("whitted", 16, 2)
@@ -210,15 +211,35 @@ fn render_exr_says_how_it_was_made() {
         .iter()
         .map(|c| c.name.to_string())
         .collect();
-    for c in ["R", "G", "B", "image.R"] {
-        assert!(names.iter().any(|n| n == c), "no channel {c} in {names:?}");
-    }
+    assert_eq!(names, ["A", "B", "G", "R"]);
     let attr = |name: &str| twopass_tests::exr_text(&layer.attributes, name);
     assert_eq!(attr("twopass:method"), "whitted");
     assert_eq!(attr("twopass:spp"), "2");
     assert_eq!(attr("twopass:seed"), "7");
     assert!(attr("twopass:seconds").parse::<f64>().unwrap() > 0.0);
     assert_eq!(attr("twopass:version"), env!("CARGO_PKG_VERSION"));
+    // With --layers: the passes beside the plain image, and the same header.
+    let out = common::render_box("whitted", 16, 2)
+        .words("--seed 7 --layers -o")
+        .arg(&exr_path)
+        .words("--quiet")
+        .run();
+    assert!(out.status.success());
+    let raw = exr::prelude::read_all_flat_layers_from_file(&exr_path).unwrap();
+    let layer = &raw.layer_data[0];
+    let names: Vec<String> = layer
+        .channel_data
+        .list
+        .iter()
+        .map(|c| c.name.to_string())
+        .collect();
+    for c in ["R", "G", "B", "image.R"] {
+        assert!(names.iter().any(|n| n == c), "no channel {c} in {names:?}");
+    }
+    assert_eq!(
+        twopass_tests::exr_text(&layer.attributes, "twopass:method"),
+        "whitted"
+    );
 }
 
 #[test]

@@ -17,7 +17,7 @@ use crate::common::{self, BOX, assert_exit, assert_ok, cli, repo, twopass};
 /// object, positions in metres, each material's albedo as a base colour (or `white` for every
 /// one), the emission as emissiveFactor x KHR_materials_emissive_strength, the camera as a
 /// perspective camera on a node placed and turned as the scene's.
-fn cornell_glb(path: &Path, white: Option<[f32; 3]>) {
+pub(crate) fn cornell_glb(path: &Path, white: Option<[f32; 3]>) {
     let (scene, _) = twopass_scene::load(repo(BOX)).unwrap();
     let metres = scene.unit.metres() as f32;
     let mut w = GltfWriter::new();

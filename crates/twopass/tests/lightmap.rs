@@ -28,6 +28,7 @@ fn lightmap_bake_writes_its_files_into_the_manifest() {
             "lightmap-exr",
             "lightmap-glb",
             "lightmap-png",
+            "lightmap-rgbm.png",
             "vertex.glb"
         ]
     );
@@ -50,6 +51,10 @@ fn lightmap_bake_writes_its_files_into_the_manifest() {
         "{lm}"
     );
     assert!(dir.join("cornell-box.lightmap.png").exists());
+    // The HDR texture the .glb names for engines (the default encoding), with its multiplier.
+    assert!(dir.join("cornell-box.lightmap.rgbm.png").exists());
+    assert_eq!(lm["encoding"], "rgbm", "{lm}");
+    assert!(lm["rgbm_multiplier"].as_f64().unwrap() > 0.0, "{lm}");
     // The default final gather ran and says what it did.
     let g = &lm["gather"];
     assert_eq!(g["min_rays"], 64, "{g}");
@@ -166,4 +171,30 @@ fn a_gather_ends_at_the_time_budget_with_every_texel_filled() {
     // slack allowed here.
     let total = manifest["timings"]["total_s"].as_f64().unwrap();
     assert!(total < 3.0 + 5.0, "{total} s");
+}
+
+#[test]
+fn lightmap_encoding_srgb_writes_no_rgbm_and_needs_lightmap() {
+    let out_dir = tempfile::tempdir().unwrap();
+    let dir = out_dir.path();
+    let out = common::bake_box(dir)
+        .words("--format bake --lightmap --texel-size 20 --gather off")
+        .words("--lightmap-encoding srgb --element-size 100 --unshot 1e-2 --json")
+        .run();
+    let manifest = common::ok_json(&out);
+    assert_eq!(manifest["lightmap"]["encoding"], "srgb");
+    assert!(manifest["lightmap"]["rgbm_multiplier"].is_null());
+    common::assert_absent(
+        &dir.join("cornell-box.lightmap.rgbm.png"),
+        "no RGBM texture with --lightmap-encoding srgb",
+    );
+    // The encoding without a lightmap is a usage error; an unknown one too.
+    let out = common::bake_box(dir)
+        .words("--format bake --lightmap-encoding rgbm")
+        .run();
+    common::assert_exit(&out, 2);
+    let out = common::bake_box(dir)
+        .words("--format bake --lightmap --lightmap-encoding rgbe")
+        .run();
+    common::assert_exit(&out, 2);
 }

@@ -13,8 +13,8 @@ const COARSE: &str = "--element-size 80 --patch-size 150 --unshot 1e-2";
 
 /// The render every render test splits: the hybrid over a saved solution, with its light
 /// tracing pass through the glass sphere (40 x 40 pixels at 6 samples: 9,600 light paths, three
-/// chunks of 4,096 to split).
-const RENDER: &str = "--method hybrid --width 40 --spp 6 --seed 5 --png --quiet";
+/// chunks of 4,096 to split), every layer in its EXR (`--layers`).
+const RENDER: &str = "--method hybrid --width 40 --spp 6 --seed 5 --png --layers --quiet";
 
 /// Every layer of two EXRs, as bit patterns, and their names.
 fn exr_bits(path: &Path) -> Vec<(String, Vec<u32>)> {

@@ -27,7 +27,7 @@ fn every_method_writes_layers_that_sum_to_the_image() {
             .arg(&scene)
             .words("--method")
             .arg(method)
-            .words("--width 24 --spp 2 --png --json --output")
+            .words("--width 24 --spp 2 --png --layers --json --output")
             .arg(dir.path())
             .words(COARSE)
             .run();
@@ -85,7 +85,7 @@ fn a_bake_renders_the_same_as_a_fresh_solve_with_the_same_settings() {
     let render = |bake: Option<&Path>, out: &Path| {
         let mut c = cli("render")
             .arg(&scene)
-            .words("--method radiosity --width 16 --spp 1 --quiet")
+            .words("--method radiosity --width 16 --spp 1 --layers --quiet")
             .words(COARSE);
         if let Some(bake) = bake {
             c = c.words("--bake").arg(bake);
@@ -144,7 +144,7 @@ fn output_with_an_image_extension_is_that_file() {
         &[0x76, 0x2f, 0x31, 0x01],
         "not an EXR"
     );
-    assert!(read_exr_layers(&exr).unwrap().require("image").is_ok());
+    assert_eq!(rgba_exr(&exr).0, ["A", "B", "G", "R"]);
     assert!(exr.with_extension("png").is_file());
 
     // An image format render cannot write is a usage error, and nothing is created.
@@ -166,5 +166,73 @@ fn output_without_an_image_extension_is_a_directory() {
         assert!(inside.is_dir(), "{} is not a directory", inside.display());
         assert!(inside.join("cornell-box-whitted.exr").is_file());
         assert!(inside.join("cornell-box-whitted.png").is_file());
+    }
+}
+
+/// The channel names (sorted) and, per channel, the samples of a one-part EXR, read with the
+/// `exr` crate directly.
+fn rgba_exr(path: &Path) -> (Vec<String>, Vec<Vec<f32>>) {
+    use exr::prelude::{ReadChannels, ReadLayers};
+    let image = exr::prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .all_layers()
+        .all_attributes()
+        .from_file(path)
+        .unwrap();
+    assert_eq!(image.layer_data.len(), 1, "one part");
+    let channels = &image.layer_data[0].channel_data.list;
+    (
+        channels.iter().map(|c| c.name.to_string()).collect(),
+        channels
+            .iter()
+            .map(|c| c.sample_data.values_as_f32().collect())
+            .collect(),
+    )
+}
+
+/// Issue 41: the render EXR is a plain RGBA image by default (what Blender, Nuke and tev open
+/// as the image): channels R, G, B and A = 1 only, R, G, B bit for bit the final image of the
+/// layered file `--layers` writes from the same render.
+#[test]
+fn the_default_exr_is_plain_rgba_and_layers_writes_every_pass() {
+    let dir = tempfile::tempdir().unwrap();
+    let render = |extra: &str, out: &Path| {
+        let c = cli("render")
+            .arg(repo("scenes/cornell-box.toml"))
+            .words("--method whitted --width 16 --spp 1 --seed 3 --quiet")
+            .words(extra);
+        common::assert_ok(&c.output(out).run());
+    };
+    let (plain, layered) = (dir.path().join("plain.exr"), dir.path().join("layered.exr"));
+    render("", &plain);
+    render("--layers", &layered);
+    let (names, samples) = rgba_exr(&plain);
+    assert_eq!(names, ["A", "B", "G", "R"]);
+    assert!(samples[0].iter().all(|&a| a == 1.0), "A is 1 everywhere");
+    let image = read_exr_layers(&layered).unwrap();
+    let image = image.require("image").unwrap();
+    let pixels = image.pixels();
+    assert_eq!(samples[3].len(), pixels.len());
+    for (c, channel) in [(0, 3), (1, 2), (2, 1)] {
+        let want: Vec<u32> = pixels.iter().map(|p| p[c].to_bits()).collect();
+        let got: Vec<u32> = samples[channel].iter().map(|v| v.to_bits()).collect();
+        assert_eq!(got, want, "channel {}", names[channel]);
+    }
+    // The layered file has the passes; the plain one has none.
+    assert!(read_exr_layers(&layered).unwrap().names().count() > 1);
+    assert_eq!(read_exr_layers(&plain).unwrap().names().count(), 0);
+    // Python's OpenEXR, where installed, reads the same four channels.
+    let py = std::process::Command::new("python3")
+        .arg("-c")
+        .arg("import sys, OpenEXR; print(' '.join(sorted(OpenEXR.InputFile(sys.argv[1]).header()['channels'])))")
+        .arg(&plain)
+        .output();
+    match py {
+        Ok(out) if out.status.success() => {
+            assert_eq!(String::from_utf8_lossy(&out.stdout).trim(), "A B G R");
+        }
+        _ => eprintln!("note: the plain EXR not read with Python's OpenEXR (not installed)"),
     }
 }

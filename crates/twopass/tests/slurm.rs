@@ -169,7 +169,7 @@ fn slurm_render_and_gather_merge_bit_for_bit() {
     let render: Vec<&str> = [spheres.as_str()]
         .into_iter()
         .chain(
-            "--method hybrid --width 64 --spp 2 --seed 9 --png --element-size 80 --patch-size 150 --unshot 1e-2"
+            "--method hybrid --width 64 --spp 2 --seed 9 --png --layers --element-size 80 --patch-size 150 --unshot 1e-2"
                 .split(' '),
         )
         .collect();
@@ -239,6 +239,7 @@ fn a_cancelled_and_requeued_task_redoes_its_part_and_the_merge_succeeds() {
         "64",
         "--spp",
         "1024",
+        "--layers",
     ];
     let job = d.join("job");
     let out_dir = d.join("out");
@@ -319,6 +320,7 @@ fn a_set_with_a_part_of_another_seed_is_refused() {
         let dir = d.join(format!("seed{seed}"));
         let render = [
             &spheres, "--method", "whitted", "--width", "16", "--spp", "1", "--seed", seed,
+            "--layers",
         ];
         let rec = submit("render", &dir, 4, &dir.join("out"), &render);
         (dir, rec)

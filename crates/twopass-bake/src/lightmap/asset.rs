@@ -14,15 +14,19 @@
 //! several nodes use gets one copy per node after the first (the copies share nothing but
 //! their names), since each use has its own place in the atlas.
 //!
+//! **The camera.** The scene's camera is the user's own camera node when it came from one
+//! (`GltfSource::camera_node`); otherwise (the default framing) it is added as a perspective
+//! camera on a new root node named [`CAMERA_NAME`](super::CAMERA_NAME) ([`GltfCamera`]). The
+//! user's camera nodes are never edited; `asset.extras.twopass.camera_node` names the node.
+//!
 //! **The lightmap's reference** (no glTF extension exists for lightmaps, and an unknown one
-//! would be a validator warning): the PNG is an image with a texture (bilinear, clamped), and
-//! every material a baked primitive uses gets `extras.lightMap = { "index": <texture>,
-//! "texCoord": 1, "intensity": <x>, "quantity": ... }`, named after three.js's
-//! `material.lightMap` and `lightMapIntensity` (three.js's GLTFLoader puts a material's extras
-//! in `material.userData`, Blender's importer in the material's custom properties).
-//! `asset.extras.twopass` records the same with the encoding, units and EXR fingerprint.
-//! `intensity` is the factor that turns the PNG's linear value back into what the engine
-//! expects: 1 / exposure for the HDR value, times pi for an irradiance lightmap in three.js.
+//! would be a validator warning): the texture engines take (the RGBM PNG, or the sRGB PNG with
+//! `--lightmap-encoding srgb`) is an image with a texture (bilinear, clamped), and every
+//! material a baked primitive uses gets `extras.lightMap` (module `reference`: texture,
+//! `texCoord` 1, quantity, encoding, multiplier or exposure, three.js's intensity; three.js's
+//! GLTFLoader puts a material's extras in `material.userData`, Blender's importer in the
+//! material's custom properties). `asset.extras.twopass` records the same with the decode
+//! formula, units and EXR fingerprint.
 
 use std::collections::HashMap;
 
@@ -30,9 +34,10 @@ use glam::Vec2;
 use serde_json::{Value, json};
 use twopass_scene::{GltfSource, Scene};
 
+use super::camera::{CameraRecord, GltfCamera};
 use super::layout::Layout;
-use super::settings::{AtlasSource, LightmapQuantity, Resolved};
-use crate::colour::ColorMapping;
+use super::reference::Encoded;
+use super::settings::{AtlasSource, Resolved};
 use crate::error::BakeError;
 
 /// The component byte size of a glTF `componentType`.
@@ -208,9 +213,7 @@ pub(super) fn encode_asset_glb(
     scene: &Scene,
     layout: &Layout,
     s: &Resolved,
-    png: &[u8],
-    mapping: ColorMapping,
-    exr_fingerprint: u64,
+    encoded: &Encoded<'_>,
 ) -> Result<Vec<u8>, BakeError> {
     let root: Value = serde_json::from_slice(&src.json)
         .map_err(|e| err(format!("the loaded document no longer parses: {e}")))?;
@@ -256,7 +259,7 @@ pub(super) fn encode_asset_glb(
         rewrite_primitives(&mut w, src, scene, layout)?;
     }
     // The lightmap: image, sampler, texture.
-    let view = w.view(png, json!({}));
+    let view = w.view(encoded.engine_png(), json!({}));
     let image = w.push(
         "images",
         json!({ "name": "twopass lightmap", "bufferView": view, "mimeType": "image/png" }),
@@ -269,17 +272,7 @@ pub(super) fn encode_asset_glb(
         "textures",
         json!({ "name": "twopass lightmap", "sampler": sampler, "source": image }),
     );
-    let scale = 1.0 / mapping.exposure;
-    let three_intensity = match s.quantity {
-        LightmapQuantity::Irradiance => std::f32::consts::PI * scale,
-        LightmapQuantity::Radiance => scale,
-    };
-    let reference = json!({
-        "index": texture,
-        "texCoord": 1,
-        "intensity": three_intensity,
-        "quantity": s.quantity.name(),
-    });
+    let reference = encoded.material_entry(texture, s);
     let mut used: Vec<usize> = Vec::new();
     for o in &src.origins {
         let p = &w.root["meshes"][o.mesh]["primitives"][o.primitive];
@@ -298,22 +291,27 @@ pub(super) fn encode_asset_glb(
             e.insert("lightMap".into(), reference.clone());
         }
     }
-    let record = json!({
+    let camera_node = match src.camera_node {
+        Some(node) => node,
+        None => add_camera(&mut w, scene),
+    };
+    let mut record = json!({
         "lightmap": s.quantity.png_formula(),
         "quantity": s.quantity.name(),
-        "texture": texture,
         "texcoord": 1,
-        "exposure": mapping.exposure,
-        "hdr_scale": scale,
-        "three_js": format!(
-            "material.lightMap = the texture (channel 1), material.lightMapIntensity = {three_intensity}"
-        ),
+        "exposure": encoded.mapping.exposure,
+        "hdr_scale": 1.0 / encoded.mapping.exposure,
         "unit": "W/(m^2 sr)",
         "texel_size_m": f64::from(s.texel_size) * scene.unit.metres(),
         "padding_texels": s.padding,
         "atlas": layout.source.describe(),
-        "exr_fingerprint": format!("{exr_fingerprint:016x}"),
+        "exr_fingerprint": format!("{:016x}", encoded.exr_fingerprint),
+        "camera_node": camera_node,
+        "camera": serde_json::to_value(CameraRecord::of(scene)).map_err(|e| err(e.to_string()))?,
     });
+    if let (Some(r), Value::Object(more)) = (record.as_object_mut(), encoded.record(texture, s)) {
+        r.extend(more);
+    }
     let asset = &mut w.root["asset"];
     if let Some(o) = asset.as_object_mut() {
         let extras = o.entry("extras").or_insert_with(|| json!({}));
@@ -324,6 +322,22 @@ pub(super) fn encode_asset_glb(
     let bin_len = w.bin.len();
     w.root["buffers"] = json!([{ "byteLength": bin_len }]);
     finish(w)
+}
+
+/// Adds the scene's camera ([`GltfCamera`]) on a new root node of the document's scene and
+/// returns the node's index.
+fn add_camera(w: &mut Writer, scene: &Scene) -> usize {
+    let camera = GltfCamera::of(scene);
+    let index = w.push("cameras", camera.camera_json());
+    let node = w.push("nodes", camera.node_json(index));
+    let shown = w.root["scene"].as_u64().unwrap_or(0) as usize;
+    if let Some(s) = w.root["scenes"][shown].as_object_mut() {
+        let nodes = s.entry("nodes").or_insert_with(|| json!([]));
+        if let Some(list) = nodes.as_array_mut() {
+            list.push(json!(node));
+        }
+    }
+    node
 }
 
 /// Gives each baked primitive the generated atlas on a vertex list split by chart (module

@@ -12,8 +12,10 @@ use super::asset::encode_asset_glb;
 use super::fill::{RegionTexels, TexelSource, fill_region};
 use super::glb::encode_lightmap_glb;
 use super::layout::{Layout, generated_layout, scene_layout};
+use super::reference::Encoded;
+use super::rgbm::{RGBM_FORMULA, encode_rgbm};
 use super::settings::{
-    Lightmap, LightmapQuantity, LightmapSettings, Resolved, TEXELS_PER_DIAGONAL,
+    Lightmap, LightmapEncoding, LightmapQuantity, LightmapSettings, Resolved, TEXELS_PER_DIAGONAL,
 };
 use crate::colour::ColorMapping;
 use crate::error::BakeError;
@@ -22,7 +24,7 @@ use crate::fingerprint::LIGHTMAP_FINGERPRINT;
 /// Bakes the light of `source` (a solution's diffuse radiance interpolated per texel, or a
 /// final gather per texel: [`TexelSource`]) into a lightmap over the scene's own triangles,
 /// and encodes it: the HDR EXR, the LDR PNG (with
-/// `mapping`) and a `.glb` of the scene's triangles (not the element mesh) whose `TEXCOORD_1`
+/// `mapping`), with [`LightmapEncoding::Rgbm`] the RGBM PNG, and a `.glb` of the scene's triangles (not the element mesh) whose `TEXCOORD_1`
 /// addresses the lightmap.
 ///
 /// The atlas is the scene's own texture coordinates (an OBJ's `vt`) when every triangle has
@@ -35,7 +37,9 @@ use crate::fingerprint::LIGHTMAP_FINGERPRINT;
 /// glTF wants sets numbered from 0), and one material: black base colour, metallic 0,
 /// roughness 1, and the PNG as `emissiveTexture` with `texCoord` 1 (emissive factor 1); its
 /// `asset.extras.twopass` say how the PNG encodes radiance (`exposure`) and where the scene's
-/// camera is ([`CameraRecord`](super::glb::CameraRecord)). Any
+/// camera is ([`CameraRecord`](super::CameraRecord)), also a glTF camera node. The
+/// material's `extras.lightMap` names the texture engines take (the RGBM PNG, embedded too,
+/// or the emissive sRGB PNG; module `reference`). Any
 /// glTF viewer then shows the baked light as the surface's emission without relighting it;
 /// engines with a lightmap slot take the same texture on UV set 1 (README, "Bakes for
 /// engines"). A vertex is written once per position, shading normal (normals within
@@ -94,17 +98,34 @@ pub fn bake_lightmap(
     let png =
         twopass_composite::write::encode_png(Path::new("lightmap.png"), &ldr, Some(&description))
             .map_err(encode_err)?;
-    let glb = encode_lightmap_glb(scene, &layout, &s, &png, mapping, fingerprint)?;
+    let rgbm = match s.encoding {
+        LightmapEncoding::Rgbm => {
+            let rgbm = encode_rgbm(&image);
+            let description = format!(
+                "twopass lightmap, RGBM: {RGBM_FORMULA}, multiplier {:e}; {}",
+                rgbm.multiplier,
+                s.quantity.name()
+            );
+            let png = twopass_composite::write::encode_png_rgba(
+                Path::new("lightmap.rgbm.png"),
+                (width, height),
+                &rgbm.rgba,
+                Some(&description),
+            )
+            .map_err(encode_err)?;
+            Some((png, rgbm.multiplier))
+        }
+        LightmapEncoding::Srgb => None,
+    };
+    let encoded = Encoded {
+        png: &png,
+        rgbm: rgbm.as_ref().map(|(png, m)| (png.as_slice(), *m)),
+        mapping,
+        exr_fingerprint: fingerprint,
+    };
+    let glb = encode_lightmap_glb(scene, &layout, &s, &encoded)?;
     let asset = match &scene.gltf {
-        Some(src) => Some(encode_asset_glb(
-            src,
-            scene,
-            &layout,
-            &s,
-            &png,
-            mapping,
-            fingerprint,
-        )?),
+        Some(src) => Some(encode_asset_glb(src, scene, &layout, &s, &encoded)?),
         None => None,
     };
     Ok(Lightmap {
@@ -122,6 +143,8 @@ pub fn bake_lightmap(
         asset,
         exr,
         png,
+        encoding: s.encoding,
+        rgbm,
     })
 }
 
@@ -155,6 +178,7 @@ fn resolve(scene: &Scene, settings: &LightmapSettings) -> Result<Resolved, BakeE
         quantity: settings
             .quantity
             .unwrap_or_else(|| LightmapQuantity::for_scene(scene)),
+        encoding: settings.encoding,
     };
     if !(s.texel_size.is_finite() && s.texel_size > 0.0) {
         return Err(BakeError::Encode {

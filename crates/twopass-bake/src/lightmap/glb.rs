@@ -2,14 +2,15 @@
 //! emissive texture, and the extras that say how to read it back as radiance and where the
 //! scene's camera is.
 
-use glam::{Vec2, Vec3};
+use glam::Vec2;
 use gltf_json as json;
 use serde::Serialize;
 use twopass_scene::Scene;
 
+use super::camera::{CAMERA_NAME, CameraRecord, GltfCamera};
 use super::layout::Layout;
+use super::reference::Encoded;
 use super::settings::Resolved;
-use crate::colour::ColorMapping;
 use crate::error::BakeError;
 use crate::gltf::{Attribute, GlbBuilder};
 use crate::weld::SharedVertices;
@@ -36,48 +37,14 @@ struct LightmapExtrasBody<'a> {
     metres_per_scene_unit: f64,
     scene: &'a str,
     camera: CameraRecord,
+    /// The name of the glTF camera node that places the same camera.
+    camera_node: &'static str,
     /// The EXR's [`lightmap_fingerprint`](crate::fingerprint::lightmap_fingerprint), 16 hex
     /// digits: the `.glb` is read only with that EXR.
     exr_fingerprint: String,
-}
-
-/// The scene's camera as the lightmap `.glb` records it (`asset.extras.twopass.camera`), so
-/// a viewer (the page of `twopass view`) can show the bake from the view twopass renders.
-/// Positions in metres, in the `.glb`'s frame.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct CameraRecord {
-    /// Eye position, metres.
-    pub position: [f32; 3],
-    /// The point looked at, metres: on the viewing axis, as far along it as the centre of
-    /// the scene's bounding box (the point a viewer orbits around).
-    pub target: [f32; 3],
-    /// Unit image-up direction.
-    pub up: [f32; 3],
-    /// Vertical field of view, degrees.
-    pub vertical_fov_degrees: f32,
-    /// The scene's image width, pixels.
-    pub width: u32,
-    /// The scene's image height, pixels.
-    pub height: u32,
-}
-
-impl CameraRecord {
-    /// The record of `scene`'s camera.
-    pub fn of(scene: &Scene) -> Self {
-        let c = &scene.camera;
-        let m = scene.unit.metres();
-        let centre = (scene.bounds.min + scene.bounds.max) * 0.5;
-        let along = c.forward.dot(centre - c.position).max(f32::EPSILON);
-        let metres = |p: Vec3| (p.as_dvec3() * m).as_vec3().to_array();
-        Self {
-            position: metres(c.position),
-            target: metres(c.position + c.forward * along),
-            up: c.up.to_array(),
-            vertical_fov_degrees: c.fov_y.to_degrees(),
-            width: c.width,
-            height: c.height,
-        }
-    }
+    /// The texture engines take and how to decode it (module `reference`).
+    #[serde(flatten)]
+    engine_texture: serde_json::Value,
 }
 
 /// How the lightmap PNG encodes radiance, as recorded in the `.glb`.
@@ -92,15 +59,21 @@ pub(super) fn encode_lightmap_glb(
     scene: &Scene,
     layout: &Layout,
     s: &Resolved,
-    png: &[u8],
-    mapping: ColorMapping,
-    exr_fingerprint: u64,
+    encoded: &Encoded<'_>,
 ) -> Result<Vec<u8>, BakeError> {
     let m = &scene.mesh;
     let to_metres = scene.unit.metres();
     let mut b = GlbBuilder::new();
-    let texture = b.png_texture("twopass lightmap", png);
+    let texture = b.png_texture("twopass lightmap", encoded.png);
+    let engine_texture = match encoded.rgbm {
+        Some((png, _)) => b.png_texture("twopass lightmap (RGBM)", png),
+        None => texture,
+    };
+    let reference = json_raw(
+        &serde_json::json!({ "lightMap": encoded.material_entry(engine_texture.value(), s) }),
+    )?;
     let material = b.root.push(json::Material {
+        extras: Some(reference),
         name: Some("twopass lightmap (emissive, TEXCOORD_1)".into()),
         pbr_metallic_roughness: json::material::PbrMetallicRoughness {
             base_color_factor: json::material::PbrBaseColorFactor([0.0, 0.0, 0.0, 1.0]),
@@ -155,6 +128,7 @@ pub(super) fn encode_lightmap_glb(
             material,
         );
     }
+    add_camera(&mut b, scene)?;
     let scene_name = scene.path.display().to_string();
     let atlas = layout.source.describe();
     let extras = LightmapExtras {
@@ -163,7 +137,7 @@ pub(super) fn encode_lightmap_glb(
             quantity: s.quantity.name(),
             texcoord: 1,
             atlas: &atlas,
-            exposure: mapping.exposure,
+            exposure: encoded.mapping.exposure,
             radiance_unit: "W/(m^2 sr)",
             texel_size: s.texel_size,
             texel_size_unit: scene.unit.symbol(),
@@ -173,8 +147,37 @@ pub(super) fn encode_lightmap_glb(
             metres_per_scene_unit: to_metres,
             scene: &scene_name,
             camera: CameraRecord::of(scene),
-            exr_fingerprint: format!("{exr_fingerprint:016x}"),
+            camera_node: CAMERA_NAME,
+            exr_fingerprint: format!("{:016x}", encoded.exr_fingerprint),
+            engine_texture: encoded.record(engine_texture.value(), s),
         },
     };
     b.finish(&scene_name, &extras)
+}
+
+/// Adds the scene's camera as a glTF perspective camera on a node of the scene
+/// ([`GltfCamera`]).
+fn add_camera(b: &mut GlbBuilder, scene: &Scene) -> Result<(), BakeError> {
+    let bad = |e: serde_json::Error| BakeError::Encode {
+        path: "lightmap glb".into(),
+        message: format!("the camera: {e}"),
+    };
+    let camera = GltfCamera::of(scene);
+    let index = b.root.cameras.len();
+    b.root
+        .cameras
+        .push(serde_json::from_value(camera.camera_json()).map_err(bad)?);
+    let node = b
+        .root
+        .push::<json::Node>(serde_json::from_value(camera.node_json(index)).map_err(bad)?);
+    b.nodes.push(node);
+    Ok(())
+}
+
+/// `value` as the raw JSON of a glTF `extras`.
+fn json_raw(value: &serde_json::Value) -> Result<Box<serde_json::value::RawValue>, BakeError> {
+    serde_json::value::to_raw_value(value).map_err(|e| BakeError::Encode {
+        path: "lightmap glb".into(),
+        message: e.to_string(),
+    })
 }

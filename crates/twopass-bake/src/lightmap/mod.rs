@@ -36,30 +36,37 @@
 //! 32-bit float, plain `R`, `G`, `B`). The LDR lightmap a glTF loader uses is a plain
 //! exposure-scaled sRGB PNG: `round(255 srgb(min(1, exposure * L)))`, the [`ColorMapping`](crate::colour::ColorMapping) of
 //! the per-vertex bakes, so the PNG's linear value times `1 / exposure` gives `L` up to the
-//! clip.
+//! clip. With [`LightmapEncoding::Rgbm`] (the default) the `.glb` files also carry the HDR
+//! values as an RGBM PNG ([`rgbm`]: `value = multiplier * A * (R, G, B)`), and that is the
+//! texture the materials' `extras.lightMap` names.
 //!
 //! Files, one job each: `settings` (what a bake takes and gives), `asset` (a glTF scene's own
 //! document written back with the lightmap), `layout` (the atlas),
 //! `raster` (the texel centres a triangle covers), `fill` (the texels of one region), `filter`
-//! (the gathered indirect light denoised), `glb` (the `.glb` and its extras), `bake`
+//! (the gathered indirect light denoised), `rgbm` (the HDR texture), `glb` (the `.glb` and its extras), `bake`
 //! ([`bake_lightmap`], which runs them in that order).
 
 mod asset;
 mod bake;
+mod camera;
 mod fill;
 mod filter;
 mod glb;
 mod layout;
 mod raster;
+mod reference;
+pub mod rgbm;
 mod settings;
 
 pub use crate::weld::COPLANAR_COS;
 pub use bake::{bake_lightmap, lightmap_atlas_size};
+pub use camera::{CAMERA_NAME, CameraRecord, GltfCamera, ZNEAR_PER_DIAGONAL, camera_rotation};
 pub use fill::{MAX_BACK_FACES, TexelSource};
 pub use filter::FILTER;
-pub use glb::{CameraRecord, PNG_FORMULA};
+pub use glb::PNG_FORMULA;
 pub use layout::{MAX_AREA_DISTORTION, MAX_LIGHTMAP_SIDE, smallest_texel_size};
+pub use rgbm::{RGBM_FORMULA, Rgbm};
 pub use settings::{
-    AtlasSource, IRRADIANCE_PNG_FORMULA, Lightmap, LightmapQuantity, LightmapSettings,
-    TEXELS_PER_DIAGONAL,
+    AtlasSource, IRRADIANCE_PNG_FORMULA, Lightmap, LightmapEncoding, LightmapQuantity,
+    LightmapSettings, TEXELS_PER_DIAGONAL,
 };

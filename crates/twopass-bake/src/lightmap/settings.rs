@@ -23,6 +23,35 @@ pub struct LightmapSettings {
     /// scene, radiance otherwise).
     #[default(None)]
     pub quantity: Option<LightmapQuantity>,
+    /// How the texture the `.glb` files reference for engines encodes the texels.
+    #[default(LightmapEncoding::Rgbm)]
+    pub encoding: LightmapEncoding,
+}
+
+/// How the lightmap texture that the `.glb` files reference for engines (the materials'
+/// `extras.lightMap`) encodes the texels.
+///
+/// The default is [`Rgbm`](LightmapEncoding::Rgbm): a lightmap's point is its range (a sunlit
+/// floor is many times brighter than the exposure's white), every consumer of
+/// `extras.lightMap` already reads it with code of its own (glTF has no lightmap slot), and the
+/// decode is one multiplication. The sRGB PNG is written either way (`<stem>.lightmap.png`,
+/// and the lightmap `.glb`'s emissive texture that any glTF viewer shows).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LightmapEncoding {
+    /// The exposure-scaled sRGB PNG: `round(255 srgb(min(1, exposure * value)))`, clipped.
+    Srgb,
+    /// RGBM ([`Rgbm`](super::Rgbm)): `value = multiplier * A * (R, G, B)`, linear, not clipped.
+    Rgbm,
+}
+
+impl LightmapEncoding {
+    /// Its name on the command line and in the `.glb`: `srgb` or `rgbm`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Srgb => "srgb",
+            Self::Rgbm => "rgbm",
+        }
+    }
 }
 
 /// What a lightmap's texels hold, per RGB channel.
@@ -92,6 +121,8 @@ pub(super) struct Resolved {
     pub(super) padding: u32,
     /// What the texels hold.
     pub(super) quantity: LightmapQuantity,
+    /// How the texture the `.glb` files reference encodes them.
+    pub(super) encoding: LightmapEncoding,
 }
 
 /// A baked lightmap and the user-mesh glTF that shows it.
@@ -129,6 +160,11 @@ pub struct Lightmap {
     pub exr: Vec<u8>,
     /// The LDR lightmap as PNG bytes (exposure-scaled sRGB).
     pub png: Vec<u8>,
+    /// How the texture the `.glb` files reference encodes the texels.
+    pub encoding: LightmapEncoding,
+    /// With [`LightmapEncoding::Rgbm`], the HDR lightmap as an RGBA PNG (RGBM, module
+    /// [`rgbm`](super::rgbm)) and its range multiplier; `None` otherwise.
+    pub rgbm: Option<(Vec<u8>, f32)>,
 }
 
 /// Where a lightmap's texture coordinates come from.

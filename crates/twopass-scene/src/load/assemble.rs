@@ -197,6 +197,12 @@ impl Loader {
             }
             mesh.positions.push(q);
         }
+        if local.source_vertices.len() == local.positions.len() {
+            mesh.source_vertices
+                .extend_from_slice(&local.source_vertices);
+        } else {
+            mesh.source_vertices.extend(0..local.positions.len() as u32);
+        }
         let normal_base = mesh.normals.len() as u32;
         let smooth = !local.normal_indices.is_empty();
         mesh.normals
@@ -276,6 +282,7 @@ impl Loader {
             }
             mesh.triangles.push(t);
             mesh.normal_indices.push(nt);
+            mesh.flat.push(!smooth);
             mesh.texcoord_indices.push(uv);
             if textured {
                 mesh.albedo_uvs.push(albedo_uv);

@@ -61,6 +61,12 @@ pub(super) struct ScannedModel {
     pub(super) usemtl: Option<(String, usize)>,
     /// The line of its first face (0 before one is met).
     pub(super) first_face: usize,
+    /// The `v` statements its faces use (0-based, file order), in the order of first use:
+    /// tobj's order of the group's positions (it numbers them as the faces' corners first name
+    /// them, a triangulated polygon's corners in their written order).
+    pub(super) vertices: Vec<u32>,
+    /// Whether each `v` statement is in [`ScannedModel::vertices`] already.
+    pub(super) used: std::collections::HashSet<u32>,
 }
 
 /// One MTL library, read and checked by us, parsed by tobj.

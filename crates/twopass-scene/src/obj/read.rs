@@ -93,7 +93,7 @@ pub(crate) fn load(path: &Path, policy: &ReadPolicy) -> Result<ObjFile, SceneErr
             debug_assert_eq!(mats.len(), lib.origins.len());
         }
     }
-    let scanned = scan(&text, path, &material_map, &mtllibs)?;
+    let mut scanned = scan(&text, path, &material_map, &mtllibs)?;
 
     let opts = tobj::LoadOptions {
         triangulate: true,
@@ -147,6 +147,7 @@ pub(crate) fn load(path: &Path, policy: &ReadPolicy) -> Result<ObjFile, SceneErr
             None => Ok(()),
         };
         finite(&positions, "v", "vertex")?;
+        let m_positions = positions.len();
         let normals: Vec<Vec3> = mesh.normals.chunks_exact(3).map(Vec3::from_slice).collect();
         finite(&normals, "vn", "normal")?;
         let triangles = triples(&mesh.indices);
@@ -201,6 +202,13 @@ pub(crate) fn load(path: &Path, policy: &ReadPolicy) -> Result<ObjFile, SceneErr
                 texcoords,
                 texcoord_indices,
                 albedo_uvs,
+                // The OBJ `v` statement of each position, where the scan followed tobj's
+                // groups and names as many positions as tobj made.
+                source_vertices: scanned
+                    .get_mut(k)
+                    .filter(|s| agree && s.vertices.len() == m_positions)
+                    .map(|s| std::mem::take(&mut s.vertices))
+                    .unwrap_or_default(),
             },
             material: mesh.material_id,
             usemtl: scanned.get(k).and_then(|s| s.usemtl.clone()),

@@ -107,6 +107,12 @@ pub(super) fn scan(
                         }
                     };
                     index(parts[0], nv, tv, "vertex")?;
+                    // The `v` statement it names, 0-based (checked in range just above).
+                    let i: i64 = parts[0].parse().unwrap_or(1);
+                    let v = if i > 0 { i - 1 } else { nv as i64 + i } as u32;
+                    if current.used.insert(v) {
+                        current.vertices.push(v);
+                    }
                     if let Some(t) = parts.get(1).filter(|t| !t.is_empty()) {
                         index(t, nvt, tvt, "texture coordinate")?;
                         texcoords += 1;
@@ -176,6 +182,8 @@ pub(super) fn push_model(models: &mut Vec<ScannedModel>, current: &mut ScannedMo
         all_texcoords: true,
         usemtl: current.usemtl.clone(),
         first_face: 0,
+        vertices: Vec::new(),
+        used: Default::default(),
     };
     let done = std::mem::replace(current, next);
     if done.triangles > 0 {

@@ -10,7 +10,7 @@ use serde::Serialize;
 use serde_json::Value;
 use twopass_composite::RenderMetadata;
 use twopass_composite::tonemap::ToneMap;
-use twopass_composite::write::{write_exr_render, write_png_tonemapped};
+use twopass_composite::write::{write_exr_render, write_exr_render_rgba, write_png_tonemapped};
 use twopass_trace::{Layer, LayerImages, Splat, add_light, light_image, tile_origins};
 
 use super::render::{SPLAT_WORDS, for_each_share_pixel, share_of};
@@ -60,6 +60,8 @@ pub fn merge(set: &PartSet, ctx: &Context, started: Instant) -> Result<(), CliEr
         .and_then(Value::as_bool)
         .ok_or_else(|| bad("png"))?;
     let exposure = s.get("exposure").and_then(Value::as_f64).map(|e| e as f32);
+    // Parts written before `--layers` existed wrote every layer.
+    let all_layers = s.get("layers").and_then(Value::as_bool).unwrap_or(true);
     let tiles = tile_origins(width, height, tile);
     let mut layers = LayerImages::new(width, height);
     let mut splats: Vec<Vec<Splat>> = Vec::new();
@@ -110,7 +112,11 @@ pub fn merge(set: &PartSet, ctx: &Context, started: Instant) -> Result<(), CliEr
     if let Some(exr) = &targets.exr {
         crate::output::create_dir(exr.parent().unwrap_or(Path::new("")))?;
         let metadata = RenderMetadata::new(method.name(), spp, seed, set.cost.seconds);
-        write_exr_render(exr, &images, &metadata)?;
+        if all_layers {
+            write_exr_render(exr, &images, &metadata)?;
+        } else {
+            write_exr_render_rgba(exr, &images, &metadata)?;
+        }
     }
     if let Some(png) = &targets.png {
         let image = images.require("image")?;

@@ -151,6 +151,12 @@ fn bake_flags(args: &BakeArgs) -> Vec<String> {
     if let Some(q) = args.lightmap_quantity {
         flags.extend(["--lightmap-quantity".into(), name_of(q)]);
     }
+    if args.lightmap {
+        flags.extend([
+            "--lightmap-encoding".into(),
+            name_of(args.lightmap_encoding),
+        ]);
+    }
     flags
 }
 

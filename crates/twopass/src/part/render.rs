@@ -65,6 +65,8 @@ pub struct RenderJob<'a> {
     pub radiosity: String,
     /// `--png`.
     pub png: bool,
+    /// `--layers`.
+    pub layers: bool,
     /// `--exposure`.
     pub exposure: Option<f32>,
     /// When the command started (the part's seconds count from here).
@@ -215,6 +217,7 @@ fn settings_of(job: &RenderJob<'_>, settings: &RenderSettings) -> Map<String, Va
         "jitter": settings.jitter,
         "radiosity": job.radiosity,
         "png": job.png,
+        "layers": job.layers,
         "exposure": job.exposure,
     });
     match value {

@@ -107,6 +107,7 @@ pub(super) fn load_gltf(
         buffers: file.buffers,
         images: file.images,
         origins: walked.origins,
+        camera_node: walked.camera_node,
     }));
     Ok((scene, warnings))
 }

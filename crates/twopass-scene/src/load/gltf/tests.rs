@@ -140,6 +140,10 @@ fn hierarchy_instances_camera_and_emission_load_in_world_space() {
     let src = scene.gltf.as_ref().unwrap();
     let origins: Vec<(usize, usize)> = src.origins.iter().map(|o| (o.node, o.mesh)).collect();
     assert_eq!(origins, [(0, 0), (2, 0)]);
+    // The camera's node is recorded, so a bake writing the asset back adds no second one.
+    let doc = gltf::json::Root::from_slice(&src.json).unwrap();
+    let node = src.camera_node.expect("the camera's node");
+    assert_eq!(doc.nodes[node].name.as_deref(), Some("Eye"));
 }
 
 #[test]
@@ -153,7 +157,8 @@ fn a_gltf_with_its_buffer_in_a_file_loads_and_a_missing_buffer_is_an_error() {
     w.write_gltf(vec![n], &path, "s.bin");
     let (scene, warnings) = load(&path).unwrap();
     assert_eq!(scene.objects.len(), 1);
-    // No camera: the default framing; nothing emits.
+    // No camera: the default framing (no camera node recorded); nothing emits.
+    assert_eq!(scene.gltf.as_ref().unwrap().camera_node, None);
     assert!(
         warnings
             .iter()

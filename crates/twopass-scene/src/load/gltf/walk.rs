@@ -32,6 +32,8 @@ pub(super) struct Walked {
     pub(super) parts: Vec<PlacedPart>,
     pub(super) origins: Vec<GltfOrigin>,
     pub(super) camera: Option<Camera>,
+    /// The node of [`Walked::camera`].
+    pub(super) camera_node: Option<usize>,
 }
 
 impl Loader {
@@ -73,6 +75,7 @@ pub(super) fn walk(ld: &mut Loader, file: &GltfFile) -> Result<Walked, SceneErro
         parts: Vec::new(),
         origins: Vec::new(),
         camera: None,
+        camera_node: None,
     };
     // How many nodes of the scene show each mesh, for the instancing note.
     let mut uses = vec![0usize; doc.meshes().len()];
@@ -112,6 +115,7 @@ pub(super) fn walk(ld: &mut Loader, file: &GltfFile) -> Result<Walked, SceneErro
             && walked.camera.is_none()
         {
             walked.camera = camera_of(ld, &camera, world, &at)?;
+            walked.camera_node = walked.camera.map(|_| node.index());
         }
         let Some(mesh) = node.mesh() else {
             continue;
