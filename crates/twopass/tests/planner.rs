@@ -4,18 +4,14 @@
 
 use std::path::Path;
 
-use twopass_composite::write::read_exr_layers;
+use twopass_composite::write::read_exr;
 use twopass_image::Image;
 
 use crate::common::{assert_exit, cli, ok_json, render_box, repo};
 
-/// The final image of a render's EXR.
+/// The image of a render's (plain RGBA) EXR.
 fn image(exr: &Path) -> Image {
-    read_exr_layers(exr)
-        .unwrap()
-        .require("image")
-        .unwrap()
-        .clone()
+    read_exr(exr).unwrap()
 }
 
 /// One image's noise from two independent renders, written from the metric's definition:
