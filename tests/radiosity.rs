@@ -902,7 +902,9 @@ fn the_generated_rooms_create_no_power() {
     let dir = tempfile::tempdir().unwrap();
     for kind in twopass_scene::workload::RoomKind::ALL {
         let room = twopass_scene::workload::room(kind, &Default::default());
-        std::fs::write(dir.path().join(&room.mesh_file), &room.mesh).unwrap();
+        for (file, text) in room.mesh_files() {
+            std::fs::write(dir.path().join(file), text).unwrap();
+        }
         let path = dir.path().join(room.scene_file());
         std::fs::write(&path, &room.scene).unwrap();
         let (scene, _) = load(&path).unwrap();

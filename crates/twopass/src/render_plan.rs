@@ -313,14 +313,16 @@ mod tests {
         }
     }
 
-    /// Two images whose pixels differ by +-d around m: each is d away from their mean, so the
-    /// noise is d / sqrt(m^2 + 0.01) exactly.
+    /// Two images whose pixels are m + d and m - d: the unbiased variance of two samples is
+    /// ((m + d - m)^2 + (m - d - m)^2) / (2 - 1) = 2 d^2, so one image's noise is
+    /// sqrt(2) d / sqrt(m^2 + 0.01).
     #[test]
     fn pilot_noise_is_one_image_against_the_pair_mean() {
-        let (m, d) = (0.3f32, 0.03f32);
+        // Exact in f32, so the images hold exactly these values.
+        let (m, d) = (0.25f32, 0.03125f32);
         let a = Image::filled(4, 4, twopass_brdf::Rgb::splat(m + d));
         let b = Image::filled(4, 4, twopass_brdf::Rgb::splat(m - d));
-        let want = f64::from(d) / (f64::from(m) * f64::from(m) + 0.01).sqrt();
+        let want = 2f64.sqrt() * f64::from(d) / (f64::from(m) * f64::from(m) + 0.01).sqrt();
         assert!((pilot_noise(&a, &b) - want).abs() < 1e-6 * want);
         assert_eq!(pilot_noise(&a, &a), 0.0);
     }

@@ -188,10 +188,12 @@ fn test_args(words: &[String], tmp: &Path) -> Vec<String> {
     }
     if let Some(s) = shrink {
         let preset = words.iter().any(|w| w == "--preset");
+        // The planner chooses the samples itself (`--spp` conflicts with its target).
+        let planned = words.iter().any(|w| w == "--target-error");
         // A render that solves (no bake, no preset) gets the coarse mesh.
         let solves = s.command == ["render"] && !preset && !words.iter().any(|w| w == "--bake");
         let mut add: Vec<(&str, &str)> = s.add.to_vec();
-        if s.command == ["render"] && !preset {
+        if s.command == ["render"] && !preset && !planned {
             add.push(("--spp", "1"));
         }
         if solves {
