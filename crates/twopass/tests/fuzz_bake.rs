@@ -95,7 +95,11 @@ fn mutate(bytes: &mut Vec<u8>, range: std::ops::Range<usize>, rng: &mut SplitMix
         // A word overwritten with a huge or special value.
         3 => {
             let value = HUGE[(rng.next_u64() % HUGE.len() as u64) as usize];
-            let width = if rng.next_u64() % 2 == 0 { 4 } else { 8 };
+            let width = if rng.next_u64().is_multiple_of(2) {
+                4
+            } else {
+                8
+            };
             let to = (at(rng) & !3).max(range.start);
             let end = (to + width).min(range.end);
             bytes[to..end].copy_from_slice(&value.to_le_bytes()[..end - to]);

@@ -25,6 +25,10 @@ pub(super) fn corner_key(p: [Vec3; 3]) -> CornerKey {
     [corners[r], corners[(r + 1) % 3], corners[(r + 2) % 3]]
 }
 
+/// Where a triangle is: its object's name, that object's line (when it has one) and its index
+/// within the object.
+type Place = (String, Option<usize>, usize);
+
 /// What a triangle is, seen against every triangle kept so far.
 pub(super) enum Seen {
     /// No triangle before it has its corners: it is kept.
@@ -45,10 +49,7 @@ pub(super) struct Coincident {
     dropped: usize,
     objects: usize,
     removed: usize,
-    first: Option<(
-        (String, Option<usize>, usize),
-        (String, Option<usize>, usize),
-    )>,
+    first: Option<(Place, Place)>,
     /// Whether the current part has had a copy of an earlier object's triangle.
     in_part: bool,
 }
