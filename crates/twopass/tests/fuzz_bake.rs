@@ -297,3 +297,37 @@ fn mutated_bake_sets_render_or_fail_cleanly() {
         }
     }
 }
+
+/// Found by the long run of `mutated_bake_files_read_or_fail_cleanly`: a lightmap `.glb`
+/// whose index accessors say floats (component type 5126) made the gltf crate's index reader
+/// panic (`unreachable!`); it is refused, naming the file and the accessor.
+#[test]
+fn a_lightmap_glb_with_float_indices_is_refused() {
+    let (_keep, dir) = baked_set();
+    let (scene, _) = twopass_scene::load(repo("scenes/cornell-box.toml")).unwrap();
+    let glb = dir.join("cornell-box.lightmap.glb");
+    let mut bytes = std::fs::read(&glb).unwrap();
+    // Unsigned int and short component types become float, the JSON chunk's length unchanged.
+    let mut changed = 0;
+    for from in [
+        &b"\"componentType\":5125"[..],
+        &b"\"componentType\":5123"[..],
+    ] {
+        while let Some(at) = bytes.windows(from.len()).position(|w| w == from) {
+            bytes[at + from.len() - 1] = b'6';
+            changed += 1;
+        }
+    }
+    assert!(changed > 0, "the .glb has integer index accessors");
+    std::fs::write(&glb, &bytes).unwrap();
+    let err = twopass_bake::read_lightmap_glb(&glb, &scene)
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(
+        err.starts_with(&glb.display().to_string())
+            && err.contains("indices accessor")
+            && err.contains("F32"),
+        "{err}"
+    );
+}
