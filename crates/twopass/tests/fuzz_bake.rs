@@ -321,8 +321,7 @@ fn a_lightmap_glb_with_float_indices_is_refused() {
     assert!(changed > 0, "the .glb has integer index accessors");
     std::fs::write(&glb, &bytes).unwrap();
     let err = twopass_bake::read_lightmap_glb(&glb, &scene)
-        .err()
-        .expect("refused")
+        .expect_err("refused")
         .to_string();
     assert!(
         err.starts_with(&glb.display().to_string())
