@@ -283,6 +283,8 @@ fn mutated_scenes_load_or_fail_cleanly() {
 fn mutated_meshes_load_or_fail_cleanly() {
     // An OBJ and its MTL library, mutated together, loaded bare from a scratch folder.
     let read = |p: &Path| std::fs::read_to_string(p).unwrap();
+    let uv_dir = tempfile::tempdir().unwrap();
+    twopass_tests::write_checker_floor(uv_dir.path(), 4, [255, 255, 255], [0, 0, 0], 0.8);
     let meshes: Vec<(String, String)> = vec![
         (
             read(&scene_path("meshes/cornell-box.obj")),
@@ -294,8 +296,18 @@ fn mutated_meshes_load_or_fail_cleanly() {
         ),
         (read(&data("unreferenced-normal.obj")), String::new()),
         (read(&data("degenerate.obj")), String::new()),
+        // With texture coordinates: the textured floor (its `map_Kd` PNG in the folder), and
+        // the box with a `vt` per corner (lightmap atlases are cut from these).
+        (
+            read(&uv_dir.path().join("floor.obj")),
+            read(&uv_dir.path().join("floor.mtl")),
+        ),
+        (
+            with_texcoords(&read(&scene_path("meshes/cornell-box.obj"))),
+            read(&scene_path("meshes/cornell-box.mtl")),
+        ),
     ];
-    let dir = tempfile::tempdir().unwrap();
+    let dir = uv_dir;
     let strategy = (
         0..meshes.len(),
         prop::collection::vec(mutation(), 0..3),
@@ -322,6 +334,35 @@ fn mutated_meshes_load_or_fail_cleanly() {
             Ok(())
         })
         .unwrap();
+}
+
+/// `obj` with a texture coordinate per vertex (`vt`, from its x and z) and every face's
+/// corners given as `v/vt`.
+fn with_texcoords(obj: &str) -> String {
+    let mut vt = String::new();
+    let mut faces = String::new();
+    for line in obj.lines() {
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("v") => {
+                let c: Vec<f32> = words.filter_map(|w| w.parse().ok()).collect();
+                if let [x, _, z, ..] = c[..] {
+                    vt += &format!("vt {} {}\n", x / 600.0, z / 600.0);
+                }
+                faces += line;
+            }
+            Some("f") => {
+                faces += "f";
+                for w in words {
+                    let v = w.split('/').next().unwrap_or(w);
+                    faces += &format!(" {v}/{v}");
+                }
+            }
+            _ => faces += line,
+        }
+        faces += "\n";
+    }
+    vt + &faces
 }
 
 /// Every fixture (and every crash the fuzzing ever found, kept here) loads or fails with an

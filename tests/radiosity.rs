@@ -805,68 +805,69 @@ fn light_facing_a_wall(gap: f64) -> Scene {
     load_toml(&text, Path::new("gap.toml")).unwrap().0
 }
 
+/// `scene` solved by `method` with the default options, to its stop.
+fn solved(scene: &Scene, method: Method) -> Solver<'_> {
+    let mut solver = Solver::new(
+        scene,
+        Options {
+            method,
+            ..Options::default()
+        },
+    )
+    .unwrap();
+    solver.run(|_| ControlFlow::Continue(()));
+    solver
+}
+
+/// Issue 43, finding 3: a light 1e-2 to 1e-6 of the room in front of a wall, facing it, in
+/// both solvers. The wall's elements under the light see it as a whole hemisphere and,
+/// interpolated over elements larger than the gap, would receive more than it sends (29 % of
+/// the emitted power created at 1e-6 by progressive refinement, 50 % by the hierarchical
+/// solver); bounded, the solve creates none beyond the discretization's and passes the energy
+/// invariant at every gap. Expected light, derived apart from the solvers: the gap is closed
+/// but for a slit, so the light's exitance M = pi L_e goes back and forth between light and
+/// wall (albedo 0.5 each) until absorbed: the wall under the light receives
+/// E = M / (1 - 0.5 * 0.5) and shows L = 0.5 E / pi = 0.5 L_e / 0.75 = 6.667 W/(m^2 sr); the
+/// rest of the room stays dark.
 #[test]
-fn a_light_against_a_wall_creates_no_power_or_the_solve_is_refused() {
-    // The vertex form factors of the wall's elements under the light see it as a whole
-    // hemisphere, and interpolated over elements larger than the light they would receive
-    // more than it sends. Progressive refinement delivers no more than each shot sends (within
-    // the 5 % it leaves for the form factors' discretization) down to gaps of 1e-2 of the
-    // room; closer, the adaptive re-estimates of the patches' light read the vertices' point
-    // values and create some, and the hierarchical solver's links do too. Whatever a solve
-    // creates beyond the tolerance, `check_energy` refuses, naming the share.
-    let solve = |gap: f64, method: Method| {
+fn a_light_against_a_wall_creates_no_power_at_any_gap() {
+    let expected = 0.5 * 10.0 / 0.75;
+    for gap in [1e-2, 1e-3, 1e-4, 1e-6] {
         let scene = light_facing_a_wall(gap);
-        let mut solver = Solver::new(
-            &scene,
-            Options {
-                method,
-                ..Options::default()
-            },
-        )
-        .unwrap();
-        solver.run(|_| ControlFlow::Continue(()));
-        let energy = solver.progress().energy;
-        // The closed cube lets nothing out: what is absorbed is what was created beyond the
-        // emitted, less what is still unshot.
-        let created = (energy.absorbed.x - energy.emitted.x) / energy.emitted.x;
-        (created, solver.check_energy(), solver.residuals(100))
-    };
-    for method in [Method::Progressive, Method::Hierarchical] {
-        let (created, check, r) = solve(1e-2, method);
-        assert!(created < 1e-3, "{method:?}: created {created}");
-        assert_eq!(check, Ok(()), "{method:?}");
-        assert!(
-            r.energy_excess.is_finite() && r.energy_excess >= 0.0,
-            "{r:?}"
-        );
-        let (created, check, _) = solve(1e-6, method);
-        assert!(created > 0.1, "{method:?}: created {created}");
-        match check {
-            Err(SolveError::EnergyCreated {
-                solver,
-                created: c,
-                tolerance,
-            }) => {
-                assert_eq!(
-                    (solver, tolerance),
-                    (method.name(), twopass_radiosity::ENERGY_TOLERANCE)
-                );
-                // The refusal's figure counts at least what was absorbed beyond the emitted
-                // (it adds what escaped, which in a closed room is light lost on the way).
-                assert!(c >= created - 1e-9, "{method:?}: {c} against {created}");
-                let message = SolveError::EnergyCreated {
-                    solver,
-                    created: c,
-                    tolerance,
+        for method in [Method::Progressive, Method::Hierarchical] {
+            let solver = solved(&scene, method);
+            let what = format!("{method:?} at gap {gap:e}");
+            let energy = solver.progress().energy;
+            // Measured: none created (below zero) but 2 % by the hierarchical solver at 1e-6
+            // (its links may sum to 1.25 before they are cut).
+            let created = energy.created_fraction();
+            assert!(created < 0.03, "{what}: created {created}");
+            assert_eq!(solver.check_energy(), Ok(()), "{what}");
+            let solution = solver.solution();
+            let at = |origin: glam::Vec3, direction: glam::Vec3| {
+                let h = scene.accel().closest(origin, direction, 1.0).unwrap();
+                solution.radiance(h.triangle, h.barycentric).x
+            };
+            // The wall under the light, a 5 x 5 grid over its middle, seen from inside the gap.
+            let mut under = 0.0;
+            for i in 0..5 {
+                for j in 0..5 {
+                    let (x, y) = (0.42 + 0.04 * i as f32, 0.42 + 0.04 * j as f32);
+                    under +=
+                        at(glam::Vec3::new(x, y, (gap / 2.0) as f32), glam::Vec3::NEG_Z) / 25.0;
                 }
-                .to_string();
-                assert!(
-                    message.contains(&format!("the {} solver created", method.name()))
-                        && message.contains("more than the 5 % tolerated"),
-                    "{message}"
-                );
             }
-            other => panic!("{method:?}: {other:?}"),
+            // Measured: 12 % to 18 % below the closed form (the light the coarse elements
+            // around the light's edge spread into the room and lose), never above it.
+            assert!(
+                (0.8 * expected..1.02 * expected).contains(&f64::from(under)),
+                "{what}: {under} against {expected}"
+            );
+            let far = at(glam::Vec3::new(0.5, 0.5, 0.5), glam::Vec3::Z);
+            assert!(
+                far < 0.01 * under,
+                "{what}: far wall {far}, under the light {under}"
+            );
         }
     }
 }
@@ -876,15 +877,7 @@ fn an_ordinary_scene_has_no_excess() {
     // The Cornell box: its vertex form factors overshoot by far less than the warning's 1 %.
     for method in [Method::Progressive, Method::Hierarchical] {
         let (scene, _) = load(scene_path("cornell-box.toml")).unwrap();
-        let mut solver = Solver::new(
-            &scene,
-            Options {
-                method,
-                ..Options::default()
-            },
-        )
-        .unwrap();
-        solver.run(|_| ControlFlow::Continue(()));
+        let mut solver = solved(&scene, method);
         let r = solver.residuals(100);
         assert!(r.energy_excess < 1e-3, "{method:?}: {r:?}");
         // Nothing created: absorbed plus escaped stay below the emitted (the rest is unshot).

@@ -107,6 +107,59 @@ impl DiffuseRadiance for LightmapRadiance {
     }
 }
 
+/// Refuses the accessors of `prim` that the gltf crate's readers assume well formed without
+/// its validation checking them, and panic on otherwise: indices that are not unsigned
+/// integers, texture coordinates that are not floats or normalized integers, a stride shorter
+/// than an element, sparse storage (the bake never writes it) or none at all. A missing
+/// accessor is left to the reader, which says so.
+fn check_accessors(prim: &::gltf::Primitive<'_>) -> Result<(), String> {
+    use ::gltf::Semantic;
+    use ::gltf::accessor::{DataType, Dimensions};
+    let wanted: [(&str, Option<::gltf::Accessor<'_>>, Dimensions, &[DataType]); 3] = [
+        (
+            "POSITION",
+            prim.get(&Semantic::Positions),
+            Dimensions::Vec3,
+            &[DataType::F32],
+        ),
+        (
+            "TEXCOORD_1",
+            prim.get(&Semantic::TexCoords(1)),
+            Dimensions::Vec2,
+            &[DataType::F32, DataType::U8, DataType::U16],
+        ),
+        (
+            "indices",
+            prim.indices(),
+            Dimensions::Scalar,
+            &[DataType::U8, DataType::U16, DataType::U32],
+        ),
+    ];
+    for (name, accessor, dimensions, types) in wanted {
+        let Some(a) = accessor else { continue };
+        let short_stride = a
+            .view()
+            .and_then(|v| v.stride())
+            .is_some_and(|s| s < a.size());
+        if a.dimensions() != dimensions
+            || !types.contains(&a.data_type())
+            || a.sparse().is_some()
+            || a.view().is_none()
+            || short_stride
+        {
+            return Err(format!(
+                "its {name} accessor {} is {:?} of {:?}{}, not what a lightmap .glb holds: bake \
+                 again",
+                a.index(),
+                a.dimensions(),
+                a.data_type(),
+                if a.sparse().is_some() { ", sparse" } else { "" }
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// The HDR lightmap that belongs to a lightmap `.glb`: `x.lightmap.glb` -> `x.lightmap.exr`.
 pub fn lightmap_exr_path(glb: &Path) -> PathBuf {
     glb.with_extension("exr")
@@ -182,6 +235,7 @@ pub fn read_lightmap_glb(glb: &Path, scene: &Scene) -> Result<LightmapRadiance, 
             .primitives()
             .next()
             .ok_or_else(|| invalid(glb, format!("mesh `{}` has no primitive", object.name)))?;
+        check_accessors(&prim).map_err(|p| invalid(glb, format!("mesh `{}`: {p}", object.name)))?;
         let reader = prim.reader(|buffer| match buffer.source() {
             ::gltf::buffer::Source::Bin => blob,
             ::gltf::buffer::Source::Uri(_) => None,

@@ -58,14 +58,14 @@ impl Energy {
 }
 
 /// Most power a solve may create ([`Energy::created_fraction`]) before its result is refused
-/// ([`crate::SolveError::EnergyCreated`]): 5 % of the emitted power, the share progressive
-/// refinement already leaves each shot for the vertex form factors' discretization. Measured
-/// with the default options: the Cornell boxes (both solvers) and three of the five generated
-/// rooms create none (absorbed plus escaped stay below the emitted by the power still unshot);
-/// the hierarchical solver's links create 0.4 % in the spheres room and 1.3 % in the
-/// near-light room (small objects close under the light), and a light 1e-3 of the room from a
-/// wall makes 2.1 % (progressive). Closer than the element mesh resolves, more: a light 1e-4
-/// of the room from a wall 6-7 %, 1e-6 29 % (progressive) and 50 % (hierarchical).
+/// ([`crate::SolveError::EnergyCreated`]): 5 % of the emitted power. Both solvers bound their
+/// form factors so that no surface sends more than it has (progressive refinement per shot and
+/// per re-estimate of a patch's light, the hierarchical solver per leaf, within a quarter of
+/// its links' sum for the seven-point averages' errors). Measured with the default options:
+/// the Cornell boxes (both solvers) and three of the five generated rooms create none
+/// (absorbed plus escaped stay below the emitted by the power still unshot); the hierarchical
+/// solver's links create 0.4 % in the spheres room and 1.3 % in the near-light room, and a
+/// light 1e-6 of the room in front of a wall 2 % (hierarchical; progressive none).
 pub const ENERGY_TOLERANCE: f64 = 0.05;
 
 /// What both solvers keep alike about a solve: its refinement rounds, its clock and its power

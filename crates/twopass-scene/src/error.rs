@@ -339,6 +339,24 @@ pub enum Warning {
         /// Index (within the object) of the triangle it copies.
         original: usize,
     },
+    /// Exact copies of a triangle of an earlier object (the same three world corners in the
+    /// same cyclic order) were dropped, across the whole scene; an object left with no
+    /// triangle of its own was removed. One warning per scene, naming the first copy.
+    CoincidentObjects {
+        /// The scene or OBJ file.
+        path: PathBuf,
+        /// How many triangles were dropped.
+        dropped: usize,
+        /// In how many objects.
+        objects: usize,
+        /// How many objects were left without a triangle and removed.
+        removed: usize,
+        /// The first copy: its object, that object's line (when it has one) and its index
+        /// within the object.
+        copy: (String, Option<usize>, usize),
+        /// The triangle it repeats: its object, line and index within that object.
+        original: (String, Option<usize>, usize),
+    },
     /// A bare OBJ's MTL library is missing or broken; its faces get the default grey.
     MissingMtl {
         /// The OBJ file.
@@ -440,6 +458,26 @@ impl fmt::Display for Warning {
                 "{}: object `{object}`: dropped {dropped} triangle(s) that repeat another of the object exactly (same corners, same winding), the first is triangle {first}, a copy of triangle {original}",
                 path.display()
             ),
+            Self::CoincidentObjects {
+                path,
+                dropped,
+                objects,
+                removed,
+                copy,
+                original,
+            } => {
+                let at = |(object, line, triangle): &(String, Option<usize>, usize)| {
+                    let line = line.map_or_else(String::new, |l| format!(" (line {l})"));
+                    format!("triangle {triangle} of object `{object}`{line}")
+                };
+                write!(
+                    f,
+                    "{}: dropped {dropped} triangle(s) in {objects} object(s) that repeat a triangle of an earlier object exactly (same corners, same winding); {removed} object(s) left with no triangle were removed; the first is {}, a copy of {}",
+                    path.display(),
+                    at(copy),
+                    at(original)
+                )
+            }
             Self::MissingMtl { path, mtl } => write!(
                 f,
                 "{}: material library {} cannot be loaded; using the default grey Lambert material",

@@ -338,11 +338,13 @@ pub fn integrator<'a>(
     }
 }
 
-/// Checks a bake file's set against the manifest beside it, when there is one
-/// (`<stem>.manifest.json`, for `<stem>.lightmap.glb` and `.exr` too): every file the manifest
-/// seals, not only the one asked for, must be there with the recorded size and CRC-32. A set
-/// with a file from another bake (one interrupted between its files), a damaged file or a
-/// missing one is refused whole.
+/// Checks a bake file's set against the manifest beside it (`<stem>.manifest.json`, for
+/// `<stem>.lightmap.glb` and `.exr` too): every file the manifest seals, not only the one
+/// asked for, must be there with the recorded size and CRC-32. A set with a file from another
+/// bake (one interrupted between its files), a damaged file or a missing one is refused whole,
+/// and so is a file without its manifest: `bake` writes the manifest last, so a set without
+/// one is a bake that never finished (or one whose seal was removed), and its files cannot be
+/// told from another bake's.
 pub fn check_in_set(file: &Path) -> Result<(), CliError> {
     let (Some(dir), Some(stem), Some(name)) = (file.parent(), file.file_stem(), file.file_name())
     else {
@@ -354,7 +356,29 @@ pub fn check_in_set(file: &Path) -> Result<(), CliError> {
     let manifest_path = dir.join(format!("{stem}.manifest.json"));
     let text = match crate::output::read_small(&manifest_path) {
         Ok(text) => text,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
+        // A named file that is not there, or not a regular file (a FIFO, a device), is left
+        // to its reader, which says so of the file itself.
+        Err(e)
+            if e.kind() == std::io::ErrorKind::NotFound
+                && !std::fs::metadata(file).is_ok_and(|m| m.is_file()) =>
+        {
+            return Ok(());
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            let folder = if dir.as_os_str().is_empty() {
+                Path::new(".")
+            } else {
+                dir
+            };
+            return Err(CliError::Input(format!(
+                "{}: {} has no manifest beside it ({} is missing): a bake writes its manifest \
+                 last, so this set is incomplete or its seal was removed; bake again into {}",
+                folder.display(),
+                name.to_string_lossy(),
+                manifest_path.display(),
+                folder.display()
+            )));
+        }
         Err(e) => return Err(CliError::io(&manifest_path, e)),
     };
     let manifest: Manifest = serde_json::from_slice(&text).map_err(|e| {

@@ -159,9 +159,9 @@ fn a_scene_without_emitters_is_a_clear_error() {
 }
 
 #[test]
-fn a_light_almost_touching_a_wall_fails_the_bake() {
+fn a_light_almost_touching_a_wall_bakes() {
     // A 0.2 x 0.2 light a micrometre in front of a wall of a closed 1 m cube, facing it: the
-    // wall's elements under it would receive more than it sends.
+    // wall's elements under it would receive more than it sends, unbounded.
     let dir = tempfile::tempdir().unwrap();
     let scene = dir.path().join("gap.toml");
     let mut text = String::from(
@@ -188,28 +188,19 @@ fn a_light_almost_touching_a_wall_fails_the_bake() {
              shape = { type = \"quad\", origin = [0.4, 0.4, 1e-6], edge_u = [0, 0.2, 0], \
              edge_v = [0.2, 0, 0] }\n";
     std::fs::write(&scene, text).unwrap();
-    // Issue 43, the energy invariant: both solvers create power here (29 % progressive, 50 %
-    // hierarchical: more than the 5 % tolerated), and the bake fails naming the scene and the
-    // share, writing nothing.
+    // Issue 43, finding 3: both solvers created power here (29 % progressive, 50 %
+    // hierarchical), which the energy invariant refused; bounded, they bake (progressive
+    // refinement warns of the light it kept out).
     for solver in ["progressive", "hierarchical"] {
         let out_dir = dir.path().join(solver);
         let out = cli(&format!("bake --solver {solver} --gather off"))
             .arg(&scene)
             .output(&out_dir)
             .run();
-        assert_eq!(out.status.code(), Some(1), "{solver}");
         let err = String::from_utf8_lossy(&out.stderr);
-        assert!(
-            err.contains(&format!("gap.toml: the {solver} solver created "))
-                && err.contains("% of the emitted power")
-                && err.contains("more than the 5 % tolerated")
-                && err.contains("its solution is refused"),
-            "{err}"
-        );
-        let written: Vec<_> = std::fs::read_dir(&out_dir)
-            .map(|d| d.map(|e| e.unwrap().file_name()).collect())
-            .unwrap_or_default();
-        assert!(written.is_empty(), "{solver}: {written:?}");
+        assert_eq!(out.status.code(), Some(0), "{solver}: {err}");
+        assert!(!err.contains("solver created"), "{solver}: {err}");
+        assert!(out_dir.join("gap.manifest.json").exists(), "{solver}");
     }
 }
 

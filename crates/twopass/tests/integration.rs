@@ -7,6 +7,7 @@ mod bake;
 mod bakes;
 mod cli;
 mod compare;
+mod fuzz_bake;
 mod gltf_input;
 mod lamps;
 mod lightmap;

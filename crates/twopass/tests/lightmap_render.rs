@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use crate::common::{BOX, SPHERES, assert_ok, bake_cornell_lightmap, cli, repo};
+use crate::common::{self, BOX, SPHERES, assert_ok, bake_cornell_lightmap, cli, repo};
 use twopass_composite::metric::compare;
 use twopass_composite::tonemap::ToneMap;
 use twopass_composite::write::read_exr;
@@ -67,9 +67,15 @@ fn a_lightmap_of_another_scene_or_without_its_exr_is_refused() {
     );
     let err = refused(BOX, "hybrid-direct");
     assert!(err.contains("hybrid-direct"), "{err}");
-    // The EXR removed: the manifest check names it, and without the manifest the reader does.
+    // The EXR removed: the manifest check names it, and behind a manifest that does not
+    // list it the reader does.
     std::fs::remove_file(dir.join("cornell-box.lightmap.exr")).unwrap();
-    std::fs::remove_file(dir.join("cornell-box.manifest.json")).unwrap();
+    let err = refused(BOX, "radiosity");
+    assert!(
+        err.contains("cornell-box.lightmap.exr") && err.contains("missing"),
+        "{err}"
+    );
+    common::reseal(dir, "cornell-box", |name| !name.ends_with(".exr"));
     let err = refused(BOX, "radiosity");
     assert!(err.contains("cornell-box.lightmap.exr"), "{err}");
     assert!(!dir.join("x.exr").exists());
@@ -101,8 +107,9 @@ fn a_lightmap_exr_is_checked_against_its_glb_before_decoding() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
     bake_cornell_lightmap(dir);
-    // Without the manifest, whose checksums would refuse any changed file first.
-    std::fs::remove_file(dir.join("cornell-box.manifest.json")).unwrap();
+    // Behind a manifest that does not list the EXR, whose checksum would refuse any changed
+    // file first.
+    common::reseal(dir, "cornell-box", |name| !name.ends_with(".exr"));
     let exr = dir.join("cornell-box.lightmap.exr");
     let good = std::fs::read(&exr).unwrap();
     let refused = |why: &str| {

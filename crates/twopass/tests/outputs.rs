@@ -43,13 +43,18 @@ fn the_manifest_seals_the_bake_set() {
     assert_eq!(out.status.code(), Some(0));
     let bake_file = dir.join("cornell-box.bake");
     std::fs::copy(other.join("cornell-box.bake"), &bake_file).unwrap();
-    let render = render_box("radiosity", 8, 1)
-        .words("--bake")
-        .arg(&bake_file)
-        .output(tmp.path().join("r.exr"))
-        .run();
-    let stderr = String::from_utf8_lossy(&render.stderr);
-    assert_eq!(render.status.code(), Some(1), "{stderr}");
+    // `render --bake` from the set, refused: its standard error.
+    let refused = || {
+        let render = render_box("radiosity", 8, 1)
+            .words("--bake")
+            .arg(&bake_file)
+            .output(tmp.path().join("r.exr"))
+            .run();
+        let stderr = String::from_utf8_lossy(&render.stderr).into_owned();
+        assert_eq!(render.status.code(), Some(1), "{stderr}");
+        stderr
+    };
+    let stderr = refused();
     assert!(stderr.contains("does not match its manifest"), "{stderr}");
 
     // A bake that fails between its files leaves no manifest: the set is visibly incomplete.
@@ -60,6 +65,22 @@ fn the_manifest_seals_the_bake_set() {
     common::assert_exit(&out, 1);
     let why = "the old manifest must not survive beside a partial new set";
     common::assert_absent(&manifest_path, why);
+    // Issue 43: rendering from that unsealed set is refused, naming the folder, the file and
+    // the missing manifest, and how to mend it.
+    let stderr = refused();
+    let d = dir.display();
+    assert_eq!(
+        stderr.trim_end(),
+        format!(
+            "error: {d}: cornell-box.bake has no manifest beside it ({d}/cornell-box.manifest.json \
+             is missing): a bake writes its manifest last, so this set is incomplete or its seal \
+             was removed; bake again into {d}"
+        )
+    );
+    common::assert_absent(
+        &tmp.path().join("r.exr"),
+        "nothing rendered from an unsealed set",
+    );
 }
 
 #[test]

@@ -14,6 +14,7 @@ use crate::cluster::Kind;
 impl HierarchicalSolver<'_> {
     /// One Jacobi gather over every link, then push-pull. Updates the residual.
     pub(super) fn iterate(&mut self) {
+        self.weigh_sending();
         let links = &self.links;
         let receivers = &self.receivers;
         // A cluster's incoming light is boxed: most receivers are surfaces, and an unboxed

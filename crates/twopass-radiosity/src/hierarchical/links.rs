@@ -74,7 +74,10 @@ impl HierarchicalSolver<'_> {
                 let t = &self.radiant[c as usize];
                 [l.dir.read_rgb(&t[0]), l.dir.read_rgb(&t[1])]
             }
-            Kind::Surface(n) => self.exitance[n as usize],
+            Kind::Surface(n) => match self.sending.get(n as usize) {
+                Some(&sent) => sent,
+                None => self.exitance[n as usize],
+            },
         }
     }
 
@@ -92,6 +95,8 @@ impl HierarchicalSolver<'_> {
         }
     }
 
+    /// Sorts the links by receiver, indexes their runs and bounds what they send
+    /// ([`HierarchicalSolver::bound_links`]): every change to the links ends here.
     pub(super) fn sort_links(&mut self) {
         self.links
             .par_sort_unstable_by_key(|l| (l.receiver, l.source));
@@ -101,5 +106,6 @@ impl HierarchicalSolver<'_> {
                 self.receivers.push((l.receiver, i as u32));
             }
         }
+        self.bound_links();
     }
 }

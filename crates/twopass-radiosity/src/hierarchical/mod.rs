@@ -23,6 +23,10 @@
 //! - times the visible fraction of a few stratified shadow rays between the two ends; a
 //!   partially visible link counts its whole transport as error, so it is refined.
 //!
+//! Where surfaces are closer than the elements resolve, the links leaving a surface could sum
+//! to a form factor above one; `bound` cuts what such a leaf sends through them (its own
+//! links first), so no leaf sends more than it has.
+//!
 //! Each gather iteration (Jacobi) sums every link's transport into its receiver, then
 //! **push-pull** moves irradiance down the hierarchy (linearly interpolated at surface nodes)
 //! and area-averaged radiosity back up. The convergence measure is the one progressive
@@ -36,6 +40,7 @@
 //! (`shoot_specular`); what lands is splatted onto the vertices and joins the leaves'
 //! reflected light at the next gather.
 
+mod bound;
 mod build;
 mod directions;
 mod gather;

@@ -72,6 +72,14 @@ pub struct HierarchicalSolver<'s> {
     /// from reflected light), and its area-averaged exitance (emitted, reflected).
     pub(super) gathered: Vec<[[DVec3; 4]; 2]>,
     pub(super) exitance: Vec<[DVec3; 2]>,
+    /// Per surface leaf: the share of its exitance its own links send and the share its
+    /// ancestors' links send (one each, less where the form factors would sum above one);
+    /// per surface node, what it sends through its links, those shares applied (empty while
+    /// every share is whole). See `bound`.
+    pub(super) send_weight: Vec<[f64; 2]>,
+    pub(super) sending: Vec<[DVec3; 2]>,
+    /// The shares are applied: a gather delivered more than its sources sent.
+    pub(super) bounding: bool,
     /// Surface nodes at the last push-pull: those from this index on were split off since, and
     /// have sent nothing yet.
     pub(super) settled: usize,

@@ -155,6 +155,7 @@ impl<'s> ProgressiveSolver<'s> {
             specular,
             unshot_emit: Vec::new(),
             unshot_refl: Vec::new(),
+            arrived: Vec::new(),
             shot_emit: Vec::new(),
             shot_refl: Vec::new(),
             unshot_power: Vec::new(),
@@ -178,6 +179,7 @@ impl<'s> ProgressiveSolver<'s> {
             .map(|p| crate::albedo::node_albedo(scene, &s.mesh, s.mesh.patches[p]))
             .collect();
         s.unshot_refl = vec![DVec3::ZERO; n];
+        s.arrived = vec![DVec3::ZERO; n];
         s.shot_emit = vec![DVec3::ZERO; n];
         s.shot_refl = vec![DVec3::ZERO; n];
         s.cache = vec![None; n];

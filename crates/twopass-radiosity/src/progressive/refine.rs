@@ -72,13 +72,16 @@ impl ProgressiveSolver<'_> {
         });
         self.rebuild_patch_elements();
         self.resplat();
-        // Re-estimate each patch's reflected radiosity from its (finer) elements.
+        // Re-estimate each patch's reflected radiosity from its (finer) elements. Their
+        // vertices' irradiance is a point value: where a source is closer than the elements
+        // resolve, interpolated over an element it would make more light than arrived. A
+        // patch reflects at most rho times what arrived at it, so a re-estimate creates none.
         for p in 0..self.mesh.patches.len() {
             let mut reflected = DVec3::ZERO;
             for (r, area) in self.element_means(p, |v| self.rho[v] * self.received(v)) {
                 reflected += r * area;
             }
-            let reflected = reflected / self.patch_area(p);
+            let reflected = reflected.min(self.patch_rho(p) * self.arrived[p]) / self.patch_area(p);
             let new_unshot = reflected - self.shot_refl[p];
             let change = (new_unshot - self.unshot_refl[p]) * self.patch_area(p);
             self.bookkeeping.energy.unshot += change;

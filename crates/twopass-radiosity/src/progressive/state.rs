@@ -82,6 +82,9 @@ pub struct ProgressiveSolver<'s> {
     pub(super) unshot_refl: Vec<DVec3>,
     pub(super) shot_emit: Vec<DVec3>,
     pub(super) shot_refl: Vec<DVec3>,
+    /// Per patch: the power that arrived at it so far, W per channel (from shots, lamps and
+    /// the specular transfer): what bounds its reflected light when the mesh is refined.
+    pub(super) arrived: Vec<DVec3>,
     /// Per patch: its unshot power, W summed over channels (`|unshot_emit + unshot_refl|`
     /// times its area): what the next shooter is chosen by and the stop is decided by, kept
     /// up to date wherever the unshot radiosity changes ([`ProgressiveSolver::note_unshot`]) rather

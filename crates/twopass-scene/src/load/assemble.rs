@@ -1,11 +1,10 @@
 //! Assembling the scene: every part meshed (spheres from the scene's size), transformed and
 //! checked, degenerate triangles dropped, the accelerator built over the result.
 
-use std::collections::HashMap;
-
 use glam::Vec3;
 use twopass_brdf::Rgb;
 
+use super::coincident::{Coincident, Seen, corner_key};
 use super::loader::{
     Geometry, Loader, MAX_COORDINATE, MAX_EMITTED_POWER, MAX_TRIANGLES, PlacedPart,
     SPHERE_TOLERANCE, in_range,
@@ -21,11 +20,24 @@ use crate::transform::Transform;
 impl Loader {
     /// Meshes the parts (spheres from the scene's size), validates the triangles, builds the scene.
     pub(super) fn finish(
-        mut self,
+        self,
         parts: Vec<PlacedPart>,
         camera: Camera,
         unit: crate::unit::Unit,
     ) -> Result<(Scene, Vec<Warning>), SceneError> {
+        self.finish_parts(parts, camera, unit)
+            .map(|(scene, warnings, _)| (scene, warnings))
+    }
+
+    /// [`finish`](Self::finish), also saying which parts became objects: a part whose every
+    /// triangle repeats an earlier object's is removed (the scene's objects are the kept
+    /// parts, in order).
+    pub(super) fn finish_parts(
+        mut self,
+        parts: Vec<PlacedPart>,
+        camera: Camera,
+        unit: crate::unit::Unit,
+    ) -> Result<(Scene, Vec<Warning>, Vec<bool>), SceneError> {
         let mut bounds = Bounds::EMPTY;
         for p in &parts {
             match &p.part.geometry {
@@ -98,6 +110,8 @@ impl Loader {
         }
         let mut mesh = Mesh::default();
         let mut objects = Vec::with_capacity(parts.len());
+        let mut coincident = Coincident::default();
+        let mut kept = Vec::with_capacity(parts.len());
         for (PlacedPart { part, transform }, level) in parts.into_iter().zip(levels) {
             let local = match part.geometry {
                 Geometry::Mesh(m) => m,
@@ -112,9 +126,11 @@ impl Loader {
                     })?
                 }
             };
-            self.push(
+            coincident.begin(&part.name, part.line);
+            let object = self.push(
                 &mut mesh,
                 &mut objects,
+                &mut coincident,
                 part.name,
                 part.line,
                 local,
@@ -122,6 +138,10 @@ impl Loader {
                 part.material,
                 part.emission,
             )?;
+            kept.push(object);
+        }
+        if let Some(w) = coincident.warning(self.path.clone()) {
+            self.warnings.push(w);
         }
         if mesh.triangles.is_empty() {
             return Err(SceneError::EmptyScene { path: self.path });
@@ -150,22 +170,25 @@ impl Loader {
         );
         scene.textures = self.textures;
         scene.sky = self.sky;
-        Ok((scene, self.warnings))
+        Ok((scene, self.warnings, kept))
     }
 
-    /// Appends one object: transforms it, checks every number, drops degenerate triangles.
+    /// Appends one object: transforms it, checks every number, drops degenerate triangles and
+    /// copies of triangles kept before (`coincident`, the whole scene's). Returns whether the
+    /// object was kept: one whose every triangle repeats an earlier object's is not.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn push(
         &mut self,
         mesh: &mut Mesh,
         objects: &mut Vec<Object>,
+        coincident: &mut Coincident,
         name: String,
         line: Option<usize>,
         local: ShapeMesh,
         transform: &Transform,
         material: u32,
         emission: Rgb,
-    ) -> Result<(), SceneError> {
+    ) -> Result<bool, SceneError> {
         let base = mesh.positions.len() as u32;
         let tri_start = mesh.triangles.len() as u32;
         for (index, p) in local.positions.iter().enumerate() {
@@ -230,13 +253,9 @@ impl Loader {
             mesh.albedo_uvs.resize(tri_start as usize, None);
         }
         let (mut dropped, mut first) = (0, 0);
-        // Exact copies of a triangle of this object (the same three world corners, bit for
-        // bit, in the same cyclic order) are dropped: a repeated face is a common export
-        // glitch, the copy adds no surface (a ray keeps one of the two), and each copy would
-        // still count as a surface of its own in the radiosity pass (an emitter's power
-        // doubled, and a cluster of thousands of coincident triangles). Keyed by the corners
-        // rotated to start at the smallest, so the check is one hash look-up per triangle.
-        let mut seen: HashMap<[[u32; 3]; 3], usize> = HashMap::new();
+        // Exact copies of a triangle kept before (the same three world corners, bit for bit, in
+        // the same cyclic order), in this object or an earlier one, are dropped: a repeated
+        // face is a common export glitch, and a copy adds no surface (see `coincident`).
         let mut copies: Option<(usize, usize)> = None;
         let mut copied = 0;
         for (i, tri) in local.triangles.iter().enumerate() {
@@ -266,15 +285,15 @@ impl Loader {
                 dropped += 1;
                 continue;
             };
-            let corners = t.map(|v| mesh.positions[v as usize].to_array().map(f32::to_bits));
-            let r = (0..3).min_by_key(|&k| corners[k]).unwrap_or(0);
-            let key = [corners[r], corners[(r + 1) % 3], corners[(r + 2) % 3]];
-            if let Some(&original) = seen.get(&key) {
-                copies.get_or_insert((i, original));
-                copied += 1;
-                continue;
+            match coincident.see(corner_key(t.map(|v| mesh.positions[v as usize])), i) {
+                Seen::New => {}
+                Seen::InObject(original) => {
+                    copies.get_or_insert((i, original));
+                    copied += 1;
+                    continue;
+                }
+                Seen::Earlier => continue,
             }
-            seen.insert(key, i);
             let n = n.as_vec3();
             if !smooth {
                 nt = [mesh.normals.len() as u32; 3];
@@ -292,6 +311,15 @@ impl Loader {
             mesh.triangle_object.push(object);
         }
         let kept = mesh.triangles.len() as u32 - tri_start;
+        if kept == 0 && coincident.part_had_copies() {
+            // Nothing of its own: the object is the copy of earlier ones, and goes with the
+            // vertices, normals and texture coordinates it appended.
+            mesh.positions.truncate(base as usize);
+            mesh.normals.truncate(normal_base as usize);
+            mesh.texcoords.truncate(uv_base as usize);
+            coincident.remove_part();
+            return Ok(false);
+        }
         if kept == 0 {
             return Err(SceneError::DegenerateObject {
                 path: self.path.clone(),
@@ -342,6 +370,6 @@ impl Loader {
             triangles: tri_start..tri_start + kept,
             vertices: base..mesh.positions.len() as u32,
         });
-        Ok(())
+        Ok(true)
     }
 }

@@ -2,6 +2,7 @@
 
 mod assemble;
 mod camera;
+mod coincident;
 mod entry;
 mod gltf;
 mod lamps;

@@ -127,3 +127,55 @@ pub fn bake_cornell_lightmap(dir: &Path) {
     let lightmap = "--format bake --lightmap --texel-size 5 --gather off --quiet";
     assert_ok(&bake_box(dir).words(lightmap).run());
 }
+
+/// Rewrites the manifest `dir/<stem>.manifest.json` so it seals its files as they are now
+/// (their sizes and CRC-32), keeping only the records whose file name `keep` accepts: for the
+/// tests of the readers' own checks behind a manifest that lets a changed file through.
+pub fn reseal(dir: &Path, stem: &str, keep: impl Fn(&str) -> bool) {
+    let path = dir.join(format!("{stem}.manifest.json"));
+    let mut manifest: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
+    let files = manifest["files"]
+        .as_array_mut()
+        .expect("a manifest lists files");
+    files.retain(|f| {
+        let name = Path::new(f["path"].as_str().unwrap()).file_name().unwrap();
+        keep(&name.to_string_lossy())
+    });
+    for f in files.iter_mut() {
+        let name = Path::new(f["path"].as_str().unwrap()).file_name().unwrap();
+        let member = dir.join(name);
+        // A special file (a FIFO) keeps its record: the check refuses it before reading.
+        if std::fs::metadata(&member).is_ok_and(|m| m.is_file()) {
+            let bytes = std::fs::read(&member).unwrap();
+            f["bytes"] = bytes.len().into();
+            f["crc32"] = crc32fast::hash(&bytes).into();
+        }
+    }
+    std::fs::write(&path, serde_json::to_vec_pretty(&manifest).unwrap()).unwrap();
+}
+
+/// Runs `twopass args` with standard error captured, killing it after 60 s (a test of a hang
+/// must not hang: it panics naming the command).
+pub fn run_soon<S: AsRef<OsStr> + std::fmt::Debug>(args: &[S]) -> Output {
+    use std::process::{Command, Stdio};
+    use std::time::{Duration, Instant};
+    let mut child = Command::new(env!("CARGO_BIN_EXE_twopass"))
+        .args(args)
+        .env("CI", "1")
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the binary runs");
+    let start = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > Duration::from_secs(60) {
+            child.kill().unwrap();
+            child.wait().unwrap();
+            panic!("twopass {args:?} still running after 60 s");
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    child.wait_with_output().unwrap()
+}

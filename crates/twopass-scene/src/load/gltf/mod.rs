@@ -101,12 +101,20 @@ pub(super) fn load_gltf(
         Some(camera) => camera,
         None => framing_camera(path, &walked.parts)?,
     };
-    let (mut scene, warnings) = ld.finish(walked.parts, camera, crate::unit::Unit::Metre)?;
+    let (mut scene, warnings, kept) =
+        ld.finish_parts(walked.parts, camera, crate::unit::Unit::Metre)?;
+    // An object removed as a copy of earlier ones writes nothing back: its origin goes too.
+    let origins = walked
+        .origins
+        .into_iter()
+        .zip(kept)
+        .filter_map(|(o, k)| k.then_some(o))
+        .collect();
     scene.gltf = Some(Box::new(GltfSource {
         json: file.json,
         buffers: file.buffers,
         images: file.images,
-        origins: walked.origins,
+        origins,
         camera_node: walked.camera_node,
     }));
     Ok((scene, warnings))

@@ -202,7 +202,11 @@ fn the_chrome_room_has_glass_and_mirror_balls_and_thin_rings_resting_on_the_plat
         assert!(((hi - lo).y - 1.47).abs() < 1e-3, "{ring}: {lo} {hi}");
         let o = scene.objects.iter().find(|o| o.name == ring).unwrap();
         let p = &scene.mesh.positions[o.vertices.start as usize..o.vertices.end as usize];
-        let c = Vec3::new(0.5 * (lo.x + hi.x), 0.5 * (lo.y + hi.y), 0.5 * (lo.z + hi.z));
+        let c = Vec3::new(
+            0.5 * (lo.x + hi.x),
+            0.5 * (lo.y + hi.y),
+            0.5 * (lo.z + hi.z),
+        );
         for v in p {
             let d = (*v - c).length();
             assert!((0.665 - 1e-3..=0.735 + 1e-3).contains(&d), "{ring}: {d}");
