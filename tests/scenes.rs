@@ -157,12 +157,15 @@ fn every_scene_in_the_repository_loads() {
         let presets = path.to_string_lossy().ends_with(".presets.toml");
         if path.extension().is_some_and(|e| e == "toml") && !presets {
             let (scene, _) = load(&path).unwrap_or_else(|e| panic!("{e}"));
-            assert!(
-                !scene.emitters.is_empty(),
-                "{} has no light",
-                path.display()
-            );
-            // Every scene here is a Cornell room, about 0.55 m wide: stated in millimetres.
+            assert!(scene.has_light(), "{} has no light", path.display());
+            let cornell = path
+                .file_name()
+                .is_some_and(|n| n.to_string_lossy().starts_with("cornell"));
+            if !cornell {
+                continue;
+            }
+            assert!(!scene.emitters.is_empty(), "{}", path.display());
+            // Every Cornell room here is about 0.55 m wide: stated in millimetres.
             assert_eq!(
                 scene.unit,
                 twopass_scene::Unit::Millimetre,
