@@ -76,12 +76,20 @@ impl ProgressiveSolver<'_> {
         // vertices' irradiance is a point value: where a source is closer than the elements
         // resolve, interpolated over an element it would make more light than arrived. A
         // patch reflects at most rho times what arrived at it, so a re-estimate creates none.
+        // The rho of the bound is the largest of its vertices' (per channel): on a textured
+        // patch the texels' colours need not follow the mean albedo's where the light varies,
+        // and a bound by the mean would clip (and tint) light that is really reflected.
         for p in 0..self.mesh.patches.len() {
             let mut reflected = DVec3::ZERO;
             for (r, area) in self.element_means(p, |v| self.rho[v] * self.received(v)) {
                 reflected += r * area;
             }
-            let reflected = reflected.min(self.patch_rho(p) * self.arrived[p]) / self.patch_area(p);
+            let rho_max = self
+                .elements
+                .range(p)
+                .flat_map(|i| self.elements.vertices[i].iter())
+                .fold(DVec3::ZERO, |m, &v| m.max(self.rho[v as usize]));
+            let reflected = reflected.min(rho_max * self.arrived[p]) / self.patch_area(p);
             let new_unshot = reflected - self.shot_refl[p];
             let change = (new_unshot - self.unshot_refl[p]) * self.patch_area(p);
             self.bookkeeping.energy.unshot += change;
