@@ -62,7 +62,7 @@ pub(crate) fn plane_under(light: &str, blocker: bool) -> Scene {
     ))
 }
 
-fn options(method: Method, element: f32, unshot: f64) -> Options {
+pub(crate) fn options(method: Method, element: f32, unshot: f64) -> Options {
     Options {
         method,
         element_size: Some(element),

@@ -282,3 +282,160 @@ fn portals_give_the_same_light_through_a_window_with_far_less_variance() {
     eprintln!("variance ratio without / with the portal: {ratio}");
     assert!(ratio > 10.0, "variance ratio {ratio}");
 }
+
+/// [`crate::lamps::BEAM_WALL`] (a grey wall facing a perfect mirror tilted 45 degrees, the
+/// mirror turning light that falls straight down toward the wall) without its lamp, under `sky`.
+fn beam_wall_under(sky: &str) -> Scene {
+    let text = crate::lamps::BEAM_WALL;
+    let without_lamp = &text[..text.find("[[light]]").unwrap()];
+    twopass_scene::load_toml(
+        &format!("{without_lamp}{sky}"),
+        std::path::Path::new("mirror.toml"),
+    )
+    .unwrap()
+    .0
+}
+
+/// Solves `scene` (with the specular transfer, or with mirrors as absorbers) and returns, per
+/// vertex of the wall (object 0), its position and radiosity (W/m^2, red channel), and the
+/// power the wall reflects (W, red).
+fn wall_light(scene: &Scene, method: Method, specular: bool) -> (Vec<(Vec3, f64)>, f64) {
+    let mut options = crate::lamps::options(method, 0.1, 1e-6);
+    if !specular {
+        options.specular = None;
+    }
+    let mut solver = Solver::new(scene, options).unwrap();
+    solver.run(|_| ControlFlow::Continue(()));
+    let solution = solver.solution();
+    let b = solution.vertex_radiosity();
+    let mesh = solution.mesh();
+    let on_wall = |n: &u32| mesh.vertices[mesh.nodes[*n as usize].vertices[0] as usize].object == 0;
+    let reflected = mesh
+        .leaves()
+        .filter(on_wall)
+        .map(|n| {
+            let node = &mesh.nodes[n as usize];
+            let sum: f64 = node
+                .vertices
+                .iter()
+                .map(|&v| f64::from(b[v as usize].x))
+                .sum();
+            sum / 3.0 * f64::from(node.area)
+        })
+        .sum();
+    let vertices = mesh
+        .vertices
+        .iter()
+        .enumerate()
+        .filter(|(_, v)| v.object == 0)
+        .map(|(i, v)| (v.position, f64::from(b[i].x)))
+        .collect();
+    (vertices, reflected)
+}
+
+/// Under a uniform sky of radiance L the wall sees the sky in every direction of its
+/// hemisphere, directly or through the mirror (which turns the wall's view of it straight up,
+/// to the open sky): E = pi L at every point, B = rho pi L. Shadow rays stop at the mirror, so
+/// the light through it is the specular transfer's: rho L times the wall's projected solid
+/// angle of the mirror integrated over the wall (Lambert's polygon formula, midpoint rule),
+/// about 2.3 % of the wall's light, 4 % at its centre.
+#[test]
+fn the_sky_through_a_mirror_lights_a_wall_as_the_open_sky_would() {
+    let s = beam_wall_under("[sky]\nkind = \"uniform\"\nradiance = 1\n");
+    let want = RHO * std::f64::consts::PI;
+    // The mirror's corners, and the wall (x in [-2, 2], y in [-1, 1] at z = 2, facing -z).
+    let o = DVec3::new(-0.5, -0.25, 0.25);
+    let (u, v) = (DVec3::X, DVec3::new(0.0, 0.5, -0.5));
+    let mirror = [o, o + u, o + u + v, o + v];
+    let (nx, ny) = (400, 200);
+    let cell = 4.0 / f64::from(nx) * 2.0 / f64::from(ny);
+    let mut through = 0.0;
+    for i in 0..nx {
+        for j in 0..ny {
+            let x = DVec3::new(
+                -2.0 + 4.0 * (f64::from(i) + 0.5) / f64::from(nx),
+                -1.0 + 2.0 * (f64::from(j) + 0.5) / f64::from(ny),
+                2.0,
+            );
+            through += projected_solid_angle(x, -DVec3::Z, &mirror) * cell;
+        }
+    }
+    let through = RHO * through;
+    for method in METHODS {
+        let (vertices, reflected) = wall_light(&s, method, true);
+        let (_, absorbed) = wall_light(&s, method, false);
+        // What the wall's own light sends back through the mirror is far below the tolerance:
+        // after the mirror a ray goes (x, -z, -y), up and over the wall.
+        let gained = reflected - absorbed;
+        eprintln!(
+            "{method:?}: the wall reflects {reflected} W, {gained} W through the mirror \
+             (want {through})"
+        );
+        assert!(
+            (gained / through - 1.0).abs() < 0.02,
+            "{method:?}: {gained} W through the mirror vs {through}"
+        );
+        if method == Method::Hierarchical {
+            // Its leaves are split where links or lamps need it, not where the sky's light
+            // varies or deposits land: only the light through the mirror is checked.
+            continue;
+        }
+        let power = want * 8.0;
+        assert!(
+            (reflected / power - 1.0).abs() < 0.005,
+            "{method:?}: {reflected} W vs {power}"
+        );
+        let centre: Vec<f64> = vertices
+            .iter()
+            .filter(|(p, _)| p.x.abs() < 0.5 && p.y.abs() < 0.5)
+            .map(|&(_, b)| b)
+            .collect();
+        let mean = centre.iter().sum::<f64>() / centre.len() as f64;
+        eprintln!(
+            "{method:?}: {} centre vertices, mean B {mean} (want {want})",
+            centre.len()
+        );
+        assert!(centre.len() >= 10, "{}", centre.len());
+        assert!(
+            (mean / want - 1.0).abs() < 0.01,
+            "{method:?}: {mean} vs {want}"
+        );
+    }
+}
+
+/// The sun straight overhead, turned by the mirror onto the wall: the mirror's image on the
+/// wall (|x| < 0.5, |y| < 0.25) receives the sun's whole irradiance L_sun Omega_sun (a
+/// mirror keeps a parallel beam's cross-section) on top of the dome's light, which varies
+/// smoothly across the beam's edge: the mean inside minus the mean in a band just outside is
+/// rho E_sun, within the dome's change over the band (about 1 % of the sun's).
+#[test]
+fn the_sun_through_a_mirror_lights_the_mirrors_image_on_a_wall() {
+    let s = beam_wall_under(
+        "[sky]\nkind = \"daylight\"\nturbidity = 3\nsun_direction = [0, 1, 0]\nscale = 0.001\n",
+    );
+    let sun = s.sky.as_ref().unwrap().sun.unwrap();
+    let e_sun = f64::from(sun.radiance.x * sun.solid_angle());
+    let (vertices, _) = wall_light(&s, Method::Progressive, true);
+    let (mut inside, mut band) = (Vec::new(), Vec::new());
+    for &(p, b) in &vertices {
+        match crate::lamps::in_mirrored_beam(p, 0.15) {
+            Some(true) => inside.push(b),
+            Some(false) if p.x.abs() < 0.95 && p.y.abs() < 0.7 => band.push(b),
+            _ => {}
+        }
+    }
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    let step = mean(&inside) - mean(&band);
+    eprintln!(
+        "{} inside, {} in the band: step {step} (want {})",
+        inside.len(),
+        band.len(),
+        RHO * e_sun
+    );
+    assert!(inside.len() >= 10 && band.len() >= 10);
+    assert!(
+        (step / (RHO * e_sun) - 1.0).abs() < 0.03,
+        "{step} vs {}",
+        RHO * e_sun
+    );
+}

@@ -34,6 +34,8 @@ use twopass_scene::{Hit, LampKind, Ray, Scene, SpecularTargets};
 use crate::element::ElementMesh;
 use crate::options::{SpecularOptions, participating};
 
+mod sky;
+
 /// Probe rays cast from the specular surfaces by [`decide`].
 pub const PROBE_RAYS: u32 = 4096;
 
@@ -360,9 +362,10 @@ impl Specular {
         (results.into_iter().filter_map(|r| r.0).collect(), rays)
     }
 
-    /// The lamps' light through the specular surfaces (point and spot lamps from their
-    /// position toward the targets' cones, directional lamps across their beam toward the
-    /// targets' discs, [`SpecularTargets::parallel`]), all of it emission. Each lamp gets the
+    /// The lamps' and the sky's light through the specular surfaces (point and spot lamps
+    /// from their position toward the targets' cones, directional lamps across their beam
+    /// toward the targets' discs, [`SpecularTargets::parallel`]; the sky's sun and dome as
+    /// beams direction by direction, the `sky` module), all of it emission. Each lamp gets the
     /// share of [`SpecularOptions::rays`] its power has of `emitted` (the scene's whole
     /// emitted luminance power, W), at least [`SpecularOptions::MIN_RAYS`]; its rays are
     /// stratified over the (cone or disc, direction or point) square. Returns the deposits in
@@ -425,6 +428,9 @@ impl Specular {
                 cast += r;
             }
         }
+        let (sky, rays) = self.shoot_sky(scene, emitted, key);
+        deposits.extend(sky);
+        cast += rays;
         (deposits, cast)
     }
 
