@@ -17,8 +17,18 @@ What is converted, and how:
   `k`. Anything else stops the script with the object and material named: a benchmark on a
   scene it cannot convert exactly would compare different images.
 - emission: an `area` emitter with the object's RGB radiance (W/(m^2 sr)), front side only.
+- lamps (`[[light]]`): `point` as `point` with the same radiant intensity (W/sr); `spot` as
+  `spot` aimed along the lamp's axis, `cutoff_angle` the outer angle and `beam_width` where
+  twopass's ramp reaches full intensity, but only when the inner angle is within 0.5 degrees
+  of the outer one (a hard-edged cone): between the two the falloffs differ (glTF's t^2 in the
+  cosine against Mitsuba's linear ramp in the angle), so a soft spot would compare different
+  lights; `directional` as `directional` with the same
+  irradiance. `power` becomes intensity as twopass reads it (I = power / 4 pi, spots too).
+- sky: `kind = "uniform"` as a `constant` emitter of the same radiance. The daylight sky is
+  refused: Mitsuba's `sunsky` is Hosek-Wilkie's model, not Preetham's. Portals only steer
+  twopass's sampling and are ignored.
 
-Object `transform`s, textures, lamps and `[sky]` are refused for the same reason.
+Object `transform`s, textures and the daylight sky are refused for the same reason.
 """
 
 import math
@@ -68,13 +78,13 @@ def scene_dict(mi, scene_file, width, height):
     """The twopass scene file as a Mitsuba scene dictionary (`mi.load_dict` takes it)."""
     with open(scene_file, "rb") as f:
         s = tomllib.load(f)
-    for key in ("light", "sky", "portal"):
-        if key in s:
-            raise SystemExit(f"{scene_file}: `{key}` tables are not converted to Mitsuba")
     folder = os.path.dirname(os.path.abspath(scene_file))
     cam = s["camera"]
-    film_w, film_h = cam.get("film_size", [25, 25])
-    fov_y = math.degrees(2.0 * math.atan(0.5 * film_h / cam["focal_length"]))
+    if "fov_y" in cam:
+        fov_y = float(cam["fov_y"])
+    else:
+        _, film_h = cam.get("film_size", [36, 24])
+        fov_y = math.degrees(2.0 * math.atan(0.5 * film_h / cam.get("focal_length", 50.0)))
     materials = {m["name"]: m for m in s["material"]}
     d = {
         "type": "scene",
@@ -144,4 +154,60 @@ def scene_dict(mi, scene_file, width, height):
             d[key] = mesh
         else:
             raise SystemExit(f"object {obj['name']}: shape {kind!r} is not converted to Mitsuba")
+    for i, lamp in enumerate(s.get("light", [])):
+        d[f"lamp_{i:03d}"] = _lamp(mi, lamp, i)
+    if "sky" in s:
+        sky = s["sky"]
+        if sky["kind"] != "uniform":
+            raise SystemExit(f"[sky]: kind {sky['kind']!r} is not converted to Mitsuba")
+        radiance = np.asarray(_rgb(sky["radiance"])["value"]) * float(sky.get("scale", 1.0))
+        d["sky"] = {"type": "constant", "radiance": _rgb(list(radiance))}
     return d
+
+
+def _lamp(mi, lamp, index):
+    """A `[[light]]` table as a Mitsuba emitter dictionary."""
+    name = lamp.get("name", f"light {index + 1}")
+    kind = lamp["kind"]
+    colour = np.asarray(_rgb(lamp.get("colour", 1.0))["value"])
+    position = np.asarray(lamp.get("position", [0.0, 0.0, 0.0]), np.float64)
+    if "direction" in lamp:
+        direction = np.asarray(lamp["direction"], np.float64)
+    elif "look_at" in lamp:
+        direction = np.asarray(lamp["look_at"], np.float64) - position
+    else:
+        direction = None
+    if kind == "directional":
+        return {"type": "directional", "direction": [float(c) for c in direction],
+                "irradiance": _rgb(list(float(lamp["irradiance"]) * colour))}
+    if "intensity" in lamp:
+        intensity = np.asarray(_rgb(lamp["intensity"])["value"])
+    else:
+        intensity = np.full(3, float(lamp["power"]) / (4.0 * math.pi))
+    intensity = _rgb(list(intensity * colour))
+    if kind == "point":
+        return {"type": "point", "position": [float(c) for c in position], "intensity": intensity}
+    if kind == "spot":
+        inner, outer = float(lamp.get("inner_angle", 0.0)), float(lamp.get("outer_angle", 45.0))
+        if outer - inner > 0.5:
+            raise SystemExit(
+                f"light {name}: a spot whose falloff spans {outer - inner} degrees is not "
+                "converted (the falloffs differ); give inner_angle within 0.5 of outer_angle"
+            )
+        # Any up that is not along the axis.
+        axis = direction / np.linalg.norm(direction)
+        up = [0.0, 0.0, 1.0] if abs(axis[1]) > 0.9 else [0.0, 1.0, 0.0]
+        return {
+            "type": "spot",
+            "intensity": intensity,
+            "cutoff_angle": outer,
+            # Full intensity inside the angle where twopass's ramp reaches 1 (its ramp spans at
+            # least 0.001 in the cosine, even when the two angles are equal).
+            "beam_width": math.degrees(math.acos(min(1.0, math.cos(math.radians(outer))
+                                                     + max(0.001, math.cos(math.radians(inner))
+                                                           - math.cos(math.radians(outer)))))),
+            "to_world": mi.ScalarTransform4f().look_at(
+                origin=list(position), target=list(position + axis), up=up
+            ),
+        }
+    raise SystemExit(f"light {name}: kind {kind!r} is not converted to Mitsuba")

@@ -21,5 +21,6 @@ mod render;
 mod sky;
 mod slurm;
 mod textures;
+mod third_party;
 mod tradeoff;
 mod view;
