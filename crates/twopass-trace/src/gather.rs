@@ -24,7 +24,8 @@
 //!
 //! A gather ray that escapes the scene from the point carries nothing (the sky is in
 //! E_direct); one that escapes after a mirror or glass carries the sky's radiance (L S+ D
-//! from the sky: no shadow ray passes a delta surface, and no light path starts at the sky).
+//! from the sky: no shadow ray passes a delta surface) unless the photons or a light tracer
+//! count it (their light paths start at the sky as at the emitters).
 //!
 //! The point's own value in the solution is not used at all.
 //!
@@ -414,8 +415,9 @@ impl<'a> Gatherer<'a> {
             tally.rays += 1;
             if let Some(h) = scene.intersect_from(&here.hit.point, next) {
                 l += bs.weight * self.follow(h, next, caustics_elsewhere, sampler, tally);
-            } else {
-                // The sky through mirrors and glass (L S+ D): no shadow ray passes them.
+            } else if !caustics_elsewhere {
+                // The sky through mirrors and glass (L S+ D): no shadow ray passes them, and
+                // with `caustics_elsewhere` the photons or the light tracer count it.
                 l += bs.weight * crate::sky::escaped(scene, next);
             }
         }
@@ -531,6 +533,10 @@ impl<'a> Gatherer<'a> {
             tally.rays += 1;
             throughput *= bs.weight;
             let Some(h) = scene.intersect_from(&here.hit.point, next) else {
+                // The sky at the delta path's end is emission too.
+                if caustics_elsewhere {
+                    return sum;
+                }
                 return sum + throughput * crate::sky::escaped(scene, next);
             };
             if throughput.max_element() <= 0.0 {

@@ -30,7 +30,9 @@
 //! surface first), with throughput L_e cos(theta_e) A / (P(emitter) p(direction)); or at a
 //! point or spot lamp chosen by power, with throughput I(w) / (P(lamp) p(direction)); or, from
 //! a directional lamp, outside the scene on a line through a point of the beam's cross-section
-//! drawn toward the specular objects, with throughput E / (P(lamp) p(area)). Delta
+//! drawn toward the specular objects, with throughput E / (P(lamp) p(area)); or from the sky,
+//! as from a directional lamp in a direction drawn from the sun or the dome, with throughput
+//! L(w) / (P(sky) p(w) p(area)). Delta
 //! bounces carry power ([`twopass_brdf::delta::DeltaLobe::sample_flux`]). At a vertex x
 //! connected to the camera the pixel j that sees x gains
 //! beta f(x) |cos(theta_x)| / d^2 * W_j, with W_j = 1 / (A_pixel cos^3(theta_c)) the importance
@@ -53,7 +55,7 @@ use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use twopass_brdf::Rgb;
 use twopass_brdf::frame::Frame;
-use twopass_scene::{Camera, Hit, LampKind, Ray, Scene, SpecularTargets};
+use twopass_scene::{Camera, Hit, LampKind, Ray, Scene, Sky, SpecularTargets};
 
 use crate::counters::{RenderProgress, Tally};
 use crate::emitters::{EmitterChoice, Light};
@@ -129,6 +131,10 @@ pub struct LightTracer {
     settings: LightTracingSettings,
     targets: SpecularTargets,
     choice: EmitterChoice,
+    /// Probability that a path starts at the sky (its power, [`twopass_scene::Sky::power`],
+    /// over the sky's, the emitters' and the lamps' together); the rest start at a light of
+    /// `choice`.
+    sky_share: f32,
 }
 
 /// One splat: pixel index (row-major), layer, value (radiance times the number of paths).
@@ -169,18 +175,36 @@ pub fn finish_splats(layers: &mut LayerImages, paths: u64, non_finite: &mut u64)
 }
 
 impl LightTracer {
-    /// The light tracer of `scene`, or `None` when it has nothing to do: no emitter or no
-    /// specular object (then no path of its scope exists).
+    /// The light tracer of `scene`, or `None` when it has nothing to do: no emitter, lamp or
+    /// sky, or no specular object (then no path of its scope exists).
     pub fn new(scene: &Scene, settings: LightTracingSettings) -> Option<Self> {
         let targets = SpecularTargets::new(scene);
         let choice = EmitterChoice::new(scene);
-        if targets.is_empty() || choice.is_empty() {
+        if targets.is_empty() || (choice.is_empty() && scene.sky.is_none()) {
             return None;
         }
+        // Powers by the mean over the channels, as the emitter choice weighs them.
+        let mean = |p: Rgb| f64::from(p.element_sum() / 3.0).max(0.0);
+        let diagonal = scene.bounds.diagonal();
+        let sky = scene.sky.as_ref().map_or(0.0, |s| mean(s.power(diagonal)));
+        let lights: f64 = scene.emitters.iter().map(|e| mean(e.power)).sum::<f64>()
+            + scene
+                .lamps
+                .iter()
+                .map(|l| mean(l.power(diagonal)))
+                .sum::<f64>();
+        let sky_share = if scene.sky.is_none() {
+            0.0
+        } else if choice.is_empty() || (sky + lights).is_nan() || sky + lights <= 0.0 {
+            1.0
+        } else {
+            (sky / (sky + lights)) as f32
+        };
         Some(Self {
             settings,
             targets,
             choice,
+            sky_share,
         })
     }
 
@@ -331,8 +355,26 @@ impl LightTracer {
         sampler: &mut Sampler,
         tally: &mut Tally,
     ) -> Option<(Option<Hit>, Vec3, Rgb)> {
-        let light = self.choice.pick(sampler.next_f32());
-        let chosen = self.choice.probability_of(light);
+        let u = sampler.next_f32();
+        if u < self.sky_share {
+            let sky = scene.sky.as_ref()?;
+            // The number an area emitter's point takes, so that the direction and the point
+            // take the same dimensions of the stream as a lamp's.
+            sampler.next_f32();
+            let (ray, start) = emit_from_sky(
+                scene,
+                sky,
+                &self.targets,
+                u / self.sky_share,
+                sampler.next_2d(),
+                sampler.next_2d(),
+            )?;
+            tally.rays += 1;
+            return Some((scene.intersect(&ray), ray.direction, start / self.sky_share));
+        }
+        let u = ((u - self.sky_share) / (1.0 - self.sky_share)).min(1.0 - f32::EPSILON / 2.0);
+        let light = self.choice.pick(u);
+        let chosen = self.choice.probability_of(light) * (1.0 - self.sky_share);
         let (hit, dir, start) = match light {
             Light::Area(e) => {
                 let emitter = &scene.emitters[e];
@@ -568,4 +610,44 @@ impl PixelImportance {
         }
         Some((py * c.width + px, 1.0 / (self.pixel_area * cos * cos * cos)))
     }
+}
+
+/// The first segment of a light path that starts at the sky: the sun with probability
+/// proportional to its share of the radiance integrals ([`Sky::integrals`]; the dome
+/// otherwise), a direction toward it (`u_dir`: over the sun's disc, or
+/// [`Sky::sample_dome_emission`]) and a point across the beam toward the specular objects
+/// (`u_point`, [`SpecularTargets::parallel`]); the ray starts outside the scene's bounds, so
+/// whatever the beam meets first it meets. `pick` in [0, 1) chooses. Returns the ray (unit
+/// direction) and its throughput L(w) / (P(part) p(w) p(A)), W; `None` when it carries nothing.
+fn emit_from_sky(
+    scene: &Scene,
+    sky: &Sky,
+    targets: &SpecularTargets,
+    pick: f32,
+    u_dir: Vec2,
+    u_point: Vec2,
+) -> Option<(Ray, Rgb)> {
+    let (dome, sun) = sky.integrals();
+    let (dome, sun) = (dome.element_sum(), sun.element_sum());
+    let sun_share = sun / (sun + dome);
+    if !sun_share.is_finite() {
+        return None;
+    }
+    let (w, radiance, pdf) = if pick < sun_share {
+        let (w, pdf) = sky.sample_sun(u_dir)?;
+        (w, sky.sun_radiance(w), pdf * sun_share)
+    } else {
+        let (w, pdf) = sky.sample_dome_emission(u_dir);
+        (w, sky.dome_radiance(w), pdf * (1.0 - sun_share))
+    };
+    let travel = -w.as_dvec3().normalize();
+    let (point, density) = targets.parallel(travel, u_point)?;
+    if !(density > 0.0 && pdf > 0.0) {
+        return None;
+    }
+    let start = radiance / (pdf * density as f32);
+    let back = f64::from(scene.bounds.diagonal()) * 2.0;
+    let origin = (point - travel * back).as_vec3();
+    (start.max_element() > 0.0 && start.is_finite())
+        .then(|| (Ray::new(origin, travel.as_vec3()), start))
 }

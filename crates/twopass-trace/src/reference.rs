@@ -334,9 +334,11 @@ impl Integrator for Reference {
             if hit.is_none()
                 && let Some(sky) = &scene.sky
             {
-                // The sky, weighed against its light sample at the previous vertex. No light
-                // path starts at the sky, so the light tracer never counts it.
+                // The sky, weighed against its light sample at the previous vertex; reached
+                // through a delta bounce after a diffuse first vertex, the light tracer's (its
+                // paths start at the sky too), as an emitter's light is.
                 let w = match prev {
+                    Some((_, _, true, _)) if seen_non_delta && self.light.is_some() => 0.0,
                     None | Some((_, _, true, _)) => 1.0,
                     Some((from, pdf_bsdf, false, normal)) => {
                         power_heuristic(pdf_bsdf, sky_light_pdf(sky, from.position, normal, dir))

@@ -5,6 +5,8 @@
 //! ([`sky_light`], [`sky_irradiance`]) and never count a BRDF-sampled ray that escapes at a
 //! diffuse or glossy point; the path tracer takes one sample of the mixture ([`sky_mis`]) and
 //! weighs it and the escaping BRDF-sampled rays by the power heuristic ([`sky_light_pdf`]).
+//! Light paths start at the sky too ([`crate::light_tracing`]): what it sends through mirrors
+//! and glass is the light tracer's and the photons', as an emitter's is.
 
 use glam::Vec3;
 use twopass_brdf::Rgb;

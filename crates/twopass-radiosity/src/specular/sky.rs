@@ -5,7 +5,7 @@
 //! across the discs the specular objects' bounding spheres cast
 //! ([`SpecularTargets::parallel`](twopass_scene::SpecularTargets::parallel)), for the sun over
 //! its disc and for the dome over the sphere (a uniform sky) or the hemisphere above the
-//! horizon (daylight).
+//! horizon (daylight: [`Sky::sample_dome_emission`](twopass_scene::Sky::sample_dome_emission)).
 //!
 //! Weights: a beam from the directions dw around w carries L(w) dw per unit area across it,
 //! so a ray through a point of density p_A (per unit area across the beam) in a direction of
@@ -16,7 +16,6 @@ use glam::{DVec3, Vec2};
 use rayon::prelude::*;
 use twopass_brdf::colour::luminance_f64;
 use twopass_brdf::random::{SplitMix64, hash};
-use twopass_scene::sky::SkyKind;
 use twopass_scene::{Ray, Scene};
 
 use super::{Deposit, Specular, stratum};
@@ -26,10 +25,9 @@ use crate::options::SpecularOptions;
 const SKY_KEY: u64 = 0x5c1e_0000_0000_0000;
 
 impl Specular {
-    /// The sky's light through the specular surfaces (module docs). The
-    /// sky gets the share of [`SpecularOptions::rays`] its power ([`Sky::power`]
-    /// (twopass_scene::sky::Sky::power)) has of `emitted` (the scene's whole emitted luminance
-    /// power, W), at least [`SpecularOptions::MIN_RAYS`] each for the sun and the dome, split
+    /// The sky's light through the specular surfaces (module docs). The sky gets the share of
+    /// [`SpecularOptions::rays`] its power ([`Sky::power`](twopass_scene::Sky::power)) has of
+    /// `emitted` (the scene's whole emitted luminance power, W), at least [`SpecularOptions::MIN_RAYS`] each for the sun and the dome, split
     /// between them by their radiance integrals. Returns the deposits in ray order and the
     /// rays cast; the same `key` gives the same deposits on any number of threads.
     pub(super) fn shoot_sky(&self, scene: &Scene, emitted: f64, key: u64) -> (Vec<Deposit>, u64) {
@@ -37,13 +35,13 @@ impl Specular {
             return (Vec::new(), 0);
         };
         let diagonal = scene.bounds.diagonal();
-        let r = 0.5 * f64::from(diagonal);
         // The radiance integrals over the directions (W/m^2, luminance).
-        let total = luminance_f64(sky.power(diagonal).as_dvec3()) / (std::f64::consts::PI * r * r);
-        let sun = sky.sun.map_or(0.0, |s| {
-            luminance_f64(s.radiance.as_dvec3()) * f64::from(s.solid_angle())
-        });
-        let dome = (total - sun).max(0.0);
+        let (dome, sun) = sky.integrals();
+        let (dome, sun) = (
+            luminance_f64(dome.as_dvec3()),
+            luminance_f64(sun.as_dvec3()),
+        );
+        let total = dome + sun;
         if !(total.is_finite() && total > 0.0) {
             return (Vec::new(), 0);
         }
@@ -57,8 +55,6 @@ impl Specular {
                 ) as u32
         };
         let back = f64::from(diagonal) * 2.0;
-        let up = sky.up.as_dvec3().normalize();
-        let upper_only = matches!(sky.kind, SkyKind::Daylight(_));
         let mut deposits = Vec::new();
         let mut cast = 0;
         for (part, share) in [(0_u64, sun / total), (1, dome / total)] {
@@ -83,8 +79,8 @@ impl Specular {
                         };
                         (w, sky.sun_radiance(w), f64::from(pdf), u)
                     } else {
-                        let (w, pdf) = sphere_direction(u, up, upper_only);
-                        (w.as_vec3(), sky.dome_radiance(w.as_vec3()), pdf, v)
+                        let (w, pdf) = sky.sample_dome_emission(u);
+                        (w, sky.dome_radiance(w), f64::from(pdf), v)
                     };
                     let travel = -w.as_dvec3().normalize();
                     let Some((point, density)) = self.targets.parallel(travel, at) else {
@@ -96,9 +92,9 @@ impl Specular {
                     }
                     let ray = Ray::new((point - travel * back).as_vec3(), travel.as_vec3());
                     let first = scene.intersect(&ray);
-                    // None of it is a focused caustic the hybrids leave to a light tracer: no light
-                    // path starts at the sky.
-                    self.follow(scene, first, ray.direction, weight, DVec3::ZERO, &mut rng)
+                    // All of it is emission: what a refraction focuses, the hybrids' light
+                    // tracers count per pixel (their light paths start at the sky too).
+                    self.follow(scene, first, ray.direction, weight, DVec3::ONE, &mut rng)
                 })
                 .collect();
             for (d, r) in results {
@@ -107,46 +103,5 @@ impl Specular {
             }
         }
         (deposits, cast)
-    }
-}
-
-/// A unit direction uniform over the sphere, or over the hemisphere about `up` when
-/// `upper_only`, for `u` in [0, 1)^2 (z = cos theta linear in u.x, so strata stay strata), and
-/// its density (1/sr).
-fn sphere_direction(u: Vec2, up: DVec3, upper_only: bool) -> (DVec3, f64) {
-    let (z, pdf) = if upper_only {
-        (f64::from(u.x), 1.0 / std::f64::consts::TAU)
-    } else {
-        (
-            1.0 - 2.0 * f64::from(u.x),
-            1.0 / (4.0 * std::f64::consts::PI),
-        )
-    };
-    let s = (1.0 - z * z).max(0.0).sqrt();
-    let phi = std::f64::consts::TAU * f64::from(u.y);
-    let local = DVec3::new(s * phi.cos(), s * phi.sin(), z);
-    let frame = twopass_brdf::frame::Frame::from_normal(up.as_vec3());
-    (frame.to_world(local.as_vec3()).as_dvec3().normalize(), pdf)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn sphere_directions_are_unit_and_cover_their_domain() {
-        // The mean of z over the sphere is 0, over the hemisphere 1/2 (and never below 0).
-        let k = 64;
-        for (upper, mean_z) in [(false, 0.0), (true, 0.5)] {
-            let mut sum = 0.0;
-            for i in 0..k * k {
-                let u = stratum(i, k, Vec2::splat(0.5));
-                let (d, _) = sphere_direction(u, DVec3::Y, upper);
-                assert!((d.length() - 1.0).abs() < 1e-6);
-                assert!(!upper || d.y >= 0.0);
-                sum += d.y;
-            }
-            assert!((sum / f64::from(k * k) - mean_z).abs() < 1e-3, "{upper}");
-        }
     }
 }

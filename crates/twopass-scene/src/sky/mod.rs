@@ -357,6 +357,36 @@ impl Sky {
         PORTAL_SHARE * through + (1.0 - PORTAL_SHARE) * cosine
     }
 
+    /// The radiance integrated over all directions, W/m^2 per channel: the dome's (the sun
+    /// left out) and the sun's disc's (L_sun Omega_sun; zero without a sun above the horizon).
+    /// They set how light leaving the sky is shared between the two.
+    pub fn integrals(&self) -> (Rgb, Rgb) {
+        let sun = self.sun.map_or(Rgb::ZERO, |s| {
+            if s.direction.dot(self.up) > 0.0 {
+                s.radiance * s.solid_angle()
+            } else {
+                Rgb::ZERO
+            }
+        });
+        (self.dome_integral, sun)
+    }
+
+    /// A direction toward the dome for light that leaves the sky into the scene (where
+    /// [`Self::sample_dome`] serves a receiving point): uniform over the sphere for a uniform
+    /// sky, over the hemisphere above the horizon for daylight (the dome is black below it),
+    /// for `u` uniform in [0, 1)^2 (the cosine to [`Self::up`] linear in `u.x`, so strata stay
+    /// strata), with its density (1/sr).
+    pub fn sample_dome_emission(&self, u: Vec2) -> (Vec3, f32) {
+        let (z, pdf) = match self.kind {
+            SkyKind::Daylight(_) => (u.x, 1.0 / std::f32::consts::TAU),
+            SkyKind::Uniform { .. } => (1.0 - 2.0 * u.x, 0.25 / std::f32::consts::PI),
+        };
+        let s = (1.0 - z * z).max(0.0).sqrt();
+        let phi = std::f32::consts::TAU * u.y;
+        let local = Vec3::new(s * phi.cos(), s * phi.sin(), z);
+        (Frame::from_normal(self.up).to_world(local).normalize(), pdf)
+    }
+
     /// The power the sky sends into the bounding sphere of a scene whose bounding box has
     /// diagonal `scene_diagonal` (scene units), W per channel: pi R^2 times the radiance
     /// integrated over the directions, R half the diagonal; an upper bound of the light that

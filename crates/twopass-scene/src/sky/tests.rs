@@ -136,3 +136,40 @@ fn dome_sampling_through_a_portal_is_unbiased() {
         );
     }
 }
+
+#[test]
+fn dome_emission_samples_integrate_the_domes_radiance() {
+    // Stratified samples of L / pdf over the emission directions estimate the dome's radiance
+    // integral (computed at construction by quadrature); daylight's stay above the horizon.
+    let uniform = Sky::uniform(Rgb::new(1.0, 2.0, 3.0), Vec::new());
+    for sky in [daylight(3.0, 40.0), daylight(6.0, 10.0), uniform] {
+        let k = 256;
+        let mut sum = glam::DVec3::ZERO;
+        for i in 0..k * k {
+            let u = Vec2::new(
+                ((i % k) as f32 + 0.5) / k as f32,
+                ((i / k) as f32 + 0.5) / k as f32,
+            );
+            let (dir, pdf) = sky.sample_dome_emission(u);
+            assert!((dir.length() - 1.0).abs() < 1e-5);
+            if matches!(sky.kind, SkyKind::Daylight(_)) {
+                assert!(dir.dot(sky.up) >= -1e-6, "{dir}");
+            }
+            sum += (sky.dome_radiance(dir) / pdf).as_dvec3();
+        }
+        let estimate = sum / f64::from(k * k);
+        let (dome, _) = sky.integrals();
+        let rel = ((estimate - dome.as_dvec3()).abs() / dome.as_dvec3()).max_element();
+        assert!(rel < 2e-3, "{estimate} vs {dome}: {rel}");
+    }
+}
+
+#[test]
+fn the_suns_integral_is_its_radiance_times_its_solid_angle() {
+    let sky = daylight(3.0, 40.0);
+    let sun = sky.sun.unwrap();
+    let (_, integral) = sky.integrals();
+    assert_eq!(integral, sun.radiance * sun.solid_angle());
+    // Below the horizon: nothing.
+    assert_eq!(daylight(3.0, -5.0).integrals().1, Rgb::ZERO);
+}
