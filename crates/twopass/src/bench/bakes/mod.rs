@@ -7,7 +7,8 @@
 //! `twopass bake <room>.toml --lightmap --output OUT/<room>/bake ARGS` in a child process
 //! (`ARGS` are the bench's arguments after `--`; with `--gathers`, one bake per setting, in
 //! `bake-gather-<G>/`), timed and measured for peak memory; then two
-//! renders from it (`render --bake ... --method radiosity`, children too): `lightmap.exr`
+//! renders from it (`render --bake ... --method radiosity`, children too; `hybrid-classic` in
+//! a room with mirrors, metal or glass, which radiosity alone does not show): `lightmap.exr`
 //! from `<room>.lightmap.glb` and `element-bake.exr` from `<room>.bake`, each measured against
 //! the reference (`metric`). The report (`report`) goes to `OUT/bench-bakes.json` and stdout.
 
@@ -232,6 +233,13 @@ fn measure_scene(
     let size = (scene.camera.width, scene.camera.height);
     let objects = object_map(&scene);
     let names: Vec<String> = scene.objects.iter().map(|o| o.name.clone()).collect();
+    // Radiosity alone shows mirrors, metal and glass black; the classic hybrid shows the bake
+    // at the diffuse points and traces the rest.
+    let method = if twopass_scene::targets::specular_objects(&scene).is_empty() {
+        "radiosity"
+    } else {
+        "hybrid-classic"
+    };
 
     progress(ctx, format_args!("{name}: reference, {} spp", key.spp));
     let reference = converged(&dir, &scene_path, &key, size, ctx.threads)?;
@@ -314,13 +322,16 @@ fn measure_scene(
             let mut render: Vec<OsString> = vec!["render".into(), scene_path.clone().into()];
             render.extend(["--bake".into(), bake_file.clone().into()]);
             let words = format!(
-                "--method radiosity --spp {} --seed {} --quiet",
+                "--method {method} --spp {} --seed {} --quiet",
                 args.render_spp, ctx.seed
             );
             render.extend(words.split_whitespace().map(OsString::from));
             render.extend(threads_args(ctx));
             render.extend(["--output".into(), exr.clone().into()]);
-            progress(ctx, format_args!("{name}: render from the {source}"));
+            progress(
+                ctx,
+                format_args!("{name}: render from the {source} ({method})"),
+            );
             let rendered = run_twopass(&render)?;
             let image = twopass_composite::write::read_exr(&exr)?;
             let error = measure(
