@@ -71,7 +71,8 @@ pub(super) fn chrome(settings: &RoomSettings) -> Room {
     for k in 0..17 {
         let x = 0.6 + 0.9 * k as f32;
         let origin = Vec3::new(x, max.y - 0.02, 5.0);
-        let (u, v) = (Vec3::Z * 6.0, Vec3::X * 0.12);
+        // x cross z = -y: the front, which emits, faces the floor.
+        let (u, v) = (Vec3::X * 0.12, Vec3::Z * 6.0);
         b.quad(
             &format!("strip-{k}"),
             "grey",

@@ -213,3 +213,26 @@ fn the_chrome_room_has_glass_and_mirror_balls_and_thin_rings_resting_on_the_plat
         }
     }
 }
+
+#[test]
+fn every_light_of_every_room_faces_into_the_room() {
+    // An emitter is one-sided: one facing the ceiling or a wall it hangs by lights only that
+    // surface (the chrome room's strips did, 0.02 under the ceiling).
+    for kind in RoomKind::ALL {
+        let room = room(kind, &RoomSettings::default());
+        let (scene, _) = load(&room);
+        let centre = 0.5 * (scene.bounds.min + scene.bounds.max);
+        for o in scene.objects.iter().filter(|o| o.emission.max_element() > 0.0) {
+            for t in o.triangles.clone() {
+                let n = scene.mesh.geometric_normals[t as usize];
+                let p = scene.mesh.corners(t)[0];
+                assert!(
+                    n.dot(centre - p) > 0.0,
+                    "{}: {} faces {n}, away from the room's centre",
+                    kind.name(),
+                    o.name
+                );
+            }
+        }
+    }
+}
