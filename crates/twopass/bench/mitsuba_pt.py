@@ -63,6 +63,9 @@ def read_exr(path):
         channels = f.parts[0].channels
         if "RGB" in channels:
             return np.asarray(channels["RGB"].pixels, np.float32)
+        if "RGBA" in channels:
+            # twopass's plain render EXR (R, G, B and A = 1), which the binding groups.
+            return np.asarray(channels["RGBA"].pixels, np.float32)[..., :3]
         return np.stack([np.asarray(channels[c].pixels, np.float32) for c in "RGB"], axis=-1)
 
 
