@@ -222,7 +222,11 @@ fn every_light_of_every_room_faces_into_the_room() {
         let room = room(kind, &RoomSettings::default());
         let (scene, _) = load(&room);
         let centre = 0.5 * (scene.bounds.min + scene.bounds.max);
-        for o in scene.objects.iter().filter(|o| o.emission.max_element() > 0.0) {
+        for o in scene
+            .objects
+            .iter()
+            .filter(|o| o.emission.max_element() > 0.0)
+        {
             for t in o.triangles.clone() {
                 let n = scene.mesh.geometric_normals[t as usize];
                 let p = scene.mesh.corners(t)[0];
