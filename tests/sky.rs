@@ -52,7 +52,7 @@ fn plane_irradiance(scene: &Scene) -> Vec<Vec<DVec3>> {
 /// The dome's irradiance on a surface facing `up` (W/m^2 per channel), by the midpoint rule
 /// over a 512 x 1024 grid of the upper hemisphere (its error is far under 1e-4 of the value
 /// for the smooth dome).
-fn dome_irradiance(sky: &Sky, up: Vec3) -> DVec3 {
+pub(crate) fn dome_irradiance(sky: &Sky, up: Vec3) -> DVec3 {
     let frame = twopass_brdf::frame::Frame::from_normal(up);
     let (nt, np) = (512, 1024);
     let mut sum = DVec3::ZERO;

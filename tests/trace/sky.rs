@@ -43,6 +43,26 @@ fn solve(scene: &Scene, element_size: f32) -> twopass_radiosity::Solution {
     solver.solution()
 }
 
+/// `integrator`'s image of `s` through `camera` at `spp` samples per pixel with `seed`,
+/// after checking that no sample was NaN or infinite (`what` names the case).
+fn image(
+    s: &Scene,
+    camera: &twopass_scene::Camera,
+    integrator: &dyn Integrator,
+    (spp, seed): (u32, u64),
+    what: &str,
+) -> twopass_image::Image {
+    let out = render(
+        s,
+        camera,
+        integrator,
+        &settings(spp, seed),
+        &RenderProgress::new(),
+    );
+    assert_eq!(out.stats.non_finite, 0, "{what}");
+    out.layers.composite()
+}
+
 const UNIFORM: &str = "[sky]\nkind = \"uniform\"\nradiance = [1, 2, 3]\n";
 
 /// Every integrator for `s` (the hybrids over a solution of it).
@@ -85,15 +105,13 @@ fn a_plane_under_a_uniform_sky_shows_rho_l_in_every_integrator() {
     let sky_only = pixel_means(&s, 4, |_| None::<f64>);
     let l = Vec3::new(1.0, 2.0, 3.0);
     for integrator in integrators(&s, &solution) {
-        let out = render(
+        let img = image(
             &s,
             &s.camera,
             integrator.as_ref(),
-            &settings(4, 5),
-            &RenderProgress::new(),
+            (4, 5),
+            integrator.name(),
         );
-        assert_eq!(out.stats.non_finite, 0, "{}", integrator.name());
-        let img = out.layers.composite();
         let (mut on_plane, mut on_sky) = (0, 0);
         for (i, p) in img.pixels().iter().enumerate() {
             // Whole pixels on the plane: rho L (each light sample and escaping BRDF ray of a
@@ -145,15 +163,7 @@ fn a_diffuse_sphere_under_a_uniform_sky_shows_albedo_times_l_the_white_furnace()
     let solution = solve(&s, 0.2);
     for integrator in integrators(&s, &solution) {
         let name = integrator.name();
-        let out = render(
-            &s,
-            &s.camera,
-            integrator.as_ref(),
-            &settings(16, 2),
-            &RenderProgress::new(),
-        );
-        assert_eq!(out.stats.non_finite, 0, "{name}");
-        let img = out.layers.composite();
+        let img = image(&s, &s.camera, integrator.as_ref(), (16, 2), name);
         let values: Vec<f64> = img.pixels().iter().map(|p| f64::from(p.x)).collect();
         let (mean, error) = mean_and_error(&values);
         let worst = values.iter().map(|v| (v - 1.6).abs()).fold(0.0, f64::max);
@@ -181,39 +191,13 @@ fn a_plane_under_daylight_shows_the_suns_closed_form_plus_the_dome() {
     let omega = std::f64::consts::TAU * (1.0 - half.cos());
     let e_sun = f64::from(sun.radiance.x) * omega * 35f64.to_radians().sin();
     // The dome's irradiance (red), by a fine midpoint rule over the upper hemisphere.
-    let frame = twopass_brdf::frame::Frame::from_normal(Vec3::Y);
-    let (nt, np) = (256, 512);
-    let mut e_dome = 0.0;
-    for i in 0..nt {
-        let theta = (f64::from(i) + 0.5) / f64::from(nt) * std::f64::consts::FRAC_PI_2;
-        for j in 0..np {
-            let phi = (f64::from(j) + 0.5) / f64::from(np) * std::f64::consts::TAU;
-            let d = Vec3::new(
-                (theta.sin() * phi.cos()) as f32,
-                (theta.sin() * phi.sin()) as f32,
-                theta.cos() as f32,
-            );
-            e_dome += f64::from(sky.dome_radiance(frame.to_world(d)).x)
-                * theta.cos()
-                * theta.sin()
-                * (std::f64::consts::FRAC_PI_2 / f64::from(nt))
-                * (std::f64::consts::TAU / f64::from(np));
-        }
-    }
+    let e_dome = crate::sky::dome_irradiance(sky, Vec3::Y).x;
     let expected = RHO / std::f64::consts::PI * (e_sun + e_dome);
     let plane = pixel_means(&s, 16, |h| (h.object == 0 && h.front_face).then_some(1.0));
     let solution = solve(&s, 0.25);
     for integrator in integrators(&s, &solution) {
         let name = integrator.name();
-        let out = render(
-            &s,
-            &s.camera,
-            integrator.as_ref(),
-            &settings(16, 4),
-            &RenderProgress::new(),
-        );
-        assert_eq!(out.stats.non_finite, 0, "{name}");
-        let img = out.layers.composite();
+        let img = image(&s, &s.camera, integrator.as_ref(), (16, 4), name);
         let values: Vec<f64> = plane
             .iter()
             .zip(img.pixels())
@@ -263,28 +247,9 @@ fn a_sun_at_or_below_the_horizon_puts_no_nan_in_any_image() {
         let solution = solve(&s, 0.25);
         assert!(solution.vertex_radiosity().iter().all(|v| v.is_finite()));
         for integrator in integrators(&s, &solution) {
-            let out = render(
-                &s,
-                &s.camera,
-                integrator.as_ref(),
-                &settings(4, 1),
-                &RenderProgress::new(),
-            );
-            assert_eq!(
-                out.stats.non_finite,
-                0,
-                "{elevation}: {}",
-                integrator.name()
-            );
-            assert!(
-                out.layers
-                    .composite()
-                    .pixels()
-                    .iter()
-                    .all(|p| p.is_finite()),
-                "{elevation}: {}",
-                integrator.name()
-            );
+            let what = format!("{elevation}: {}", integrator.name());
+            let img = image(&s, &s.camera, integrator.as_ref(), (4, 1), &what);
+            assert!(img.pixels().iter().all(|p| p.is_finite()), "{what}");
         }
     }
 }

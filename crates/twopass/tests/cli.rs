@@ -205,12 +205,7 @@ fn render_exr_says_how_it_was_made() {
     );
     let raw = exr::prelude::read_all_flat_layers_from_file(&exr_path).unwrap();
     let layer = &raw.layer_data[0];
-    let names: Vec<String> = layer
-        .channel_data
-        .list
-        .iter()
-        .map(|c| c.name.to_string())
-        .collect();
+    let names = channel_names(layer);
     assert_eq!(names, ["A", "B", "G", "R"]);
     let attr = |name: &str| twopass_tests::exr_text(&layer.attributes, name);
     assert_eq!(attr("twopass:method"), "whitted");
@@ -227,12 +222,7 @@ fn render_exr_says_how_it_was_made() {
     assert!(out.status.success());
     let raw = exr::prelude::read_all_flat_layers_from_file(&exr_path).unwrap();
     let layer = &raw.layer_data[0];
-    let names: Vec<String> = layer
-        .channel_data
-        .list
-        .iter()
-        .map(|c| c.name.to_string())
-        .collect();
+    let names = channel_names(layer);
     for c in ["R", "G", "B", "image.R"] {
         assert!(names.iter().any(|n| n == c), "no channel {c} in {names:?}");
     }
@@ -262,4 +252,16 @@ fn render_says_when_the_specular_transfer_does_not_run() {
     assert_eq!(args("--solver hierarchical"), "[]");
     let off = args("--specular-rays 0");
     assert!(off.contains("--specular-rays 0"), "{off}");
+}
+
+/// The channel names of an EXR layer, in the file's (alphabetical) order.
+fn channel_names(
+    layer: &exr::prelude::Layer<exr::prelude::AnyChannels<exr::prelude::FlatSamples>>,
+) -> Vec<String> {
+    layer
+        .channel_data
+        .list
+        .iter()
+        .map(|c| c.name.to_string())
+        .collect()
 }

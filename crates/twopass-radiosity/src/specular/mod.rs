@@ -362,6 +362,18 @@ impl Specular {
         (results.into_iter().filter_map(|r| r.0).collect(), rays)
     }
 
+    /// Rays for a light of luminance power `power` (W): its share of [`SpecularOptions::rays`]
+    /// by its share of `emitted` (the scene's whole emitted luminance power, W), within
+    /// [`SpecularOptions::MIN_RAYS`] and [`SpecularOptions::MAX_RAYS`].
+    fn rays_for(&self, power: f64, emitted: f64) -> u32 {
+        (f64::from(self.settings.rays) * power / emitted.max(f64::MIN_POSITIVE))
+            .ceil()
+            .clamp(
+                f64::from(SpecularOptions::MIN_RAYS),
+                f64::from(SpecularOptions::MAX_RAYS),
+            ) as u32
+    }
+
     /// The lamps' and the sky's light through the specular surfaces (point and spot lamps
     /// from their position toward the targets' cones, directional lamps across their beam
     /// toward the targets' discs, [`SpecularTargets::parallel`]; the sky's sun and dome as
@@ -380,12 +392,7 @@ impl Specular {
             if power.is_nan() || power <= 0.0 {
                 continue;
             }
-            let n = (f64::from(self.settings.rays) * power / emitted.max(f64::MIN_POSITIVE))
-                .ceil()
-                .clamp(
-                    f64::from(SpecularOptions::MIN_RAYS),
-                    f64::from(SpecularOptions::MAX_RAYS),
-                ) as u32;
+            let n = self.rays_for(power, emitted);
             let k = n.isqrt();
             let lamp_key = hash(key ^ 0x1a3b_0000_0000 ^ l as u64);
             let results: Vec<(Option<Deposit>, u64)> = (0..n)

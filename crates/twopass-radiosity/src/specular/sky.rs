@@ -19,17 +19,16 @@ use twopass_brdf::random::{SplitMix64, hash};
 use twopass_scene::{Ray, Scene};
 
 use super::{Deposit, Specular, stratum};
-use crate::options::SpecularOptions;
 
 /// Mixed into the key of the sky's rays (apart from the lamps').
 const SKY_KEY: u64 = 0x5c1e_0000_0000_0000;
 
 impl Specular {
-    /// The sky's light through the specular surfaces (module docs). The sky gets the share of
-    /// [`SpecularOptions::rays`] its power ([`Sky::power`](twopass_scene::Sky::power)) has of
-    /// `emitted` (the scene's whole emitted luminance power, W), at least [`SpecularOptions::MIN_RAYS`] each for the sun and the dome, split
-    /// between them by their radiance integrals. Returns the deposits in ray order and the
-    /// rays cast; the same `key` gives the same deposits on any number of threads.
+    /// The sky's light through the specular surfaces (module docs). The sky gets the rays its
+    /// power ([`Sky::power`](twopass_scene::Sky::power)) earns against `emitted` (the scene's
+    /// whole emitted luminance power, W; `Specular::rays_for`), split between the sun and the
+    /// dome by their radiance integrals. Returns the deposits in ray order and the rays cast;
+    /// the same `key` gives the same deposits on any number of threads.
     pub(super) fn shoot_sky(&self, scene: &Scene, emitted: f64, key: u64) -> (Vec<Deposit>, u64) {
         let Some(sky) = &scene.sky else {
             return (Vec::new(), 0);
@@ -46,14 +45,6 @@ impl Specular {
             return (Vec::new(), 0);
         }
         let power = luminance_f64(sky.power(diagonal).as_dvec3());
-        let rays = |share: f64| {
-            (f64::from(self.settings.rays) * power * share / emitted.max(f64::MIN_POSITIVE))
-                .ceil()
-                .clamp(
-                    f64::from(SpecularOptions::MIN_RAYS),
-                    f64::from(SpecularOptions::MAX_RAYS),
-                ) as u32
-        };
         let back = f64::from(diagonal) * 2.0;
         let mut deposits = Vec::new();
         let mut cast = 0;
@@ -61,7 +52,7 @@ impl Specular {
             if share <= 0.0 {
                 continue;
             }
-            let n = rays(share);
+            let n = self.rays_for(power * share, emitted);
             let k = n.isqrt();
             let part_key = hash(key ^ SKY_KEY ^ part);
             let results: Vec<(Option<Deposit>, u64)> = (0..n)

@@ -236,11 +236,7 @@ mod tests {
 
     use crate::{LampKind, load_toml};
 
-    const ROOM: &str = "version = 1\n\
-        [camera]\nposition = [0, 1, 3]\nlook_at = [0, 0, 0]\nfov_y = 40\n\
-        [[material]]\nname = \"w\"\ntype = \"lambert\"\ndiffuse = 0.5\n\
-        [[object]]\nname = \"floor\"\nmaterial = \"w\"\n\
-        shape = { type = \"quad\", origin = [-1, 0, 1], edge_u = [2, 0, 0], edge_v = [0, 0, -2] }\n";
+    use super::super::TEST_FLOOR as ROOM;
 
     #[test]
     fn light_tables_become_lamps_in_their_units() {

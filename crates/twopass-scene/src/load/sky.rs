@@ -196,11 +196,7 @@ mod tests {
 
     use crate::{SkyKind, load_toml};
 
-    const ROOM: &str = "version = 1\n\
-        [camera]\nposition = [0, 1, 3]\nlook_at = [0, 0, 0]\nfov_y = 40\n\
-        [[material]]\nname = \"w\"\ntype = \"lambert\"\ndiffuse = 0.5\n\
-        [[object]]\nname = \"floor\"\nmaterial = \"w\"\n\
-        shape = { type = \"quad\", origin = [-1, 0, 1], edge_u = [2, 0, 0], edge_v = [0, 0, -2] }\n";
+    use super::super::TEST_FLOOR as ROOM;
 
     fn load(extra: &str) -> Result<crate::Scene, String> {
         load_toml(&format!("{ROOM}{extra}"), Path::new("s.toml"))
