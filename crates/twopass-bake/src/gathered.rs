@@ -26,7 +26,7 @@ use crate::lightmap::MAX_BACK_FACES;
 
 /// The first key of the element vertices' gather sequences (texels from 0, the user's
 /// vertices from [`VERTEX_KEYS`](crate::vertex::VERTEX_KEYS) = 2^40, the element mesh's from
-/// here, [`RULE`]'s six per node), so no two outputs share a sequence.
+/// here, six per node: the points of Dunavant's rule), so no two outputs share a sequence.
 pub const ELEMENT_KEYS: u64 = 2 << 40;
 
 /// Dunavant's six-point rule for a triangle, exact for polynomials up to degree 4 with
@@ -56,7 +56,7 @@ const RULE: [([f32; 3], f32); 6] = {
 /// term (the gather sees every bounce the solution holds) and no separate focused caustic (the
 /// gather carries it whole).
 ///
-/// The mean is a quadrature: each element is gathered at the six points of [`RULE`] (the
+/// The mean is a quadrature: each element is gathered at the six points of Dunavant's rule (the
 /// q-th of node n keyed by [`ELEMENT_KEYS`] + 6 n + q), and each of its corners takes the
 /// points weighted by its own barycentric weight there, so the light that varies up to
 /// cubically over an element is averaged exactly, with no positional noise for the gather's
