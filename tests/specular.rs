@@ -668,6 +668,15 @@ fn hierarchical_and_progressive_transfer_agree_on_the_spheres() {
                         ..Stop::default()
                     },
                     specular,
+                    // A tenth of the default link tolerance: at the default the hierarchical
+                    // solver's own refinement leaves the ceiling's visible part 4 % below
+                    // progressive refinement's, with or without the transfer (the
+                    // discretization bias `bench bakes` measures), which this test is not
+                    // about; at 2e-6 the two agree on it within 1 %.
+                    hierarchical: twopass_radiosity::HierarchicalOptions {
+                        link_tolerance: 2e-6,
+                        ..Default::default()
+                    },
                     ..Options::default()
                 },
             )
