@@ -148,7 +148,21 @@ fn cornell_box_agrees_with_progressive_refinement() {
             p.radiance(v.triangle, b) * std::f32::consts::PI
         })
         .collect();
-    let rms = relative_rms(&h.vertex_radiosity(), &at_h);
+    // Vertices inside other objects (the floor under the blocks, the ceiling behind the
+    // light) have no light of their own to agree on: progressive refinement shows its visible
+    // neighbours' light there, the hierarchical solver a share of the links' light. Left out.
+    let (hidden, _) =
+        twopass_radiosity::hidden::hidden_vertices(&s, h.mesh(), 0, options(1e-3).seed);
+    let seen = |values: &[Vec3]| -> Vec<Vec3> {
+        values
+            .iter()
+            .zip(&hidden)
+            .filter(|(_, h)| !**h)
+            .map(|(v, _)| *v)
+            .collect()
+    };
+    assert!(hidden.iter().any(|&h| h) && hidden.iter().filter(|&&h| h).count() * 10 < hidden.len());
+    let rms = relative_rms(&seen(&h.vertex_radiosity()), &seen(&at_h));
     eprintln!("hierarchical vs progressive: {rms:.4}");
     assert!(rms < 1e-2, "relative RMS {rms}");
 }

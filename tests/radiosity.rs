@@ -237,6 +237,62 @@ fn furnace_converges_to_e_over_one_minus_rho() {
 }
 
 #[test]
+fn a_furnace_with_a_box_standing_on_its_floor_keeps_its_light() {
+    // A closed cube and an open-bottomed box standing on its floor, every face emitting
+    // L_e = 1 and reflecting rho = 0.5: radiosity pi L_e / (1 - rho) everywhere it is seen,
+    // and nothing escapes. The floor's patches reach under the box, where nothing arrives;
+    // spread over the whole patch, their light would reach the room diluted and be lost.
+    let rho = 0.5;
+    let mut objects: String = CUBE_FACES
+        .iter()
+        .enumerate()
+        .map(|(i, (o, u, v))| quad(&format!("face{i}"), "w", *o, *u, *v, Some(1.0)))
+        .collect();
+    let sides: [([f64; 3], [f64; 3], [f64; 3]); 5] = [
+        ([0.3, 0.4, 0.3], [0.0, 0.0, 0.3], [0.3, 0.0, 0.0]),
+        ([0.3, 0.0, 0.3], [0.0, 0.0, 0.3], [0.0, 0.4, 0.0]),
+        ([0.6, 0.0, 0.3], [0.0, 0.4, 0.0], [0.0, 0.0, 0.3]),
+        ([0.3, 0.0, 0.3], [0.0, 0.4, 0.0], [0.3, 0.0, 0.0]),
+        ([0.3, 0.0, 0.6], [0.3, 0.0, 0.0], [0.0, 0.4, 0.0]),
+    ];
+    for (i, (o, u, v)) in sides.iter().enumerate() {
+        objects += &quad(&format!("box{i}"), "w", *o, *u, *v, Some(1.0));
+    }
+    let s = scene(&objects, &lambert("w", rho));
+    let mut solver = ProgressiveSolver::new(&s, fixed_mesh(0.25, 0.1, 1e-6)).unwrap();
+    run(&mut solver);
+    let e = solver.progress().energy;
+    assert!(
+        e.escaped.abs().max_element() < 5e-3 * e.emitted.max_element(),
+        "escaped {:?} of {:?}",
+        e.escaped,
+        e.emitted
+    );
+    // The mean the elements show, over the room's surfaces.
+    let solution = solver.solution();
+    let mesh = solution.mesh();
+    let b = solution.vertex_radiosity();
+    let (mut sum, mut area) = (0.0, 0.0);
+    for leaf in mesh.leaves() {
+        let node = &mesh.nodes[leaf as usize];
+        let mean: f64 = node
+            .vertices
+            .iter()
+            .map(|&v| f64::from(b[v as usize].x))
+            .sum::<f64>()
+            / 3.0;
+        sum += mean * f64::from(node.area);
+        area += f64::from(node.area);
+    }
+    let expected = std::f64::consts::PI / (1.0 - rho);
+    assert!(
+        (sum / area - expected).abs() < 5e-3 * expected,
+        "mean radiosity {} vs {expected}",
+        sum / area
+    );
+}
+
+#[test]
 fn ambient_term_makes_partial_solutions_plausible() {
     let s = cube(0.9, 1.0);
     let mut solver = ProgressiveSolver::new(&s, fixed_mesh(1.0, 0.5, 0.3)).unwrap();

@@ -568,14 +568,19 @@ fn per_pixel_caustics_replace_the_meshs_focused_light_once() {
 }
 
 /// Area-weighted mean vertex radiosity (red channel) per object of a solution, each vertex
-/// standing for a third of the elements around it.
-fn wall_means(solution: &twopass_radiosity::Solution, objects: usize) -> Vec<f64> {
+/// standing for a third of the elements around it. Vertices inside other objects (a ceiling
+/// behind the light fixed just below it) have no light of their own, and the solvers show
+/// them differently (progressive refinement its visible neighbours' light): left out.
+fn wall_means(scene: &Scene, solution: &twopass_radiosity::Solution, objects: usize) -> Vec<f64> {
     let mesh = solution.mesh();
     let b = solution.vertex_radiosity();
+    // The solvers' own test, at their receiving points and with their default seed.
+    let seed = Options::default().seed;
+    let (hidden, _) = twopass_radiosity::hidden::hidden_vertices(scene, mesh, 0, seed);
     let (mut sum, mut area) = (vec![0.0; objects], vec![0.0; objects]);
     for leaf in mesh.leaves() {
         let node = &mesh.nodes[leaf as usize];
-        for &v in &node.vertices {
+        for &v in node.vertices.iter().filter(|&&v| !hidden[v as usize]) {
             let o = mesh.vertices[v as usize].object as usize;
             sum[o] += f64::from(b[v as usize].x) * f64::from(node.area) / 3.0;
             area[o] += f64::from(node.area) / 3.0;
@@ -602,7 +607,7 @@ fn hierarchical_solver_carries_light_through_a_mirror_in_the_furnace() {
         let mut solver = HierarchicalSolver::new(&s, options).unwrap();
         solver.run(|_| std::ops::ControlFlow::Continue(()));
         let transfer = solver.specular_transfer();
-        let means = wall_means(&solver.solution(), 6);
+        let means = wall_means(&s, &solver.solution(), 6);
         let worst = (1..6)
             .map(|o| (means[o] - expected).abs() / expected)
             .fold(0.0, f64::max);
@@ -650,7 +655,7 @@ fn hierarchical_and_progressive_transfer_agree_on_the_spheres() {
         };
         let mut solver = ProgressiveSolver::new(&s, options).unwrap();
         run(&mut solver);
-        wall_means(&solver.solution(), s.objects.len())
+        wall_means(&s, &solver.solution(), s.objects.len())
     };
     let hierarchical = |specular, threads: usize| -> Solution {
         on_threads(threads, || {
@@ -663,6 +668,15 @@ fn hierarchical_and_progressive_transfer_agree_on_the_spheres() {
                         ..Stop::default()
                     },
                     specular,
+                    // A tenth of the default link tolerance: at the default the hierarchical
+                    // solver's own refinement leaves the ceiling's visible part 4 % below
+                    // progressive refinement's, with or without the transfer (the
+                    // discretization bias `bench bakes` measures), which this test is not
+                    // about; at 2e-6 the two agree on it within 1 %.
+                    hierarchical: twopass_radiosity::HierarchicalOptions {
+                        link_tolerance: 2e-6,
+                        ..Default::default()
+                    },
                     ..Options::default()
                 },
             )
@@ -691,7 +705,10 @@ fn hierarchical_and_progressive_transfer_agree_on_the_spheres() {
         "the glass sphere's focus is separated"
     );
     let n = s.objects.len();
-    let (h, h0) = (wall_means(&one, n), wall_means(&hierarchical(None, 2), n));
+    let (h, h0) = (
+        wall_means(&s, &one, n),
+        wall_means(&s, &hierarchical(None, 2), n),
+    );
     let (p, p0) = (progressive(transfer), progressive(None));
     for (o, object) in s.objects.iter().enumerate() {
         if object.name.contains("sphere") || object.name == "light" {

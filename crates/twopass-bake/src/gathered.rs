@@ -20,6 +20,7 @@ use rayon::prelude::*;
 use twopass_brdf::Rgb;
 use twopass_radiosity::Solution;
 use twopass_radiosity::element::ElementMesh;
+use twopass_radiosity::triangle_rule::DUNAVANT_6 as RULE;
 use twopass_scene::{RadianceEstimator, Scene};
 
 use crate::lightmap::MAX_BACK_FACES;
@@ -29,34 +30,14 @@ use crate::lightmap::MAX_BACK_FACES;
 /// here, six per node: the points of Dunavant's rule), so no two outputs share a sequence.
 pub const ELEMENT_KEYS: u64 = 2 << 40;
 
-/// Dunavant's six-point rule for a triangle, exact for polynomials up to degree 4 with
-/// positive weights (Dunavant 1985, table of degree 4): barycentric points and weights
-/// summing to 1. A hat function times light that varies up to cubically is integrated
-/// exactly.
-const RULE: [([f32; 3], f32); 6] = {
-    const A: f32 = 0.816_847_6;
-    const B: f32 = 0.091_576_21;
-    const C: f32 = 0.108_103_02;
-    const D: f32 = 0.445_948_5;
-    const WA: f32 = 0.109_951_74;
-    const WC: f32 = 0.223_381_6;
-    [
-        ([A, B, B], WA),
-        ([B, A, B], WA),
-        ([B, B, A], WA),
-        ([C, D, D], WC),
-        ([D, C, D], WC),
-        ([D, D, C], WC),
-    ]
-};
-
 /// `solution` with every element vertex's radiosity replaced by a final gather (`estimator`)
 /// averaged over the elements around the vertex with its hat function as the weight:
 /// radiosity B = pi L per part, W/m^2, emission and direct and indirect kept apart, no ambient
 /// term (the gather sees every bounce the solution holds) and no separate focused caustic (the
 /// gather carries it whole).
 ///
-/// The mean is a quadrature: each element is gathered at the six points of Dunavant's rule (the
+/// The mean is a quadrature: each element is gathered at the six points of Dunavant's rule
+/// ([`DUNAVANT_6`](twopass_radiosity::triangle_rule::DUNAVANT_6)) (the
 /// q-th of node n keyed by [`ELEMENT_KEYS`] + 6 n + q), and each of its corners takes the
 /// points weighted by its own barycentric weight there, so the light that varies up to
 /// cubically over an element is averaged exactly, with no positional noise for the gather's
@@ -131,8 +112,8 @@ pub fn gathered_solution(
 /// Fits the vertices of elements that other objects partly cover (a floor under a box
 /// standing on it): the least-squares fit of the elements' linear interpolants to their
 /// points that count, over those vertices' values with the others fixed, clamped at zero
-/// (projected Gauss-Seidel sweeps from their visible points' mean, or [`fill_hidden`]'s value
-/// for a vertex with none). Such a vertex's hat function reaches under the box, so its mean
+/// (projected Gauss-Seidel sweeps from their visible points' mean, or their neighbours' for a
+/// vertex with none). Such a vertex's hat function reaches under the box, so its mean
 /// over the visible part alone is one-sided, the light from farther out, and would hide the
 /// contact's shadow; the hidden points' darkness would spread that shadow over whole
 /// elements. The fit sets the light of the visible parts right up to the box's edge.
@@ -169,7 +150,7 @@ fn extrapolate_hidden(
             }
         }
     }
-    fill_hidden(mesh, leaves, parts);
+    twopass_radiosity::hidden::fill_hidden(mesh, parts);
     for _ in 0..SWEEPS {
         for &h in &hidden {
             let (mut sum, mut norm) = ([Rgb::ZERO; 3], 0.0f32);
@@ -193,102 +174,6 @@ fn extrapolate_hidden(
             }
             if norm > 0.0 {
                 parts[h] = Some(sum.map(|x| (x / norm).max(Rgb::ZERO)));
-            }
-        }
-    }
-}
-
-/// Gives every vertex still without a value (deep under a box standing on the floor, where no
-/// element it touches shows any light) the mean of its neighbours' values along the elements'
-/// edges, ring by ring outward, as the lightmap's dilation fills its empty texels. A surface
-/// with no value anywhere stays without (and is shown black).
-fn fill_hidden(mesh: &ElementMesh, leaves: &[u32], parts: &mut [Option<[Rgb; 3]>]) {
-    // Each vertex's neighbours along the elements' edges (an edge is listed from both of its
-    // elements: a repeated neighbour only weighs the mean, and every layer is linear work).
-    let mut start = vec![0u32; parts.len() + 1];
-    for &leaf in leaves {
-        for &v in &mesh.nodes[leaf as usize].vertices {
-            start[v as usize + 1] += 2;
-        }
-    }
-    for i in 1..start.len() {
-        start[i] += start[i - 1];
-    }
-    let mut next = start.clone();
-    let mut neighbours = vec![0u32; start[parts.len()] as usize];
-    for &leaf in leaves {
-        let v = mesh.nodes[leaf as usize].vertices;
-        for k in 0..3 {
-            let at = &mut next[v[k] as usize];
-            neighbours[*at as usize] = v[(k + 1) % 3];
-            neighbours[*at as usize + 1] = v[(k + 2) % 3];
-            *at += 2;
-        }
-    }
-    let around = |v: usize| &neighbours[start[v] as usize..start[v + 1] as usize];
-    // Layer by layer outward from the vertices with values.
-    let mut frontier: Vec<usize> = (0..parts.len())
-        .filter(|&v| parts[v].is_none() && around(v).iter().any(|&n| parts[n as usize].is_some()))
-        .collect();
-    while !frontier.is_empty() {
-        let values: Vec<[Rgb; 3]> = frontier
-            .iter()
-            .map(|&v| {
-                let (mut sum, mut n) = ([Rgb::ZERO; 3], 0.0f32);
-                for p in around(v).iter().filter_map(|&b| parts[b as usize]) {
-                    for (x, y) in sum.iter_mut().zip(p) {
-                        *x += y;
-                    }
-                    n += 1.0;
-                }
-                sum.map(|x| x / n)
-            })
-            .collect();
-        for (&v, value) in frontier.iter().zip(values) {
-            parts[v] = Some(value);
-        }
-        let mut following: Vec<usize> = frontier
-            .iter()
-            .flat_map(|&v| around(v).iter().map(|&n| n as usize))
-            .filter(|&n| parts[n].is_none())
-            .collect();
-        following.sort_unstable();
-        following.dedup();
-        frontier = following;
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::RULE;
-
-    fn factorial(n: u32) -> f64 {
-        (1..=n).map(f64::from).product()
-    }
-
-    #[test]
-    fn the_rule_integrates_every_monomial_up_to_degree_four() {
-        // Over a triangle of area A, the mean of l0^a l1^b l2^c is
-        // 2 a! b! c! / (a + b + c + 2)! (the Dirichlet integral), for a + b + c <= 4.
-        for a in 0..=4u32 {
-            for b in 0..=4 - a {
-                for c in 0..=4 - a - b {
-                    let exact =
-                        2.0 * factorial(a) * factorial(b) * factorial(c) / factorial(a + b + c + 2);
-                    let rule: f64 = RULE
-                        .iter()
-                        .map(|&(w, weight)| {
-                            f64::from(weight)
-                                * f64::from(w[0]).powi(a as i32)
-                                * f64::from(w[1]).powi(b as i32)
-                                * f64::from(w[2]).powi(c as i32)
-                        })
-                        .sum();
-                    assert!(
-                        (rule - exact).abs() < 1e-6,
-                        "l0^{a} l1^{b} l2^{c}: {rule} vs {exact}"
-                    );
-                }
             }
         }
     }

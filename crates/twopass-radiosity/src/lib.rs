@@ -41,6 +41,7 @@ pub mod cluster;
 pub mod element;
 mod error;
 pub mod form_factor;
+pub mod hidden;
 mod hierarchical;
 mod lamps;
 mod mesh_error;
@@ -51,6 +52,7 @@ mod solution;
 mod solver;
 pub mod specular;
 mod specular_receivers;
+pub mod triangle_rule;
 
 pub use error::SolveError;
 pub use form_factor::VisibilityRays;

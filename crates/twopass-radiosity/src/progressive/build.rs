@@ -149,6 +149,7 @@ impl<'s> ProgressiveSolver<'s> {
             emission: Vec::new(),
             receiving: Vec::new(),
             receivers: Vec::new(),
+            hidden: Vec::new(),
             lamp: Vec::new(),
             received_emit: Vec::new(),
             received_refl: Vec::new(),
@@ -172,9 +173,7 @@ impl<'s> ProgressiveSolver<'s> {
         };
         s.sync_vertices();
         let n = s.mesh.patches.len();
-        s.patch_area = (0..n)
-            .map(|p| f64::from(s.mesh.nodes[s.mesh.patches[p] as usize].area))
-            .collect();
+        s.patch_area = visible_patch_areas(&s.mesh, &s.hidden);
         s.patch_rho = (0..n)
             .map(|p| crate::albedo::node_albedo(scene, &s.mesh, s.mesh.patches[p]))
             .collect();
@@ -269,6 +268,19 @@ impl<'s> ProgressiveSolver<'s> {
             self.received_emit.push(DVec3::ZERO);
             self.received_refl.push(DVec3::ZERO);
         }
+        // Without occlusion every point sees everything: none is hidden.
+        if self.options.occlusion {
+            let hidden = crate::hidden::hidden_points(
+                self.scene,
+                &self.receivers[old..],
+                old,
+                self.options.seed,
+            );
+            self.rays += u64::from(crate::hidden::HIDDEN_RAYS) * hidden.len() as u64;
+            self.hidden.extend(hidden);
+        } else {
+            self.hidden.resize(self.receivers.len(), false);
+        }
         if let Some(rho) = self.element_albedo.vertex_albedo(self.scene, &self.mesh) {
             self.rho = rho;
         }
@@ -301,4 +313,30 @@ impl<'s> ProgressiveSolver<'s> {
             spec.resplat(&self.mesh);
         }
     }
+}
+
+/// Each patch's area that light leaves from, scene units squared: its elements' areas, each
+/// counting the share of its corners that are not hidden inside another object
+/// ([`crate::hidden`]). A patch's reflected light is its received power over this area, so
+/// the part under a box standing on it does not dilute the light its visible part sends. At
+/// least a thousandth of the patch's area, so a patch wholly inside an object stays finite.
+fn visible_patch_areas(mesh: &ElementMesh, hidden: &[bool]) -> Vec<f64> {
+    let mut visible = vec![0.0f64; mesh.patches.len()];
+    for leaf in mesh.leaves() {
+        let node = &mesh.nodes[leaf as usize];
+        let shown = node
+            .vertices
+            .iter()
+            .filter(|&&v| !hidden[v as usize])
+            .count();
+        visible[node.patch as usize] += f64::from(node.area) * shown as f64 / 3.0;
+    }
+    mesh.patches
+        .iter()
+        .zip(visible)
+        .map(|(&p, a)| {
+            let whole = f64::from(mesh.nodes[p as usize].area);
+            a.clamp(whole * 1e-3, whole)
+        })
+        .collect()
 }

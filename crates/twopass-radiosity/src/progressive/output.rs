@@ -3,6 +3,7 @@
 //! solve and the tests read.
 
 use glam::DVec3;
+use twopass_brdf::Rgb;
 use twopass_brdf::random::hash;
 use twopass_scene::Scene;
 
@@ -41,21 +42,31 @@ impl ProgressiveSolver<'_> {
         ambient(unshot, rho, area)
     }
 
-    /// The current solution, with the ambient term for display of a partial solve.
+    /// The current solution, with the ambient term for display of a partial solve. A vertex
+    /// inside another object shows its visible neighbours' light ([`crate::hidden`]).
     pub fn solution(&self) -> Solution {
         let ambient = self.ambient();
         let n = self.mesh.vertices.len();
-        let solution = Solution::new(
-            self.mesh.clone(),
-            (0..n).map(|v| self.radiosity(v).as_vec3()).collect(),
-            (0..n)
-                .map(|v| (self.rho[v] * self.received_emit[v]).as_vec3())
-                .collect(),
-            (0..n)
-                .map(|v| (self.rho[v] * self.received_indirect(v)).as_vec3())
-                .collect(),
-            (0..n).map(|v| (self.rho[v] * ambient).as_vec3()).collect(),
-        );
+        let mut values: Vec<Option<[Rgb; 4]>> = (0..n)
+            .map(|v| {
+                (!self.hidden[v]).then(|| {
+                    [
+                        self.radiosity(v).as_vec3(),
+                        (self.rho[v] * self.received_emit[v]).as_vec3(),
+                        (self.rho[v] * self.received_indirect(v)).as_vec3(),
+                        (self.rho[v] * ambient).as_vec3(),
+                    ]
+                })
+            })
+            .collect();
+        crate::hidden::fill_hidden(&self.mesh, &mut values);
+        let part = |i: usize| -> Vec<Rgb> {
+            values
+                .iter()
+                .map(|x| x.map_or(Rgb::ZERO, |x| x[i]))
+                .collect()
+        };
+        let solution = Solution::new(self.mesh.clone(), part(0), part(1), part(2), part(3));
         if let Some(spec) = &self.specular {
             solution.with_focused_caustics(
                 (0..n)

@@ -68,6 +68,8 @@ pub struct ProgressiveSolver<'s> {
     /// once per shooter.
     pub(super) receiving: Vec<DVec3>,
     pub(super) receivers: Vec<SurfacePoint>,
+    /// Per vertex: whether it lies inside another object ([`crate::hidden`]).
+    pub(super) hidden: Vec<bool>,
     /// Per vertex: irradiance from the lamps (shadows included), W/m^2; part of
     /// `received_emit`, kept apart for the dense solve's source term.
     pub(super) lamp: Vec<DVec3>,
