@@ -3,12 +3,11 @@
 //! meets the inside of the object), which is right for the hidden surface and wrong for the
 //! visible part of every element they share with it: interpolated toward zero, a floor would
 //! darken over whole elements around each box, and a patch's light spread over its hidden part
-//! would reach its neighbours diluted and partly be lost. So the solvers find them
-//! ([`hidden_points`]) and show a hidden vertex with its visible neighbours' light
-//! ([`fill_hidden`]), as a lightmap dilates its texels inside objects; progressive refinement
-//! also shoots each patch's light from its visible area. (The hierarchical solver's links
-//! spread their blocked share over their whole receiver, which no per-vertex correction
-//! undoes: its transport at contacts is left as it is.)
+//! would reach its neighbours diluted and partly be lost. So progressive refinement finds them
+//! ([`hidden_points`]), shoots each patch's light from its visible area, and shows a hidden
+//! vertex with its visible neighbours' light ([`fill_hidden`]), as a lightmap dilates its
+//! texels inside objects. (The hierarchical solver's links spread their blocked share over
+//! their whole receiver, so its hidden vertices are not at zero and it does not use these.)
 
 use glam::Vec2;
 use rayon::prelude::*;
@@ -61,7 +60,7 @@ fn hidden_at(scene: &Scene, point: &SurfacePoint, key: u64) -> bool {
 }
 
 /// [`hidden_points`] at the receiving points of `mesh`'s vertices from `from` on (where the
-/// solvers measure their irradiance), and the rays cast.
+/// solvers measure their irradiance; progressive refinement's own test), and the rays cast.
 pub fn hidden_vertices(
     scene: &Scene,
     mesh: &ElementMesh,

@@ -120,7 +120,6 @@ impl<'s> HierarchicalSolver<'s> {
             residual_fraction: 1.0,
             emitted: DVec3::ZERO,
             lamp: Vec::new(),
-            hidden: Vec::new(),
             lamp_power: lamp_power(scene),
             bookkeeping: Bookkeeping::new(started, Duration::ZERO),
             iterations: 0,
@@ -234,18 +233,5 @@ impl<'s> HierarchicalSolver<'s> {
             vertex_lamp_irradiance(self.scene, &self.mesh, self.lamp.len(), self.options.seed);
         self.lamp.extend(lamp);
         self.rays += rays;
-        // Without occlusion every point sees everything: none is hidden.
-        if self.options.occlusion {
-            let (hidden, rays) = crate::hidden::hidden_vertices(
-                self.scene,
-                &self.mesh,
-                self.hidden.len(),
-                self.options.seed,
-            );
-            self.hidden.extend(hidden);
-            self.rays += rays;
-        } else {
-            self.hidden.resize(self.mesh.vertices.len(), false);
-        }
     }
 }

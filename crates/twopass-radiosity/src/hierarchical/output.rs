@@ -4,7 +4,6 @@
 
 use glam::DVec3;
 use rayon::prelude::*;
-use twopass_brdf::Rgb;
 use twopass_scene::Scene;
 
 use super::link::{Eval, Link};
@@ -173,7 +172,12 @@ impl HierarchicalSolver<'_> {
         let vertex_rho = (!self.node_rho.is_empty())
             .then(|| crate::albedo::vertex_means(&self.mesh, |n| self.node_rho(n)));
         let rho_of = |v: usize, t: usize| vertex_rho.as_ref().map_or(self.tri_rho[t], |r| r[v]);
-        let mut values: Vec<Option<[Rgb; 4]>> = Vec::with_capacity(nv);
+        let (mut radiosity, mut direct, mut indirect, mut amb) = (
+            Vec::with_capacity(nv),
+            Vec::with_capacity(nv),
+            Vec::with_capacity(nv),
+            Vec::with_capacity(nv),
+        );
         for (v, vert) in self.mesh.vertices.iter().enumerate() {
             let t = vert.triangle as usize;
             let (rho, e) = (rho_of(v, t), self.tri_emission[t]);
@@ -185,24 +189,12 @@ impl HierarchicalSolver<'_> {
             // is clamped (the leaves' power, and so the transport, is unchanged).
             let d = rho * (sum[v][0] / w).max(DVec3::ZERO);
             let i = rho * (sum[v][1] / w).max(DVec3::ZERO);
-            values.push((!self.hidden.get(v).copied().unwrap_or(false)).then(|| {
-                [
-                    (e + d + i).as_vec3(),
-                    d.as_vec3(),
-                    i.as_vec3(),
-                    (rho * ambient).as_vec3(),
-                ]
-            }));
+            radiosity.push((e + d + i).as_vec3());
+            direct.push(d.as_vec3());
+            indirect.push(i.as_vec3());
+            amb.push((rho * ambient).as_vec3());
         }
-        // A vertex inside another object shows its visible neighbours' light.
-        crate::hidden::fill_hidden(&self.mesh, &mut values);
-        let part = |k: usize| -> Vec<Rgb> {
-            values
-                .iter()
-                .map(|x| x.map_or(Rgb::ZERO, |x| x[k]))
-                .collect()
-        };
-        let solution = Solution::new(self.mesh.clone(), part(0), part(1), part(2), part(3));
+        let solution = Solution::new(self.mesh.clone(), radiosity, direct, indirect, amb);
         if let Some(spec) = &self.specular {
             // Splatted afresh when the mesh changed since the last gather.
             let fresh;

@@ -113,9 +113,6 @@ pub struct HierarchicalSolver<'s> {
     /// Per element-mesh vertex: the irradiance the lamps give it directly, W/m^2; a source
     /// term every push-pull adds to the leaves' corners as emitted light.
     pub(super) lamp: Vec<DVec3>,
-    /// Per vertex: whether it lies inside another object ([`crate::hidden`]); shown with its
-    /// visible neighbours' light.
-    pub(super) hidden: Vec<bool>,
     /// Power the lamps send, W per channel ([`crate::lamps::lamp_power`]).
     pub(super) lamp_power: DVec3,
     /// Rounds, time and power, kept as the other solver keeps them.
