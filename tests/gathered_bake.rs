@@ -6,7 +6,8 @@
 use glam::DVec3;
 use twopass_bake::{ColorMapping, LightmapSettings, TexelSource, bake_lightmap, gathered_solution};
 use twopass_brdf::Rgb;
-use twopass_radiosity::element::ElementMesh;
+use twopass_radiosity::Solution;
+use twopass_radiosity::element::{ElementMesh, Node};
 use twopass_radiosity::{Options, Solver};
 use twopass_scene::{DiffuseRadiance, RadianceEstimator, Scene};
 use twopass_trace::gather::{GatherSettings, Gatherer};
@@ -14,8 +15,8 @@ use twopass_trace::gather::{GatherSettings, Gatherer};
 use crate::closed_form::{floor_under_square, square_form_factor};
 use crate::{on_threads, scene_path};
 
-fn solved(scene: &Scene) -> twopass_radiosity::Solution {
-    let mut solver = Solver::new(scene, Options::default()).unwrap();
+fn solved(scene: &Scene, options: Options) -> Solution {
+    let mut solver = Solver::new(scene, options).unwrap();
     solver.run(|_| std::ops::ControlFlow::Continue(()));
     solver.solution()
 }
@@ -27,7 +28,7 @@ fn gathered_element_vertices_match_the_closed_form() {
         std::path::Path::new("floor.toml"),
     )
     .unwrap();
-    let solution = solved(&scene);
+    let solution = solved(&scene, Options::default());
     let gatherer = Gatherer::new(
         &scene,
         &solution,
@@ -88,15 +89,7 @@ fn a_gathered_element_mesh_keeps_the_light_where_a_floor_meets_a_wall() {
          shape = { type = \"quad\", origin = [-2, 0, -2], edge_u = [4, 0, 0], edge_v = [0, 2, 0] }\n\
          [[object]]\nname = \"light\"\nmaterial = \"black\"\nemission = 10\n\
          shape = { type = \"quad\", origin = [-0.25, 0.5, -1.9], edge_u = [0.5, 0, 0], edge_v = [0, 0, 0.5] }\n";
-    let (scene, _) = twopass_scene::load_toml(text, std::path::Path::new("crease.toml")).unwrap();
-    let options = Options {
-        element_size: Some(1.0),
-        adaptive: None,
-        ..Options::default()
-    };
-    let mut solver = Solver::new(&scene, options).unwrap();
-    solver.run(|_| std::ops::ControlFlow::Continue(()));
-    let solution = solver.solution();
+    let (scene, solution) = coarse_solve(text);
     let gatherer = Gatherer::new(&scene, &solution, GatherSettings::default());
     let gathered = gathered_solution(&solution, &scene, &gatherer);
     let mesh = gathered.mesh();
@@ -104,40 +97,18 @@ fn a_gathered_element_mesh_keeps_the_light_where_a_floor_meets_a_wall() {
     // The interpolated field's integral over the floor: each element's area times its
     // corners' mean, W.
     let field = |values: &[Rgb]| -> f64 {
-        mesh.leaves()
-            .filter(|&n| mesh.vertices[mesh.nodes[n as usize].vertices[0] as usize].object == 0)
-            .map(|n| {
-                let node = &mesh.nodes[n as usize];
-                let mean = node
-                    .vertices
-                    .iter()
-                    .map(|&v| luminance(values[v as usize]))
-                    .sum::<f64>()
-                    / 3.0;
-                f64::from(node.area) * mean
-            })
-            .sum()
+        let on_floor = |node: &Node| mesh.vertices[node.vertices[0] as usize].object == 0;
+        crate::element_integral(mesh, on_floor, |v| luminance(values[v as usize])).0
     };
     let kept = field(gathered.shot_radiosity());
-    // The same integral from gathers at 64 x 64 stratified points spread evenly over the
-    // floor's two triangles (radiosity B = pi L), keys apart from the element mesh's.
-    let floor: Vec<u32> = (0..scene.mesh.triangles.len() as u32)
-        .filter(|&t| scene.mesh.triangle_object[t as usize] == 0)
-        .collect();
-    let n = 64;
-    let mut sum = 0.0;
-    for (i, &t) in floor.iter().enumerate() {
-        for j in 0..n * n {
-            let (x, y) = ((j % n) as f32 + 0.5, (j / n) as f32 + 0.5);
-            let (ux, uy) = (x / n as f32, y / n as f32);
-            let r = ux.sqrt();
-            let b = [1.0 - r, r * (1.0 - uy), r * uy];
-            let e = gatherer.estimate(t, b, (1 << 36) + (i * n * n + j) as u64);
-            sum += luminance(e.total()) * std::f64::consts::PI;
-        }
-    }
+    // The same integral from gathers spread evenly over the floor (radiosity B = pi L).
+    let points = floor_points(&scene);
+    let sum: f64 = points
+        .iter()
+        .map(|&(t, b, key)| luminance(gatherer.estimate(t, b, key).total()) * std::f64::consts::PI)
+        .sum();
     let area = 16.0;
-    let expected = sum / (floor.len() * n * n) as f64 * area;
+    let expected = sum / points.len() as f64 * area;
     assert!(
         (kept - expected).abs() < 0.01 * expected,
         "floor's power from its element mesh {kept} W vs {expected} W from gathers spread over it"
@@ -182,44 +153,60 @@ fn a_gathered_element_mesh_shows_the_floor_up_to_a_box_standing_on_it() {
          shape = { type = \"box\", min = [-0.7, 0, -0.7], max = [0.7, 1, 0.7] }\n\
          [[object]]\nname = \"light\"\nmaterial = \"black\"\nemission = 20\n\
          shape = { type = \"quad\", origin = [0.5, 2, -0.25], edge_u = [0.5, 0, 0], edge_v = [0, 0, 0.5] }\n";
-    let (scene, _) = twopass_scene::load_toml(text, std::path::Path::new("box.toml")).unwrap();
+    let (scene, solution) = coarse_solve(text);
+    let gatherer = Gatherer::new(&scene, &solution, GatherSettings::default());
+    let gathered = gathered_solution(&solution, &scene, &gatherer);
+    let luminance = |l: Rgb| f64::from(l.x + l.y + l.z) / 3.0;
+    let (mut shown, mut gathered_there) = (0.0, 0.0);
+    for (t, b, key) in floor_points(&scene) {
+        let p = scene.mesh.surface_point(t, b).position;
+        if p.x.abs() < 0.7 && p.z.abs() < 0.7 {
+            continue;
+        }
+        shown += luminance(gathered.radiance(t, b));
+        gathered_there += luminance(gatherer.estimate(t, b, key).total());
+    }
+    assert!(
+        (shown - gathered_there).abs() < 0.02 * gathered_there,
+        "visible floor: element mesh {shown} against {gathered_there} from gathers spread over it"
+    );
+}
+
+/// `text`, a scene whose object 0 is a floor, solved on elements of 1 unit without adaptive
+/// subdivision: elements coarse enough to straddle its creases and contacts.
+fn coarse_solve(text: &str) -> (Scene, Solution) {
+    let (scene, _) = twopass_scene::load_toml(text, std::path::Path::new("coarse.toml")).unwrap();
     let options = Options {
         element_size: Some(1.0),
         adaptive: None,
         ..Options::default()
     };
-    let mut solver = Solver::new(&scene, options).unwrap();
-    solver.run(|_| std::ops::ControlFlow::Continue(()));
-    let solution = solver.solution();
-    let gatherer = Gatherer::new(&scene, &solution, GatherSettings::default());
-    let gathered = gathered_solution(&solution, &scene, &gatherer);
-    let luminance = |l: Rgb| f64::from(l.x + l.y + l.z) / 3.0;
-    let floor: Vec<u32> = (0..scene.mesh.triangles.len() as u32)
-        .filter(|&t| scene.mesh.triangle_object[t as usize] == 0)
-        .collect();
+    let solution = solved(&scene, options);
+    (scene, solution)
+}
+
+/// 64 x 64 stratified points spread evenly over each triangle of object 0 (the floor): the
+/// triangle, the barycentrics and a gather key apart from the bake's.
+fn floor_points(scene: &Scene) -> Vec<(u32, [f32; 3], u64)> {
     let n = 64;
-    let (mut shown, mut gathered_there) = (0.0, 0.0);
-    for (i, &t) in floor.iter().enumerate() {
+    let floor = (0..scene.mesh.triangles.len() as u32)
+        .filter(|&t| scene.mesh.triangle_object[t as usize] == 0);
+    let mut points = Vec::new();
+    for (i, t) in floor.enumerate() {
         for j in 0..n * n {
             let (ux, uy) = (
                 ((j % n) as f32 + 0.5) / n as f32,
                 ((j / n) as f32 + 0.5) / n as f32,
             );
             let r = ux.sqrt();
-            let b = [1.0 - r, r * (1.0 - uy), r * uy];
-            let p = scene.mesh.surface_point(t, b).position;
-            if p.x.abs() < 0.7 && p.z.abs() < 0.7 {
-                continue;
-            }
-            shown += luminance(gathered.radiance(t, b));
-            let e = gatherer.estimate(t, b, (1 << 36) + (i * n * n + j) as u64);
-            gathered_there += luminance(e.total());
+            points.push((
+                t,
+                [1.0 - r, r * (1.0 - uy), r * uy],
+                (1 << 36) + (i * n * n + j) as u64,
+            ));
         }
     }
-    assert!(
-        (shown - gathered_there).abs() < 0.02 * gathered_there,
-        "visible floor: element mesh {shown} against {gathered_there} from gathers spread over it"
-    );
+    points
 }
 
 /// The mean of `f` over the elements around vertex `v`, weighted by the vertex's hat function
@@ -261,7 +248,7 @@ fn hat_mean(mesh: &ElementMesh, v: u32, f: impl Fn(DVec3) -> f64) -> f64 {
 #[test]
 fn a_gathered_lightmap_is_the_same_on_one_thread_or_two() {
     let (scene, _) = twopass_scene::load(scene_path("cornell-box.toml")).unwrap();
-    let solution = solved(&scene);
+    let solution = solved(&scene, Options::default());
     let settings = LightmapSettings {
         texel_size: Some(20.0),
         ..LightmapSettings::default()

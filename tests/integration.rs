@@ -32,6 +32,26 @@ pub fn data(name: &str) -> PathBuf {
         .join(name)
 }
 
+/// The integral over the element mesh's leaves that `keep` (by node) of the field linear over
+/// each leaf with `value` at each vertex: each leaf's area (scene units squared) times its
+/// corners' mean. With the kept area, so a caller can take the mean.
+pub fn element_integral(
+    mesh: &twopass_radiosity::element::ElementMesh,
+    keep: impl Fn(&twopass_radiosity::element::Node) -> bool,
+    value: impl Fn(u32) -> f64,
+) -> (f64, f64) {
+    let (mut sum, mut area) = (0.0, 0.0);
+    for leaf in mesh.leaves() {
+        let node = &mesh.nodes[leaf as usize];
+        if keep(node) {
+            let mean = node.vertices.iter().map(|&v| value(v)).sum::<f64>() / 3.0;
+            sum += mean * f64::from(node.area);
+            area += f64::from(node.area);
+        }
+    }
+    (sum, area)
+}
+
 /// Runs `f` on a rayon pool of `threads` threads (the determinism tests compare one and two).
 pub fn on_threads<R: Send>(threads: usize, f: impl FnOnce() -> R + Send) -> R {
     rayon::ThreadPoolBuilder::new()

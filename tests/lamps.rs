@@ -298,19 +298,11 @@ fn a_directional_lamp_through_a_mirror_lights_the_wall_with_its_beam() {
         // 0.5 m^2 (what the wall's own light sends back through the mirror is far below the
         // tolerance), whatever the elements the deposits are spread over.
         let mesh = solution.mesh();
-        let reflected: f64 = mesh
-            .leaves()
-            .filter(|&n| mesh.vertices[mesh.nodes[n as usize].vertices[0] as usize].object == 0)
-            .map(|n| {
-                let node = &mesh.nodes[n as usize];
-                let mean = node
-                    .vertices
-                    .iter()
-                    .map(|&v| f64::from(b[v as usize].x))
-                    .sum::<f64>();
-                mean / 3.0 * f64::from(node.area)
-            })
-            .sum();
+        let (reflected, _) = crate::element_integral(
+            mesh,
+            |node| mesh.vertices[node.vertices[0] as usize].object == 0,
+            |v| f64::from(b[v as usize].x),
+        );
         let want = RHO * BEAM_E * 0.5;
         assert!(
             (reflected / want - 1.0).abs() < 0.01,

@@ -272,18 +272,7 @@ fn a_furnace_with_a_box_standing_on_its_floor_keeps_its_light() {
     let solution = solver.solution();
     let mesh = solution.mesh();
     let b = solution.vertex_radiosity();
-    let (mut sum, mut area) = (0.0, 0.0);
-    for leaf in mesh.leaves() {
-        let node = &mesh.nodes[leaf as usize];
-        let mean: f64 = node
-            .vertices
-            .iter()
-            .map(|&v| f64::from(b[v as usize].x))
-            .sum::<f64>()
-            / 3.0;
-        sum += mean * f64::from(node.area);
-        area += f64::from(node.area);
-    }
+    let (sum, area) = crate::element_integral(mesh, |_| true, |v| f64::from(b[v as usize].x));
     let expected = std::f64::consts::PI / (1.0 - rho);
     assert!(
         (sum / area - expected).abs() < 5e-3 * expected,

@@ -126,10 +126,7 @@ fn extrapolate_hidden(
     /// Sweeps over the fitted vertices: each moves the fit by a share of what is left, and a
     /// contact's strip of them is a few elements wide.
     const SWEEPS: usize = 8;
-    let mut fitted = vec![false; parts.len()];
-    for (v, p) in parts.iter().enumerate() {
-        fitted[v] = p.is_none();
-    }
+    let mut fitted: Vec<bool> = parts.iter().map(Option::is_none).collect();
     for (&leaf, values) in leaves.iter().zip(points) {
         if values.iter().any(Option::is_none) {
             for &v in &mesh.nodes[leaf as usize].vertices {

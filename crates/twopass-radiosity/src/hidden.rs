@@ -18,6 +18,7 @@ use twopass_brdf::sample::square_to_cosine_hemisphere;
 use twopass_scene::{Scene, SurfacePoint};
 
 use crate::element::ElementMesh;
+use crate::specular::stratum;
 
 /// Rays per point, a 4 x 4 stratified cosine-weighted grid over its hemisphere.
 pub const HIDDEN_RAYS: u32 = 16;
@@ -46,10 +47,7 @@ fn hidden_at(scene: &Scene, point: &SurfacePoint, key: u64) -> bool {
     let (mut hits, mut backs) = (0u32, 0u32);
     let k = HIDDEN_RAYS.isqrt();
     for j in 0..k * k {
-        let u = Vec2::new(
-            ((j % k) as f32 + rng.next_f32()) / k as f32,
-            ((j / k) as f32 + rng.next_f32()) / k as f32,
-        );
+        let u = stratum(j, k, Vec2::new(rng.next_f32(), rng.next_f32()));
         let dir = frame.to_world(square_to_cosine_hemisphere(u));
         if let Some(hit) = scene.intersect_from(point, dir) {
             hits += 1;

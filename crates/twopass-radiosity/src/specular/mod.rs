@@ -128,7 +128,7 @@ pub fn decide(scene: &Scene) -> (bool, String) {
 }
 
 /// Point `u` in [0, 1)^2 moved into stratum `i` of a `k` x `k` grid.
-fn stratum(i: u32, k: u32, u: Vec2) -> Vec2 {
+pub(crate) fn stratum(i: u32, k: u32, u: Vec2) -> Vec2 {
     let (x, y) = (i % k, i / k);
     Vec2::new(
         ((x as f32 + u.x) / k as f32).min(1.0 - f32::EPSILON / 2.0),
