@@ -90,7 +90,8 @@ pub use lightmap::{
 pub use lightmap_read::{LightmapRadiance, lightmap_exr_path, read_lightmap_glb};
 pub use manifest::{
     AdaptiveRecord, ColorRecord, CountsRecord, EnergyRecord, FileRecord, GatherRecord,
-    LightmapRecord, MANIFEST_VERSION, Manifest, ResidualsRecord, SettingsRecord, TimingsRecord,
+    LightmapRecord, MANIFEST_VERSION, Manifest, PointGatherRecord, ResidualsRecord, SettingsRecord,
+    TimingsRecord,
 };
 pub use ply::{display_colour, encode_ply};
 pub use twopass_radiosity::{InvalidMesh, MeshPart};

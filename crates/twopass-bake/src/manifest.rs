@@ -226,6 +226,13 @@ pub struct Manifest {
     /// The lightmap, when one was baked.
     #[serde(default)]
     pub lightmap: Option<LightmapRecord>,
+    /// The final gather of the element-mesh outputs (`.glb`, `.ply`, `.bake`), when they were
+    /// gathered.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub element_gather: Option<PointGatherRecord>,
+    /// The final gather at the user's vertices (`.vertex.glb`), when it was written gathered.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub vertex_gather: Option<PointGatherRecord>,
     /// The files written (the manifest not included).
     pub files: Vec<FileRecord>,
 }
@@ -310,6 +317,25 @@ pub struct GatherRecord {
     /// scene has none, or the gather rays found that light).
     #[serde(default)]
     pub caustic_photons: u64,
+}
+
+/// The final gather of the element mesh or the user's vertices: each point gathered as a
+/// lightmap texel is ([`GatherRecord`] holds the shared settings when a lightmap was baked too),
+/// with at most `max_rays` gather rays.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PointGatherRecord {
+    /// Most gather rays of one point.
+    pub max_rays: u32,
+    /// Points gathered (six per element of the element mesh, one per user vertex).
+    pub points: u64,
+    /// Closest-hit rays traced.
+    pub rays: u64,
+    /// Shadow rays traced.
+    pub shadow_rays: u64,
+    /// Seconds the gather took in this process.
+    pub seconds: f64,
+    /// Rays (both kinds) per second of the gather.
+    pub rays_per_second: f64,
 }
 
 fn seconds(d: Duration) -> f64 {
@@ -413,6 +439,8 @@ impl Manifest {
             },
             color: None,
             lightmap: None,
+            element_gather: None,
+            vertex_gather: None,
             files: Vec::new(),
         }
     }

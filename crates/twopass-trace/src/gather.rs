@@ -77,6 +77,10 @@ use crate::integrator::{Shading, irradiance_from, lamp_irradiance, lamps_irradia
 use crate::photons::{CausticPhotons, PhotonSettings};
 use crate::sampler::Sampler;
 
+mod fixed;
+
+pub use fixed::Fixed;
+
 /// Stream separating a point's shadow-ray numbers from its gather rays' (the gather rays use
 /// sample indices 0, 1, ... of the point's Sobol sequence; the shadow rays a sequence of their
 /// own).
@@ -551,6 +555,21 @@ impl<'a> Gatherer<'a> {
 
 impl RadianceEstimator for Gatherer<'_> {
     fn estimate(&self, triangle: u32, barycentric: [f32; 3], key: u64) -> RadianceEstimate {
+        let (min_rays, max_rays) = (self.settings.min_rays, self.settings.max_rays);
+        self.estimate_with(triangle, barycentric, key, min_rays, max_rays)
+    }
+}
+
+impl Gatherer<'_> {
+    /// [`RadianceEstimator::estimate`] with the gather rays' first batch and cap given.
+    pub(super) fn estimate_with(
+        &self,
+        triangle: u32,
+        barycentric: [f32; 3],
+        key: u64,
+        min_rays: u32,
+        max_rays: u32,
+    ) -> RadianceEstimate {
         if self.deadline.is_some_and(|d| Instant::now() >= d) {
             self.late.fetch_add(1, Ordering::Relaxed);
             let object = self.scene.mesh.triangle_object[triangle as usize];
@@ -623,7 +642,7 @@ impl RadianceEstimator for Gatherer<'_> {
         let (mut sum, mut sum_y, mut sum_y2) = (Rgb::ZERO, 0.0f64, 0.0f64);
         let mut n = 0u32;
         let (mut hits, mut backs) = (0u32, 0u32);
-        let mut batch = self.settings.min_rays;
+        let mut batch = min_rays;
         loop {
             for i in n..n + batch {
                 let mut sampler = Sampler::new(self.settings.seed, key, u64::from(i));
@@ -644,8 +663,7 @@ impl RadianceEstimator for Gatherer<'_> {
             let variance = (sum_y2 / f64::from(n) - mean * mean).max(0.0) / f64::from(n.max(2) - 1);
             let error = variance.sqrt();
             let total = mean + f64::from(luminance(direct + emitted + caustic));
-            if n >= self.settings.max_rays || error <= f64::from(self.settings.target_error) * total
-            {
+            if n >= max_rays || error <= f64::from(self.settings.target_error) * total {
                 let indirect = rho * sum / n as f32 + caustic;
                 return RadianceEstimate {
                     emitted,
@@ -661,7 +679,7 @@ impl RadianceEstimator for Gatherer<'_> {
                     shadow_rays: tally.shadow_rays,
                 };
             }
-            batch = n.min(self.settings.max_rays - n);
+            batch = n.min(max_rays - n);
         }
     }
 }

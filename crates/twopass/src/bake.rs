@@ -18,11 +18,12 @@ use twopass_bake::{
 };
 use twopass_radiosity::{Options, Solver, Stop};
 use twopass_scene::RadianceEstimator;
-use twopass_trace::gather::{GatherSettings, Gatherer};
+use twopass_trace::gather::Gatherer;
 
 use crate::args::{checked, positive_finite};
 use crate::context::Context;
 use crate::error::CliError;
+use crate::final_gather::{Counted, Gather, gathers, gathers_elements, parse_gather};
 use crate::preset::PRESET_SETS;
 use crate::solve::{SolveArgs, parse_length};
 
@@ -114,9 +115,10 @@ pub struct BakeArgs {
     /// Lightmap texel edge on the surface, scene units [default: scene diagonal / 200].
     #[arg(long, value_name = "LENGTH", value_parser = parse_length, requires = "lightmap")]
     pub texel_size: Option<f32>,
-    /// The final gather of the lightmap's texels: `off` (each texel shows the solution
-    /// interpolated there), `auto` (a gather of 64 to 256 rays per texel, adaptive, over the
-    /// solution, plus 64 shadow rays) or N (at most N gather rays per texel, 1 to 65536).
+    /// The final gather over the solution: `off` (every output shows the solution
+    /// interpolated), `auto` (lightmap texels and the user's vertices: 64 to 256 gather rays,
+    /// adaptive, plus 64 shadow rays; the element mesh's outputs: 16 to 64 at each of six
+    /// points per element, about 8 million in all) or N (at most N gather rays per point everywhere, 1 to 65536).
     #[arg(long, default_value = "auto", value_name = "off|auto|N", value_parser = parse_gather)]
     pub gather: Gather,
     /// Gather the I-th of N shards (`--part`) of the final gather's points (lightmap texels,
@@ -151,36 +153,6 @@ pub enum Encoding {
     Srgb,
 }
 
-/// The final gather a bake runs (`--gather`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Gather {
-    /// No gather: texels show the solution.
-    Off,
-    /// The library's default gather.
-    Auto,
-    /// At most this many gather rays per texel.
-    Rays(u32),
-}
-
-impl Gather {
-    /// The gather's settings, `None` when off.
-    pub(crate) fn settings(self, seed: u64) -> Option<GatherSettings> {
-        let default = GatherSettings {
-            seed,
-            ..GatherSettings::default()
-        };
-        match self {
-            Self::Off => None,
-            Self::Auto => Some(default),
-            Self::Rays(n) => Some(GatherSettings {
-                min_rays: default.min_rays.min(n),
-                max_rays: n,
-                ..default
-            }),
-        }
-    }
-}
-
 /// Share of the emitted power above which the power that form factors summing above one
 /// would have created ([`twopass_radiosity::Residuals::energy_excess`]) is a warning: the
 /// vertex form factors of an ordinary mesh overshoot by well under this.
@@ -190,22 +162,6 @@ const ENERGY_EXCESS_WARNING: f64 = 0.01;
 /// rasterized triangle of each texel, the dilation and the encoded images (measured on the
 /// Cornell box at a texel size of 0.3, 21.5 million texels: 47 bytes each).
 const LIGHTMAP_BYTES_PER_TEXEL: f64 = 46.0;
-
-/// Most gather rays per texel `--gather` accepts.
-const MAX_GATHER_RAYS: u32 = 65_536;
-
-fn parse_gather(s: &str) -> Result<Gather, String> {
-    match s {
-        "off" => Ok(Gather::Off),
-        "auto" => Ok(Gather::Auto),
-        _ => checked(
-            s,
-            |n: &u32| (1..=MAX_GATHER_RAYS).contains(n),
-            &format!("must be off, auto or a ray count from 1 to {MAX_GATHER_RAYS}"),
-        )
-        .map(Gather::Rays),
-    }
-}
 
 /// Most vertices and patch pairs the residual report samples.
 const MAX_RESIDUAL_SAMPLES: usize = 100_000;
@@ -309,10 +265,7 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
     // most 2 s) is kept for the residual report and the files.
     let reserve = |total: Duration| (total / 10).min(Duration::from_secs(2));
     // A bake that gathers gives the solve half of what is left and the gather the rest.
-    let gathers = args.gather != Gather::Off
-        && (args.lightmap
-            || args.format.contains(&Format::VertexGlb)
-            || matches!(args.gather, Gather::Rays(_)));
+    let gathers = gathers(args);
     let solve_share = if gathers { 2 } else { 1 };
     let solve_options = Options {
         stop: Stop {
@@ -380,12 +333,28 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
         }
     });
     let estimator = gatherer.as_ref().map(|g| g as &dyn RadianceEstimator);
-    // The element-mesh outputs are gathered only when a ray count is given.
-    let gathered_elements = match (estimator, args.gather) {
-        (Some(g), Gather::Rays(_)) => Some(bake::gathered_solution(&solution, &scene, g)),
+    // The element mesh with its own ray count (`auto`: fewer than a texel's).
+    let element_points = 6 * solution.mesh().leaves().count() as u64;
+    let elements = match (&gatherer, args.gather.element_rays(element_points)) {
+        (Some(g), Some(rays)) if gathers_elements(args) => {
+            let fixed = g.fixed(rays);
+            let counted = Counted::new(&fixed, fixed.rays());
+            let gathered = bake::gathered_solution(&solution, &scene, &counted);
+            Some((gathered, counted.record(None)))
+        }
         _ => None,
     };
-    let shown = gathered_elements.as_ref().unwrap_or(&solution);
+    let shown = elements.as_ref().map_or(&solution, |(s, _)| s);
+    if ctx.chatty()
+        && let Some((_, record)) = &elements
+    {
+        errln!(
+            "final gather: element mesh at {} points, at most {} rays each ({:.2} s)",
+            record.points,
+            record.max_rays,
+            record.seconds
+        );
+    }
     let mut manifest = Manifest::new(
         &scene,
         &options,
@@ -396,6 +365,7 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
         residuals_time,
     );
     manifest.timings.load_s = load_time.as_secs_f64();
+    manifest.element_gather = elements.as_ref().map(|(_, record)| record.clone());
     let set = BakeSet {
         dir,
         scene: &scene,
@@ -484,7 +454,14 @@ pub(crate) fn write_set(
             Format::Ply => bake::encode_ply(shown, scene, mapping)?,
             Format::Bake => bake::encode_bake(shown, scene)?,
             Format::VertexGlb => {
-                let glb = bake::encode_vertex_glb(solution, scene, mapping, estimator)?;
+                let counted = estimator.map(|e| Counted::new(e, max_rays(gatherer)));
+                let glb = bake::encode_vertex_glb(
+                    solution,
+                    scene,
+                    mapping,
+                    counted.as_ref().map(|c| c as &dyn RadianceEstimator),
+                )?;
+                manifest.vertex_gather = counted.map(|c| c.record(None));
                 if manifest.color.is_none() {
                     manifest.color = Some(color_record(glb.clamped_vertices));
                 }
@@ -570,6 +547,11 @@ pub(crate) fn write_set(
         print_summary(&manifest, &manifest_path)?;
     }
     Ok(())
+}
+
+/// Most gather rays per point of `gatherer` (0 without one).
+fn max_rays(gatherer: Option<&Gatherer<'_>>) -> u32 {
+    gatherer.map_or(0, |g| g.settings().max_rays)
 }
 
 /// Holds `dir` for this bake (an advisory lock on the folder itself, released when the

@@ -15,6 +15,7 @@ mod compare;
 mod context;
 mod error;
 mod figure;
+mod final_gather;
 mod info;
 mod output;
 mod part;

@@ -78,6 +78,21 @@ fn cornell_bake_writes_every_file_and_a_truthful_manifest() {
         format!("{:016x}", bake::geometry_fingerprint(&scene))
     );
 
+    // The default gather (`auto`) gathers the element mesh at six points per element, the
+    // same number of rays at each (a coarse mesh gets the most, 64): every point of the box's
+    // diffuse surfaces casts all of them, more where a landing takes near bounces.
+    let gather = &m["element_gather"];
+    let points = gather["points"].as_u64().unwrap();
+    assert_eq!(points, 6 * mesh.leaves().count() as u64);
+    assert_eq!(gather["max_rays"], 64);
+    let rays = gather["rays"].as_u64().unwrap();
+    assert!(rays >= 64 * points, "{rays} rays for {points} points");
+    assert!(gather["shadow_rays"].as_u64().unwrap() >= points);
+    assert!(
+        m.get("vertex_gather").is_none(),
+        "no vertex.glb was written"
+    );
+
     // Every listed file exists with the listed size.
     let files = m["files"].as_array().unwrap();
     assert_eq!(files.len(), 3);
@@ -116,7 +131,7 @@ fn format_selects_the_outputs_and_exposure_is_recorded() {
     let out_dir = tempfile::tempdir().unwrap();
     let out = common::bake_box(out_dir.path())
         .words("--format glb --no-adaptive --max-shots 40 --element-size 100")
-        .words("--visibility-rays 1,4 --exposure 0.5 --quiet")
+        .words("--visibility-rays 1,4 --exposure 0.5 --gather 8 --quiet")
         .run();
     common::assert_ok(&out);
     assert!(out.stdout.is_empty() && out.stderr.is_empty(), "--quiet");
@@ -136,6 +151,9 @@ fn format_selects_the_outputs_and_exposure_is_recorded() {
     assert_eq!(m["color"]["exposure"], 0.5);
     assert_eq!(m["color"]["exposure_mode"], "fixed");
     assert_eq!(m["counts"]["refinement_rounds"], 0);
+    // `--gather N` gathers the element mesh with N rays at every point.
+    assert_eq!(m["element_gather"]["max_rays"], 8);
+    assert!(m["element_gather"]["points"].as_u64().unwrap() > 0);
 }
 
 #[test]

@@ -31,9 +31,10 @@ use twopass_trace::gather::Gatherer;
 
 use super::file::{Cost, PartHeader, PartIndex, encode, part_path, stem};
 use super::set::PartSet;
-use crate::bake::{BakeArgs, BakeSet, Format, Gather, lock_folder, write_set};
+use crate::bake::{BakeArgs, BakeSet, Format, lock_folder, write_set};
 use crate::context::Context;
 use crate::error::CliError;
+use crate::final_gather::{Counted, Gather, gathers, gathers_elements};
 
 /// `f32` words per recorded estimate: the key (2), the point (triangle and barycentrics, 4),
 /// emitted, direct and indirect (9), the indirect error and back-face fraction (2), rays and
@@ -49,12 +50,12 @@ fn point(key: u64, triangle: u32, barycentric: [f32; 3]) -> Point {
     (key, triangle, barycentric.map(f32::to_bits))
 }
 
-/// Gathers the points of one shard and records their estimates; every other point gets an
-/// empty estimate (no light, no rays), which the part never writes.
+/// Gathers the points of one shard with `inner` and records their estimates; every other
+/// point gets an empty estimate (no light, no rays), which the part never writes.
 struct Shard<'a> {
-    gatherer: &'a Gatherer<'a>,
+    inner: &'a dyn RadianceEstimator,
     part: PartIndex,
-    taken: Mutex<Vec<(Point, RadianceEstimate)>>,
+    taken: &'a Mutex<Vec<(Point, RadianceEstimate)>>,
 }
 
 impl RadianceEstimator for Shard<'_> {
@@ -62,7 +63,7 @@ impl RadianceEstimator for Shard<'_> {
         if key % u64::from(self.part.of) != u64::from(self.part.index - 1) {
             return RadianceEstimate::default();
         }
-        let e = self.gatherer.estimate(triangle, barycentric, key);
+        let e = self.inner.estimate(triangle, barycentric, key);
         self.taken
             .lock()
             .unwrap_or_else(std::sync::PoisonError::into_inner)
@@ -93,25 +94,19 @@ impl RadianceEstimator for Replay {
     }
 }
 
-/// Whether the bake's flags ask for a final gather (as `twopass bake` decides).
-fn gathers(args: &BakeArgs) -> bool {
-    args.gather != Gather::Off
-        && (args.lightmap
-            || args.format.contains(&Format::VertexGlb)
-            || matches!(args.gather, Gather::Rays(_)))
-}
-
-/// Runs every consumer of the final gather that the bake's flags select, with `estimator`,
-/// asking for exactly the points (and keys) `write_set` asks for.
+/// Runs every consumer of the final gather that the bake's flags select, with `estimator`
+/// (`elements` for the element mesh's points), asking for exactly the points (and keys)
+/// `write_set` asks for.
 fn ask_every_point(
     args: &BakeArgs,
     scene: &Scene,
     solution: &Solution,
     estimator: &dyn RadianceEstimator,
+    elements: &dyn RadianceEstimator,
 ) -> Result<(), CliError> {
     let mapping = ColorMapping { exposure: 1.0 };
-    if matches!(args.gather, Gather::Rays(_)) {
-        twopass_bake::gathered_solution(solution, scene, estimator);
+    if gathers_elements(args) {
+        twopass_bake::gathered_solution(solution, scene, elements);
     }
     if args.format.contains(&Format::VertexGlb) {
         twopass_bake::encode_vertex_glb(solution, scene, mapping, Some(estimator))?;
@@ -193,8 +188,7 @@ pub fn write_part(
     }
     if !gathers(args) {
         return Err(CliError::Usage(
-            "--part splits the final gather, and this bake gathers nothing: add --lightmap, \
-             --format vertex-glb or --gather N"
+            "--part splits the final gather, and this bake gathers nothing: drop --gather off"
                 .into(),
         ));
     }
@@ -213,14 +207,20 @@ pub fn write_part(
         .settings(ctx.seed)
         .expect("a bake that gathers has gather settings");
     let gatherer = Gatherer::new(&scene, &solution, settings);
-    let shard = Shard {
-        gatherer: &gatherer,
+    let element_points = 6 * solution.mesh().leaves().count() as u64;
+    let rays = args
+        .gather
+        .element_rays(element_points)
+        .unwrap_or(settings.max_rays);
+    let fixed = gatherer.fixed(rays);
+    let taken = Mutex::new(Vec::new());
+    let shard = |inner| Shard {
+        inner,
         part,
-        taken: Mutex::new(Vec::new()),
+        taken: &taken,
     };
-    ask_every_point(args, &scene, &solution, &shard)?;
-    let mut taken = shard
-        .taken
+    ask_every_point(args, &scene, &solution, &shard(&gatherer), &shard(&fixed))?;
+    let mut taken = taken
         .into_inner()
         .unwrap_or_else(std::sync::PoisonError::into_inner);
     taken.sort_by_key(|(p, _)| *p);
@@ -373,7 +373,7 @@ pub fn merge(set: &PartSet, ctx: &Context, started: Instant) -> Result<(), CliEr
         estimates: estimates_of(set)?,
         unknown: Mutex::new(None),
     };
-    ask_every_point(&args, &scene, &solution, &replay)?;
+    ask_every_point(&args, &scene, &solution, &replay, &replay)?;
     if let Some(key) = *replay
         .unknown
         .lock()
@@ -399,6 +399,7 @@ pub fn merge(set: &PartSet, ctx: &Context, started: Instant) -> Result<(), CliEr
     manifest.files.clear();
     manifest.color = None;
     manifest.lightmap = None;
+    manifest.vertex_gather = None;
     let job_seconds = manifest.timings.total_s + set.cost.seconds;
     let settings = args
         .gather
@@ -406,8 +407,14 @@ pub fn merge(set: &PartSet, ctx: &Context, started: Instant) -> Result<(), CliEr
         .expect("the parts gathered, so the flags ask for a gather");
     let gatherer = Gatherer::new(&scene, &solution, settings);
     let estimator: &dyn RadianceEstimator = &replay;
-    let gathered_elements = matches!(args.gather, Gather::Rays(_))
-        .then(|| twopass_bake::gathered_solution(&solution, &scene, estimator));
+    let elements = gathers_elements(&args).then(|| {
+        let points = 6 * solution.mesh().leaves().count() as u64;
+        let rays = args.gather.element_rays(points).unwrap_or(1);
+        let rays = gatherer.fixed(rays).rays();
+        let counted = Counted::new(estimator, rays);
+        let gathered = twopass_bake::gathered_solution(&solution, &scene, &counted);
+        (gathered, counted.record(None))
+    });
     let dir = ctx.output_or(Path::new("bake"));
     crate::output::create_dir(dir)?;
     let _folder = lock_folder(dir, ctx)?;
@@ -425,13 +432,14 @@ pub fn merge(set: &PartSet, ctx: &Context, started: Instant) -> Result<(), CliEr
         dir,
         scene: &scene,
         solution: &solution,
-        shown: gathered_elements.as_ref().unwrap_or(&solution),
+        shown: elements.as_ref().map_or(&solution, |(s, _)| s),
         gatherer: Some(&gatherer),
         estimator: Some(estimator),
         started: started
             .checked_sub(Duration::from_secs_f64(job_seconds.max(0.0)))
             .unwrap_or(started),
     };
+    manifest.element_gather = elements.as_ref().map(|(_, record)| record.clone());
     write_set(&args, ctx, &bake_set, manifest)
 }
 
