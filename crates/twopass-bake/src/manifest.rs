@@ -250,6 +250,10 @@ pub struct LightmapRecord {
     pub height: u32,
     /// Charts (coplanar connected triangles) in the atlas; 1 for the scene's own coordinates.
     pub charts: usize,
+    /// Objects whose charts got finer texels than `texel_size` for their curvature (one texel
+    /// spanning at most [`MAX_TEXEL_ANGLE`](crate::lightmap::MAX_TEXEL_ANGLE) radians).
+    #[serde(default)]
+    pub curved_objects: usize,
     /// Where the texture coordinates come from (the scene's, or generated and why).
     #[serde(default)]
     pub atlas: String,

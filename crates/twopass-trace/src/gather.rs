@@ -77,9 +77,7 @@ use crate::integrator::{Shading, irradiance_from, lamp_irradiance, lamps_irradia
 use crate::photons::{CausticPhotons, PhotonSettings};
 use crate::sampler::Sampler;
 
-mod fixed;
-
-pub use fixed::Fixed;
+pub mod fixed;
 
 /// Stream separating a point's shadow-ray numbers from its gather rays' (the gather rays use
 /// sample indices 0, 1, ... of the point's Sobol sequence; the shadow rays a sequence of their

@@ -23,7 +23,7 @@ use twopass_trace::gather::Gatherer;
 use crate::args::{checked, positive_finite};
 use crate::context::Context;
 use crate::error::CliError;
-use crate::final_gather::{Counted, Gather, gathers, gathers_elements, parse_gather};
+use crate::final_gather::{Counted, Gather, parse_gather};
 use crate::preset::PRESET_SETS;
 use crate::solve::{SolveArgs, parse_length};
 
@@ -42,6 +42,27 @@ pub enum Format {
     /// metres, with the solution sampled at those vertices: COLOR_0, _RADIANCE, _DIRECT,
     /// _INDIRECT (`<stem>.vertex.glb`).
     VertexGlb,
+}
+
+impl BakeArgs {
+    /// Whether the bake gathers its element-mesh outputs (`.glb`, `.ply`, `.bake`): its
+    /// gather is not off, and it writes one of them.
+    pub(crate) fn gathers_elements(&self) -> bool {
+        self.gather != Gather::Off
+            && self
+                .format
+                .iter()
+                .any(|f| matches!(f, Format::Glb | Format::Ply | Format::Bake))
+    }
+
+    /// Whether the bake runs a final gather at all: its gather is not off and some output
+    /// takes it (the lightmap, the user's vertices or the element mesh).
+    pub(crate) fn gathers(&self) -> bool {
+        self.gather != Gather::Off
+            && (self.lightmap
+                || self.format.contains(&Format::VertexGlb)
+                || self.gathers_elements())
+    }
 }
 
 impl Format {
@@ -265,7 +286,7 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
     // most 2 s) is kept for the residual report and the files.
     let reserve = |total: Duration| (total / 10).min(Duration::from_secs(2));
     // A bake that gathers gives the solve half of what is left and the gather the rest.
-    let gathers = gathers(args);
+    let gathers = args.gathers();
     let solve_share = if gathers { 2 } else { 1 };
     let solve_options = Options {
         stop: Stop {
@@ -336,7 +357,7 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
     // The element mesh with its own ray count (`auto`: fewer than a texel's).
     let element_points = 6 * solution.mesh().leaves().count() as u64;
     let elements = match (&gatherer, args.gather.element_rays(element_points)) {
-        (Some(g), Some(rays)) if gathers_elements(args) => {
+        (Some(g), Some(rays)) if args.gathers_elements() => {
             let fixed = g.fixed(rays);
             let counted = Counted::new(&fixed, fixed.rays());
             let gathered = bake::gathered_solution(&solution, &scene, &counted);
@@ -510,6 +531,7 @@ pub(crate) fn write_set(
             width: lm.width,
             height: lm.height,
             charts: lm.charts,
+            curved_objects: lm.curved_objects,
             atlas: lm.atlas.describe(),
             covered_texels: lm.covered_texels,
             quantity: lm.quantity.name().into(),

@@ -9,7 +9,6 @@ use twopass_scene::{RadianceEstimate, RadianceEstimator};
 use twopass_trace::gather::GatherSettings;
 
 use crate::args::checked;
-use crate::bake::{BakeArgs, Format};
 
 /// The final gather a bake runs (`--gather`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -69,23 +68,6 @@ impl Gather {
             Self::Rays(n) => Some(n),
         }
     }
-}
-
-/// Whether the bake gathers its element-mesh outputs (`.glb`, `.ply`, `.bake`): it gathers,
-/// and writes one of them.
-pub(crate) fn gathers_elements(args: &BakeArgs) -> bool {
-    args.gather != Gather::Off
-        && args
-            .format
-            .iter()
-            .any(|f| matches!(f, Format::Glb | Format::Ply | Format::Bake))
-}
-
-/// Whether the bake runs a final gather at all: it is not off and some output takes it (the
-/// lightmap, the user's vertices or the element mesh).
-pub(crate) fn gathers(args: &BakeArgs) -> bool {
-    args.gather != Gather::Off
-        && (args.lightmap || args.format.contains(&Format::VertexGlb) || gathers_elements(args))
 }
 
 /// Most gather rays per point `--gather` accepts.

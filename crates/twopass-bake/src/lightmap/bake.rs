@@ -135,6 +135,7 @@ pub fn bake_lightmap(
         radiance: image,
         quantity: s.quantity,
         charts: layout.charts,
+        curved_objects: layout.curved_objects,
         covered_texels,
         rays,
         shadow_rays,

@@ -6,7 +6,10 @@
 //! flat charts are projected onto their plane (no stretch) and curved ones flattened by least
 //! squares conformal maps (split where a triangle's area would be distorted more than
 //! [`MAX_AREA_DISTORTION`] times), and the charts are packed by shape at the fixed density of
-//! one texel per `texel_size` x `texel_size` scene units, `padding` empty texels around each.
+//! one texel per `texel_size` x `texel_size` scene units, `padding` empty texels around each;
+//! an object whose surface curves so tightly that one texel would span more than
+//! [`MAX_TEXEL_ANGLE`] of it gets finer texels ([`curvature_scale`]), since the bilinear
+//! lookup between texel centres misses a curved surface's falling light.
 //! The binding `xatlas-rs` (0.1.3, bindgen 0.49, unmaintained) was not taken: it brings a C++
 //! build for what this crate does in Rust.
 //! An OBJ's own `vt` coordinates are used instead when every triangle of the scene has them,
@@ -64,7 +67,10 @@ pub use camera::{CAMERA_NAME, CameraRecord, GltfCamera, ZNEAR_PER_DIAGONAL, came
 pub use fill::{MAX_BACK_FACES, TexelSource};
 pub use filter::FILTER;
 pub use glb::PNG_FORMULA;
-pub use layout::{MAX_AREA_DISTORTION, MAX_LIGHTMAP_SIDE, smallest_texel_size};
+pub use layout::{
+    MAX_AREA_DISTORTION, MAX_CURVATURE_SCALE, MAX_LIGHTMAP_SIDE, MAX_TEXEL_ANGLE, curvature_scale,
+    smallest_texel_size,
+};
 pub use rgbm::{RGBM_FORMULA, Rgbm};
 pub use settings::{
     AtlasSource, IRRADIANCE_PNG_FORMULA, Lightmap, LightmapEncoding, LightmapQuantity,

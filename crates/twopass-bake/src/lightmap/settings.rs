@@ -142,6 +142,9 @@ pub struct Lightmap {
     pub quantity: LightmapQuantity,
     /// Charts in the atlas (1 when the scene's own texture coordinates are used).
     pub charts: usize,
+    /// Objects whose charts got finer texels than `texel_size` for their curvature
+    /// ([`curvature_scale`](super::curvature_scale)); 0 with the scene's own coordinates.
+    pub curved_objects: usize,
     /// Texels a triangle touches, each lit at its own point (the rest are padding, dilated or
     /// empty).
     pub covered_texels: usize,

@@ -34,7 +34,7 @@ use super::set::PartSet;
 use crate::bake::{BakeArgs, BakeSet, Format, lock_folder, write_set};
 use crate::context::Context;
 use crate::error::CliError;
-use crate::final_gather::{Counted, Gather, gathers, gathers_elements};
+use crate::final_gather::{Counted, Gather};
 
 /// `f32` words per recorded estimate: the key (2), the point (triangle and barycentrics, 4),
 /// emitted, direct and indirect (9), the indirect error and back-face fraction (2), rays and
@@ -105,7 +105,7 @@ fn ask_every_point(
     elements: &dyn RadianceEstimator,
 ) -> Result<(), CliError> {
     let mapping = ColorMapping { exposure: 1.0 };
-    if gathers_elements(args) {
+    if args.gathers_elements() {
         twopass_bake::gathered_solution(solution, scene, elements);
     }
     if args.format.contains(&Format::VertexGlb) {
@@ -186,7 +186,7 @@ pub fn write_part(
                 .into(),
         ));
     }
-    if !gathers(args) {
+    if !args.gathers() {
         return Err(CliError::Usage(
             "--part splits the final gather, and this bake gathers nothing: drop --gather off"
                 .into(),
@@ -407,7 +407,7 @@ pub fn merge(set: &PartSet, ctx: &Context, started: Instant) -> Result<(), CliEr
         .expect("the parts gathered, so the flags ask for a gather");
     let gatherer = Gatherer::new(&scene, &solution, settings);
     let estimator: &dyn RadianceEstimator = &replay;
-    let elements = gathers_elements(&args).then(|| {
+    let elements = args.gathers_elements().then(|| {
         let points = 6 * solution.mesh().leaves().count() as u64;
         let rays = args.gather.element_rays(points).unwrap_or(1);
         let rays = gatherer.fixed(rays).rays();

@@ -1,6 +1,7 @@
 //! The Pareto front of measured (time, error) points and the presets derived from it.
 
 use super::args::PRESET_NAMES;
+use super::measure::GATHERED_RADIOSITY;
 use super::report::{Reach, SweepRow};
 use super::sweep::{RunSpec, SolveSpec};
 use crate::pipeline::RenderMethod;
@@ -99,7 +100,16 @@ pub(super) fn derive_presets(
     solves: &[SolveSpec],
     targets: &[f64],
 ) -> Vec<Preset> {
-    let pts = points(rows);
+    // The presets configure `twopass render`, which shows a solve as solved: the final
+    // gather over the element mesh is a bake's ([`SolveSpec::gather`]).
+    let pts: Vec<(f64, f64)> = points(rows)
+        .into_iter()
+        .zip(runs)
+        .map(|(p, run)| match run.solve.map(|s| solves[s].gather) {
+            Some(Some(_)) => (f64::INFINITY, f64::INFINITY),
+            _ => p,
+        })
+        .collect();
     PRESET_NAMES
         .iter()
         .zip(targets)
@@ -131,13 +141,18 @@ pub(super) fn reach_table(
             .map(|r| (r.total_seconds, r.rel_rmse))
             .collect()
     };
+    // Each method's curve, and radiosity over a gathered element mesh as one of its own.
+    let mut names: Vec<&'static str> = methods.iter().map(|m| m.name()).collect();
+    if rows.iter().any(|r| r.method == GATHERED_RADIOSITY) {
+        names.push(GATHERED_RADIOSITY);
+    }
     let mut out = Vec::new();
     for &target in targets {
         let pt = time_to_reach(&curve(RenderMethod::Reference.name()), target);
-        for m in methods {
-            let reached = time_to_reach(&curve(m.name()), target);
+        for &name in &names {
+            let reached = time_to_reach(&curve(name), target);
             out.push(Reach {
-                method: m.name(),
+                method: name,
                 target_rel_rmse: target,
                 seconds: reached.map(|r| r.0),
                 interpolated: reached.is_some_and(|r| r.1),

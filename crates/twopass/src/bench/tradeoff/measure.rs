@@ -18,7 +18,10 @@ use crate::error::CliError;
 use crate::pipeline::{RenderMethod, integrator};
 use crate::preset::RenderKnobs;
 
-/// A finished solve.
+/// The method name of radiosity alone over a gathered element mesh, in the rows and the plot.
+pub(super) const GATHERED_RADIOSITY: &str = "radiosity-gathered";
+
+/// A finished solve (its final gather included, when it has one).
 pub(super) struct Solved {
     pub(super) solution: Solution,
     pub(super) seconds: f64,
@@ -51,11 +54,27 @@ pub(super) fn solve_all(
             })?;
         solver.run(|_| std::ops::ControlFlow::Continue(()));
         let p = solver.progress();
+        let mut solution = solver.solution();
+        let mut rays = p.rays;
+        if let Some(n) = spec.gather {
+            // As `twopass bake` gathers its element mesh: the same rays at every point.
+            let settings = crate::final_gather::Gather::Rays(n)
+                .settings(ctx.seed)
+                .expect("a ray count gathers");
+            let gatherer = twopass_trace::gather::Gatherer::new(scene, &solution, settings);
+            let fixed = gatherer.fixed(n);
+            let counted = crate::final_gather::Counted::new(&fixed, n);
+            let gathered = twopass_bake::gathered_solution(&solution, scene, &counted);
+            let record = counted.record(None);
+            rays += record.rays + record.shadow_rays;
+            drop(gatherer);
+            solution = gathered;
+        }
         solved.push(Solved {
-            solution: solver.solution(),
+            solution,
             seconds: started.elapsed().as_secs_f64(),
             elements: p.elements,
-            rays: p.rays,
+            rays,
             unshot_fraction: p.unshot_fraction,
             peak_bytes: peak_memory(),
         });
@@ -201,8 +220,14 @@ fn row(
         (Some(a), Some(b)) => Some(a.max(b)),
         (a, b) => a.or(b),
     };
+    let gather = solve.and_then(|s| s.0.gather);
     SweepRow {
-        method: run.method.name(),
+        // A gathered solve is radiosity with a bake's final gather: a curve of its own.
+        method: match gather {
+            Some(_) => GATHERED_RADIOSITY,
+            None => run.method.name(),
+        },
+        final_gather: gather,
         knob: run.knob,
         spp: run.render.spp,
         adaptive_aa: run.render.adaptive,

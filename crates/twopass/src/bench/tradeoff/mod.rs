@@ -10,7 +10,10 @@
 //!   samples per pixel (the two knobs that dominate their error), each element size at the
 //!   base and at one shadow ray a pair, stopping at unshot 1e-3 and at 1e-2;
 //! - Whitted and the hybrids: samples per pixel x shadow-ray grid, and recursion depth;
-//! - the reference path tracer: samples per pixel.
+//! - the reference path tracer: samples per pixel;
+//! - the bake's final gather over the element mesh (rays per point, over coarse and base
+//!   solves), rendered as radiosity alone: the curve `radiosity-gathered`, which the presets
+//!   (settings of `twopass render`, which shows a solve as solved) leave out.
 //!
 //! Writes, in `--output DIR` (default `tradeoff/`): `<stem>-tradeoff.csv` (one row per run:
 //! method, settings, time per phase, rays, peak memory, error metrics, Pareto membership),

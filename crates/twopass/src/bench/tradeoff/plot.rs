@@ -29,6 +29,7 @@ fn colour(method: &str) -> RGBColor {
         "reference" => RGBColor(90, 90, 90),
         "whitted" => RGBColor(214, 39, 40),
         "radiosity" => RGBColor(31, 119, 180),
+        "radiosity-gathered" => RGBColor(23, 190, 207),
         "hybrid" => RGBColor(255, 127, 14),
         "hybrid-classic" => RGBColor(148, 103, 189),
         _ => RGBColor(44, 160, 44), // hybrid-direct

@@ -22,6 +22,9 @@ pub(super) struct SweepRow {
     pub(super) shadow_grid: u32,
     /// Gather rays per camera sample (the gathered hybrid's; the others ignore it).
     pub(super) gather_rays: u32,
+    /// Rays per point of the final gather over the element mesh (`radiosity-gathered`; empty
+    /// for the solution as solved).
+    pub(super) final_gather: Option<u32>,
     /// Radiosity settings (empty for Whitted and the path tracer).
     pub(super) element_size: Option<f32>,
     pub(super) unshot: Option<f64>,

@@ -34,6 +34,13 @@ pub(super) struct Sweep {
     pub(super) gather_rays: Vec<u32>,
     /// Samples per pixel crossed with the element sizes for the radiosity-based methods.
     pub(super) radiosity_spps: Vec<u32>,
+    /// Rays per point of the final gather over the element mesh (what `twopass bake` gathers
+    /// its element-mesh outputs with), crossed with `final_gather_divisors`; each gathered
+    /// solve is rendered as radiosity alone.
+    pub(super) final_gathers: Vec<u32>,
+    /// Element sizes (divisors of the scene diagonal) the final gathers run over: a coarse
+    /// solve gathered can be cheaper than a fine one at the same error.
+    pub(super) final_gather_divisors: Vec<f32>,
     /// First-pass samples per pixel of adaptive anti-aliasing, tried beside every
     /// radiosity-based setting of more samples per pixel than this (element size x samples
     /// per pixel, and the hybrids' samples x shadow grid); `None` for no adaptive runs.
@@ -66,6 +73,8 @@ impl Sweep {
             depths: vec![1, 2, 4, 8],
             gather_rays: vec![2, 4, 8, 16],
             radiosity_spps: vec![1, 4, 16, 64],
+            final_gathers: vec![4, 16, 64],
+            final_gather_divisors: vec![8.0, 16.0, 24.0],
             adaptive_base: Some(4),
             reference_spps: vec![1, 4, 16, 64, 256, 1024, 2048],
         }
@@ -95,6 +104,8 @@ impl Sweep {
             depths: vec![2],
             gather_rays: vec![1, 2],
             radiosity_spps: vec![1],
+            final_gathers: vec![2],
+            final_gather_divisors: vec![8.0],
             adaptive_base: None,
             reference_spps: vec![1, 4],
         }
@@ -105,6 +116,9 @@ impl Sweep {
 pub(super) struct SolveSpec {
     pub(super) knob: &'static str,
     pub(super) knobs: RadiosityKnobs,
+    /// Rays per point of a final gather over the element mesh after the solve (`None`: the
+    /// solution as solved). Only radiosity alone renders a gathered solve.
+    pub(super) gather: Option<u32>,
 }
 
 /// One render of the sweep.
@@ -139,12 +153,18 @@ pub(super) fn plan_runs(
     let mut solves = vec![SolveSpec {
         knob: "base",
         knobs: base,
+        gather: None,
     }];
-    let mut add = |knob: &'static str, k: RadiosityKnobs| {
-        if !solves.iter().any(|s| s.knobs == k) {
-            solves.push(SolveSpec { knob, knobs: k });
+    let mut add_gathered = |knob: &'static str, k: RadiosityKnobs, gather: Option<u32>| {
+        if !solves.iter().any(|s| s.knobs == k && s.gather == gather) {
+            solves.push(SolveSpec {
+                knob,
+                knobs: k,
+                gather,
+            });
         }
     };
+    let mut add = |knob: &'static str, k: RadiosityKnobs| add_gathered(knob, k, None);
     for &d in &sweep.element_divisors {
         add(
             "element-size",
@@ -197,6 +217,14 @@ pub(super) fn plan_runs(
             false,
         ),
     );
+    if methods.contains(&RenderMethod::Radiosity) {
+        for &d in &sweep.final_gather_divisors {
+            for &rays in &sweep.final_gathers {
+                let k = knobs(d, sweep.base_unshot, sweep.base_visibility, true);
+                add_gathered("final-gather", k, Some(rays));
+            }
+        }
+    }
     if !methods.iter().any(|m| m.needs_radiosity()) {
         solves.clear();
     }
@@ -227,9 +255,14 @@ pub(super) fn plan_runs(
             // Every solve at the base render, then the two knobs that dominate the error
             // (element size and samples per pixel) crossed.
             for (i, s) in solves.iter().enumerate() {
-                push(s.knob, base_render, Some(i));
+                if s.gather.is_none() || method == RenderMethod::Radiosity {
+                    push(s.knob, base_render, Some(i));
+                }
             }
             for (i, s) in solves.iter().enumerate() {
+                if s.gather.is_some() {
+                    continue;
+                }
                 let k = &s.knobs;
                 let visibility = (k.visibility_min, k.visibility_max);
                 let crossed = k.adaptive
