@@ -313,8 +313,9 @@ pub struct GatherRecord {
     pub shadow_rays: u64,
     /// Rays (both kinds) per second of the gather.
     pub rays_per_second: f64,
-    /// Points (texels and vertices) that showed the solution instead because the time budget
-    /// ran out before their gather.
+    /// Points (texels, the user's vertices and the element mesh's points, which share the
+    /// gather) that showed the solution instead because the time budget ran out before their
+    /// gather.
     #[serde(default)]
     pub late_points: u64,
     /// Caustic photons the gather estimated the light through mirrors and glass from (0: the
