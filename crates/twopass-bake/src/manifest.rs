@@ -127,6 +127,9 @@ pub struct EnergyRecord {
     pub unshot: [f64; 3],
     /// Change of the unshot estimate by adaptive subdivision.
     pub remeshing: [f64; 3],
+    /// Sent by the surfaces (the base of the escaped share).
+    #[serde(default)]
+    pub sent: [f64; 3],
     /// Largest relative imbalance after any step.
     pub worst_imbalance: f64,
 }
@@ -436,6 +439,7 @@ impl Manifest {
                 escaped: e.escaped.to_array(),
                 unshot: e.unshot.to_array(),
                 remeshing: e.remeshing.to_array(),
+                sent: e.sent.to_array(),
                 worst_imbalance: progress.worst_imbalance,
             },
             residuals: ResidualsRecord {

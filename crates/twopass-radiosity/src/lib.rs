@@ -40,6 +40,7 @@ mod ambient;
 pub mod cluster;
 pub mod element;
 mod error;
+mod escape;
 pub mod form_factor;
 pub mod hidden;
 mod hierarchical;

@@ -23,6 +23,10 @@ pub struct Energy {
     pub unshot: DVec3,
     /// Change of the unshot estimate when adaptive subdivision re-estimated patch radiosities.
     pub remeshing: DVec3,
+    /// Power the surfaces sent, of which `escaped` is booked as leaving: progressive
+    /// refinement's shots summed, the hierarchical solver's last gather (its surfaces'
+    /// exitance times area); lamps and the sky not included.
+    pub sent: DVec3,
     /// Power that form factors summing above one would have created: more arriving than was
     /// sent, where surfaces are closer than the mesh resolves (a light a hair's breadth from
     /// a wall). Progressive refinement takes it out of each such shot, so it is not part of
@@ -190,6 +194,16 @@ pub struct Residuals {
     pub reciprocity_spread: f64,
     /// The same, weighted: sum of |A_p F_pq - A_q F_qp| over sum of the larger of the two.
     pub reciprocity_mean: f64,
+    /// Power the solve lost, over the emitted power: booked as escaped, but not leaving the
+    /// scene by rays cast from the surfaces it lights (a closed room lets nothing out), the
+    /// largest over the channels; near zero for a solve that conserves energy. Lost where
+    /// surfaces are closer than the element mesh resolves, such as a light almost touching a
+    /// wall. `None` where rays from the surfaces cannot tell: lamps or a sky, mirrors or glass.
+    #[serde(default)]
+    pub energy_lost: Option<f64>,
+    /// Standard error of `energy_lost` (the rays' sampling), over the emitted power.
+    #[serde(default)]
+    pub energy_lost_error: Option<f64>,
 }
 
 impl Residuals {
@@ -219,6 +233,8 @@ impl Residuals {
             reciprocity_pairs: n,
             reciprocity_spread: spread,
             reciprocity_mean: diff / scale.max(f64::MIN_POSITIVE),
+            energy_lost: None,
+            energy_lost_error: None,
         }
     }
 }

@@ -93,13 +93,26 @@ impl<'s> Solver<'s> {
         }
     }
 
-    /// Consistency checks on up to `samples` sampled vertices, elements and node pairs; their
-    /// cost is bounded by the samples, not by the scene.
+    /// Consistency checks on up to `samples` sampled vertices, elements and node pairs, and the
+    /// power lost ([`Residuals::energy_lost`], from 64 rays at each of `4 samples` points);
+    /// their cost is bounded by the samples, not by the scene.
     pub fn residuals(&mut self, samples: usize) -> Residuals {
-        match self {
+        let mut residuals = match self {
             Self::Progressive(p) => p.residuals(samples),
             Self::Hierarchical(h) => h.residuals(samples),
+        };
+        let (scene, seed) = match &*self {
+            Self::Progressive(p) => (p.scene(), p.options().seed),
+            Self::Hierarchical(h) => (h.scene(), h.options().seed),
+        };
+        let energy = self.progress().energy;
+        if let Some((lost, error)) =
+            crate::escape::lost_fraction(scene, &self.solution(), &energy, 4 * samples, seed)
+        {
+            residuals.energy_lost = Some(lost);
+            residuals.energy_lost_error = Some(error);
         }
+        residuals
     }
 
     /// The element mesh.

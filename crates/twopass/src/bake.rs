@@ -174,11 +174,6 @@ pub enum Encoding {
     Srgb,
 }
 
-/// Share of the emitted power above which the power that form factors summing above one
-/// would have created ([`twopass_radiosity::Residuals::energy_excess`]) is a warning: the
-/// vertex form factors of an ordinary mesh overshoot by well under this.
-const ENERGY_EXCESS_WARNING: f64 = 0.01;
-
 /// Peak memory of a lightmap bake per texel of surface, bytes: the atlas's layers, the
 /// rasterized triangle of each texel, the dilation and the encoded images (measured on the
 /// Cornell box at a texel size of 0.3, 21.5 million texels: 47 bytes each).
@@ -330,18 +325,8 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
     };
     let residuals = solver.residuals(samples);
     let residuals_time = residuals_started.elapsed();
-    if residuals.energy_excess > ENERGY_EXCESS_WARNING && !ctx.quiet {
-        errln!(
-            "warning: {}: form factors summing above one would have created {:.1} % of the \
-             emitted power ({}): surfaces closer than the element mesh resolves, such as a light \
-             almost touching a wall; the light near them is not to be trusted",
-            args.scene.display(),
-            100.0 * residuals.energy_excess,
-            match solver.method() {
-                twopass_radiosity::Method::Progressive => "kept out of the shots",
-                _ => "in the solution",
-            }
-        );
+    if !ctx.quiet {
+        crate::solve::warn_energy(&args.scene, &residuals, solver.method());
     }
     let solution = solver.solution();
     // The final gather over the solution, ending where the time budget (less the reserve for

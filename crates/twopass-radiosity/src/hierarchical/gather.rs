@@ -109,6 +109,7 @@ impl HierarchicalSolver<'_> {
         self.bookkeeping.energy.absorbed = absorbed;
         let sent = before + self.lamp_power;
         self.bookkeeping.energy.escaped = sent - arrived;
+        self.bookkeeping.energy.sent = before;
         self.bookkeeping.energy.excess = (arrived - sent).max(DVec3::ZERO);
         self.bookkeeping.energy.unshot = self.residual;
         self.bookkeeping.energy.emitted = self.emitted;

@@ -326,6 +326,11 @@ impl HierarchicalSolver<'_> {
         &self.mesh
     }
 
+    /// The options the solve runs with.
+    pub(crate) fn options(&self) -> &crate::options::Options {
+        &self.options
+    }
+
     /// The scene being solved.
     pub fn scene(&self) -> &Scene {
         self.scene

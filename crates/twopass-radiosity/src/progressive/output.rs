@@ -136,6 +136,11 @@ impl ProgressiveSolver<'_> {
         &self.mesh
     }
 
+    /// The options the solve runs with.
+    pub(crate) fn options(&self) -> &crate::options::Options {
+        &self.options
+    }
+
     /// The scene being solved.
     pub fn scene(&self) -> &Scene {
         self.scene

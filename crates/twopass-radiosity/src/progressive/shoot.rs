@@ -87,6 +87,7 @@ impl ProgressiveSolver<'_> {
             arrived += self.shoot_specular(p);
         }
         self.bookkeeping.energy.escaped += sent * area - arrived;
+        self.bookkeeping.energy.sent += sent * area;
         self.bookkeeping.energy.unshot -= sent * area;
         self.shot_emit[p] += de;
         self.shot_refl[p] += dr;
