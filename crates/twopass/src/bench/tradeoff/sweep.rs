@@ -36,7 +36,7 @@ pub(super) struct Sweep {
     pub(super) radiosity_spps: Vec<u32>,
     /// Rays per point of the final gather over the element mesh (what `twopass bake` gathers
     /// its element-mesh outputs with), crossed with `final_gather_divisors`; each gathered
-    /// solve is rendered as radiosity alone.
+    /// solve is rendered as radiosity alone at every one of `radiosity_spps`.
     pub(super) final_gathers: Vec<u32>,
     /// Element sizes (divisors of the scene diagonal) the final gathers run over: a coarse
     /// solve gathered can be cheaper than a fine one at the same error.
@@ -261,6 +261,13 @@ pub(super) fn plan_runs(
             }
             for (i, s) in solves.iter().enumerate() {
                 if s.gather.is_some() {
+                    // A gathered element mesh against anti-aliasing, as the solves below.
+                    if method == RenderMethod::Radiosity {
+                        for &spp in &sweep.radiosity_spps {
+                            let render = RenderKnobs { spp, ..base_render };
+                            push("final-gather-spp", render, Some(i));
+                        }
+                    }
                     continue;
                 }
                 let k = &s.knobs;
