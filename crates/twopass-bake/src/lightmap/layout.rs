@@ -30,9 +30,9 @@ pub const MAX_AREA_DISTORTION: f32 = 2.0;
 
 /// Largest angle, radians, that one texel may span on a curved object: a texel of edge h on a
 /// surface of curvature radius R spans h / R, and the renderer's bilinear reconstruction of
-/// the light between texel centres that far apart misses its curvature and its terminator
-/// by about the square of that angle (a sphere of radius 0.28 under texels of 0.074 units,
-/// 0.26 rad, showed 3.7 % too bright; at half the texel, 0.8 %). An object whose surface
+/// the light between texel centres that far apart misses its curvature and its terminator,
+/// more the wider the angle (a sphere of radius 0.28 under texels of 0.147 units, 0.53 rad,
+/// showed 3.7 % too bright; under texels of 0.037, 0.13 rad, 0.8 %). An object whose surface
 /// curves more tightly gets finer texels ([`curvature_scale`]).
 pub const MAX_TEXEL_ANGLE: f32 = 0.125;
 
@@ -372,7 +372,7 @@ mod tests {
             let radius = curvature_radius(&p, &i).expect("a sphere curves");
             // An icosphere's faces are not all alike, and the median falls on one kind of
             // edge: a few percent off (measured -3.1 % to +3.2 % over levels 1 to 5), which
-            // moves the texel's angle, and the bias that goes with its square, no further.
+            // moves the texel's angle by as much.
             assert!(
                 (radius / r - 1.0).abs() < 0.05,
                 "{radius} for a radius of {r}"
