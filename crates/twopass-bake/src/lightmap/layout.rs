@@ -52,9 +52,9 @@ const CREASE_ANGLE: f32 = std::f32::consts::FRAC_PI_4;
 ///
 /// The curvature radius is the area-weighted median over the object's edges shared by two
 /// triangles of the centroid distance over the angle between their normals (a sphere's
-/// radius, a cylinder's); flat edges count as infinitely far from curving and creases
-/// ([`CREASE_ANGLE`]) do not count. A mostly flat object, a box or a wall, keeps the bake's
-/// texel size.
+/// radius, a cylinder's); flat edges count as infinitely far from curving and creases (more
+/// than 45 degrees between the normals) do not count. A mostly flat object, a box or a wall,
+/// keeps the bake's texel size.
 pub fn curvature_scale(positions: &[[f32; 3]], indices: &[u32], texel_size: f32) -> f32 {
     let Some(radius) = curvature_radius(positions, indices) else {
         return 1.0;
