@@ -9,6 +9,7 @@ use rayon::prelude::*;
 use twopass_brdf::colour::luminance;
 use twopass_brdf::random::{hash, unit_f32};
 use twopass_scene::Scene;
+use twopass_scene::targets::specular_objects;
 use twopass_scene::workload::cosine_direction;
 
 use crate::lamps::lamp_power;
@@ -35,12 +36,7 @@ pub(crate) fn lost_fraction(
     points: usize,
     seed: u64,
 ) -> Option<(f64, f64)> {
-    let specular = scene.objects.iter().any(|o| {
-        scene.materials[o.material as usize]
-            .material
-            .delta()
-            .is_some()
-    });
+    let specular = !specular_objects(scene).is_empty();
     if specular || lamp_power(scene) != DVec3::ZERO || points == 0 {
         return None;
     }

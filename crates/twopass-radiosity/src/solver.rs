@@ -97,6 +97,14 @@ impl<'s> Solver<'s> {
     /// power lost ([`Residuals::energy_lost`], from 64 rays at each of `4 samples` points);
     /// their cost is bounded by the samples, not by the scene.
     pub fn residuals(&mut self, samples: usize) -> Residuals {
+        let solution = self.solution();
+        self.residuals_of(samples, &solution)
+    }
+
+    /// [`Solver::residuals`] with the lost power sampled over `solution`, this solver's
+    /// [`Solver::solution`], for a caller that has it already (building it again would copy
+    /// the element mesh).
+    pub fn residuals_of(&mut self, samples: usize, solution: &Solution) -> Residuals {
         let mut residuals = match self {
             Self::Progressive(p) => p.residuals(samples),
             Self::Hierarchical(h) => h.residuals(samples),
@@ -107,7 +115,7 @@ impl<'s> Solver<'s> {
         };
         let energy = self.progress().energy;
         if let Some((lost, error)) =
-            crate::escape::lost_fraction(scene, &self.solution(), &energy, 4 * samples, seed)
+            crate::escape::lost_fraction(scene, solution, &energy, 4 * samples, seed)
         {
             residuals.energy_lost = Some(lost);
             residuals.energy_lost_error = Some(error);

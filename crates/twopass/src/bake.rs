@@ -23,7 +23,7 @@ use twopass_trace::gather::Gatherer;
 use crate::args::{checked, positive_finite};
 use crate::context::Context;
 use crate::error::CliError;
-use crate::final_gather::{Counted, Gather, parse_gather};
+use crate::final_gather::{Counted, Gather, gather_elements, parse_gather};
 use crate::preset::PRESET_SETS;
 use crate::solve::{SolveArgs, parse_length};
 
@@ -139,7 +139,8 @@ pub struct BakeArgs {
     /// The final gather over the solution: `off` (every output shows the solution
     /// interpolated), `auto` (lightmap texels and the user's vertices: 64 to 256 gather rays,
     /// adaptive, plus 64 shadow rays; the element mesh's outputs: 16 to 64 at each of six
-    /// points per element, about 8 million in all) or N (at most N gather rays per point everywhere, 1 to 65536).
+    /// points per element, about 8 million in all) or N (N gather rays per point of the
+    /// element mesh, at most N elsewhere; 1 to 65536).
     #[arg(long, default_value = "auto", value_name = "off|auto|N", value_parser = parse_gather)]
     pub gather: Gather,
     /// Gather the I-th of N shards (`--part`) of the final gather's points (lightmap texels,
@@ -315,6 +316,7 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
             source,
         })?;
     let progress = solver.progress();
+    let solution = solver.solution();
     let residuals_started = Instant::now();
     // Out of time: a token report rather than an overrun.
     let samples = match options.stop.time_budget {
@@ -323,12 +325,11 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
         }
         _ => args.residual_samples,
     };
-    let residuals = solver.residuals(samples);
+    let residuals = solver.residuals_of(samples, &solution);
     let residuals_time = residuals_started.elapsed();
     if !ctx.quiet {
         crate::solve::warn_energy(&args.scene, &residuals, solver.method());
     }
-    let solution = solver.solution();
     // The final gather over the solution, ending where the time budget (less the reserve for
     // the files) does.
     let gatherer = args.gather.settings(ctx.seed).filter(|_| gathers).map(|g| {
@@ -340,13 +341,10 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
     });
     let estimator = gatherer.as_ref().map(|g| g as &dyn RadianceEstimator);
     // The element mesh with its own ray count (`auto`: fewer than a texel's).
-    let element_points = 6 * solution.mesh().leaves().count() as u64;
-    let elements = match (&gatherer, args.gather.element_rays(element_points)) {
+    let elements = match (&gatherer, args.gather.element_rays(solution.mesh())) {
         (Some(g), Some(rays)) if args.gathers_elements() => {
             let fixed = g.fixed(rays);
-            let counted = Counted::new(&fixed, fixed.rays());
-            let gathered = bake::gathered_solution(&solution, &scene, &counted);
-            Some((gathered, counted.record(None)))
+            Some(gather_elements(&solution, &scene, &fixed, fixed.rays()))
         }
         _ => None,
     };
@@ -355,7 +353,7 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
         && let Some((_, record)) = &elements
     {
         errln!(
-            "final gather: element mesh at {} points, at most {} rays each ({:.2} s)",
+            "final gather: element mesh at {} points, {} rays each ({:.2} s)",
             record.points,
             record.max_rays,
             record.seconds
@@ -467,7 +465,7 @@ pub(crate) fn write_set(
                     mapping,
                     counted.as_ref().map(|c| c as &dyn RadianceEstimator),
                 )?;
-                manifest.vertex_gather = counted.map(|c| c.record(None));
+                manifest.vertex_gather = counted.map(|c| c.record());
                 if manifest.color.is_none() {
                     manifest.color = Some(color_record(glb.clamped_vertices));
                 }

@@ -2,10 +2,13 @@
 //! how many rays per point, and the count of what each gather cast for the manifest.
 
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use twopass_bake::PointGatherRecord;
-use twopass_scene::{RadianceEstimate, RadianceEstimator};
+use twopass_radiosity::Solution;
+use twopass_radiosity::element::ElementMesh;
+use twopass_radiosity::triangle_rule::DUNAVANT_6;
+use twopass_scene::{RadianceEstimate, RadianceEstimator, Scene};
 use twopass_trace::gather::GatherSettings;
 
 use crate::args::checked;
@@ -55,12 +58,13 @@ impl Gather {
         }
     }
 
-    /// Gather rays per point of the element-mesh outputs when they have `points` points (six
-    /// per element), `None` when off.
-    pub(crate) fn element_rays(self, points: u64) -> Option<u32> {
+    /// Gather rays per point of the element-mesh outputs of `mesh` (gathered at the points of
+    /// Dunavant's rule in each of its elements), `None` when off.
+    pub(crate) fn element_rays(self, mesh: &ElementMesh) -> Option<u32> {
         match self {
             Self::Off => None,
             Self::Auto => {
+                let points = (DUNAVANT_6.len() * mesh.leaves().count()) as u64;
                 let (fewest, most) = ELEMENT_RAYS;
                 let share = ELEMENT_RAY_BUDGET / points.max(1);
                 Some(share.clamp(u64::from(fewest), u64::from(most)) as u32)
@@ -84,6 +88,20 @@ pub(crate) fn parse_gather(s: &str) -> Result<Gather, String> {
         )
         .map(Gather::Rays),
     }
+}
+
+/// `solution` with its element-mesh outputs' values gathered by `estimator` (which casts at
+/// most `max_rays` gather rays per point; [`twopass_bake::gathered_solution`]), and the
+/// record of that gather.
+pub(crate) fn gather_elements(
+    solution: &Solution,
+    scene: &Scene,
+    estimator: &dyn RadianceEstimator,
+    max_rays: u32,
+) -> (Solution, PointGatherRecord) {
+    let counted = Counted::new(estimator, max_rays);
+    let gathered = twopass_bake::gathered_solution(solution, scene, &counted);
+    (gathered, counted.record())
 }
 
 /// An estimator that counts the points it was asked for and the rays their estimates cast,
@@ -110,11 +128,9 @@ impl<'e> Counted<'e> {
         }
     }
 
-    /// What was counted, with the time since [`Counted::new`] (or `seconds` when given).
-    pub(crate) fn record(&self, seconds: Option<Duration>) -> PointGatherRecord {
-        let seconds = seconds
-            .unwrap_or_else(|| self.started.elapsed())
-            .as_secs_f64();
+    /// What was counted, with the time since [`Counted::new`].
+    pub(crate) fn record(&self) -> PointGatherRecord {
+        let seconds = self.started.elapsed().as_secs_f64();
         let (rays, shadow_rays) = (
             self.rays.load(Ordering::Relaxed),
             self.shadow_rays.load(Ordering::Relaxed),

@@ -34,7 +34,7 @@ use super::set::PartSet;
 use crate::bake::{BakeArgs, BakeSet, Format, lock_folder, write_set};
 use crate::context::Context;
 use crate::error::CliError;
-use crate::final_gather::{Counted, Gather};
+use crate::final_gather::{Gather, gather_elements};
 
 /// `f32` words per recorded estimate: the key (2), the point (triangle and barycentrics, 4),
 /// emitted, direct and indirect (9), the indirect error and back-face fraction (2), rays and
@@ -207,10 +207,9 @@ pub fn write_part(
         .settings(ctx.seed)
         .expect("a bake that gathers has gather settings");
     let gatherer = Gatherer::new(&scene, &solution, settings);
-    let element_points = 6 * solution.mesh().leaves().count() as u64;
     let rays = args
         .gather
-        .element_rays(element_points)
+        .element_rays(solution.mesh())
         .unwrap_or(settings.max_rays);
     let fixed = gatherer.fixed(rays);
     let taken = Mutex::new(Vec::new());
@@ -408,12 +407,8 @@ pub fn merge(set: &PartSet, ctx: &Context, started: Instant) -> Result<(), CliEr
     let gatherer = Gatherer::new(&scene, &solution, settings);
     let estimator: &dyn RadianceEstimator = &replay;
     let elements = args.gathers_elements().then(|| {
-        let points = 6 * solution.mesh().leaves().count() as u64;
-        let rays = args.gather.element_rays(points).unwrap_or(1);
-        let rays = gatherer.fixed(rays).rays();
-        let counted = Counted::new(estimator, rays);
-        let gathered = twopass_bake::gathered_solution(&solution, &scene, &counted);
-        (gathered, counted.record(None))
+        let rays = args.gather.element_rays(solution.mesh()).unwrap_or(1);
+        gather_elements(&solution, &scene, estimator, rays)
     });
     let dir = ctx.output_or(Path::new("bake"));
     crate::output::create_dir(dir)?;

@@ -57,17 +57,14 @@ pub(super) fn solve_all(
         let mut solution = solver.solution();
         let mut rays = p.rays;
         if let Some(n) = spec.gather {
-            // As `twopass bake` gathers its element mesh: the same rays at every point.
+            // As `twopass bake --gather N` gathers its element mesh.
             let settings = crate::final_gather::Gather::Rays(n)
                 .settings(ctx.seed)
                 .expect("a ray count gathers");
             let gatherer = twopass_trace::gather::Gatherer::new(scene, &solution, settings);
-            let fixed = gatherer.fixed(n);
-            let counted = crate::final_gather::Counted::new(&fixed, n);
-            let gathered = twopass_bake::gathered_solution(&solution, scene, &counted);
-            let record = counted.record(None);
+            let (gathered, record) =
+                crate::final_gather::gather_elements(&solution, scene, &gatherer.fixed(n), n);
             rays += record.rays + record.shadow_rays;
-            drop(gatherer);
             solution = gathered;
         }
         solved.push(Solved {
