@@ -131,3 +131,98 @@ fn reference_matches_the_closed_form_within_its_noise_and_one_percent() {
     assert!(mean.abs() < 4.0 * err, "biased: {mean} +- {err}");
     assert!(4.0 * err < 0.01, "too noisy to decide at 1%: {err}");
 }
+
+/// The plane under five parallel square emitters of different radiances at height `HEIGHT`
+/// (centre x, centre z, L_e), and one more facing up (it lights nothing below).
+const EMITTERS: [(f64, f64, f64); 5] = [
+    (0.0, 0.0, 10.0),
+    (-1.0, -1.0, 20.0),
+    (1.0, -1.0, 5.0),
+    (-1.0, 1.0, 40.0),
+    (1.2, 0.9, 2.0),
+];
+
+fn many_emitters_scene() -> twopass_scene::Scene {
+    let mut text = String::from(
+        "version = 1\n\
+         [camera]\nposition = [0, 0.9, 3]\nlook_at = [0, 0, 0]\nfov_y = 40\nresolution = [32, 32]\n\
+         [[material]]\nname = \"grey\"\ntype = \"lambert\"\ndiffuse = 0.5\n\
+         [[material]]\nname = \"black\"\ntype = \"lambert\"\ndiffuse = 0\n\
+         [[object]]\nname = \"plane\"\nmaterial = \"grey\"\n\
+         shape = { type = \"quad\", origin = [-2, 0, -2], edge_u = [0, 0, 4], edge_v = [4, 0, 0] }\n",
+    );
+    let h = SIDE / 2.0;
+    for (i, (x, z, l)) in EMITTERS.iter().enumerate() {
+        text += &format!(
+            "[[object]]\nname = \"light-{i}\"\nmaterial = \"black\"\nemission = {l}\n\
+             shape = {{ type = \"quad\", origin = [{}, {HEIGHT}, {}], edge_u = [{SIDE}, 0, 0], edge_v = [0, 0, {SIDE}] }}\n",
+            x - h,
+            z - h
+        );
+    }
+    text += &format!(
+        "[[object]]\nname = \"up\"\nmaterial = \"black\"\nemission = 100\n\
+         shape = {{ type = \"quad\", origin = [0.25, {HEIGHT}, 0.75], edge_u = [0, 0, {SIDE}], edge_v = [{SIDE}, 0, 0] }}\n"
+    );
+    scene(&text)
+}
+
+#[test]
+fn whitted_under_many_emitters_matches_the_closed_form_with_a_shared_shadow_budget() {
+    // 16 shadow rays per point in all, each ray's emitter chosen by its importance at the
+    // point (not 16 per emitter): the estimate must stay unbiased against the sum of the
+    // five closed forms, and the emitter facing away must add nothing.
+    let scene = many_emitters_scene();
+    let spp = 64;
+    let exact = pixel_means(&scene, spp, |h| {
+        (h.object == 0 && h.front_face).then(|| {
+            let p = h.point.position.as_dvec3();
+            let h2 = SIDE / 2.0;
+            EMITTERS
+                .iter()
+                .map(|&(x, z, l)| {
+                    let f = form_factor(x - h2 - p.x, x + h2 - p.x, z - h2 - p.z, z + h2 - p.z);
+                    f64::from(RHO) * l * f
+                })
+                .sum::<f64>()
+        })
+    });
+    let w = Whitted::new(
+        &scene,
+        glam::Vec3::ZERO,
+        WhittedSettings {
+            shadow_grid: 4,
+            ..Default::default()
+        },
+    );
+    let out = render(
+        &scene,
+        &scene.camera,
+        &w,
+        &settings(spp),
+        &RenderProgress::new(),
+    );
+    let img = out.layers.layer(Layer::Diffuse);
+    let diffs: Vec<f64> = exact
+        .iter()
+        .enumerate()
+        .filter_map(|(i, e)| e.map(|e| f64::from(img.pixels()[i].x) / e - 1.0))
+        .collect();
+    assert!(
+        diffs.len() > 500,
+        "the plane fills the view: {}",
+        diffs.len()
+    );
+    let (mean, err) = mean_and_error(&diffs);
+    eprintln!("many emitters vs closed form: mean relative difference {mean:.2e} +- {err:.1e}");
+    assert!(mean.abs() < 4.0 * err, "biased: {mean} +- {err}");
+    assert!(4.0 * err < 0.01, "too noisy to decide at 1%: {err}");
+    // The shared budget: 16 shadow rays per camera sample at most, not 16 per emitter.
+    let samples = (diffs.len() as u64) * u64::from(spp);
+    assert!(
+        out.stats.shadow_rays <= 16 * 32 * 32 * u64::from(spp),
+        "{} shadow rays for {samples} samples on the plane",
+        out.stats.shadow_rays
+    );
+    assert_eq!(out.stats.non_finite, 0);
+}

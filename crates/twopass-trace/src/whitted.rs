@@ -14,7 +14,7 @@
 //! | --- | --- | --- | --- |
 //! | `max_depth` | bounces | 8 | delta bounces followed after the camera hit |
 //! | `min_throughput` | dimensionless | 1e-3 | a branch whose largest channel weight falls below is cut |
-//! | `shadow_grid` | samples per axis | 4 | shadow rays per emitter per shading point: grid^2 (and as many for the sky's sun and for its dome) |
+//! | `shadow_grid` | samples per axis | 4 | shadow rays per shading point over all area emitters, each ray's emitter by its importance there: grid^2 (and as many for the sky's sun and for its dome; one per lamp) |
 //! | `caustic_paths` | light paths per camera sample | 1 | the hybrids' per-pixel caustics ([`crate::hybrid`]); 0: off |
 //! | `gather_rays` | rays per camera sample and shading point | 8 | the gathered hybrid's indirect light ([`crate::hybrid::gathered`]) |
 
@@ -40,8 +40,9 @@ pub struct WhittedSettings {
     /// for which a reflection or refraction ray is still traced.
     #[default(1e-3)]
     pub min_throughput: f32,
-    /// Shadow rays per emitter and shading point along each axis of the stratification grid
-    /// (`shadow_grid`^2 rays; at least 1).
+    /// Shadow rays per shading point along each axis of the stratification grid, over all the
+    /// area emitters (`shadow_grid`^2 rays, each ray's emitter chosen by its importance at the
+    /// point: [`crate::integrator::direct_light`]; at least 1).
     #[default(4)]
     pub shadow_grid: u32,
     /// Light paths per camera sample of the hybrids' per-pixel caustics (light through mirrors

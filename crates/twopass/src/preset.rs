@@ -40,7 +40,8 @@ pub struct RenderKnobs {
     pub spp: u32,
     /// Recursion depth of mirror and refraction paths (Whitted and the hybrids).
     pub depth: u32,
-    /// Shadow rays per emitter and hit as an N x N grid (Whitted and the hybrids).
+    /// Shadow rays per hit as an N x N grid over all the emitters, each ray's emitter chosen by
+    /// its importance at the hit (Whitted and the hybrids).
     pub shadow_grid: u32,
     /// Adaptive anti-aliasing: samples per pixel of a first pass everywhere, `spp` only where
     /// a pixel's samples or its neighbours disagree ([`twopass_trace::AdaptiveSampling`]);

@@ -65,7 +65,8 @@ pub struct RenderArgs {
     /// internal reflection keeps its full weight, so only the depth ends it.
     #[arg(long, default_value_t = WhittedSettings::default().max_depth, value_parser = clap::value_parser!(u32).range(0..=MAX_DEPTH as i64))]
     pub depth: u32,
-    /// Shadow rays per emitter and hit, as an N x N stratified grid (Whitted and the hybrids).
+    /// Shadow rays per hit, as an N x N stratified grid over all the emitters, each ray's emitter
+    /// chosen by its importance at the hit (Whitted and the hybrids; each lamp gets one more).
     #[arg(long, default_value_t = WhittedSettings::default().shadow_grid, value_parser = clap::value_parser!(u32).range(1..=64))]
     pub shadow_grid: u32,
     /// Gather rays per camera sample at every diffuse point the gathered hybrid (`hybrid`)
