@@ -6,7 +6,7 @@
 //! | method | function | diffuse light at a shading point |
 //! | --- | --- | --- |
 //! | `radiosity` | [`radiosity_only`] | the solution there, nothing traced |
-//! | `hybrid` | [`gathered`] | shadow rays to every emitter, plus gather rays that read the solution where they land ([`crate::gather`]) |
+//! | `hybrid` | [`gathered`] | shadow rays to the emitters (chosen per ray by importance), plus gather rays that read the solution where they land ([`crate::gather`]) |
 //! | `hybrid-classic` | [`hybrid`] with [`DirectLight::FromSolution`] | the solution there |
 //! | `hybrid-direct` | [`hybrid`] with [`DirectLight::PerPixel`] | shadow rays, plus the solution's indirect part there |
 //!
@@ -99,8 +99,9 @@ pub enum DirectLight {
 }
 
 /// The gathered hybrid (`hybrid`): at every diffuse shading point (the camera's first hit and
-/// every one reached through mirrors and glass), direct light by shadow rays to every emitter
-/// and the indirect light by [`WhittedSettings::gather_rays`] gather rays per camera sample
+/// every one reached through mirrors and glass), direct light by shadow rays to the emitters
+/// ([`crate::integrator::direct_light`]: the grid's rays shared by all, each ray's emitter
+/// chosen by its importance there) and the indirect light by [`WhittedSettings::gather_rays`] gather rays per camera sample
 /// that read `solution` where they land ([`Gatherer`], the final gather of the bakes), plus
 /// the glossy lobes against the emitters and delta reflection and refraction paths.
 pub fn gathered<'a>(

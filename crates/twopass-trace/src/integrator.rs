@@ -127,17 +127,20 @@ pub fn direct_light(
     }
     if !scene.emitters.is_empty() {
         let x = s.hit.point;
-        let choice = lights.choice_at(x.position, x.normal, s.hit.shading_normal);
+        // One emitter takes every ray: no importance to weigh.
+        let choice = (scene.emitters.len() > 1)
+            .then(|| lights.choice_at(x.position, x.normal, s.hit.shading_normal));
         let k = grid.max(1);
         let n = k * k;
         for i in 0..n {
             // Drawn whether or not an emitter can light the point, so the numbers after
             // these keep their dimensions of the sample's sequence.
             let u = stratum(i, k, sampler.next_2d());
-            if choice.is_empty() {
-                continue;
-            }
-            let (e, p, rest) = choice.pick(u.x);
+            let (e, p, rest) = match &choice {
+                None => (0, 1.0, u.x),
+                Some(c) if c.is_empty() => continue,
+                Some(c) => c.pick(u.x),
+            };
             let emitter = &scene.emitters[e];
             let y = lights.sample(scene, e, glam::Vec2::new(rest, u.y));
             let Some((f, g)) = unoccluded(scene, s, &x, &y, &brdf, tally) else {

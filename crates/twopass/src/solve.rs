@@ -67,7 +67,7 @@ pub struct SolveArgs {
     #[arg(long, value_name = "LENGTH", value_parser = parse_length)]
     pub patch_size: Option<f32>,
     /// Longest element (receiver) edge before adaptive subdivision, scene units
-    /// [default: scene diagonal / 24].
+    /// [default: scene diagonal / 24; / 12 for `render`'s gathered hybrid].
     #[arg(long, value_name = "LENGTH", value_parser = parse_length)]
     pub element_size: Option<f32>,
     /// Keep the element mesh fixed: no adaptive subdivision where the light changes fast.

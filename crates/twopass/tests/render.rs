@@ -237,3 +237,29 @@ fn the_default_exr_is_plain_rgba_and_layers_writes_every_pass() {
         _ => eprintln!("note: the plain EXR not read with Python's OpenEXR (not installed)"),
     }
 }
+
+#[test]
+fn the_gathered_hybrid_solves_on_a_mesh_twice_as_coarse_unless_told() {
+    // Without --element-size the gathered hybrid solves with elements of the scene diagonal
+    // / 12 (radiosity alone: / 24): the same image as that size given explicitly, and not
+    // the image of radiosity alone's default mesh.
+    let dir = tempfile::tempdir().unwrap();
+    let scene = repo("scenes/cornell-box.toml");
+    let (box_scene, _) = twopass_scene::load(&scene).unwrap();
+    let diagonal = box_scene.bounds.diagonal();
+    let render = |extra: &str, out: &str| {
+        let path = dir.path().join(out);
+        let c = cli("render")
+            .arg(&scene)
+            .words("--method hybrid --width 16 --spp 1 --unshot 1e-2 --layers --quiet")
+            .words(extra);
+        common::assert_ok(&c.output(&path).run());
+        read_exr_layers(&path).unwrap()
+    };
+    let default = render("", "default.exr");
+    let coarse = render(&format!("--element-size={}", diagonal / 12.0), "coarse.exr");
+    let fine = render(&format!("--element-size={}", diagonal / 24.0), "fine.exr");
+    let image = |l: &twopass_composite::Layers| l.require("image").unwrap().pixels().to_vec();
+    assert_eq!(image(&default), image(&coarse));
+    assert_ne!(image(&default), image(&fine));
+}

@@ -365,7 +365,7 @@ fn dry_run_prints_the_three_scripts_and_refuses_flags_out_of_place() {
     let text = String::from_utf8_lossy(&out.stdout);
     for want in [
         "# The radiosity solution, once, for every part.",
-        "--unshot 0.01 --format bake --gather off",
+        "--format bake --gather off",
         "#SBATCH --array=1-3",
         "#SBATCH --requeue",
         "--part \"${SLURM_ARRAY_TASK_ID}/3\"",
@@ -374,6 +374,14 @@ fn dry_run_prints_the_three_scripts_and_refuses_flags_out_of_place() {
     ] {
         assert!(text.contains(want), "no {want:?} in\n{text}");
     }
+    // The solve takes the solver's flags and, for the gathered hybrid, its own default mesh
+    // (what `render --method hybrid` solves on alone: diagonal / 12).
+    let (box_scene, _) = twopass_scene::load(repo(BOX)).unwrap();
+    let mesh = format!(
+        "--unshot 0.01 --element-size={} --format bake",
+        box_scene.bounds.diagonal() / 12.0
+    );
+    assert!(text.contains(&mesh), "no {mesh:?} in\n{text}");
     // The parts read the solve's solution instead of solving again.
     let parts = text.split("parts.sbatch").nth(1).unwrap();
     assert!(

@@ -157,6 +157,9 @@ pub fn plan(kind: Kind, args: &SubmitArgs, ctx: &Context) -> Result<Plan, CliErr
     }
     let argv =
         std::iter::once(format!("twopass {}", kind.command())).chain(args.command.iter().cloned());
+    // The gathered hybrid's own default mesh (`render`'s `HYBRID_ELEMENTS_PER_DIAGONAL`),
+    // which the solve job must use for the parts to render what one `render` would.
+    let mut hybrid_mesh = None;
     let (line_ctx, scene, name, needs_solve, no_more) = match kind {
         Kind::Render => {
             let line = RenderLine::try_parse_from(argv).map_err(|e| usage(kind, &e))?;
@@ -174,6 +177,17 @@ pub fn plan(kind: Kind, args: &SubmitArgs, ctx: &Context) -> Result<Plan, CliErr
                 ));
             }
             let needs = method.needs_radiosity() && line.args.bake.is_none();
+            if needs
+                && method == RenderMethod::Hybrid
+                && line.args.preset.is_none()
+                && line.args.solve.element_size.is_none()
+            {
+                let (scene, _) = ctx.load_scene(&line.args.scene)?;
+                hybrid_mesh = Some(format!(
+                    "--element-size={}",
+                    scene.bounds.diagonal() / crate::render::HYBRID_ELEMENTS_PER_DIAGONAL
+                ));
+            }
             let name = format!("{}-{}", stem(&line.args.scene), method.name());
             let no_more = line.args.part.is_some();
             (line.ctx, line.args.scene, name, needs, no_more)
@@ -217,7 +231,8 @@ pub fn plan(kind: Kind, args: &SubmitArgs, ctx: &Context) -> Result<Plan, CliErr
     let path = |p: &Path| quote(&p.display().to_string());
     let scene_q = quote(&args.command[0]);
     let threads = format!("--threads {}", args.cpus);
-    let (solve_words, rest) = solve_flags(&args.command[1..]);
+    let (mut solve_words, rest) = solve_flags(&args.command[1..]);
+    solve_words.extend(hybrid_mesh);
     let rest_q = |words: &[String]| words.iter().map(|w| quote(w)).collect::<Vec<_>>().join(" ");
     let header = |job: &str, log: &str, extra: &[&str]| {
         let mut lines = vec![
