@@ -53,9 +53,8 @@ pub struct WhittedSettings {
     pub caustic_paths: f32,
     /// Gather rays per camera sample at each diffuse shading point of the gathered hybrid
     /// ([`crate::hybrid::gathered`]): a pixel of `spp` samples averages `spp` times as many
-    /// (stratified together, [`Sampler::fork`]). 0: no indirect light. At the CLI's 16
-    /// samples per pixel the default's 128 rays per pixel bring the indirect light's noise on
-    /// the Cornell box under its discretisation error (docs/benchmarks.md).
+    /// (stratified together, [`Sampler::fork`]). 0: no indirect light. The CLI's `render` spends
+    /// the same 128 rays per pixel as 2 rays at each of 64 samples (`RenderDefaults` there).
     #[default(8)]
     pub gather_rays: u32,
 }
