@@ -31,8 +31,8 @@ use crate::solve::SolveArgs;
 
 /// The gathered hybrid's default element edge is the scene's bounding-box diagonal over this
 /// (radiosity alone and the bakes use diagonal / 24): its gather rays read the solution one
-/// bounce away and average it, so a coarser solve costs the image little. On the Cornell box
-/// it halves the solve's time for 1.50 % against 1.47 % relative RMSE (docs/benchmarks.md).
+/// bounce away and average it, so a coarser solve costs the image little and halves the
+/// solve's time on a progressive solve (docs/benchmarks.md, "The gathered hybrid").
 pub const HYBRID_ELEMENTS_PER_DIAGONAL: f32 = 12.0;
 
 /// Arguments of `twopass render`.
@@ -485,10 +485,9 @@ impl RenderDefaults {
     /// instead: its gather and shadow rays are stratified over the pixel's samples, so their
     /// noise stays, while the camera's own (the edges, what mirrors and glass show of small
     /// bright emitters) falls by half. Measured on four scenes against Mitsuba 3's references
-    /// (docs/benchmarks.md, "Images against Mitsuba 3 at equal error"): the chrome room from
-    /// 7.3 % to 4.7 % relative RMSE, the 100k-triangle room from 3.5 % to 2.9 %, the Cornell
-    /// box from 1.53 % to 1.41 %, each at about the same time or less but for the Cornell
-    /// spheres (2.62 % to 2.47 %, 1.6 times the time).
+    /// (docs/benchmarks.md, "The gathered hybrid"): better or equal error for the time on
+    /// all but the Cornell spheres, where the camera samples' glass paths and light tracing
+    /// cost most.
     pub fn of(method: RenderMethod) -> Self {
         let w = WhittedSettings::default();
         match method {
