@@ -96,6 +96,30 @@ impl Shading {
     }
 }
 
+/// Light arriving at the shading point from unit world direction `dir`: its local direction and
+/// the two BRDF values (1/sr) of `brdf` there, or `None` when nothing can arrive (below the
+/// geometric or the shading surface) or both values are zero. The test before every shadow ray
+/// the Whitted core casts (emitters, lamps, the sky), so no ray is spent on light that would be
+/// multiplied by zero.
+pub(crate) fn arriving(
+    s: &Shading,
+    dir: Vec3,
+    brdf: &impl Fn(Vec3) -> [Rgb; 2],
+) -> Option<(Vec3, [Rgb; 2])> {
+    if dir.dot(s.hit.point.normal) <= 0.0 {
+        return None;
+    }
+    let wl = s.frame.to_local(dir);
+    if wl.z <= 0.0 {
+        return None;
+    }
+    let f = brdf(wl);
+    if f[0].max_element() <= 0.0 && f[1].max_element() <= 0.0 {
+        return None;
+    }
+    Some((wl, f))
+}
+
 /// Direct light from every emitter at a shading point: `grid` x `grid` stratified shadow rays
 /// over all the area emitters, each ray's emitter chosen in proportion to its importance at
 /// the point ([`Lights::choice_at`]), and one shadow ray per lamp ([`lamps_light`]) (the sky's
@@ -143,7 +167,7 @@ pub fn direct_light(
             };
             let emitter = &scene.emitters[e];
             let y = lights.sample(scene, e, glam::Vec2::new(rest, u.y));
-            let Some((f, g)) = unoccluded(scene, s, &x, &y, &brdf, tally) else {
+            let Some((f, g)) = unoccluded(scene, s, &y, &brdf, tally) else {
                 continue;
             };
             let w = emitter.radiance * (g * emitter.area / (p * n as f32));
@@ -156,16 +180,16 @@ pub fn direct_light(
 }
 
 /// The two BRDF values and the geometry term cos(theta_x) cos(theta_y) / d^2 (1/(scene unit)^2)
-/// of light from emitter point `y` at the shading point `x` of `s`, or `None` when it cannot
+/// of light from emitter point `y` at the shading point of `s`, or `None` when it cannot
 /// arrive: behind either surface, a BRDF of zero, or a blocker (a shadow ray, counted).
 fn unoccluded(
     scene: &Scene,
     s: &Shading,
-    x: &twopass_scene::SurfacePoint,
     y: &twopass_scene::SurfacePoint,
     brdf: &impl Fn(Vec3) -> [Rgb; 2],
     tally: &mut Tally,
 ) -> Option<([Rgb; 2], f32)> {
+    let x = &s.hit.point;
     let d = y.position - x.position;
     let dist2 = d.length_squared();
     if dist2 <= 0.0 {
@@ -173,17 +197,10 @@ fn unoccluded(
     }
     let wi = d / dist2.sqrt();
     let cos_y = -wi.dot(y.normal);
-    if cos_y <= 0.0 || wi.dot(x.normal) <= 0.0 {
+    if cos_y <= 0.0 {
         return None;
     }
-    let wl = s.frame.to_local(wi);
-    if wl.z <= 0.0 {
-        return None;
-    }
-    let f = brdf(wl);
-    if f[0].max_element() <= 0.0 && f[1].max_element() <= 0.0 {
-        return None;
-    }
+    let (wl, f) = arriving(s, wi, brdf)?;
     tally.shadow_rays += 1;
     if scene.occluded_between(x, y) {
         return None;
@@ -227,11 +244,10 @@ fn emitter_light(
     let emitter = &scene.emitters[e];
     let k = grid.max(1);
     let n = k * k;
-    let x = s.hit.point;
     let mut sum = [Rgb::ZERO; 2];
     for i in 0..n {
         let y = lights.sample(scene, e, stratum(i, k, sampler.next_2d()));
-        if let Some((f, g)) = unoccluded(scene, s, &x, &y, brdf, tally) {
+        if let Some((f, g)) = unoccluded(scene, s, &y, brdf, tally) {
             sum[0] += f[0] * g;
             sum[1] += f[1] * g;
         }
@@ -261,17 +277,9 @@ pub fn lamp_light(
     let Some(light) = scene.lamps[l].light_at(x.position) else {
         return zero;
     };
-    if light.direction.dot(x.normal) <= 0.0 {
+    let Some((wl, f)) = arriving(s, light.direction, brdf) else {
         return zero;
-    }
-    let wl = s.frame.to_local(light.direction);
-    if wl.z <= 0.0 {
-        return zero;
-    }
-    let f = brdf(wl);
-    if f[0].max_element() <= 0.0 && f[1].max_element() <= 0.0 {
-        return zero;
-    }
+    };
     tally.shadow_rays += 1;
     if scene.lamp_occluded(&x, &light) {
         return zero;

@@ -31,20 +31,12 @@ fn contribution(
     tally: &mut Tally,
     brdf: &impl Fn(Vec3) -> [Rgb; 2],
 ) -> Option<([Rgb; 2], f32)> {
-    let x = &s.hit.point;
-    if l == Rgb::ZERO || dir.dot(x.normal) <= 0.0 {
+    if l == Rgb::ZERO {
         return None;
     }
-    let wl = s.frame.to_local(dir);
-    if wl.z <= 0.0 {
-        return None;
-    }
-    let f = brdf(wl);
-    if f[0].max_element() <= 0.0 && f[1].max_element() <= 0.0 {
-        return None;
-    }
+    let (wl, f) = crate::integrator::arriving(s, dir, brdf)?;
     tally.shadow_rays += 1;
-    if !scene.sky_visible(x, dir) {
+    if !scene.sky_visible(&s.hit.point, dir) {
         return None;
     }
     Some(([f[0] * l * wl.z, f[1] * l * wl.z], wl.z))
