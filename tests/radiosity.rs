@@ -930,8 +930,13 @@ fn the_residual_report_finds_the_light_a_solve_loses() {
     let r = solver.residuals(100);
     let (lost, error) = (r.energy_lost.unwrap(), r.energy_lost_error.unwrap());
     let escaped = (energy.escaped / energy.emitted).max_element();
-    assert_eq!(error, 0.0, "no ray leaves a closed cube");
-    assert!((lost - escaped).abs() < 1e-9, "{lost} against {escaped}");
+    // No ray leaves a closed cube; the few that land on the light's back (one-sided, it
+    // absorbs them as the solvers do) are all the rays count as leaving.
+    assert!(error < 1e-3, "{error}");
+    assert!(
+        (lost - escaped).abs() <= 3.0 * error + 1e-9,
+        "{lost} against {escaped} +- {error}"
+    );
     // Measured: 10.1 %.
     assert!(lost > 0.05, "{lost}");
     let (scene, _) = load(scene_path("cornell-box.toml")).unwrap();
@@ -949,6 +954,102 @@ fn the_residual_report_finds_the_light_a_solve_loses() {
             "{method:?}: lost {lost} +- {error}"
         );
     }
+}
+
+/// A closed grey room (16 x 8 x 16, its walls in 2 m squares, three spheres on the floor) lit
+/// by seventeen strip lights under its ceiling, as the chrome room is: the hierarchical
+/// solver carries most of its light through clusters' far-field links, from clusters of strips
+/// a few metres long to pieces of floor and wall off to their side. Nothing leaves a closed
+/// room, so what the residual report's rays find lost is what those links dropped: the light
+/// a cluster sends or intercepts along a direction its surfaces all face is exact (not a
+/// blend of table directions, which falls short by 7 % on average), the far-field estimate is
+/// corrected for the extent of both ends, and a cluster of lights holds no wall. Measured:
+/// 0.1 % +- 0.3 % lost (4.2 % with none of the three).
+#[test]
+fn a_room_under_strip_lights_keeps_its_light_through_the_clusters() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut obj = String::new();
+    let mut vertices = 0u32;
+    let mut add = |obj: &mut String, positions: &[glam::Vec3], triangles: &[[u32; 3]]| {
+        for p in positions {
+            obj.push_str(&format!("v {} {} {}\n", p.x, p.y, p.z));
+        }
+        for t in triangles {
+            let [a, b, c] = t.map(|i| i + vertices + 1);
+            obj.push_str(&format!("f {a} {b} {c}\n"));
+        }
+        vertices += positions.len() as u32;
+    };
+    // Each wall an 8 x 8 grid facing in: origin, then two edges whose cross product points in.
+    let (l, h) = (16.0f32, 8.0f32);
+    let walls = [
+        ([0.0, 0.0, 0.0], [0.0, 0.0, l], [l, 0.0, 0.0]),
+        ([0.0, h, 0.0], [l, 0.0, 0.0], [0.0, 0.0, l]),
+        ([0.0, 0.0, 0.0], [0.0, h, 0.0], [0.0, 0.0, l]),
+        ([l, 0.0, 0.0], [0.0, 0.0, l], [0.0, h, 0.0]),
+        ([0.0, 0.0, 0.0], [l, 0.0, 0.0], [0.0, h, 0.0]),
+        ([0.0, 0.0, l], [0.0, h, 0.0], [l, 0.0, 0.0]),
+    ];
+    let n = 8u32;
+    for (o, u, v) in walls {
+        let (o, u, v) = (
+            glam::Vec3::from(o),
+            glam::Vec3::from(u),
+            glam::Vec3::from(v),
+        );
+        let positions: Vec<glam::Vec3> = (0..=n)
+            .flat_map(|i| {
+                (0..=n).map(move |j| o + u * i as f32 / n as f32 + v * j as f32 / n as f32)
+            })
+            .collect();
+        let triangles: Vec<[u32; 3]> = (0..n)
+            .flat_map(|i| {
+                (0..n).flat_map(move |j| {
+                    let a = i * (n + 1) + j;
+                    let (b, c) = (a + 1, a + n + 1);
+                    [[a, c, c + 1], [a, c + 1, b]]
+                })
+            })
+            .collect();
+        add(&mut obj, &positions, &triangles);
+    }
+    for (centre, radius) in [
+        ([5.2, 0.5, 10.2], 0.5),
+        ([9.0, 0.8, 6.0], 0.8),
+        ([12.0, 0.5, 11.0], 0.5),
+    ] {
+        let sphere = twopass_scene::shape::sphere(glam::Vec3::from(centre), radius, 3).unwrap();
+        add(&mut obj, &sphere.positions, &sphere.triangles);
+    }
+    std::fs::write(dir.path().join("room.obj"), obj).unwrap();
+    let strips: String = (0..17)
+        .map(|k| {
+            let x = 0.6 + 0.9 * f64::from(k);
+            quad(
+                &format!("strip-{k}"),
+                "grey",
+                [x, 7.98, 5.0],
+                [0.12, 0.0, 0.0],
+                [0.0, 0.0, 6.0],
+                Some(60.0),
+            )
+        })
+        .collect();
+    let text = format!(
+        "version = 1\n[camera]\nposition = [8, 3.6, 0.5]\nlook_at = [8, 0.8, 8]\nfov_y = 60\n{}\n\
+         [[object]]\nname = \"room\"\nmaterial = \"grey\"\nshape = {{ type = \"obj\", file = \"room.obj\" }}\n{strips}",
+        lambert("grey", 0.5)
+    );
+    let path = dir.path().join("strips.toml");
+    std::fs::write(&path, text).unwrap();
+    let (scene, _) = load(&path).unwrap();
+    let mut solver = solved(&scene, Method::Hierarchical);
+    let r = solver.residuals(200);
+    let (lost, error) = (r.energy_lost.unwrap(), r.energy_lost_error.unwrap());
+    // Rays leave a closed room only onto the backs of the strips (one-sided: they absorb what
+    // the ceiling sends them, in the solver as in the path tracer).
+    assert!(error < 0.01, "{error}");
+    assert!(lost.abs() < 0.01 + 3.0 * error, "lost {lost} +- {error}");
 }
 
 #[test]

@@ -100,14 +100,75 @@ pub struct Clusters {
 
 impl Clusters {
     /// Builds the tree over the mesh's root nodes; `rho_lum[t]` is scene triangle `t`'s
-    /// diffuse reflectance luminance. Returns `None` when no triangle takes part.
-    pub fn build(mesh: &ElementMesh, rho_lum: &[f64]) -> Option<Self> {
+    /// diffuse reflectance luminance, `emitting[t]` whether it emits. Returns `None` when no
+    /// triangle takes part.
+    ///
+    /// Emitting and other triangles get a subtree each, joined only at the root: a cluster
+    /// that mixed a light with the wall beside it would send the light's power from the
+    /// pair's centre and by the pair's orientation (a strip light under a ceiling, its
+    /// far-field links to the far side of a room half as strong as the light's own), while a
+    /// cluster of emitters alone is as uniform a source as its far-field estimate assumes.
+    pub fn build(mesh: &ElementMesh, rho_lum: &[f64], emitting: &[bool]) -> Option<Self> {
         let tris: Vec<u32> = (0..mesh.roots.len() as u32)
             .filter(|&t| mesh.roots[t as usize] != u32::MAX)
             .collect();
         if tris.is_empty() {
             return None;
         }
+        let mut out = Self {
+            nodes: Vec::new(),
+            root: NodeRef::surface(mesh.roots[tris[0] as usize]),
+            triangles: Vec::with_capacity(tris.len()),
+            area_cdf: Vec::with_capacity(tris.len()),
+            triangle_parent: vec![u32::MAX; mesh.roots.len()],
+        };
+        let (lit, dark): (Vec<u32>, Vec<u32>) = tris
+            .iter()
+            .partition(|&&t| emitting.get(t as usize).copied().unwrap_or(false));
+        if lit.is_empty() || dark.is_empty() {
+            out.root = out.grow(mesh, rho_lum, &tris, None).0;
+            return Some(out);
+        }
+        // The root first (a parent comes before its children), then the two subtrees.
+        out.nodes.push(Cluster {
+            center: DVec3::ZERO,
+            radius: 0.0,
+            area: 0.0,
+            children: [NodeRef::surface(0); 2],
+            triangles: 0..0,
+            rho_max: 0.0,
+            parent: u32::MAX,
+        });
+        let (first, a) = out.grow(mesh, rho_lum, &lit, Some((0, 0)));
+        let (second, b) = out.grow(mesh, rho_lum, &dark, Some((0, 1)));
+        let (min, max) = (a.min.min(b.min).as_dvec3(), a.max.max(b.max).as_dvec3());
+        let end = out.triangles.len() as u32;
+        let rho_max = tris
+            .iter()
+            .map(|&t| rho_lum[t as usize])
+            .fold(0.0, f64::max);
+        out.nodes[0] = Cluster {
+            center: (min + max) * 0.5,
+            radius: (max - min).length() * 0.5,
+            area: out.area_cdf[end as usize - 1],
+            children: [first, second],
+            triangles: 0..end,
+            rho_max,
+            parent: u32::MAX,
+        };
+        out.root = NodeRef::cluster(0);
+        Some(out)
+    }
+
+    /// Appends the subtree over triangles `tris` below `parent` (cluster index, child slot)
+    /// and returns its root and bounding box.
+    fn grow(
+        &mut self,
+        mesh: &ElementMesh,
+        rho_lum: &[f64],
+        tris: &[u32],
+        parent: Option<(usize, usize)>,
+    ) -> (NodeRef, Aabb) {
         let boxes: Vec<Aabb> = tris
             .iter()
             .map(|&t| {
@@ -117,16 +178,13 @@ impl Clusters {
                 Aabb::new(Vec3A::from(min), Vec3A::from(max))
             })
             .collect();
-        let mut out = Self {
-            nodes: Vec::new(),
-            root: NodeRef::surface(mesh.roots[tris[0] as usize]),
-            triangles: Vec::with_capacity(tris.len()),
-            area_cdf: Vec::with_capacity(tris.len()),
-            triangle_parent: vec![u32::MAX; mesh.roots.len()],
-        };
         if tris.len() == 1 {
-            out.push_triangle(mesh, tris[0]);
-            return Some(out);
+            self.push_triangle(mesh, tris[0]);
+            if let Some((p, k)) = parent {
+                self.triangle_parent[tris[0] as usize] = p as u32;
+                self.nodes[p].children[k] = NodeRef::surface(mesh.roots[tris[0] as usize]);
+            }
+            return (NodeRef::surface(mesh.roots[tris[0] as usize]), boxes[0]);
         }
         let params = BvhBuildParams {
             max_prims_per_leaf: 1,
@@ -143,7 +201,7 @@ impl Clusters {
             Enter(u32, Option<(usize, usize)>),
             Leave(usize, u32),
         }
-        let mut stack = vec![Step::Enter(0, None)];
+        let mut stack = vec![Step::Enter(0, parent)];
         let mut root = None;
         while let Some(step) = stack.pop() {
             match step {
@@ -152,15 +210,15 @@ impl Clusters {
                     let r = if node.prim_count > 0 {
                         debug_assert_eq!(node.prim_count, 1, "one triangle per leaf");
                         let t = tris[bvh.primitive_indices[node.first_index as usize] as usize];
-                        out.push_triangle(mesh, t);
+                        self.push_triangle(mesh, t);
                         if let Some((p, _)) = parent {
-                            out.triangle_parent[t as usize] = p as u32;
+                            self.triangle_parent[t as usize] = p as u32;
                         }
                         NodeRef::surface(mesh.roots[t as usize])
                     } else {
-                        let c = out.nodes.len();
-                        let start = out.triangles.len() as u32;
-                        out.nodes.push(Cluster {
+                        let c = self.nodes.len();
+                        let start = self.triangles.len() as u32;
+                        self.nodes.push(Cluster {
                             center: DVec3::ZERO,
                             radius: 0.0,
                             area: 0.0,
@@ -174,28 +232,30 @@ impl Clusters {
                         stack.push(Step::Enter(node.first_index, Some((c, 0))));
                         NodeRef::cluster(c as u32)
                     };
-                    match parent {
-                        Some((p, k)) => out.nodes[p].children[k] = r,
-                        None => root = Some(r),
+                    if b == 0 {
+                        root = Some(r);
+                    }
+                    if let Some((p, k)) = parent {
+                        self.nodes[p].children[k] = r;
                     }
                 }
                 Step::Leave(c, first) => {
-                    let end = out.triangles.len() as u32;
-                    let range = out.nodes[c].triangles.start..end;
+                    let end = self.triangles.len() as u32;
+                    let range = self.nodes[c].triangles.start..end;
                     let (l, r) = (&bvh.nodes[first as usize], &bvh.nodes[first as usize + 1]);
                     let min = l.aabb.min.min(r.aabb.min).as_dvec3();
                     let max = l.aabb.max.max(r.aabb.max).as_dvec3();
                     let lo = if range.start == 0 {
                         0.0
                     } else {
-                        out.area_cdf[range.start as usize - 1]
+                        self.area_cdf[range.start as usize - 1]
                     };
-                    let area = out.area_cdf[end as usize - 1] - lo;
-                    let rho_max = out.triangles[range.start as usize..end as usize]
+                    let area = self.area_cdf[end as usize - 1] - lo;
+                    let rho_max = self.triangles[range.start as usize..end as usize]
                         .iter()
                         .map(|&t| rho_lum[t as usize])
                         .fold(0.0, f64::max);
-                    let cl = &mut out.nodes[c];
+                    let cl = &mut self.nodes[c];
                     cl.center = (min + max) * 0.5;
                     cl.radius = (max - min).length() * 0.5;
                     cl.area = area;
@@ -204,8 +264,7 @@ impl Clusters {
                 }
             }
         }
-        out.root = root.expect("the tree has a root");
-        Some(out)
+        (root.expect("the tree has a root"), bvh.nodes[0].aabb)
     }
 
     fn push_triangle(&mut self, mesh: &ElementMesh, t: u32) {

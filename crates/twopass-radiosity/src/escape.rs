@@ -3,6 +3,11 @@
 //! solve whose form factors miss part of what a surface sends (a light a hair's breadth from
 //! a wall, whose vertices see the wall as a whole hemisphere or not at all) books that light
 //! as escaped. Only rays, which know nothing of the mesh, can tell the two apart.
+//!
+//! Light that lands on the back of a surface leaves the solve as surely as light that leaves
+//! the scene: surfaces are one-sided, so the back of a strip light hung under a ceiling
+//! absorbs what the ceiling sends it, in the solvers as in the path tracer. A ray that ends on
+//! a back face counts as leaving.
 
 use glam::{DVec3, Vec2};
 use rayon::prelude::*;
@@ -47,7 +52,8 @@ pub(crate) fn lost_fraction(
     (lost.is_finite() && error.is_finite()).then_some((lost, error))
 }
 
-/// The share of the light the surfaces send that leaves the scene, and its standard error.
+/// The share of the light the surfaces send that leaves the scene or lands on the back of a
+/// surface, and its standard error.
 fn escaping_share(
     scene: &Scene,
     solution: &Solution,
@@ -92,7 +98,12 @@ fn escaping_share(
                     let u = Vec2::new(unit_f32(h), unit_f32(hash(h)));
                     let dir = cosine_direction(point.normal, u);
                     let origin = point.spawn_origin(dir);
-                    scene.accel().closest(origin, dir, f32::INFINITY).is_none()
+                    scene
+                        .accel()
+                        .closest(origin, dir, f32::INFINITY)
+                        .is_none_or(|h| {
+                            scene.mesh.geometric_normals[h.triangle as usize].dot(dir) > 0.0
+                        })
                 })
                 .count();
             out as f64 / f64::from(RAYS_PER_POINT)

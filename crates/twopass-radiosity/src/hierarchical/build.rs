@@ -10,7 +10,7 @@ use twopass_brdf::colour::luminance_f64;
 use twopass_brdf::random::hash;
 use twopass_scene::Scene;
 
-use super::directions::{DIRECTIONS, EMPTY, NOTHING, directions};
+use super::directions::{DARK, DIRECTIONS, EMPTY, Facing, NOTHING, directions};
 use super::geometry::merge_cones;
 use super::state::{BYTES_PER_CLUSTER, BYTES_PER_LINK, BYTES_PER_NODE, HierarchicalSolver};
 use crate::cluster::{Clusters, Kind, NodeRef};
@@ -88,7 +88,9 @@ impl<'s> HierarchicalSolver<'s> {
             })
             .collect();
         let rho_lum: Vec<f64> = tri_rho.iter().map(|&r| luminance_f64(r)).collect();
-        let clusters = Clusters::build(&mesh, &rho_lum).ok_or(SolveError::NothingTakesPart)?;
+        let emitting: Vec<bool> = tri_emission.iter().map(|e| *e != DVec3::ZERO).collect();
+        let clusters =
+            Clusters::build(&mesh, &rho_lum, &emitting).ok_or(SolveError::NothingTakesPart)?;
         let spare = options.memory_limit - base;
         let mut s = Self {
             scene,
@@ -113,8 +115,11 @@ impl<'s> HierarchicalSolver<'s> {
             cluster_gathered: Vec::new(),
             cluster_exitance: Vec::new(),
             radiant: Vec::new(),
+            radiant_linear: Vec::new(),
             projected: Vec::new(),
+            projected_linear: Vec::new(),
             cones: Vec::new(),
+            cone_sines: Vec::new(),
             dirs: directions(),
             residual: DVec3::ZERO,
             residual_fraction: 1.0,
@@ -171,9 +176,11 @@ impl<'s> HierarchicalSolver<'s> {
     /// parent, so a reverse sweep sees every child first).
     fn project(&mut self) {
         let mut projected = vec![[0.0f32; DIRECTIONS]; self.clusters.nodes.len()];
+        let mut linear = vec![DVec3::ZERO; self.clusters.nodes.len()];
         let mut cones = vec![(DVec3::Z, 0.0); self.clusters.nodes.len()];
         for c in (0..self.clusters.nodes.len()).rev() {
             let mut sum = [0.0f64; DIRECTIONS];
+            let mut vector = DVec3::ZERO;
             let children = self.clusters.nodes[c].children;
             let cone = |x: NodeRef| match x.kind() {
                 Kind::Cluster(cc) => cones[cc as usize],
@@ -186,6 +193,7 @@ impl<'s> HierarchicalSolver<'s> {
                         for (s, p) in sum.iter_mut().zip(&projected[cc as usize]) {
                             *s += f64::from(*p);
                         }
+                        vector += linear[cc as usize];
                     }
                     Kind::Surface(n) => {
                         let node = &self.mesh.nodes[n as usize];
@@ -195,12 +203,16 @@ impl<'s> HierarchicalSolver<'s> {
                         for (s, d) in sum.iter_mut().zip(&self.dirs) {
                             *s += f64::from(node.area) * normal.dot(*d).max(0.0);
                         }
+                        vector += f64::from(node.area) * normal;
                     }
                 }
             }
             projected[c] = sum.map(|s| s as f32);
+            linear[c] = vector;
         }
         self.projected = projected;
+        self.projected_linear = linear;
+        self.cone_sines = cones.iter().map(|c| Facing::sine(c.1)).collect();
         self.cones = cones;
     }
 
@@ -223,6 +235,7 @@ impl<'s> HierarchicalSolver<'s> {
         self.cluster_gathered.resize(c, NOTHING);
         self.cluster_exitance.resize(c, [DVec3::ZERO; 2]);
         self.radiant.resize(c, EMPTY);
+        self.radiant_linear.resize(c, DARK);
         self.cluster_spread.resize(c, 0.0);
         if let Some(spec) = &mut self.specular {
             spec.sent.resize(n, None);

@@ -39,11 +39,7 @@ impl HierarchicalSolver<'_> {
                         // Arriving from the source's side: the opposite of `dir`.
                         let k = f64::from(l.transport[0]);
                         let toward = l.dir.opposite();
-                        let u = toward
-                            .parts()
-                            .map(|(j, w)| self.dirs[j] * w)
-                            .sum::<DVec3>()
-                            .normalize_or(self.dirs[toward.parts().next().map_or(0, |p| p.0)]);
+                        let u = toward.unit();
                         let y = luminance_f64(be + br) * k;
                         for (j, w) in toward.parts() {
                             flux[0][j] += be * k * w;

@@ -5,9 +5,15 @@ use glam::DVec3;
 use rayon::prelude::*;
 use twopass_brdf::colour::luminance_f64;
 
+use super::directions::{Dir, Facing};
 use super::link::Link;
 use super::state::HierarchicalSolver;
 use crate::cluster::{Kind, NodeRef};
+
+/// Levels below a cluster whose surfaces face a direction only in part that its light and
+/// projected area are summed over (each part exact where it faces the direction wholly)
+/// before the direction table is read.
+pub(super) const RESOLVE_DEPTH: u32 = 3;
 
 impl HierarchicalSolver<'_> {
     /// The links node `r` receives (they are sorted by receiver).
@@ -70,15 +76,88 @@ impl HierarchicalSolver<'_> {
     /// the receiver (W).
     pub(super) fn source_value(&self, l: &Link) -> [DVec3; 2] {
         match l.source.kind() {
-            Kind::Cluster(c) => {
-                let t = &self.radiant[c as usize];
-                [l.dir.read_rgb(&t[0]), l.dir.read_rgb(&t[1])]
-            }
+            Kind::Cluster(c) => self.cluster_radiant(c, l.dir),
             Kind::Surface(n) => match self.sending.get(n as usize) {
                 Some(&sent) => sent,
                 None => self.exitance[n as usize],
             },
         }
+    }
+
+    /// Cluster `c`'s radiant intensity times pi toward `dir` (emitted, reflected light), W:
+    /// exact where every triangle inside faces `dir`; where only some do, summed over its
+    /// parts down to [`RESOLVE_DEPTH`] levels (each exact where it faces `dir` wholly), then
+    /// from the table.
+    pub(super) fn cluster_radiant(&self, c: u32, dir: Dir) -> [DVec3; 2] {
+        self.radiant_at(c, dir, dir.unit(), RESOLVE_DEPTH)
+    }
+
+    fn radiant_at(&self, c: u32, dir: Dir, u: DVec3, depth: u32) -> [DVec3; 2] {
+        match self.facing(c, u) {
+            Facing::All => self.radiant_linear[c as usize]
+                .map(|m| (m * u.as_vec3()).as_dvec3().max(DVec3::ZERO)),
+            Facing::None => [DVec3::ZERO; 2],
+            Facing::Some if depth > 0 => {
+                let mut sum = [DVec3::ZERO; 2];
+                for child in self.clusters.nodes[c as usize].children {
+                    let part = match child.kind() {
+                        Kind::Cluster(cc) => self.radiant_at(cc, dir, u, depth - 1),
+                        Kind::Surface(n) => {
+                            let a = self.surface_projected(n, u);
+                            self.exitance[n as usize].map(|e| e * a)
+                        }
+                    };
+                    sum[0] += part[0];
+                    sum[1] += part[1];
+                }
+                sum
+            }
+            Facing::Some => {
+                let t = &self.radiant[c as usize];
+                [dir.read_rgb(&t[0]), dir.read_rgb(&t[1])]
+            }
+        }
+    }
+
+    /// Cluster `c`'s projected area toward `dir`, scene units squared, by the same rule as
+    /// [`Self::cluster_radiant`].
+    pub(super) fn cluster_projected(&self, c: u32, dir: Dir) -> f64 {
+        self.projected_at(c, Some(dir), dir.unit(), RESOLVE_DEPTH)
+    }
+
+    /// Cluster `c`'s projected area toward unit direction `u` as [`Self::cluster_projected`]
+    /// gives it; the table's blend is made only when it is needed (`dir`, when given, is `u`'s).
+    pub(super) fn projected_at(&self, c: u32, dir: Option<Dir>, u: DVec3, depth: u32) -> f64 {
+        match self.facing(c, u) {
+            Facing::All => self.projected_linear[c as usize].dot(u).max(0.0),
+            Facing::None => 0.0,
+            Facing::Some if depth > 0 => self.clusters.nodes[c as usize]
+                .children
+                .iter()
+                .map(|&child| match child.kind() {
+                    Kind::Cluster(cc) => self.projected_at(cc, dir, u, depth - 1),
+                    Kind::Surface(n) => self.surface_projected(n, u),
+                })
+                .sum(),
+            Facing::Some => dir
+                .unwrap_or_else(|| Dir::new(&self.dirs, u))
+                .read(&self.projected[c as usize]),
+        }
+    }
+
+    /// Surface node `n`'s projected area toward unit direction `u`, scene units squared.
+    pub(super) fn surface_projected(&self, n: u32, u: DVec3) -> f64 {
+        let t = self.mesh.nodes[n as usize].scene_triangle as usize;
+        let cos = self.scene.mesh.geometric_normals[t]
+            .as_dvec3()
+            .dot(u)
+            .max(0.0);
+        f64::from(self.mesh.nodes[n as usize].area) * cos
+    }
+
+    /// Which of cluster `c`'s surfaces face unit direction `u`.
+    fn facing(&self, c: u32, u: DVec3) -> Facing {
+        Facing::of(self.cones[c as usize].0, self.cone_sines[c as usize], u)
     }
 
     /// Whether a node can ever send light: it emits or reflects.

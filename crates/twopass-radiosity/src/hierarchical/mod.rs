@@ -17,11 +17,19 @@
 //!   integral) at the receiver's three corners, so irradiance varies linearly over an element
 //!   and the leaves get per-vertex values; its error estimate is the spread of the form factor
 //!   over the corners and the centroid;
-//! - with a cluster at either end: the isotropic cluster (Sillion 1994): a cluster of area A
-//!   seen from any direction shows a projected area A / 4, as a closed convex object does;
-//!   its error estimate is the whole transport;
+//! - with a cluster at either end: the far-field estimate between the ends' centres (Sillion
+//!   1994), a cluster sending and intercepting by its projected area and radiant intensity
+//!   toward the other end: exact (sums of area x normal) where every surface inside faces that
+//!   way, from 32-direction tables where only some do (`directions`); corrected for the
+//!   ends' extent by the same estimate over their parts (`transport`), since over ends a few
+//!   radii wide the estimate at the centres errs with a sign that refinement would otherwise
+//!   leave uncorrected; its error estimate is the whole transport. Emitters form a subtree of
+//!   their own ([`Clusters::build`](crate::cluster::Clusters::build)): a cluster never mixes
+//!   a light with the wall beside it;
 //! - times the visible fraction of a few stratified shadow rays between the two ends; a
-//!   partially visible link counts its whole transport as error, so it is refined.
+//!   partially visible link counts its whole transport as error, so it is refined, and a
+//!   link whose rays all passed is confirmed with more whenever one blocked ray would have
+//!   refined it (otherwise the links kept whole would see more than they should).
 //!
 //! Where surfaces are closer than the elements resolve, the links leaving a surface could sum
 //! to a form factor above one; `bound` cuts what such a leaf sends through them (its own

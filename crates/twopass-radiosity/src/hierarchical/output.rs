@@ -309,12 +309,12 @@ impl HierarchicalSolver<'_> {
             (f64::from(l.transport[0]) + f64::from(l.transport[1]) + f64::from(l.transport[2]))
                 / 3.0;
         let sent = match l.source.kind() {
-            Kind::Cluster(c) => l.dir.read(&self.projected[c as usize]),
+            Kind::Cluster(c) => self.cluster_projected(c, l.dir),
             Kind::Surface(_) => 1.0,
         };
         match l.receiver.kind() {
             Kind::Cluster(c) => {
-                mean * sent * l.dir.opposite().read(&self.projected[c as usize])
+                mean * sent * self.cluster_projected(c, l.dir.opposite())
                     / self.clusters.nodes[c as usize].area.max(f64::MIN_POSITIVE)
             }
             Kind::Surface(_) => (mean + f64::from(l.area_correction)) * sent,

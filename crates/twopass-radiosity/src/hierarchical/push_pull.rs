@@ -5,10 +5,10 @@
 //! the hierarchy is (a cluster tree over thousands of coincident triangles, a bisection tree
 //! refined to a tiny element size), and the call stack must not.
 
-use glam::DVec3;
+use glam::{DVec3, Mat3};
 use twopass_brdf::colour::luminance_f64;
 
-use super::directions::{EMPTY, Incoming, NOTHING, Table, add_tables};
+use super::directions::{DARK, EMPTY, Incoming, Linear, NOTHING, Table, add_tables};
 use super::state::HierarchicalSolver;
 use crate::cluster::{Kind, NodeRef};
 use crate::element::barycentric_2d;
@@ -48,8 +48,9 @@ struct Open {
     /// Sums of the finished children's [`Pulled`].
     power: [DVec3; 2],
     range: (f64, f64),
-    /// A cluster's power toward each direction, summed over its finished children.
-    radiant: Option<Box<Table>>,
+    /// A cluster's power toward each direction and its linear form, summed over its finished
+    /// children.
+    radiant: Option<Box<(Table, Linear)>>,
 }
 
 impl HierarchicalSolver<'_> {
@@ -114,7 +115,7 @@ impl HierarchicalSolver<'_> {
         };
         Entered::Open(Open {
             node,
-            radiant: matches!(light, Light::Cluster(_)).then(|| Box::new(EMPTY)),
+            radiant: matches!(light, Light::Cluster(_)).then(|| Box::new((EMPTY, DARK))),
             light,
             next: 0,
             power: [DVec3::ZERO; 2],
@@ -207,7 +208,9 @@ impl HierarchicalSolver<'_> {
                 let (power, range) = pulled;
                 self.cluster_exitance[c as usize] = [power[0] / area, power[1] / area];
                 self.cluster_spread[c as usize] = range.1 - range.0;
-                self.radiant[c as usize] = *done.radiant.expect("a cluster sums its radiance");
+                let (table, linear) = *done.radiant.expect("a cluster sums its radiance");
+                self.radiant[c as usize] = table;
+                self.radiant_linear[c as usize] = linear;
             }
         }
         pulled
@@ -215,9 +218,15 @@ impl HierarchicalSolver<'_> {
 
     /// Adds a finished child's result to its open parent.
     fn hand_up(&self, parent: &mut Open, child: NodeRef, (p, r): &Pulled) {
-        if let Some(radiant) = &mut parent.radiant {
+        if let Some(sums) = &mut parent.radiant {
+            let (radiant, linear) = &mut **sums;
             match child.kind() {
-                Kind::Cluster(cc) => **radiant = add_tables(radiant, &self.radiant[cc as usize]),
+                Kind::Cluster(cc) => {
+                    *radiant = add_tables(radiant, &self.radiant[cc as usize]);
+                    let child = &self.radiant_linear[cc as usize];
+                    linear[0] += child[0];
+                    linear[1] += child[1];
+                }
                 Kind::Surface(n) => {
                     // The triangle's power toward each direction: exitance x area x cos.
                     let normal = self.scene.mesh.geometric_normals
@@ -230,6 +239,13 @@ impl HierarchicalSolver<'_> {
                                 radiant[o][j] += (*p * c).as_vec3();
                             }
                         }
+                    }
+                    for (l, p) in linear.iter_mut().zip(p) {
+                        *l += Mat3::from_cols(
+                            (*p * normal.x).as_vec3(),
+                            (*p * normal.y).as_vec3(),
+                            (*p * normal.z).as_vec3(),
+                        );
                     }
                 }
             }

@@ -4,7 +4,7 @@
 use glam::DVec3;
 use twopass_scene::Scene;
 
-use super::directions::{DIRECTIONS, Incoming, Table};
+use super::directions::{DIRECTIONS, Incoming, Linear, Table};
 use super::link::Link;
 use crate::cluster::{Clusters, NodeRef};
 use crate::element::ElementMesh;
@@ -20,6 +20,8 @@ pub(super) const BYTES_PER_NODE: u64 = 480;
 pub(super) const BYTES_PER_CLUSTER: u64 = (std::mem::size_of::<Incoming>()
     + std::mem::size_of::<Table>()
     + std::mem::size_of::<[f32; DIRECTIONS]>()
+    + std::mem::size_of::<Linear>()
+    + std::mem::size_of::<glam::DVec3>()
     + 120) as u64;
 
 /// Approximate bytes per link (the link, sorting and the candidates of a refinement pass).
@@ -98,11 +100,19 @@ pub struct HierarchicalSolver<'s> {
     /// Per cluster: its radiant intensity times pi toward each table direction, W: the sum
     /// over its triangles of exitance x area x clamped cosine. A cluster source sends this.
     pub(super) radiant: Vec<Table>,
+    /// Per cluster: the exact linear form of the same, for directions every triangle inside
+    /// faces (see [`super::directions::Facing`]).
+    pub(super) radiant_linear: Vec<Linear>,
     /// Per cluster: its projected area toward each table direction, scene units squared.
     pub(super) projected: Vec<[f32; DIRECTIONS]>,
+    /// Per cluster: the sum of its triangles' area x unit normal, scene units squared: its
+    /// projected area toward any direction every triangle inside faces.
+    pub(super) projected_linear: Vec<DVec3>,
     /// Per cluster: a cone (unit axis, half-angle in radians) holding the normals of every
     /// triangle inside, geometric and shading: what cannot face a node is never linked to it.
     pub(super) cones: Vec<(DVec3, f64)>,
+    /// Per cluster: [`super::directions::Facing::sine`] of its cone's half-angle.
+    pub(super) cone_sines: Vec<f64>,
     /// The table directions (unit vectors, see [`super::directions::directions`]).
     pub(super) dirs: [DVec3; DIRECTIONS],
     /// Residual power of the last iteration per channel (signed), and its fraction.
