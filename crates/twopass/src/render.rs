@@ -35,6 +35,21 @@ use crate::solve::SolveArgs;
 /// solve's time on a progressive solve (docs/benchmarks.md, "The gathered hybrid").
 pub const HYBRID_ELEMENTS_PER_DIAGONAL: f32 = 12.0;
 
+/// The element edge `render` solves on for `method` when neither the user (`solve`'s
+/// `--element-size`) nor a preset's solver knobs (`preset_sized`) size the mesh, scene units:
+/// the gathered hybrid's diagonal / [`HYBRID_ELEMENTS_PER_DIAGONAL`]; `None` for every other
+/// method and whenever the mesh is sized (the solver's own default holds). `slurm render`'s
+/// solve job asks the same, so that its parts render what one `render` does.
+pub(crate) fn hybrid_element_size(
+    method: RenderMethod,
+    preset_sized: bool,
+    solve: &SolveArgs,
+    scene: &twopass_scene::Scene,
+) -> Option<f32> {
+    (method == RenderMethod::Hybrid && !preset_sized && solve.element_size.is_none())
+        .then(|| scene.bounds.diagonal() / HYBRID_ELEMENTS_PER_DIAGONAL)
+}
+
 /// Arguments of `twopass render`.
 #[derive(Debug, Args)]
 pub struct RenderArgs {
@@ -185,17 +200,16 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
     // and never shows it at the hit: a mesh twice as coarse serves it (ARCHITECTURE.md,
     // "The final gather"), unless the user or a preset sized it.
     let gather_solve;
-    let solve =
-        if method == RenderMethod::Hybrid && preset_solve.is_none() && solve.element_size.is_none()
-        {
+    let solve = match hybrid_element_size(method, preset_solve.is_some(), solve, &scene) {
+        Some(size) => {
             gather_solve = SolveArgs {
-                element_size: Some(scene.bounds.diagonal() / HYBRID_ELEMENTS_PER_DIAGONAL),
+                element_size: Some(size),
                 ..solve.clone()
             };
             &gather_solve
-        } else {
-            solve
-        };
+        }
+        None => solve,
+    };
     if args.bake.is_some() && !method.needs_radiosity() {
         return Err(CliError::Input(format!(
             "--bake is for the radiosity-based methods, not {}",

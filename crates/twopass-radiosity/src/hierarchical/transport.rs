@@ -1,5 +1,6 @@
-//! The transport of a link: exact point form factors between surfaces, the isotropic
-//! far-field estimate with a cluster at either end, and the visible fraction.
+//! The transport of a link: exact point form factors between surfaces, the far-field
+//! estimate with a cluster at either end (corrected for the ends' extent), and the visible
+//! fraction.
 
 use std::f64::consts::PI;
 
@@ -34,18 +35,26 @@ struct Part {
 
 enum Shape {
     Cluster(u32),
-    Flat { corners: [DVec3; 3], normal: DVec3 },
+    /// A triangle: its corners, unit normal and area (scene units squared).
+    Flat {
+        corners: [DVec3; 3],
+        normal: DVec3,
+        area: f64,
+    },
 }
 
 impl Part {
-    /// Node `x` (bounding sphere `center`, `radius`) as a part.
-    fn of(solver: &HierarchicalSolver<'_>, x: NodeRef, center: DVec3, radius: f64) -> Self {
+    /// Node `x` as a part.
+    fn of(solver: &HierarchicalSolver<'_>, x: NodeRef) -> Self {
         match x.kind() {
-            Kind::Cluster(c) => Self {
-                center,
-                radius,
-                shape: Shape::Cluster(c),
-            },
+            Kind::Cluster(c) => {
+                let cl = &solver.clusters.nodes[c as usize];
+                Self {
+                    center: cl.center,
+                    radius: cl.radius,
+                    shape: Shape::Cluster(c),
+                }
+            }
             Kind::Surface(n) => {
                 let t = solver.mesh.nodes[n as usize].scene_triangle as usize;
                 Self::flat(
@@ -62,10 +71,18 @@ impl Part {
             .iter()
             .map(|p| (*p - center).length())
             .fold(0.0, f64::max);
+        let area = 0.5
+            * (corners[1] - corners[0])
+                .cross(corners[2] - corners[0])
+                .length();
         Self {
             center,
             radius,
-            shape: Shape::Flat { corners, normal },
+            shape: Shape::Flat {
+                corners,
+                normal,
+                area,
+            },
         }
     }
 
@@ -73,13 +90,7 @@ impl Part {
     fn projected(&self, solver: &HierarchicalSolver<'_>, u: DVec3) -> f64 {
         match self.shape {
             Shape::Cluster(c) => solver.projected_at(c, None, u, RESOLVE_DEPTH),
-            Shape::Flat { corners, normal } => {
-                let area = 0.5
-                    * (corners[1] - corners[0])
-                        .cross(corners[2] - corners[0])
-                        .length();
-                area * normal.dot(u).max(0.0)
-            }
+            Shape::Flat { normal, area, .. } => area * normal.dot(u).max(0.0),
         }
     }
 }
@@ -169,10 +180,7 @@ impl HierarchicalSolver<'_> {
         if !split_r && !split_s {
             return 1.0;
         }
-        let (whole_r, whole_s) = (
-            Part::of(self, r, er.center, er.radius),
-            Part::of(self, s, es.center, es.radius),
-        );
+        let (whole_r, whole_s) = (Part::of(self, r), Part::of(self, s));
         let whole = centre_estimate(&whole_r, &whole_s, self);
         if !(whole > 0.0 && whole.is_finite()) {
             return 1.0;
@@ -208,8 +216,7 @@ impl HierarchicalSolver<'_> {
     /// [`MAX_PARTS`] parts, the largest split first: a cluster into its children, a triangle
     /// into the four triangles between its edge midpoints.
     fn parts(&self, x: NodeRef, limit: f64) -> Vec<Part> {
-        let e = self.ends(x);
-        let mut parts = vec![Part::of(self, x, e.center, e.radius)];
+        let mut parts = vec![Part::of(self, x)];
         while parts.len() + 3 <= MAX_PARTS {
             let Some((i, _)) = parts
                 .iter()
@@ -223,11 +230,12 @@ impl HierarchicalSolver<'_> {
             match part.shape {
                 Shape::Cluster(c) => {
                     for child in self.clusters.nodes[c as usize].children {
-                        let e = self.ends(child);
-                        parts.push(Part::of(self, child, e.center, e.radius));
+                        parts.push(Part::of(self, child));
                     }
                 }
-                Shape::Flat { corners, normal } => {
+                Shape::Flat {
+                    corners, normal, ..
+                } => {
                     let [a, b, c] = corners;
                     let (ab, bc, ca) = ((a + b) * 0.5, (b + c) * 0.5, (c + a) * 0.5);
                     for t in [[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]] {

@@ -157,18 +157,25 @@ pub fn plan(kind: Kind, args: &SubmitArgs, ctx: &Context) -> Result<Plan, CliErr
     }
     let argv =
         std::iter::once(format!("twopass {}", kind.command())).chain(args.command.iter().cloned());
-    // The gathered hybrid's own default mesh (`render`'s `HYBRID_ELEMENTS_PER_DIAGONAL`),
-    // which the solve job must use for the parts to render what one `render` would.
+    // The gathered hybrid's own default mesh (`render::hybrid_element_size`), which the solve
+    // job must use for the parts to render what one `render` would.
     let mut hybrid_mesh = None;
     let (line_ctx, scene, name, needs_solve, no_more) = match kind {
         Kind::Render => {
             let line = RenderLine::try_parse_from(argv).map_err(|e| usage(kind, &e))?;
-            let method = match &line.args.preset {
-                Some(p) => {
-                    crate::preset::load(&line.args.scene, line.args.presets.as_deref(), p)?.method
-                }
-                None => line.args.method.unwrap_or(RenderMethod::Hybrid),
+            let preset = match &line.args.preset {
+                Some(p) => Some(crate::preset::load(
+                    &line.args.scene,
+                    line.args.presets.as_deref(),
+                    p,
+                )?),
+                None => None,
             };
+            let method = preset
+                .as_ref()
+                .map_or(line.args.method.unwrap_or(RenderMethod::Hybrid), |p| {
+                    p.method
+                });
             if line.args.adaptive.is_some() {
                 return Err(CliError::Usage(
                     "--adaptive cannot be split into parts (a pixel is refined by its \
@@ -177,16 +184,16 @@ pub fn plan(kind: Kind, args: &SubmitArgs, ctx: &Context) -> Result<Plan, CliErr
                 ));
             }
             let needs = method.needs_radiosity() && line.args.bake.is_none();
-            if needs
-                && method == RenderMethod::Hybrid
-                && line.args.preset.is_none()
-                && line.args.solve.element_size.is_none()
-            {
+            let preset_sized = preset.as_ref().is_some_and(|p| p.radiosity.is_some());
+            if needs && method == RenderMethod::Hybrid {
                 let (scene, _) = ctx.load_scene(&line.args.scene)?;
-                hybrid_mesh = Some(format!(
-                    "--element-size={}",
-                    scene.bounds.diagonal() / crate::render::HYBRID_ELEMENTS_PER_DIAGONAL
-                ));
+                hybrid_mesh = crate::render::hybrid_element_size(
+                    method,
+                    preset_sized,
+                    &line.args.solve,
+                    &scene,
+                )
+                .map(|size| format!("--element-size={size}"));
             }
             let name = format!("{}-{}", stem(&line.args.scene), method.name());
             let no_more = line.args.part.is_some();
