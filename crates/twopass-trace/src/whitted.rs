@@ -54,7 +54,7 @@ pub struct WhittedSettings {
     /// Gather rays per camera sample at each diffuse shading point of the gathered hybrid
     /// ([`crate::hybrid::gathered`]): a pixel of `spp` samples averages `spp` times as many
     /// (stratified together, [`Sampler::fork`]). 0: no indirect light. The CLI's `render` spends
-    /// the same 128 rays per pixel as 2 rays at each of 64 samples (`RenderDefaults` there).
+    /// 256 rays per pixel as 4 rays at each of 64 samples (`RenderDefaults` there).
     #[default(8)]
     pub gather_rays: u32,
 }
