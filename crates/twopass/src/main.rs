@@ -7,6 +7,7 @@
 #[macro_use]
 mod macros;
 
+mod allocation;
 mod args;
 mod bake;
 mod bench;

@@ -72,8 +72,11 @@ pub struct RenderArgs {
     /// only).
     #[arg(long, value_name = "FILE")]
     pub bake: Option<PathBuf>,
-    /// Samples per pixel (stratified) [default: 16; 64 for the gathered hybrid (`hybrid`);
-    /// with --time-budget and no --spp, as many as the planner measures to fit the budget].
+    /// Samples per pixel (stratified), the same in every pixel. Without it the default is a
+    /// mean spread by noise: two pilot renders of a sixteenth of it each measure every pixel's
+    /// noise, and the rest goes where the noise is (their samples count in the image)
+    /// [default: 16; 64 for the gathered hybrid (`hybrid`); with --time-budget and no --spp, as
+    /// many as the planner measures to fit the budget, in every pixel].
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
     pub spp: Option<u32>,
     /// Adaptive anti-aliasing: BASE samples per pixel everywhere first, then `--spp` only in
@@ -151,6 +154,9 @@ struct Summary {
     /// The planner's measurements and choice (`--target-error`, `--time-budget`).
     #[serde(skip_serializing_if = "Option::is_none")]
     plan: Option<RenderPlan>,
+    /// How the samples were spread by noise (a render without `--spp`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    allocation: Option<crate::allocation::Allocation>,
 }
 
 /// Renders the scene and writes the EXR (and PNG).
@@ -322,14 +328,32 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
         };
         return crate::part::render::write_part(&job, integrator.as_ref(), &settings, part, ctx);
     }
-    let out = render_with_bar(
-        &scene,
-        &camera,
-        integrator.as_ref(),
-        &settings,
-        method.name(),
-        ctx,
-    )?;
+    // Without `--spp` (or anything else that fixes the samples) the default samples per pixel
+    // are a mean, spent where the noise is.
+    let by_noise = args.spp.is_none()
+        && knobs.adaptive.is_none()
+        && args.preset.is_none()
+        && render_plan.is_none();
+    let (out, allocation) = if by_noise {
+        crate::allocation::render_by_noise(
+            &scene,
+            &camera,
+            integrator.as_ref(),
+            &settings,
+            method.name(),
+            ctx,
+        )?
+    } else {
+        let out = render_with_bar(
+            &scene,
+            &camera,
+            integrator.as_ref(),
+            &settings,
+            method.name(),
+            ctx,
+        )?;
+        (out, None)
+    };
     let layers = to_layers(&out.layers)?;
     if let Some(exr) = &targets.exr {
         crate::output::create_dir(exr.parent().unwrap_or(Path::new("")))?;
@@ -375,6 +399,7 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
         png,
         skipped,
         plan: render_plan,
+        allocation,
     };
     crate::output::report(&summary, ctx, || {
         for s in &summary.skipped {
@@ -393,6 +418,12 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
             format!(
                 " (adaptive: {base} spp everywhere, {} pixels refined)",
                 summary.refined_pixels
+            )
+        });
+        let adaptive = summary.allocation.map_or(adaptive, |a| {
+            format!(
+                " on average (by noise: pilots of 2 x {} spp, {}-{} spp per pixel)",
+                a.pilot_spp, a.min_spp, a.max_spp
             )
         });
         outln!(

@@ -263,3 +263,55 @@ fn the_gathered_hybrid_solves_on_a_mesh_twice_as_coarse_unless_told() {
     assert_eq!(image(&default), image(&coarse));
     assert_ne!(image(&default), image(&fine));
 }
+
+#[test]
+fn a_render_without_spp_spends_its_samples_where_the_noise_is() {
+    // The Cornell spheres' noise sits in the mirror and the glass sphere (the small light seen
+    // in them, the caustic): by noise, the same 64 samples per pixel on average leave less
+    // noise than 64 in every pixel. Noise is measured as the planner measures it, from two
+    // renders with different seeds (one image's relative RMSE against the truth).
+    let dir = tempfile::tempdir().unwrap();
+    let scene = repo("scenes/cornell-spheres.toml");
+    let render = |extra: &str, seed: u32| {
+        let path = dir.path().join(format!("{}-{seed}.exr", extra.len()));
+        let out = cli("render")
+            .arg(&scene)
+            .words(&format!(
+                "--method hybrid --width 32 --layers --json --seed {seed} {COARSE}"
+            ))
+            .words(extra)
+            .output(&path)
+            .run();
+        let v = common::ok_json(&out);
+        let image = read_exr_layers(&path)
+            .unwrap()
+            .require("image")
+            .unwrap()
+            .clone();
+        (v, image)
+    };
+    let noise = |extra: &str| {
+        let ((v, a), (_, b)) = (render(extra, 1), render(extra, 2));
+        let mut sum = 0.0;
+        for (x, y) in a.pixels().iter().zip(b.pixels()) {
+            for c in 0..3 {
+                let (x, y) = (f64::from(x[c]), f64::from(y[c]));
+                let m = 0.5 * (x + y);
+                sum += (x - y) * (x - y) / 2.0 / (m * m + 0.01);
+            }
+        }
+        (v, (sum / (3 * a.pixels().len()) as f64).sqrt())
+    };
+    let (by_noise, spread) = noise("");
+    let (uniform, even) = noise("--spp 64");
+    let a = &by_noise["allocation"];
+    assert_eq!(a["pilot_spp"], 4, "{by_noise}");
+    let (lo, hi) = (
+        a["min_spp"].as_u64().unwrap(),
+        a["max_spp"].as_u64().unwrap(),
+    );
+    assert!(lo < 64 && hi > 64, "{lo}-{hi} spp");
+    assert_eq!(by_noise["spp"], 64);
+    assert!(uniform.get("allocation").is_none(), "{uniform}");
+    assert!(spread < even, "noise by noise {spread}, uniform {even}");
+}
