@@ -33,6 +33,7 @@
 //! # Ok::<(), twopass_scene::SceneError>(())
 //! ```
 
+pub mod budget;
 pub mod counters;
 pub mod diffuse;
 pub mod emitters;
@@ -49,10 +50,10 @@ pub mod sky;
 pub mod whitted;
 
 pub use film::{Layer, LayerImages, Radiance};
+pub use budget::{BUDGET_FLOOR, BUDGET_SMOOTHING, SampleBudget};
 pub use render::{
-    AdaptiveSampling, BUDGET_FLOOR, BUDGET_SMOOTHING, LightShare, RenderOutput, RenderSettings,
-    RenderStats, SampleBudget, ShareOutput, TileShare, add_light, light_image, render,
-    render_budgeted, render_share, tile_origins,
+    AdaptiveSampling, LightShare, RenderOutput, RenderSettings, RenderStats, ShareOutput,
+    TileShare, add_light, light_image, render, render_budgeted, render_share, tile_origins,
 };
 
 pub use counters::{RenderProgress, Tally};

@@ -13,8 +13,8 @@ use twopass_brdf::Rgb;
 use twopass_brdf::colour::luminance;
 use twopass_scene::{Camera, Ray, Scene};
 
-use twopass_image::Image;
 
+use crate::budget::SampleBudget;
 use crate::counters::RenderProgress;
 use crate::counters::Tally;
 use crate::film::{LayerImages, Radiance};
@@ -58,122 +58,6 @@ pub struct AdaptiveSampling {
     /// first-pass samples, or between its mean and any of its four neighbours' means.
     #[default(0.05)]
     pub contrast: f32,
-}
-
-/// Camera samples per pixel chosen pixel by pixel, for [`render_budgeted`]: a converged
-/// reference spends its samples where its own noise is, instead of the same number everywhere.
-/// Each pixel's estimate stays the unbiased mean of its own samples; only how many it gets
-/// differs.
-#[derive(Debug, Clone, PartialEq)]
-pub struct SampleBudget {
-    width: u32,
-    height: u32,
-    /// Row-major, at least 1 each.
-    samples: Vec<u32>,
-}
-
-/// Half width (pixels) of the box filter [`SampleBudget::from_pilots`] smooths the pilots'
-/// noise with: a pixel's own squared difference is one draw of its variance, its 5 x 5
-/// neighbourhood's mean a steadier one.
-pub const BUDGET_SMOOTHING: usize = 2;
-
-/// The least share of the mean samples per pixel [`SampleBudget::from_pilots`] gives any pixel
-/// (before rounding): a pixel whose pilots happened to agree still gets a quarter of the mean.
-pub const BUDGET_FLOOR: f64 = 0.25;
-
-impl SampleBudget {
-    /// `spp` samples in every pixel of a `width` x `height` image.
-    pub fn uniform(width: u32, height: u32, spp: u32) -> Self {
-        Self {
-            width,
-            height,
-            samples: vec![spp.max(1); width as usize * height as usize],
-        }
-    }
-
-    /// About `spp` samples per pixel on average, each pixel's share proportional to the noise
-    /// of the two independent pilot renders `a` and `b` there: the standard deviation of a
-    /// pixel's sample, weighted as the relative error measures it, estimated by
-    /// `sum_c (a - b)^2 / (m^2 + 0.01)` with `m` the pilots' mean (the metric's
-    /// `REL_EPSILON`), smoothed over [`BUDGET_SMOOTHING`] pixels and square-rooted, floored at
-    /// [`BUDGET_FLOOR`] of its mean. For a fixed total, samples proportional to the standard
-    /// deviation minimise the summed variance (`sum sigma_i^2 / n_i` with `sum n_i` fixed).
-    /// Every pixel gets at least one sample. `None` when the pilots differ in size from each
-    /// other or are empty; a non-finite pixel counts as no noise.
-    pub fn from_pilots(a: &Image, b: &Image, spp: u32) -> Option<Self> {
-        let (width, height) = a.size();
-        if b.size() != (width, height) || width == 0 || height == 0 {
-            return None;
-        }
-        let (w, h) = (width as usize, height as usize);
-        let var: Vec<f64> = a
-            .pixels()
-            .iter()
-            .zip(b.pixels())
-            .map(|(p, q)| {
-                let (p, q) = (p.as_dvec3(), q.as_dvec3());
-                let m = 0.5 * (p + q);
-                let d = p - q;
-                let v = (d * d / (m * m + 0.01)).element_sum();
-                if v.is_finite() { v } else { 0.0 }
-            })
-            .collect();
-        let r = BUDGET_SMOOTHING;
-        let var = &var;
-        let sigma: Vec<f64> = (0..w * h)
-            .map(|i| {
-                let (x, y) = (i % w, i / w);
-                let (xs, ys) = (
-                    x.saturating_sub(r)..(x + r + 1).min(w),
-                    y.saturating_sub(r)..(y + r + 1).min(h),
-                );
-                let n = (xs.len() * ys.len()) as f64;
-                let sum: f64 = ys
-                    .flat_map(|y| xs.clone().map(move |x| var[y * w + x]))
-                    .sum();
-                (sum / n).sqrt()
-            })
-            .collect();
-        let mean = sigma.iter().sum::<f64>() / sigma.len() as f64;
-        let weights: Vec<f64> = if mean > 0.0 && mean.is_finite() {
-            sigma.iter().map(|&s| s.max(BUDGET_FLOOR * mean)).collect()
-        } else {
-            vec![1.0; sigma.len()]
-        };
-        let total = weights.iter().sum::<f64>();
-        let scale = f64::from(spp.max(1)) * weights.len() as f64 / total;
-        let samples = weights
-            .iter()
-            .map(|&wt| (wt * scale).round().clamp(1.0, f64::from(u32::MAX)) as u32)
-            .collect();
-        Some(Self {
-            width,
-            height,
-            samples,
-        })
-    }
-
-    /// Image size, pixels.
-    pub fn size(&self) -> (u32, u32) {
-        (self.width, self.height)
-    }
-
-    /// Samples of pixel (`x`, `y`).
-    pub fn samples(&self, x: u32, y: u32) -> u32 {
-        self.samples[y as usize * self.width as usize + x as usize]
-    }
-
-    /// Samples of the whole image.
-    pub fn total(&self) -> u64 {
-        self.samples.iter().map(|&n| u64::from(n)).sum()
-    }
-
-    /// Fewest and most samples of any pixel.
-    pub fn range(&self) -> (u32, u32) {
-        self.samples
-            .iter()
-            .fold((u32::MAX, 0), |(lo, hi), &n| (lo.min(n), hi.max(n)))
-    }
 }
 
 /// Contrast `(max - min) / (max + min)` of two luminances (0 when both are 0).
@@ -255,23 +139,29 @@ impl Pass<'_> {
         &self,
         x: u32,
         y: u32,
-        n: u32,
+        (first, n): (Option<u32>, u32),
         tally: &mut Tally,
         non_finite: &mut u64,
     ) -> (Radiance, f32) {
         let index = u64::from(y) * u64::from(self.camera.width) + u64::from(x);
-        let k = n.isqrt();
+        // A run that continues a sequence places its samples by the sampler's own points.
+        let k = if first.is_some() { 0 } else { n.isqrt() };
+        let first = first.unwrap_or(0);
         let mut sum = Radiance::ZERO;
         let mut finite = 0u32;
         let (mut lo, mut hi) = (f32::INFINITY, 0.0f32);
-        for s in 0..n {
+        for s in first..first.saturating_add(n) {
             let mut sampler = Sampler::new(self.settings.seed, index, u64::from(s));
             let u = if self.settings.jitter {
                 sampler.next_2d()
             } else {
                 Vec2::splat(0.5)
             };
-            let offset = if s < k * k { stratum(s, k, u) } else { u };
+            let offset = if s < k * k {
+                stratum(s, k, u)
+            } else {
+                u
+            };
             let pixel = Vec2::new(x as f32, y as f32) + offset;
             let ray = Ray::new(self.camera.position, self.camera.direction(pixel));
             let mut t = Tally::default();
@@ -306,8 +196,14 @@ impl Pass<'_> {
     }
 
     /// Renders the pixels of tile (`x0`, `y0`) with `n(x, y)` samples each (those with 0 are
-    /// left zero).
-    fn tile(&self, (x0, y0): (u32, u32), n: impl Fn(u32, u32) -> u32) -> TileResult {
+    /// left zero), from sample `first` of each pixel's sequence when given
+    /// ([`SampleBudget::continuing`]).
+    fn tile(
+        &self,
+        (x0, y0): (u32, u32),
+        first: Option<u32>,
+        n: impl Fn(u32, u32) -> u32,
+    ) -> TileResult {
         let tile = self.settings.tile_size.max(1);
         let (w, h) = (
             tile.min(self.camera.width - x0),
@@ -323,7 +219,7 @@ impl Pass<'_> {
                 let n = n(x, y);
                 let (p, c) = if n > 0 {
                     samples += u64::from(n);
-                    self.pixel(x, y, n, &mut tally, &mut non_finite)
+                    self.pixel(x, y, (first, n), &mut tally, &mut non_finite)
                 } else {
                     (Radiance::ZERO, 0.0)
                 };
@@ -559,7 +455,7 @@ fn render_core(
         tiles
             .par_iter()
             .map(|&origin| {
-                let r = pass.tile(origin, n);
+                let r = pass.tile(origin, budget.and_then(SampleBudget::first), n);
                 progress.add_done(r.pixels.len() as u64);
                 r
             })
@@ -609,6 +505,14 @@ fn render_core(
     }
     let mut light_paths = 0;
     let mut apart = None;
+    // A run continuing a sequence traces light paths of its own: the same seed would repeat
+    // the earlier runs' paths.
+    let light_seed = match budget.and_then(SampleBudget::first) {
+        Some(f) if f > 0 => twopass_brdf::random::mix64(
+            settings.seed ^ u64::from(f).wrapping_mul(0x9e37_79b9_7f4a_7c15),
+        ),
+        _ => settings.seed,
+    };
     if let Some(tracer) = light {
         let paths = match budget {
             Some(b) => tracer.paths_for_samples(b.total()),
@@ -624,7 +528,7 @@ fn render_core(
             light_paths = paths;
             apart = Some(LightShare { splats, paths });
         } else {
-            let lit = tracer.trace(scene, camera, paths, settings.seed, progress, pixels);
+            let lit = tracer.trace(scene, camera, paths, light_seed, progress, pixels);
             add_light(&mut layers, &lit.layers);
             tally.add(lit.tally);
             non_finite += lit.non_finite;

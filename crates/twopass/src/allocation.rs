@@ -2,13 +2,16 @@
 //! part or planner goal) spends its default samples per pixel as a mean, pixel by pixel in
 //! proportion to the noise measured there.
 //!
-//! Two pilot renders of [`pilot_spp`] samples per pixel each, with seeds apart from the final
-//! render's, give every pixel's noise ([`SampleBudget::from_pilots`]: the pilots' squared
-//! difference, weighted as the relative error weighs it, smoothed over 5 x 5 pixels); the
-//! samples left after the pilots go to the pixels in proportion to its standard deviation, which
-//! for a fixed total minimises the summed variance. Each pixel's estimate is then the
-//! sample-weighted mean of its three independent estimates (the two pilots and the budgeted
-//! render), so no sample is wasted and the image stays unbiased.
+//! Two pilot renders of [`pilot_spp`] samples per pixel each, the first two runs of every
+//! pixel's sample sequence, give every pixel's noise ([`SampleBudget::from_pilots`]: the
+//! pilots' squared difference, weighted as the relative error weighs it, smoothed over 5 x 5
+//! pixels); the samples left after the pilots go to the pixels in proportion to its standard
+//! deviation, which for a fixed total minimises the summed variance. The budgeted render
+//! continues each pixel's sequence ([`SampleBudget::continuing`]), so the sample-weighted mean
+//! of the three renders is exactly one render of the pixel's samples, stratified together: no
+//! sample is wasted, and the gather and shadow rays, stratified over a pixel's samples, keep
+//! the convergence they have in one render (independent pilots would lose it: on the grazing
+//! room that costs more than the allocation gains).
 //!
 //! What it pays for: the camera's own noise concentrates where a few samples decide a pixel
 //! (a small bright emitter seen in a chrome ball, an edge, a thin mirror), and those pixels get
@@ -26,10 +29,6 @@ use crate::pipeline::{render_budgeted_with_bar, render_with_bar};
 
 /// The pilots take one sample per pixel each per this many of the mean.
 pub const PILOT_SHARE: u32 = 16;
-
-/// Seeds of the two pilots are the final render's with this added (and the pilot's index), so
-/// that no pilot shares a random stream with the render it is combined with.
-const PILOT_SEED: u64 = 0xa110_c000_0000_0000;
 
 /// How a render's samples were spread over its pixels.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -66,19 +65,17 @@ pub fn render_by_noise(
         let out = render_with_bar(scene, camera, integrator, settings, label, ctx)?;
         return Ok((out, None));
     };
+    // The pilots are the first 2p samples of every pixel's sequence, in two runs of p; the
+    // budgeted render continues the sequence, so each pixel is one stratified sequence.
     let mut pilots = Vec::with_capacity(2);
     for k in 0..2 {
-        let pilot = RenderSettings {
-            samples_per_pixel: p,
-            seed: settings.seed ^ (PILOT_SEED + k),
-            adaptive: None,
-            ..*settings
-        };
-        pilots.push(render_with_bar(
+        let run = SampleBudget::uniform(camera.width, camera.height, p).continuing(k * p);
+        pilots.push(render_budgeted_with_bar(
             scene,
             camera,
             integrator,
-            &pilot,
+            settings,
+            &run,
             &format!("{label} (pilot {})", k + 1),
             ctx,
         )?);
@@ -96,6 +93,7 @@ pub fn render_by_noise(
             camera.height
         ))
     })?;
+    let budget = budget.continuing(2 * p);
     let main = render_budgeted_with_bar(scene, camera, integrator, settings, &budget, label, ctx)?;
     let (lo, hi) = budget.range();
     let allocation = Allocation {
