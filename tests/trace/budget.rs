@@ -201,3 +201,51 @@ fn a_budgeted_render_with_light_tracing_is_the_same_on_one_and_two_threads() {
     assert_eq!(one.stats.samples, budget.total());
     assert_eq!(one.stats.light_paths, budget.total());
 }
+
+#[test]
+fn runs_that_continue_a_sequence_are_together_the_single_run_of_all_their_samples() {
+    // Runs of 3 and then 5 samples per pixel (`continuing(0)`, `continuing(3)`) against one run
+    // of 8 (`continuing(0)`): per pixel the sample-weighted mean of the runs is the single
+    // run's mean, to f32 rounding of the sums, because the samples are the same ones. The
+    // diffuse box: no light tracing pass, whose paths each run draws anew.
+    let scene = repo_scene("cornell-box.toml");
+    let camera = scene.camera.with_resolution(Some(10), Some(10));
+    let reference = Reference::new(&scene, ReferenceSettings::default());
+    let settings = RenderSettings {
+        samples_per_pixel: 8,
+        seed: 5,
+        ..RenderSettings::default()
+    };
+    let run = |n: u32, first: u32| {
+        let budget = SampleBudget::uniform(10, 10, n).continuing(first);
+        assert_eq!(budget.first(), Some(first));
+        render_budgeted(
+            &scene,
+            &camera,
+            &reference,
+            &settings,
+            &budget,
+            &RenderProgress::new(),
+        )
+        .unwrap()
+        .layers
+        .composite()
+    };
+    let (a, b, all) = (run(3, 0), run(5, 3), run(8, 0));
+    for (i, ((a, b), all)) in a
+        .pixels()
+        .iter()
+        .zip(b.pixels())
+        .zip(all.pixels())
+        .enumerate()
+    {
+        let mean = (*a * 3.0 + *b * 5.0) / 8.0;
+        assert!(
+            (mean - *all).abs().max_element() <= 1e-5 * all.max_element().max(1e-3),
+            "pixel {i}: {mean} vs {all}"
+        );
+    }
+    // A second run of the same samples is the same estimate; another run is not.
+    assert_eq!(run(3, 0).pixels(), a.pixels());
+    assert_ne!(run(3, 3).pixels(), a.pixels());
+}

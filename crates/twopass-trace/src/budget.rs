@@ -142,4 +142,3 @@ impl SampleBudget {
             .fold((u32::MAX, 0), |(lo, hi), &n| (lo.min(n), hi.max(n)))
     }
 }
-

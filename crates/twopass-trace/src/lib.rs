@@ -49,8 +49,8 @@ pub mod sampler;
 pub mod sky;
 pub mod whitted;
 
-pub use film::{Layer, LayerImages, Radiance};
 pub use budget::{BUDGET_FLOOR, BUDGET_SMOOTHING, SampleBudget};
+pub use film::{Layer, LayerImages, Radiance};
 pub use render::{
     AdaptiveSampling, LightShare, RenderOutput, RenderSettings, RenderStats, ShareOutput,
     TileShare, add_light, light_image, render, render_budgeted, render_share, tile_origins,

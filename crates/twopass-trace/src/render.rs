@@ -13,7 +13,6 @@ use twopass_brdf::Rgb;
 use twopass_brdf::colour::luminance;
 use twopass_scene::{Camera, Ray, Scene};
 
-
 use crate::budget::SampleBudget;
 use crate::counters::RenderProgress;
 use crate::counters::Tally;
@@ -157,11 +156,7 @@ impl Pass<'_> {
             } else {
                 Vec2::splat(0.5)
             };
-            let offset = if s < k * k {
-                stratum(s, k, u)
-            } else {
-                u
-            };
+            let offset = if s < k * k { stratum(s, k, u) } else { u };
             let pixel = Vec2::new(x as f32, y as f32) + offset;
             let ray = Ray::new(self.camera.position, self.camera.direction(pixel));
             let mut t = Tally::default();
