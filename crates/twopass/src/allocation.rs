@@ -11,7 +11,12 @@
 //! of the three renders is exactly one render of the pixel's samples, stratified together: no
 //! sample is wasted, and the gather and shadow rays, stratified over a pixel's samples, keep
 //! the convergence they have in one render (independent pilots would lose it: on the grazing
-//! room that costs more than the allocation gains).
+//! room that costs more than the allocation gains). Keeping the pilots' samples in a pixel
+//! whose count they helped decide is not strictly unbiased (Kirk and Arvo 1991): a pixel whose
+//! pilots happened to disagree gets more samples that dilute them. The count follows the noise
+//! of the pixel's 5 x 5 neighbourhood, 25 pixels' pilots, so one pixel's own samples weigh
+//! little in it; the image means of the scenes measured agree with uniform renders within
+//! their noise (docs/benchmarks.md, "The gathered hybrid").
 //!
 //! What it pays for: the camera's own noise concentrates where a few samples decide a pixel
 //! (a small bright emitter seen in a chrome ball, an edge, a thin mirror), and those pixels get
@@ -21,7 +26,7 @@
 
 use serde::Serialize;
 use twopass_scene::{Camera, Scene};
-use twopass_trace::{Integrator, LayerImages, RenderOutput, RenderSettings, SampleBudget};
+use twopass_trace::{Integrator, RenderOutput, RenderSettings, RenderStats, SampleBudget};
 
 use crate::context::Context;
 use crate::error::CliError;
@@ -66,11 +71,14 @@ pub fn render_by_noise(
         return Ok((out, None));
     };
     // The pilots are the first 2p samples of every pixel's sequence, in two runs of p; the
-    // budgeted render continues the sequence, so each pixel is one stratified sequence.
-    let mut pilots = Vec::with_capacity(2);
+    // budgeted render continues the sequence, so each pixel is one stratified sequence. Only
+    // their sum and their two composites are kept, so the allocation adds a film and a half
+    // to the render's memory.
+    let mut composites = Vec::with_capacity(2);
+    let mut pilots: Option<RenderOutput> = None;
     for k in 0..2 {
         let run = SampleBudget::uniform(camera.width, camera.height, p).continuing(k * p);
-        pilots.push(render_budgeted_with_bar(
+        let out = render_budgeted_with_bar(
             scene,
             camera,
             integrator,
@@ -78,22 +86,24 @@ pub fn render_by_noise(
             &run,
             &format!("{label} (pilot {})", k + 1),
             ctx,
-        )?);
+        )?;
+        composites.push(out.layers.composite());
+        pilots = Some(match pilots {
+            None => out,
+            Some(sum) => add(sum, &out),
+        });
     }
-    let budget = SampleBudget::from_pilots(
-        &pilots[0].layers.composite(),
-        &pilots[1].layers.composite(),
-        spp - 2 * p,
-    )
-    .ok_or_else(|| {
-        CliError::Input(format!(
-            "{}: the pilot renders are empty ({} x {} pixels)",
-            scene.path.display(),
-            camera.width,
-            camera.height
-        ))
-    })?;
-    let budget = budget.continuing(2 * p);
+    let budget = SampleBudget::from_pilots(&composites[0], &composites[1], spp - 2 * p)
+        .ok_or_else(|| {
+            CliError::Input(format!(
+                "{}: the pilot renders are empty ({} x {} pixels)",
+                scene.path.display(),
+                camera.width,
+                camera.height
+            ))
+        })?
+        .continuing(2 * p);
+    drop(composites);
     let main = render_budgeted_with_bar(scene, camera, integrator, settings, &budget, label, ctx)?;
     let (lo, hi) = budget.range();
     let allocation = Allocation {
@@ -101,44 +111,52 @@ pub fn render_by_noise(
         min_spp: lo.saturating_add(2 * p),
         max_spp: hi.saturating_add(2 * p),
     };
+    let pilots = pilots.expect("two pilots were rendered");
     Ok((combine(&pilots, main, &budget, p, spp), Some(allocation)))
 }
 
-/// Each pixel of every layer as the sample-weighted mean of the pilots' (`p` samples each) and
-/// the budgeted render's (`budget`'s samples there); statistics summed.
+/// `sum` with `out`'s layers added pixel by pixel and its statistics summed.
+fn add(mut sum: RenderOutput, out: &RenderOutput) -> RenderOutput {
+    for (s, o) in sum.layers.images.iter_mut().zip(&out.layers.images) {
+        for (a, b) in s.pixels_mut().iter_mut().zip(o.pixels()) {
+            *a += *b;
+        }
+    }
+    add_stats(&mut sum.stats, &out.stats);
+    sum
+}
+
+/// The counts and times of `s` added to `t`.
+fn add_stats(t: &mut RenderStats, s: &RenderStats) {
+    t.samples += s.samples;
+    t.non_finite += s.non_finite;
+    t.rays += s.rays;
+    t.shadow_rays += s.shadow_rays;
+    t.light_paths += s.light_paths;
+    t.elapsed += s.elapsed;
+}
+
+/// Each pixel of every layer of `main` as the sample-weighted mean of the two pilots' (`pilots`
+/// holds their sum, `p` samples each) and the budgeted render's (`budget`'s samples there);
+/// statistics summed, with `spp` the mean samples per pixel.
 fn combine(
-    pilots: &[RenderOutput],
-    main: RenderOutput,
+    pilots: &RenderOutput,
+    mut main: RenderOutput,
     budget: &SampleBudget,
     p: u32,
     spp: u32,
 ) -> RenderOutput {
     let width = main.layers.width();
-    let mut layers = LayerImages::new(width, main.layers.height());
     let p = p as f32;
-    for (l, out) in layers.images.iter_mut().enumerate() {
-        let (a, b, m) = (
-            pilots[0].layers.images[l].pixels(),
-            pilots[1].layers.images[l].pixels(),
-            main.layers.images[l].pixels(),
-        );
-        for (i, o) in out.pixels_mut().iter_mut().enumerate() {
+    for (m, a) in main.layers.images.iter_mut().zip(&pilots.layers.images) {
+        for (i, (m, a)) in m.pixels_mut().iter_mut().zip(a.pixels()).enumerate() {
             let n = budget.samples(i as u32 % width, i as u32 / width) as f32;
-            *o = (a[i] * p + b[i] * p + m[i] * n) / (2.0 * p + n);
+            *m = (*a * p + *m * n) / (2.0 * p + n);
         }
     }
-    let mut stats = main.stats;
-    for pilot in pilots {
-        let s = &pilot.stats;
-        stats.samples += s.samples;
-        stats.non_finite += s.non_finite;
-        stats.rays += s.rays;
-        stats.shadow_rays += s.shadow_rays;
-        stats.light_paths += s.light_paths;
-        stats.elapsed += s.elapsed;
-    }
-    stats.samples_per_pixel = spp;
-    RenderOutput { layers, stats }
+    add_stats(&mut main.stats, &pilots.stats);
+    main.stats.samples_per_pixel = spp;
+    main
 }
 
 #[cfg(test)]
@@ -146,7 +164,7 @@ mod tests {
     use super::*;
     use std::time::Duration;
     use twopass_brdf::Rgb;
-    use twopass_trace::RenderStats;
+    use twopass_trace::LayerImages;
 
     /// An 8 x 1 render whose every layer holds `value` times its index + 1 in every pixel,
     /// `samples` taken.
@@ -188,7 +206,7 @@ mod tests {
         let budget = SampleBudget::from_pilots(&image(0.0), &image(1.0), 8).unwrap();
         let (lo, hi) = (budget.samples(7, 0), budget.samples(0, 0));
         assert!(lo < hi, "the noisier pixel gets more: {lo} {hi}");
-        let pilots = [output(1.0, 4), output(3.0, 4)];
+        let pilots = add(output(1.0, 4), &output(3.0, 4));
         let out = combine(&pilots, output(5.0, 16), &budget, 2, 12);
         for (l, img) in out.layers.images.iter().enumerate() {
             let k = (l + 1) as f32;
