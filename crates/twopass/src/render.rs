@@ -96,8 +96,8 @@ pub struct RenderArgs {
     pub shadow_grid: Option<u32>,
     /// Gather rays per camera sample at every diffuse point the gathered hybrid (`hybrid`)
     /// shades: its indirect light, read from the solution where they land. Stratified over the
-    /// pixel's samples, so a pixel gets `--spp` times this many; a power of two keeps them
-    /// stratified [default: 4, at the hybrid's 64 samples per pixel: 256 rays per pixel].
+    /// pixel's samples, so a pixel gets `--spp` times this many [default: 4, at the hybrid's 64
+    /// samples per pixel: 256 rays per pixel].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=i64::from(crate::preset::MAX_GATHER_RAYS)))]
     pub gather_rays: Option<u32>,
     /// Also write a tone-mapped PNG beside the EXR.
