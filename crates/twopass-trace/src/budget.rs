@@ -6,8 +6,9 @@ use twopass_image::Image;
 
 /// Camera samples per pixel chosen pixel by pixel, for [`crate::render_budgeted`]: a converged
 /// reference spends its samples where its own noise is, instead of the same number everywhere.
-/// Each pixel's estimate stays the unbiased mean of its own samples; only how many it gets
-/// differs.
+/// Each pixel's estimate is the mean of its own samples; only how many it gets differs. It is
+/// unbiased when the counts do not depend on those samples (a reference whose pilots are
+/// renders of their own); runs that continue the pilots' sequences keep the pilots' samples.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SampleBudget {
     width: u32,
@@ -39,7 +40,8 @@ impl SampleBudget {
     }
 
     /// About `spp` samples per pixel on average, each pixel's share proportional to the noise
-    /// of the two independent pilot renders `a` and `b` there: the standard deviation of a
+    /// of the two pilot renders `a` and `b` there (independent, or two runs of one sequence,
+    /// [`SampleBudget::continuing`]): the standard deviation of a
     /// pixel's sample, weighted as the relative error measures it, estimated by
     /// `sum_c (a - b)^2 / (m^2 + 0.01)` with `m` the pilots' mean (the metric's
     /// `REL_EPSILON`), smoothed over [`BUDGET_SMOOTHING`] pixels and square-rooted, floored at
