@@ -53,20 +53,21 @@ pub fn pilot_spp(spp: u32) -> Option<u32> {
     (p >= 1).then_some(p)
 }
 
-/// Renders with `settings.samples_per_pixel` samples per pixel on average, spread by the noise
-/// the pilots measure (see the module documentation), or uniformly when there are too few to
-/// share out (`None` then). The statistics are the three renders' summed, with the mean
-/// samples per pixel.
-pub fn render_by_noise(
+/// Renders with `settings.samples_per_pixel` samples per pixel: with `by_noise` on average,
+/// spread by the noise the pilots measure (see the module documentation), and otherwise, or
+/// when there are too few to share out, the same in every pixel (`None` then). The statistics
+/// of a spread render are its three runs' summed, with the mean samples per pixel.
+pub fn render(
     scene: &Scene,
     camera: &Camera,
     integrator: &dyn Integrator,
     settings: &RenderSettings,
+    by_noise: bool,
     label: &str,
     ctx: &Context,
 ) -> Result<(RenderOutput, Option<Allocation>), CliError> {
     let spp = settings.samples_per_pixel;
-    let Some(p) = pilot_spp(spp) else {
+    let Some(p) = pilot_spp(spp).filter(|_| by_noise) else {
         let out = render_with_bar(scene, camera, integrator, settings, label, ctx)?;
         return Ok((out, None));
     };

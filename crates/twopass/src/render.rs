@@ -21,9 +21,7 @@ use twopass_trace::WhittedSettings;
 use crate::args::checked;
 use crate::context::Context;
 use crate::error::CliError;
-use crate::pipeline::{
-    MAX_DEPTH, RenderMethod, integrator, is_glb, radiosity, render_with_bar, to_layers,
-};
+use crate::pipeline::{MAX_DEPTH, RenderMethod, integrator, is_glb, radiosity, to_layers};
 use crate::plan::plan;
 use crate::preset::{PRESET_SETS, RadiosityKnobs, RenderKnobs};
 use crate::render_plan::{Goal, RenderPlan};
@@ -334,26 +332,15 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
         && knobs.adaptive.is_none()
         && args.preset.is_none()
         && render_plan.is_none();
-    let (out, allocation) = if by_noise {
-        crate::allocation::render_by_noise(
-            &scene,
-            &camera,
-            integrator.as_ref(),
-            &settings,
-            method.name(),
-            ctx,
-        )?
-    } else {
-        let out = render_with_bar(
-            &scene,
-            &camera,
-            integrator.as_ref(),
-            &settings,
-            method.name(),
-            ctx,
-        )?;
-        (out, None)
-    };
+    let (out, allocation) = crate::allocation::render(
+        &scene,
+        &camera,
+        integrator.as_ref(),
+        &settings,
+        by_noise,
+        method.name(),
+        ctx,
+    )?;
     let layers = to_layers(&out.layers)?;
     if let Some(exr) = &targets.exr {
         crate::output::create_dir(exr.parent().unwrap_or(Path::new("")))?;
