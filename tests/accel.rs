@@ -50,8 +50,8 @@ fn awkward_rays(scene: &Scene, n: usize, seed: u64) -> Vec<Ray> {
     }
     let m = &scene.mesh;
     for _ in 0..n {
-        let t = m.triangles[r.random_range(0..m.triangles.len() as u32) as usize];
-        let [a, b] = [t[0], t[1]].map(|i| m.positions[i as usize]);
+        let t = m.triangle(r.random_range(0..m.triangle_count() as u32));
+        let [a, b] = [t[0], t[1]].map(|i| m.position(i));
         let target = if r.random::<bool>() { a } else { (a + b) * 0.5 };
         let o = point_in(lo, hi, &mut r);
         if (target - o).length() > 1e-3 {
@@ -63,11 +63,12 @@ fn awkward_rays(scene: &Scene, n: usize, seed: u64) -> Vec<Ray> {
 
 fn assert_bvh_equals_brute_force(scene: &Scene, rays: &[Ray]) {
     let m = &scene.mesh;
+    let (positions, triangles) = m.flattened();
     for ray in rays {
         let fast = scene.accel().closest(ray.origin, ray.direction, ray.t_max);
         let slow = Accel::closest_brute_force(
-            &m.positions,
-            &m.triangles,
+            &positions,
+            &triangles,
             ray.origin,
             ray.direction,
             ray.t_max,
@@ -84,9 +85,9 @@ fn assert_bvh_equals_brute_force(scene: &Scene, rays: &[Ray]) {
                 );
                 if f.triangle != s.triangle {
                     // A tie at a shared edge or vertex: the BVH's triangle is hit there too.
-                    let own = [m.triangles[f.triangle as usize]];
+                    let own = [m.triangle(f.triangle)];
                     let alone = Accel::closest_brute_force(
-                        &m.positions,
+                        &positions,
                         &own,
                         ray.origin,
                         ray.direction,
@@ -129,7 +130,7 @@ fn bvh_equals_brute_force_on_the_cornell_scenes() {
 #[test]
 fn bvh_equals_brute_force_on_a_generated_scene() {
     let (scene, _) = workload::synthetic_scene(30_000, 3).unwrap();
-    assert!(scene.mesh.triangles.len() >= 30_000);
+    assert!(scene.mesh.triangle_count() >= 30_000);
     // The room's walls face in, so rays leaving them stay inside but for the open front.
     let centre = scene.bounds.center();
     for o in scene
@@ -138,9 +139,9 @@ fn bvh_equals_brute_force_on_a_generated_scene() {
         .filter(|o| !o.name.starts_with("sphere"))
     {
         let t = o.triangles.start as usize;
-        let p = scene.mesh.positions[scene.mesh.triangles[t][0] as usize];
+        let p = scene.mesh.position(scene.mesh.triangle(t as u32)[0]);
         assert!(
-            scene.mesh.geometric_normals[t].dot(centre - p) > 0.0,
+            scene.mesh.geometric_normal(t as u32).dot(centre - p) > 0.0,
             "{} faces out",
             o.name
         );
@@ -154,15 +155,12 @@ fn spawned_rays_never_rehit_their_own_surface() {
     let m = &scene.mesh;
     let mut r = rng(5);
     let coplanar = |a: u32, b: u32| {
-        let (na, nb) = (
-            m.geometric_normals[a as usize],
-            m.geometric_normals[b as usize],
-        );
+        let (na, nb) = (m.geometric_normal(a), m.geometric_normal(b));
         let (pa, pb) = (m.corners(a)[0], m.corners(b)[0]);
         na.dot(nb).abs() > 1.0 - 1e-6 && (na.dot(pb - pa)).abs() < 1e-3
     };
     for i in 0..20_000 {
-        let t = r.random_range(0..m.triangles.len() as u32);
+        let t = r.random_range(0..m.triangle_count() as u32);
         let p = m.sample_triangle(t, random_vec2(&mut r));
         // Both sides, including directions within a hair of the surface.
         let mut d = random_dir(&mut r);
@@ -205,10 +203,10 @@ fn icosphere_targets(subdivisions: u32) -> (Scene, Vec<Vec3>) {
     );
     let (scene, _) = load_toml(&text, std::path::Path::new("sphere.toml")).unwrap();
     let m = &scene.mesh;
-    let mut targets: Vec<Vec3> = m.positions.clone();
-    for t in &m.triangles {
+    let mut targets: Vec<Vec3> = m.positions().collect();
+    for t in m.triangles() {
         for k in 0..3 {
-            targets.push((m.positions[t[k] as usize] + m.positions[t[(k + 1) % 3] as usize]) * 0.5);
+            targets.push((m.position(t[k]) + m.position(t[(k + 1) % 3])) * 0.5);
         }
     }
     (scene, targets)
@@ -298,7 +296,7 @@ fn point_in_triangle(p: [Vec3; 3], r: &mut Pcg64Mcg) -> Vec3 {
 fn shaft_clear_never_hides_a_blocker() {
     for (k, scene) in shaft_scenes().iter().enumerate() {
         let mut r = rng(40 + k as u64);
-        let n = scene.mesh.triangles.len() as u32;
+        let n = scene.mesh.triangle_count() as u32;
         let (mut clear, mut pairs) = (0, 0);
         for _ in 0..4000 {
             let from = interior_point(scene, r.random_range(0..n), &mut r);
@@ -341,7 +339,7 @@ fn shaft_clear_never_hides_a_blocker() {
 fn shaft_clear_between_never_hides_a_blocker() {
     for (k, scene) in shaft_scenes().iter().enumerate() {
         let mut r = rng(70 + k as u64);
-        let n = scene.mesh.triangles.len() as u32;
+        let n = scene.mesh.triangle_count() as u32;
         let (mut clear, mut pairs) = (0, 0);
         for _ in 0..3000 {
             let (s, t) = (r.random_range(0..n), r.random_range(0..n));
@@ -349,8 +347,8 @@ fn shaft_clear_between_never_hides_a_blocker() {
                 |t: u32, r: &mut Pcg64Mcg| [0, 1, 2].map(|_| interior_point(scene, t, r).position);
             let (a, b) = (part(s, &mut r), part(t, &mut r));
             let (na, nb) = (
-                scene.mesh.geometric_normals[s as usize],
-                scene.mesh.geometric_normals[t as usize],
+                scene.mesh.geometric_normal(s),
+                scene.mesh.geometric_normal(t),
             );
             let centre = |p: [Vec3; 3]| (p[0] + p[1] + p[2]) / 3.0;
             if s == t || (centre(b) - centre(a)).dot(na) <= 0.0 {

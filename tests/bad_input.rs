@@ -197,7 +197,7 @@ fn degenerate_shape_is_refused() {
 #[test]
 fn degenerate_obj_triangles_are_dropped_with_a_warning() {
     let (scene, warnings) = load(data("degenerate-obj.toml")).unwrap();
-    assert_eq!(scene.mesh.triangles.len(), 1);
+    assert_eq!(scene.mesh.triangle_count(), 1);
     let dropped = warnings.iter().find_map(|w| match w {
         Warning::DegenerateTriangles {
             object,

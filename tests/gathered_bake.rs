@@ -189,8 +189,7 @@ fn coarse_solve(text: &str) -> (Scene, Solution) {
 /// triangle, the barycentrics and a gather key apart from the bake's.
 fn floor_points(scene: &Scene) -> Vec<(u32, [f32; 3], u64)> {
     let n = 64;
-    let floor = (0..scene.mesh.triangles.len() as u32)
-        .filter(|&t| scene.mesh.triangle_object[t as usize] == 0);
+    let floor = (0..scene.mesh.triangle_count() as u32).filter(|&t| scene.mesh.object_of(t) == 0);
     let mut points = Vec::new();
     for (i, t) in floor.enumerate() {
         for j in 0..n * n {

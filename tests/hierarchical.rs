@@ -280,13 +280,10 @@ fn direct_power_monte_carlo(scene: &Scene, n: u64) -> Vec<f64> {
     use twopass_brdf::random::hash;
     let unit = |h: u64| (h >> 11) as f64 / (1u64 << 53) as f64;
     let pick = |tris: &std::ops::Range<u32>, u: f64| -> (u32, f64) {
-        let area: f64 = tris
-            .clone()
-            .map(|t| f64::from(scene.mesh.areas[t as usize]))
-            .sum();
+        let area: f64 = tris.clone().map(|t| f64::from(scene.mesh.area(t))).sum();
         let mut x = u * area;
         for t in tris.clone() {
-            x -= f64::from(scene.mesh.areas[t as usize]);
+            x -= f64::from(scene.mesh.area(t));
             if x <= 0.0 {
                 return (t, area);
             }
@@ -389,7 +386,7 @@ shape = { type = "sphere", center = [-1.4, 0.4, -1.3], radius = 0.35, subdivisio
     let mut power = vec![0.0f64; scene.objects.len()];
     for n in mesh.leaves() {
         let node = &mesh.nodes[n as usize];
-        let o = scene.mesh.triangle_object[node.scene_triangle as usize] as usize;
+        let o = scene.mesh.object_of(node.scene_triangle) as usize;
         for &v in &node.vertices {
             power[o] +=
                 f64::from(node.area) / 3.0 * f64::from(s.direct()[v as usize].element_sum());

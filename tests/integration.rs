@@ -10,6 +10,7 @@ mod fuzz;
 mod gathered_bake;
 mod hardening;
 mod hierarchical;
+mod instancing;
 mod lamps;
 mod radiosity;
 mod scenes;

@@ -72,8 +72,10 @@ fn object_form_factor(solver: &mut ProgressiveSolver<'_>, from: u32, to: u32) ->
     let areas = solver.patch_areas();
     let mesh = solver.mesh().clone();
     let object = |p: usize| {
-        solver.scene().mesh.triangle_object
-            [mesh.nodes[mesh.patches[p] as usize].scene_triangle as usize]
+        solver
+            .scene()
+            .mesh
+            .object_of(mesh.nodes[mesh.patches[p] as usize].scene_triangle)
     };
     let (mut num, mut area) = (0.0, 0.0);
     for p in 0..mesh.patches.len() {
@@ -568,7 +570,7 @@ fn elements_of_very_different_sizes_side_by_side() {
         tiny >= one_bounce * 0.995 && tiny <= one_bounce * 1.05,
         "{tiny} vs {one_bounce}"
     );
-    for t in 0..s.mesh.triangles.len() as u32 {
+    for t in 0..s.mesh.triangle_count() as u32 {
         let l = sol.radiance(t, [0.2, 0.3, 0.5]);
         assert!(l.is_finite() && l.min_element() >= 0.0, "triangle {t}: {l}");
     }
@@ -802,7 +804,7 @@ fn visibility_keeps_its_coarse_samples_and_stays_unbiased() {
     };
     let blocker = "[[object]]\nname = \"blocker\"\nmaterial = \"w\"\nshape = { type = \"quad\", origin = [-3, -3, 0.5], edge_u = [3, 0, 0], edge_v = [0, 6, 0] }\n";
     let s = room(1.0, 1.0, blocker);
-    assert_eq!(s.mesh.triangles.len(), 5);
+    assert_eq!(s.mesh.triangle_count(), 5);
     let shooter = Shooter::new(&s, s.mesh.corners(4).map(|c| c.as_dvec3()), 4);
     let from = s.mesh.surface_point_at(0, glam::Vec3::ZERO);
     let rays = VisibilityRays { min: 4, max: 16 };

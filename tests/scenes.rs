@@ -20,7 +20,7 @@ fn object_area(scene: &Scene, i: usize) -> f64 {
     scene.objects[i]
         .triangles
         .clone()
-        .map(|t| f64::from(scene.mesh.areas[t as usize]))
+        .map(|t| f64::from(scene.mesh.area(t)))
         .sum()
 }
 
@@ -30,7 +30,7 @@ fn cornell_box_matches_the_measured_data() {
     assert!(warnings.is_empty(), "{warnings:?}");
     // 5 walls + light + 2 blocks of 5 faces, each a quad: 16 objects, 32 triangles.
     assert_eq!(scene.objects.len(), 16);
-    assert_eq!(scene.mesh.triangles.len(), 32);
+    assert_eq!(scene.mesh.triangle_count(), 32);
     assert_eq!(scene.emitters.len(), 1);
     let light = &scene.emitters[0];
     assert!((light.area - 130.0 * 105.0).abs() < 1e-2);
@@ -38,10 +38,8 @@ fn cornell_box_matches_the_measured_data() {
     assert!(light.power.abs_diff_eq(expected_power, 1.0));
     // The light faces down, 0.1 mm below the ceiling.
     let t = scene.objects[light.object as usize].triangles.start;
-    assert!(scene.mesh.geometric_normals[t as usize].abs_diff_eq(-Vec3::Y, 1e-6));
-    assert!(
-        (scene.mesh.positions[scene.mesh.triangles[t as usize][0] as usize].y - 548.7).abs() < 1e-4
-    );
+    assert!(scene.mesh.geometric_normal(t).abs_diff_eq(-Vec3::Y, 1e-6));
+    assert!((scene.mesh.position(scene.mesh.triangle(t)[0]).y - 548.7).abs() < 1e-4);
     assert!(scene.bounds.min.abs_diff_eq(Vec3::ZERO, 1e-6));
     assert!(
         scene
@@ -76,9 +74,9 @@ fn cornell_box_matches_the_measured_data() {
         .filter(|o| o.name.ends_with("wall") || o.name == "floor" || o.name == "ceiling")
     {
         for t in o.triangles.clone() {
-            let p = scene.mesh.positions[scene.mesh.triangles[t as usize][0] as usize];
+            let p = scene.mesh.position(scene.mesh.triangle(t)[0]);
             assert!(
-                scene.mesh.geometric_normals[t as usize].dot(centre - p) > 0.0,
+                scene.mesh.geometric_normal(t).dot(centre - p) > 0.0,
                 "{} faces out",
                 o.name
             );
@@ -119,7 +117,7 @@ fn obj_version_of_the_box_equals_the_toml_version() {
     let (a, _) = load(scene_path("cornell-box.toml")).unwrap();
     let (b, warnings) = load(scene_path("cornell-obj.toml")).unwrap();
     assert!(warnings.is_empty(), "{warnings:?}");
-    assert_eq!(a.mesh.triangles.len(), b.mesh.triangles.len());
+    assert_eq!(a.mesh.triangle_count(), b.mesh.triangle_count());
     assert!((a.total_area() - b.total_area()).abs() < 1e-6 * a.total_area());
     assert_eq!(
         b.emitters.len(),
@@ -193,7 +191,9 @@ fn quad_and_polygon_shapes() {
     );
     assert!((object_area(&s, 0) - 6.0).abs() < 1e-5);
     assert!(
-        s.mesh.geometric_normals[0].abs_diff_eq(Vec3::Y, 1e-6),
+        s.mesh
+            .geometric_normal((0) as u32)
+            .abs_diff_eq(Vec3::Y, 1e-6),
         "edge_u x edge_v = x x -z = +y"
     );
     // Concave pentagon: 16 minus the notch triangle (4, 4), (2, 1), (0, 4) of area 6.
@@ -211,7 +211,7 @@ fn box_shape_is_closed_and_outward() {
     let s = inline(
         "[[object]]\nname = \"b\"\nmaterial = \"white\"\nshape = { type = \"box\", min = [0, 0, 0], max = [1, 2, 3] }\n",
     );
-    assert_eq!(s.mesh.triangles.len(), 12);
+    assert_eq!(s.mesh.triangle_count(), 12);
     assert!((object_area(&s, 0) - 22.0).abs() < 1e-5);
     // A ray from inside hits a face from behind; one from outside hits its front.
     let inside = s
@@ -261,7 +261,7 @@ fn transforms_place_and_orient_objects() {
     let quad: Vec<Vec3> = s.objects[0]
         .vertices
         .clone()
-        .map(|v| s.mesh.positions[v as usize])
+        .map(|v| s.mesh.position(v))
         .collect();
     assert!(
         quad.iter()
@@ -269,11 +269,15 @@ fn transforms_place_and_orient_objects() {
         "{quad:?}"
     );
     // The normal +z turns into +x.
-    assert!(s.mesh.geometric_normals[0].abs_diff_eq(Vec3::X, 1e-6));
+    assert!(
+        s.mesh
+            .geometric_normal((0) as u32)
+            .abs_diff_eq(Vec3::X, 1e-6)
+    );
     // A mirroring transform keeps the box's faces pointing out.
     for t in s.objects[1].triangles.clone() {
-        let p = s.mesh.positions[s.mesh.triangles[t as usize][0] as usize];
-        let n = s.mesh.geometric_normals[t as usize];
+        let p = s.mesh.position(s.mesh.triangle(t)[0]);
+        let n = s.mesh.geometric_normal(t);
         assert!(
             n.dot(p - Vec3::new(-0.5, 0.5, 0.5)) > 0.0,
             "mirrored box face {t} points in"

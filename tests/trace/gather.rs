@@ -26,7 +26,9 @@ impl Constant {
         Self {
             value: Rgb::splat(value),
             lit: lit.to_vec(),
-            triangle_object: scene.mesh.triangle_object.clone(),
+            triangle_object: (0..scene.mesh.triangle_count() as u32)
+                .map(|t| scene.mesh.object_of(t))
+                .collect(),
         }
     }
 }

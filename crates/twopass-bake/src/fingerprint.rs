@@ -116,15 +116,15 @@ impl Fnv {
 pub fn geometry_fingerprint(scene: &Scene) -> u64 {
     let m = &scene.mesh;
     let mut h = Fnv::new();
-    h.u64(m.positions.len() as u64);
-    m.positions.iter().for_each(|&p| h.vec3(p));
-    h.u64(m.normals.len() as u64);
-    m.normals.iter().for_each(|&n| h.vec3(n));
-    h.u64(m.triangles.len() as u64);
-    for t in 0..m.triangles.len() {
-        m.triangles[t].iter().for_each(|&i| h.u32(i));
-        m.normal_indices[t].iter().for_each(|&i| h.u32(i));
-        h.u32(m.triangle_object[t]);
+    h.u64(m.vertex_count() as u64);
+    m.positions().for_each(|p| h.vec3(p));
+    h.u64(m.normal_count() as u64);
+    (0..m.normal_count() as u32).for_each(|n| h.vec3(m.normal(n)));
+    h.u64(m.triangle_count() as u64);
+    for t in 0..m.triangle_count() {
+        m.triangle(t as u32).iter().for_each(|&i| h.u32(i));
+        m.normal_indices(t as u32).iter().for_each(|&i| h.u32(i));
+        h.u32(m.object_of(t as u32));
     }
     h.0
 }
@@ -166,7 +166,11 @@ pub fn lighting_fingerprint(scene: &Scene) -> u64 {
             h.u32(base.height);
             base.texels.iter().for_each(|&c| h.vec3(c));
         }
-        for uv in &scene.mesh.albedo_uvs {
+        let m = &scene.mesh;
+        for uv in (0..m.triangle_count() as u32)
+            .filter(|_| m.has_albedo_uvs())
+            .map(|t| m.albedo_uv(t))
+        {
             match uv {
                 Some(c) => c.iter().for_each(|p| h.vec3(p.extend(1.0))),
                 None => h.u32(u32::MAX),

@@ -191,7 +191,7 @@ pub fn decode_bake(bytes: &[u8], scene: &Scene) -> Result<Solution, BakeProblem>
             return Err(BakeProblem::SceneMismatch { what, scene, bake });
         }
     }
-    if p.roots.len() != scene.mesh.triangles.len() {
+    if p.roots.len() != scene.mesh.triangle_count() {
         return Err(BakeProblem::Values {
             what: "roots",
             index: p.roots.len(),

@@ -49,7 +49,7 @@ fn object_parts(mesh: &ElementMesh, scene: &Scene) -> Vec<ObjectPart> {
     let mut leaves_of: Vec<Vec<u32>> = vec![Vec::new(); n_obj];
     for leaf in mesh.leaves() {
         let t = mesh.nodes[leaf as usize].scene_triangle as usize;
-        let o = scene.mesh.triangle_object.get(t).map_or(0, |&o| o as usize);
+        let o = scene.mesh.object_of(t as u32) as usize;
         if o < n_obj {
             leaves_of[o].push(leaf);
         }

@@ -209,7 +209,7 @@ pub fn read_lightmap_glb(glb: &Path, scene: &Scene) -> Result<LightmapRadiance, 
     let (width, height) = png_size(png)
         .ok_or_else(|| invalid(glb, "the embedded lightmap image is not a PNG".to_owned()))?;
     let mut meshes = doc.meshes();
-    let mut corners = vec![[Vec2::ZERO; 3]; m.triangles.len()];
+    let mut corners = vec![[Vec2::ZERO; 3]; m.triangle_count()];
     let atlas = Vec2::new(width as f32, height as f32);
     for object in scene.objects.iter().filter(|o| !o.triangles.is_empty()) {
         let mesh = meshes.next().ok_or_else(|| {
@@ -271,7 +271,7 @@ pub fn read_lightmap_glb(glb: &Path, scene: &Scene) -> Result<LightmapRadiance, 
             ));
         }
         for (k, t) in object.triangles.clone().enumerate() {
-            let tri = m.triangles[t as usize];
+            let tri = m.triangle(t);
             for c in 0..3 {
                 let v = indices[3 * k + c] as usize;
                 let (Some(p), Some(uv)) = (positions.get(v), uvs.get(v)) else {
@@ -280,7 +280,7 @@ pub fn read_lightmap_glb(glb: &Path, scene: &Scene) -> Result<LightmapRadiance, 
                         format!("mesh `{}`: index {v} out of range", object.name),
                     ));
                 };
-                let want = (m.positions[tri[c] as usize].as_dvec3() * to_metres).as_vec3();
+                let want = (m.position(tri[c]).as_dvec3() * to_metres).as_vec3();
                 let off = (glam::Vec3::from_array(*p) - want).abs().max_element();
                 if off.is_nan() || off > tolerance {
                     return Err(invalid(
@@ -369,15 +369,15 @@ pub fn read_lightmap_glb(glb: &Path, scene: &Scene) -> Result<LightmapRadiance, 
         .check_finite("lightmap")
         .map_err(|e| invalid(&exr, e.to_string()))?;
     let reflect = (glb_record(&gltf, "quantity").as_deref() == Some("irradiance")).then(|| {
-        (0..m.triangles.len() as u32)
+        (0..m.triangle_count() as u32)
             .map(|t| {
-                let o = &scene.objects[m.triangle_object[t as usize] as usize];
+                let o = &scene.objects[m.object_of(t) as usize];
                 (scene.material_of(t).diffuse_albedo(), o.emission)
             })
             .collect()
     });
     let (textures, tints) = if reflect.is_some() && scene.has_textures() {
-        let tints = (0..m.triangles.len() as u32)
+        let tints = (0..m.triangle_count() as u32)
             .map(|t| scene.albedo_texture_of(t).map(|(_, a, uv)| (*a, uv)))
             .collect();
         (scene.textures.clone(), tints)

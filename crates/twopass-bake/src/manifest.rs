@@ -423,7 +423,7 @@ impl Manifest {
             shots: progress.shots,
             rays: progress.rays,
             counts: CountsRecord {
-                scene_triangles: scene.mesh.triangles.len(),
+                scene_triangles: scene.mesh.triangle_count(),
                 patches: progress.patches,
                 elements: progress.elements,
                 vertices: progress.vertices,

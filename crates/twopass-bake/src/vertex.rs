@@ -59,13 +59,13 @@ fn user_vertices(scene: &Scene, object: &twopass_scene::Object) -> Option<UserVe
     let (mut scene_vertex, mut normals, mut first, mut indices) =
         (Vec::new(), Vec::<Vec3>::new(), Vec::new(), Vec::new());
     for t in object.triangles.clone() {
-        let (tri, nrm) = (m.triangles[t as usize], m.normal_indices[t as usize]);
-        let flat = m.flat.get(t as usize).copied().unwrap_or(false);
+        let (tri, nrm) = (m.triangle(t), m.normal_indices(t));
+        let flat = m.is_flat(t);
         for k in 0..3 {
             let (normal, weight) = if flat {
-                (m.geometric_normals[t as usize], m.areas[t as usize])
+                (m.geometric_normal(t), m.area(t))
             } else {
-                (m.normals[nrm[k] as usize], 1.0)
+                (m.normal(nrm[k]), 1.0)
             };
             // A flat triangle's corners weld by position alone: one normal stands for all.
             let key_normal = if flat { Vec3::Z } else { normal };
@@ -86,7 +86,7 @@ fn user_vertices(scene: &Scene, object: &twopass_scene::Object) -> Option<UserVe
     }
     // The user's order: by source index, ties (split copies) in first-use order.
     let mut order: Vec<u32> = (0..scene_vertex.len() as u32).collect();
-    order.sort_by_key(|&v| (m.source_vertices[scene_vertex[v as usize] as usize], v));
+    order.sort_by_key(|&v| (m.source_vertex(scene_vertex[v as usize]), v));
     let mut rank = vec![0u32; order.len()];
     for (new, &old) in order.iter().enumerate() {
         rank[old as usize] = new as u32;
@@ -215,12 +215,12 @@ pub fn encode_vertex_glb(
         let positions: Vec<Vec3> = list
             .scene_vertex
             .iter()
-            .map(|&v| (m.positions[v as usize].as_dvec3() * to_metres).as_vec3())
+            .map(|&v| (m.position(v).as_dvec3() * to_metres).as_vec3())
             .collect();
         let sources: Vec<u32> = list
             .scene_vertex
             .iter()
-            .map(|&v| m.source_vertices[v as usize])
+            .map(|&v| m.source_vertex(v))
             .collect();
         let colours = mapping.colors(&radiance, &mut clamped_vertices);
         b.vertex_radiance_mesh(

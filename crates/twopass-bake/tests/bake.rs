@@ -76,7 +76,7 @@ fn bake_file_round_trips_bit_for_bit() {
     assert_eq!(loaded.mesh().roots, solution.mesh().roots);
     assert_eq!(loaded.mesh().patches, solution.mesh().patches);
     let mut points = 0;
-    for t in 0..scene.mesh.triangles.len() as u32 {
+    for t in 0..scene.mesh.triangle_count() as u32 {
         for i in 0..=12 {
             for j in 0..=12 - i {
                 let (b1, b2) = (i as f32 / 12.0, j as f32 / 12.0);
@@ -367,9 +367,7 @@ fn glb_parses_with_one_colour_per_vertex_on_the_element_mesh() {
         // The documented layout: this object's vertices in ascending mesh order.
         let mut expect: Vec<u32> = mesh
             .leaves()
-            .filter(|&l| {
-                scene.mesh.triangle_object[mesh.nodes[l as usize].scene_triangle as usize] == object
-            })
+            .filter(|&l| scene.mesh.object_of(mesh.nodes[l as usize].scene_triangle) == object)
             .flat_map(|l| mesh.nodes[l as usize].vertices)
             .collect();
         expect.sort_unstable();
@@ -568,7 +566,7 @@ fn manifest_records_the_solve_and_round_trips_through_json() {
     assert!(manifest.rays > 0 && manifest.shots > 0);
     assert!(manifest.unshot_fraction <= 1e-2);
     assert_eq!(manifest.finish, "converged");
-    assert_eq!(manifest.counts.scene_triangles, scene.mesh.triangles.len());
+    assert_eq!(manifest.counts.scene_triangles, scene.mesh.triangle_count());
     assert_eq!(
         manifest.geometry_fingerprint,
         format!("{:016x}", bake::geometry_fingerprint(scene))

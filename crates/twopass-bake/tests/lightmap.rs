@@ -93,7 +93,7 @@ fn glb_is_the_scene_mesh_with_area_preserving_charts() {
     let tris = triangles(lm);
     assert_eq!(
         tris.len(),
-        scene.mesh.triangles.len(),
+        scene.mesh.triangle_count(),
         "the user's triangles, not the elements"
     );
     let texel_m = f64::from(TEXEL) * scene.unit.metres();
@@ -354,10 +354,10 @@ fn curved_surfaces_unwrap_into_few_charts_that_carry_their_power() {
     let texel = 2.0;
     let lm = bake_solution(&scene, &solution, texel);
     assert!(
-        lm.charts * 100 < scene.mesh.triangles.len(),
+        lm.charts * 100 < scene.mesh.triangle_count(),
         "{} charts for {} triangles",
         lm.charts,
-        scene.mesh.triangles.len()
+        scene.mesh.triangle_count()
     );
     // Positions are metres in the .glb, the scene is in millimetres.
     let power_map = lightmap_power(&lm, &triangles(&lm), |pos, uv| {
@@ -413,11 +413,10 @@ fn a_face_thinner_than_a_texel_is_lit_along_its_whole_length() {
         .unwrap() as u32;
     // The solution along the strip's middle line, from the scene's own triangles.
     let solution_at = |p: Vec3| {
-        (0..scene.mesh.triangles.len() as u32)
-            .filter(|&t| scene.mesh.triangle_object[t as usize] == strip)
+        (0..scene.mesh.triangle_count() as u32)
+            .filter(|&t| scene.mesh.object_of(t) == strip)
             .find_map(|t| {
-                let corners =
-                    scene.mesh.triangles[t as usize].map(|i| scene.mesh.positions[i as usize]);
+                let corners = scene.mesh.triangle(t).map(|i| scene.mesh.position(i));
                 horizontal_barycentric(corners, p).map(|b| solution.radiance(t, b))
             })
             .unwrap()

@@ -77,7 +77,7 @@ fn vertex_glb_holds_the_element_values_at_the_users_vertices() {
         triangles += idx.len() / 3;
         vertices += pos.len();
     }
-    assert_eq!(triangles, scene.mesh.triangles.len());
+    assert_eq!(triangles, scene.mesh.triangle_count());
     assert!(
         singles * 2 > vertices,
         "most vertices match one element vertex exactly"

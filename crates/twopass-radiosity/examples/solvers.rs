@@ -78,7 +78,7 @@ fn object_power(scene: &twopass_scene::Scene, s: &Solution) -> Vec<(f64, f64)> {
     let mut out = vec![(0.0, 0.0); scene.objects.len()];
     for n in mesh.leaves() {
         let node = &mesh.nodes[n as usize];
-        let o = scene.mesh.triangle_object[node.scene_triangle as usize] as usize;
+        let o = scene.mesh.object_of(node.scene_triangle) as usize;
         let a = f64::from(node.area);
         for &v in &node.vertices {
             let v = v as usize;

@@ -110,20 +110,20 @@ impl ElementMesh {
         let mut mesh = Self {
             vertices: Vec::new(),
             nodes: Vec::new(),
-            roots: vec![u32::MAX; m.triangles.len()],
+            roots: vec![u32::MAX; m.triangle_count()],
             patches: Vec::new(),
             midpoints: HashMap::new(),
             edge_leaves: HashMap::new(),
         };
-        for (t, tri) in m.triangles.iter().enumerate() {
-            let object = m.triangle_object[t];
+        for (t, tri) in m.triangles().enumerate() {
+            let object = m.object_of(t as u32);
             if !takes_part[object as usize] {
                 continue;
             }
-            let gn = m.geometric_normals[t];
-            let ni = m.normal_indices[t];
+            let gn = m.geometric_normal(t as u32);
+            let ni = m.normal_indices(t as u32);
             // A corner is smooth when its shading normal is shared with other triangles.
-            let smooth = ni.iter().any(|&n| m.normals[n as usize] != gn) || ni[0] != ni[1];
+            let smooth = ni.iter().any(|&n| m.normal(n) != gn) || ni[0] != ni[1];
             let vertices = [0, 1, 2].map(|k| {
                 let key = if smooth {
                     VertexKey::Smooth(tri[k], ni[k])
@@ -132,12 +132,8 @@ impl ElementMesh {
                 };
                 *keys.entry(key).or_insert_with(|| {
                     mesh.vertices.push(Vertex {
-                        position: m.positions[tri[k] as usize],
-                        normal: if smooth {
-                            m.normals[ni[k] as usize]
-                        } else {
-                            gn
-                        },
+                        position: m.position(tri[k]),
+                        normal: if smooth { m.normal(ni[k]) } else { gn },
                         triangle: t as u32,
                         object,
                     });
@@ -151,7 +147,7 @@ impl ElementMesh {
                 children: None,
                 scene_triangle: t as u32,
                 patch: u32::MAX,
-                area: m.areas[t],
+                area: m.area(t as u32),
             });
             mesh.roots[t] = id;
             mesh.link(id);

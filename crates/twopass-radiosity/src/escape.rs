@@ -101,9 +101,7 @@ fn escaping_share(
                     scene
                         .accel()
                         .closest(origin, dir, f32::INFINITY)
-                        .is_none_or(|h| {
-                            scene.mesh.geometric_normals[h.triangle as usize].dot(dir) > 0.0
-                        })
+                        .is_none_or(|h| scene.mesh.geometric_normal(h.triangle).dot(dir) > 0.0)
                 })
                 .count();
             out as f64 / f64::from(RAYS_PER_POINT)

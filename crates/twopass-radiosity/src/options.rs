@@ -162,11 +162,8 @@ impl Method {
     /// The method that runs for `scene` (itself unless `Auto`), and why, in words.
     pub fn choose(self, scene: &Scene) -> (Self, String) {
         let takes_part = participating(scene);
-        let n = scene
-            .mesh
-            .triangle_object
-            .iter()
-            .filter(|&&o| takes_part[o as usize])
+        let n = (0..scene.mesh.triangle_count() as u32)
+            .filter(|&t| takes_part[scene.mesh.object_of(t) as usize])
             .count();
         match self {
             Self::Auto if n > Self::AUTO_TRIANGLES => (

@@ -60,7 +60,7 @@ fn queries(c: &mut Criterion) {
 fn build(c: &mut Criterion) {
     let (_, scene) = scenes().pop().expect("two scenes");
     c.bench_function("build/generated-100k", |b| {
-        b.iter(|| Accel::build(black_box(&scene.mesh.positions), &scene.mesh.triangles))
+        b.iter(|| Accel::build_mesh(black_box(&scene.mesh)))
     });
 }
 

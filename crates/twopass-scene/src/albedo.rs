@@ -11,14 +11,14 @@ use crate::texture::{AlbedoTexture, Texture};
 impl Scene {
     /// Whether any triangle of the scene reads a base colour texture.
     pub fn has_textures(&self) -> bool {
-        !self.mesh.albedo_uvs.is_empty()
+        self.mesh.has_albedo_uvs()
     }
 
     /// The texture triangle `t` reads, how, and its corners' texture coordinates; `None` for
     /// an untextured triangle.
     pub fn albedo_texture_of(&self, t: u32) -> Option<(&Texture, &AlbedoTexture, [Vec2; 3])> {
-        let uv = (*self.mesh.albedo_uvs.get(t as usize)?)?;
-        let o = &self.objects[self.mesh.triangle_object[t as usize] as usize];
+        let uv = self.mesh.albedo_uv(t)?;
+        let o = &self.objects[self.mesh.object_of(t) as usize];
         let a = self.materials[o.material as usize]
             .albedo_texture
             .as_ref()?;

@@ -34,6 +34,7 @@ mod gltf_source;
 mod input;
 pub mod lamp;
 mod load;
+mod mesh;
 mod obj;
 mod radiance;
 mod scene;
@@ -58,9 +59,10 @@ pub use input::{
 };
 pub use lamp::{LUMINOUS_EFFICACY, Lamp, LampKind, LampLight, MAX_LAMP_INTENSITY, spot_falloff};
 pub use load::{
-    MAX_COORDINATE, MAX_EMITTED_POWER, MAX_TRIANGLES, SMOOTH_ROUGHNESS, SPHERE_TOLERANCE, load,
-    load_toml, load_toml_with, load_with,
+    MAX_COORDINATE, MAX_EMITTED_POWER, MAX_PLACED_TRIANGLES, MAX_TRIANGLES, SMOOTH_ROUGHNESS,
+    SPHERE_TOLERANCE, load, load_toml, load_toml_with, load_with,
 };
+pub use mesh::Repeat;
 pub use radiance::{DiffuseRadiance, RadianceEstimate, RadianceEstimator};
 pub use scene::{Bounds, Emitter, Hit, Mesh, Object, Scene, SceneMaterial};
 pub use sky::irradiance::SKY_GRID;

@@ -4,7 +4,9 @@
 use std::ops::Range;
 use std::path::PathBuf;
 
-use glam::{DVec3, Vec2, Vec3};
+use glam::{Vec2, Vec3};
+
+pub use crate::mesh::Mesh;
 use rayon::prelude::*;
 use twopass_brdf::{Material, Rgb};
 
@@ -52,102 +54,6 @@ impl Bounds {
     /// The centre.
     pub fn center(&self) -> Vec3 {
         (self.min + self.max) * 0.5
-    }
-}
-
-/// The indexed triangle mesh of the whole scene. Vertices are shared within an object, so
-/// quantities stored per vertex (radiosity) are continuous across its triangles.
-#[derive(Debug, Clone, Default)]
-pub struct Mesh {
-    /// Vertex positions, scene units.
-    pub positions: Vec<Vec3>,
-    /// Shading normals (unit), indexed by [`Mesh::normal_indices`].
-    pub normals: Vec<Vec3>,
-    /// Vertex indices of each triangle, counter-clockwise seen from the front.
-    pub triangles: Vec<[u32; 3]>,
-    /// Shading-normal indices of each triangle's corners.
-    pub normal_indices: Vec<[u32; 3]>,
-    /// Unit geometric normal of each triangle (front side by winding).
-    pub geometric_normals: Vec<Vec3>,
-    /// Area of each triangle, scene units squared.
-    pub areas: Vec<f32>,
-    /// Object of each triangle (index into [`Scene::objects`]).
-    pub triangle_object: Vec<u32>,
-    /// Texture coordinates from the meshes that have them (an OBJ's `vt`, v up, as written).
-    pub texcoords: Vec<Vec2>,
-    /// Texture-coordinate indices of each triangle's corners (into [`Mesh::texcoords`]), or
-    /// `None` for a triangle without them (built-in shapes, OBJ groups lacking `vt`).
-    pub texcoord_indices: Vec<Option<[u32; 3]>>,
-    /// The coordinates a triangle's base colour texture is read at, per corner (glTF's
-    /// convention: (0, 0) the image's top left, v down), or `None` for a triangle without
-    /// them. Empty when no material of the scene has a texture, else one per triangle.
-    pub albedo_uvs: Vec<Option<[Vec2; 3]>>,
-    /// Each position's index in its source's own vertex list, so an output on the user's
-    /// mesh can name the user's vertex: an OBJ's `v` statements (0-based, file order), a glTF
-    /// primitive's accessor, a built-in shape's vertices (the index within its object).
-    pub source_vertices: Vec<u32>,
-    /// Whether each triangle's shading normal is its own flat normal because its input gave
-    /// none (an OBJ group without `vn`, a glTF primitive without `NORMAL`, a flat shape).
-    pub flat: Vec<bool>,
-}
-
-impl Mesh {
-    /// The three corner positions of triangle `t`.
-    pub fn corners(&self, t: u32) -> [Vec3; 3] {
-        self.triangles[t as usize].map(|i| self.positions[i as usize])
-    }
-
-    /// The interpolated unit shading normal of triangle `t` at barycentrics `b`.
-    pub fn shading_normal(&self, t: u32, b: [f32; 3]) -> Vec3 {
-        let n = self.normal_indices[t as usize].map(|i| self.normals[i as usize]);
-        let s = n[0] * b[0] + n[1] * b[1] + n[2] * b[2];
-        s.try_normalize()
-            .unwrap_or(self.geometric_normals[t as usize])
-    }
-
-    /// [`Mesh::shading_normal`] turned to the front side, the side of the geometric normal
-    /// (unit): the normal a surface point is shaded with.
-    pub fn front_shading_normal(&self, t: u32, b: [f32; 3]) -> Vec3 {
-        let n = self.shading_normal(t, b);
-        if n.dot(self.geometric_normals[t as usize]) < 0.0 {
-            -n
-        } else {
-            n
-        }
-    }
-
-    /// The surface point of triangle `t` at barycentrics `b`.
-    pub fn surface_point(&self, t: u32, b: [f32; 3]) -> SurfacePoint {
-        SurfacePoint::on_triangle(self.corners(t), b, self.geometric_normals[t as usize], t)
-    }
-
-    /// The surface point of triangle `t` nearest to `position` (projected into the triangle's
-    /// plane, barycentrics from the projection), with its error bound: for points computed
-    /// elsewhere, such as the vertices of a finer mesh over the triangle.
-    pub fn surface_point_at(&self, t: u32, position: Vec3) -> SurfacePoint {
-        self.surface_point(
-            t,
-            self.barycentric(t, position.as_dvec3()).map(|b| b as f32),
-        )
-    }
-
-    /// Barycentric weights on triangle `t` of `position` projected into its plane, in f64
-    /// (they sum to 1; all in [0, 1] for points inside).
-    pub fn barycentric(&self, t: u32, position: DVec3) -> [f64; 3] {
-        let [p0, p1, p2] = self.corners(t).map(|p| p.as_dvec3());
-        let (e1, e2, d) = (p1 - p0, p2 - p0, position - p0);
-        let (a, b, c) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
-        let (r1, r2) = (d.dot(e1), d.dot(e2));
-        let det = a * c - b * b;
-        let (b1, b2) = ((c * r1 - b * r2) / det, (a * r2 - b * r1) / det);
-        [1.0 - b1 - b2, b1, b2]
-    }
-
-    /// A point uniformly distributed over triangle `t` for `u` in [0, 1)^2.
-    pub fn sample_triangle(&self, t: u32, u: Vec2) -> SurfacePoint {
-        let s = u.x.sqrt();
-        let (b1, b2) = (s * (1.0 - u.y), s * u.y);
-        self.surface_point(t, [1.0 - b1 - b2, b1, b2])
     }
 }
 
@@ -269,7 +175,7 @@ impl Scene {
         lamps: Vec<crate::lamp::Lamp>,
         camera: Camera,
     ) -> Self {
-        let bounds = mesh.positions.iter().fold(Bounds::EMPTY, |b, p| b.grow(*p));
+        let bounds = mesh.positions().fold(Bounds::EMPTY, |b, p| b.grow(p));
         let emitters = objects
             .iter()
             .enumerate()
@@ -280,7 +186,7 @@ impl Scene {
                     .triangles
                     .clone()
                     .map(|t| {
-                        acc += f64::from(mesh.areas[t as usize]);
+                        acc += f64::from(mesh.area(t));
                         acc as f32
                     })
                     .collect();
@@ -294,7 +200,7 @@ impl Scene {
                 }
             })
             .collect();
-        let accel = Accel::build(&mesh.positions, &mesh.triangles);
+        let accel = Accel::build_mesh(&mesh);
         Self {
             path,
             unit,
@@ -319,24 +225,21 @@ impl Scene {
 
     /// The material of triangle `t`.
     pub fn material_of(&self, t: u32) -> &Material {
-        let o = &self.objects[self.mesh.triangle_object[t as usize] as usize];
+        let o = &self.objects[self.mesh.object_of(t) as usize];
         &self.materials[o.material as usize].material
     }
 
     /// Total area of the scene's surfaces, scene units squared.
     pub fn total_area(&self) -> f64 {
-        self.mesh.areas.iter().map(|&a| f64::from(a)).sum()
+        self.mesh.areas().map(f64::from).sum()
     }
 
     fn hit_from(&self, ray: &Ray, h: TriangleHit) -> Hit {
         // The hit carries the corners the accelerator just read: no second fetch from the mesh.
-        let point = SurfacePoint::on_triangle(
-            h.corners,
-            h.barycentric,
-            self.mesh.geometric_normals[h.triangle as usize],
-            h.triangle,
-        );
-        let object = self.mesh.triangle_object[h.triangle as usize];
+        let point = self
+            .mesh
+            .surface_point_on(h.triangle, h.corners, h.barycentric);
+        let object = self.mesh.object_of(h.triangle);
         Hit {
             t: h.t,
             point,
@@ -352,7 +255,7 @@ impl Scene {
     /// find it (at distance 0): where a point of the surface itself, a lightmap texel or a
     /// vertex, is shaded.
     pub fn surface_hit(&self, t: u32, b: [f32; 3]) -> Hit {
-        let object = self.mesh.triangle_object[t as usize];
+        let object = self.mesh.object_of(t);
         Hit {
             t: 0.0,
             point: self.mesh.surface_point(t, b),

@@ -53,7 +53,7 @@ impl Lights {
                 let cdf = tris
                     .clone()
                     .map(|t| {
-                        acc += f64::from(scene.mesh.areas[t as usize]);
+                        acc += f64::from(scene.mesh.area(t));
                         acc
                     })
                     .collect();
@@ -235,14 +235,13 @@ fn emitter_bounds(scene: &Scene) -> Vec<EmitterBounds> {
                     lo = lo.min(p);
                     hi = hi.max(p);
                 }
-                normal_sum += mesh.geometric_normals[t as usize].as_dvec3()
-                    * f64::from(mesh.areas[t as usize]);
+                normal_sum += mesh.geometric_normal(t).as_dvec3() * f64::from(mesh.area(t));
             }
             let axis = normal_sum.normalize_or_zero().as_vec3();
             let cos_cone = if axis == Vec3::ZERO {
                 -1.0
             } else {
-                tris.map(|t| mesh.geometric_normals[t as usize].dot(axis))
+                tris.map(|t| mesh.geometric_normal(t).dot(axis))
                     .fold(1.0f32, f32::min)
                     // Rounding must not narrow the cone below a normal it holds.
                     .next_down()

@@ -103,14 +103,14 @@ enum FirstHit {
 fn closed_objects(scene: &Scene) -> Vec<bool> {
     use std::collections::HashMap;
     let m = &scene.mesh;
-    let key = |v: u32| m.positions[v as usize].to_array().map(f32::to_bits);
+    let key = |v: u32| m.position(v).to_array().map(f32::to_bits);
     scene
         .objects
         .iter()
         .map(|o| {
             let mut edges: HashMap<([u32; 3], [u32; 3]), u32> = HashMap::new();
             for t in o.triangles.clone() {
-                let [a, b, c] = m.triangles[t as usize];
+                let [a, b, c] = m.triangle(t);
                 for (p, q) in [(a, b), (b, c), (c, a)] {
                     let (p, q) = (key(p), key(q));
                     *edges.entry((p.min(q), p.max(q))).or_default() += 1;
@@ -365,10 +365,10 @@ impl<'a> Gatherer<'a> {
         };
         // Most rays land on a surface without a delta lobe: read the solution there without
         // building the full hit (shading normal, error bounds, frame).
-        let object = scene.mesh.triangle_object[h.triangle as usize] as usize;
+        let object = scene.mesh.object_of(h.triangle) as usize;
         let material = &scene.materials[scene.objects[object].material as usize].material;
         if material.delta().is_none() {
-            let front = dir.dot(scene.mesh.geometric_normals[h.triangle as usize]) < 0.0;
+            let front = dir.dot(scene.mesh.geometric_normal(h.triangle)) < 0.0;
             if !front {
                 let first = if self.closed[object] {
                     FirstHit::Back
@@ -476,10 +476,10 @@ impl<'a> Gatherer<'a> {
             let Some(h) = scene.accel().closest(origin, bounce, f32::INFINITY) else {
                 break;
             };
-            if bounce.dot(scene.mesh.geometric_normals[h.triangle as usize]) >= 0.0 {
+            if bounce.dot(scene.mesh.geometric_normal(h.triangle)) >= 0.0 {
                 break;
             }
-            let landed = scene.mesh.triangle_object[h.triangle as usize] as usize;
+            let landed = scene.mesh.object_of(h.triangle) as usize;
             let material = &scene.materials[scene.objects[landed].material as usize].material;
             if h.t < self.near
                 && level < NEAR_BOUNCES
@@ -570,7 +570,7 @@ impl Gatherer<'_> {
     ) -> RadianceEstimate {
         if self.deadline.is_some_and(|d| Instant::now() >= d) {
             self.late.fetch_add(1, Ordering::Relaxed);
-            let object = self.scene.mesh.triangle_object[triangle as usize];
+            let object = self.scene.mesh.object_of(triangle);
             let emitted = self.scene.objects[object as usize].emission;
             let total = self.solution.radiance(triangle, barycentric);
             let indirect = self.solution.indirect_radiance(triangle, barycentric);

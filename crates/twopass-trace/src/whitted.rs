@@ -222,7 +222,7 @@ pub fn ambient_estimate(scene: &Scene) -> Rgb {
     }
     let mut rho_area = glam::DVec3::ZERO;
     for o in &scene.objects {
-        let area = |t: u32| f64::from(scene.mesh.areas[t as usize]);
+        let area = |t: u32| f64::from(scene.mesh.area(t));
         rho_area += if scene.has_textures() {
             // Each triangle's texture mean.
             o.triangles

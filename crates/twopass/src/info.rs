@@ -133,8 +133,8 @@ pub fn run(args: &InfoArgs, ctx: &Context) -> Result<(), CliError> {
     }
     let info = Info {
         scene: args.scene.clone(),
-        triangles: scene.mesh.triangles.len(),
-        vertices: scene.mesh.positions.len(),
+        triangles: scene.mesh.triangle_count(),
+        vertices: scene.mesh.vertex_count(),
         objects: scene.objects.len(),
         materials_by_type,
         emitters: scene

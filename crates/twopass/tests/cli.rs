@@ -93,7 +93,7 @@ fn bench_rays_reports_every_query_kind() {
     let (loaded, _) = twopass_scene::load(repo(BOX)).unwrap();
     assert_eq!(
         v["triangles"].as_u64(),
-        Some(loaded.mesh.triangles.len() as u64)
+        Some(loaded.mesh.triangle_count() as u64)
     );
     // The tree's memory is its nodes (256 bytes each, each starting on a 64-byte line) and
     // packets (160 bytes each, four triangles at most, every triangle in one).

@@ -43,15 +43,16 @@ pub(crate) fn cornell_glb(path: &Path, white: Option<[f32; 3]>) {
             },
         );
         let first = o.vertices.start;
-        let positions: Vec<[f32; 3]> = scene.mesh.positions
-            [o.vertices.start as usize..o.vertices.end as usize]
-            .iter()
-            .map(|p| (*p * metres).to_array())
+        let positions: Vec<[f32; 3]> = o
+            .vertices
+            .clone()
+            .map(|v| scene.mesh.position(v))
+            .map(|p| (p * metres).to_array())
             .collect();
         let indices: Vec<u32> = o
             .triangles
             .clone()
-            .flat_map(|t| scene.mesh.triangles[t as usize].map(|v| v - first))
+            .flat_map(|t| scene.mesh.triangle(t).map(|v| v - first))
             .collect();
         let mesh = w.mesh(
             &o.name,

@@ -369,7 +369,7 @@ fn rewrite_primitives(
             let mut split: HashMap<(u32, u32), u32> = HashMap::new();
             let (mut order, mut uv, mut indices) = (Vec::new(), Vec::new(), Vec::new());
             for t in object.triangles.clone() {
-                let tri = scene.mesh.triangles[t as usize];
+                let tri = scene.mesh.triangle(t);
                 let mut corner = [0u32; 3];
                 for k in 0..3 {
                     let v = tri[k] - first;

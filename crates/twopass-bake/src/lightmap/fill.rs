@@ -188,7 +188,7 @@ pub(super) fn fill_region(
                     match s.quantity {
                         LightmapQuantity::Radiance => l,
                         LightmapQuantity::Irradiance => {
-                            let object = scene.mesh.triangle_object[p.triangle as usize];
+                            let object = scene.mesh.object_of(p.triangle);
                             let emitted = scene.objects[object as usize].emission;
                             // The solution reflects with the texture's mean over its elements:
                             // the triangle's mean stands in for it.
@@ -216,7 +216,7 @@ pub(super) fn fill_region(
             shadow_rays = estimates.iter().map(|e| e.shadow_rays).sum();
             let chart = |t: u32| match layout.source {
                 AtlasSource::Generated(_) => layout.groups[t as usize][0],
-                AtlasSource::Scene => scene.mesh.triangle_object[t as usize],
+                AtlasSource::Scene => scene.mesh.object_of(t),
             };
             // Texels inside another object take no part.
             let (samples, estimates): (Vec<Sample>, Vec<RadianceEstimate>) = samples
@@ -232,7 +232,7 @@ pub(super) fn fill_region(
                     position: scene.mesh.surface_point(p.triangle, p.barycentric).position,
                     normal: scene.mesh.front_shading_normal(p.triangle, p.barycentric),
                     chart: chart(p.triangle),
-                    object: scene.mesh.triangle_object[p.triangle as usize],
+                    object: scene.mesh.object_of(p.triangle),
                     error: e.indirect_error,
                 })
                 .collect();

@@ -96,14 +96,14 @@ pub(super) fn encode_lightmap_glb(
         let (mut positions, mut normals, mut uvs, mut indices) =
             (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for t in object.triangles.clone() {
-            let tri = m.triangles[t as usize];
-            let nrm = m.normal_indices[t as usize];
+            let tri = m.triangle(t);
+            let nrm = m.normal_indices(t);
             for k in 0..3 {
-                let normal = m.normals[nrm[k] as usize];
+                let normal = m.normal(nrm[k]);
                 let group = layout.groups[t as usize][k];
                 let (v, new) = shared.get(group, tri[k], normal, positions.len() as u32);
                 if new {
-                    let p = m.positions[tri[k] as usize];
+                    let p = m.position(tri[k]);
                     positions.push((p.as_dvec3() * to_metres).as_vec3());
                     normals.push(normal);
                     uvs.push(layout.corners[t as usize][k] / size);

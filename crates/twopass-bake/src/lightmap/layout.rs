@@ -171,9 +171,9 @@ pub(super) fn generated_layout(
             let (mut positions, mut indices, mut triangles) = (Vec::new(), Vec::new(), Vec::new());
             for t in o.triangles.clone() {
                 triangles.push(t);
-                for v in m.triangles[t as usize] {
+                for v in m.triangle(t) {
                     let k = *index.entry(v).or_insert_with(|| {
-                        positions.push(m.positions[v as usize].to_array());
+                        positions.push(m.position(v).to_array());
                         positions.len() as u32 - 1
                     });
                     indices.push(k);
@@ -218,10 +218,10 @@ pub(super) fn generated_layout(
     }
     let (width, height) = (atlas.width.max(1), atlas.height.max(1));
     let size = Vec2::new(width as f32, height as f32);
-    let mut corners = vec![[Vec2::ZERO; 3]; m.triangles.len()];
-    let mut groups = vec![[0; 3]; m.triangles.len()];
+    let mut corners = vec![[Vec2::ZERO; 3]; m.triangle_count()];
+    let mut groups = vec![[0; 3]; m.triangle_count()];
     let mut chart_ids: HashMap<(usize, u32), u32> = HashMap::new();
-    let mut all = Vec::with_capacity(m.triangles.len());
+    let mut all = Vec::with_capacity(m.triangle_count());
     for (o, (out, input)) in atlas.meshes.iter().zip(&inputs).enumerate() {
         for (k, &t) in input.triangles.iter().enumerate() {
             let vs: [&uvunwrap::OutputVertex; 3] =
@@ -257,21 +257,24 @@ pub(super) fn generated_layout(
 /// coordinates' own area; OBJ's v points up, the atlas's y down.
 pub(super) fn scene_layout(scene: &Scene, s: &Resolved) -> Result<Layout, String> {
     let m = &scene.mesh;
-    let mut uv = Vec::with_capacity(m.triangles.len());
-    for (t, idx) in m.texcoord_indices.iter().enumerate() {
+    let mut uv = Vec::with_capacity(m.triangle_count());
+    for (t, idx) in (0..m.triangle_count() as u32)
+        .map(|t| m.texcoord_indices(t))
+        .enumerate()
+    {
         let Some(idx) = idx else {
             return Err(format!(
                 "object `{}` has no texture coordinates",
-                scene.objects[m.triangle_object[t] as usize].name
+                scene.objects[m.object_of(t as u32) as usize].name
             ));
         };
-        let q = idx.map(|k| m.texcoords[k as usize]);
+        let q = idx.map(|k| m.texcoord(k));
         if q.iter()
             .any(|p| !(0.0..=1.0).contains(&p.x) || !(0.0..=1.0).contains(&p.y))
         {
             return Err(format!(
                 "object `{}` has texture coordinates outside [0, 1]",
-                scene.objects[m.triangle_object[t] as usize].name
+                scene.objects[m.object_of(t as u32) as usize].name
             ));
         }
         uv.push(q);
@@ -306,7 +309,7 @@ pub(super) fn scene_layout(scene: &Scene, s: &Resolved) -> Result<Layout, String
         if det.abs() <= f32::MIN_POSITIVE {
             return Err(format!(
                 "object `{}` has a triangle of zero area in texture space",
-                scene.objects[m.triangle_object[t] as usize].name
+                scene.objects[m.object_of(t as u32) as usize].name
             ));
         }
         let mut overlap = None;
@@ -323,7 +326,7 @@ pub(super) fn scene_layout(scene: &Scene, s: &Resolved) -> Result<Layout, String
             },
         );
         if let Some(other) = overlap {
-            let name = |t: usize| &scene.objects[m.triangle_object[t] as usize].name;
+            let name = |t: usize| &scene.objects[m.object_of(t as u32) as usize].name;
             return Err(format!(
                 "texture coordinates overlap (objects `{}` and `{}`)",
                 name(other as usize),
@@ -331,10 +334,8 @@ pub(super) fn scene_layout(scene: &Scene, s: &Resolved) -> Result<Layout, String
             ));
         }
     }
-    let groups = m
-        .texcoord_indices
-        .iter()
-        .map(|i| i.unwrap_or([0; 3]))
+    let groups = (0..m.triangle_count() as u32)
+        .map(|t| m.texcoord_indices(t).unwrap_or([0; 3]))
         .collect();
     Ok(Layout {
         charts: 1,
@@ -345,7 +346,7 @@ pub(super) fn scene_layout(scene: &Scene, s: &Resolved) -> Result<Layout, String
         regions: vec![Region {
             at: [0, 0],
             size: [side, side],
-            triangles: (0..m.triangles.len() as u32).collect(),
+            triangles: (0..m.triangle_count() as u32).collect(),
         }],
         groups,
         source: AtlasSource::Scene,

@@ -52,11 +52,8 @@ impl<'s> HierarchicalSolver<'s> {
         if !takes_part.iter().any(|&t| t) {
             return Err(SolveError::NothingTakesPart);
         }
-        let triangles = scene
-            .mesh
-            .triangle_object
-            .iter()
-            .filter(|&&o| takes_part[o as usize])
+        let triangles = (0..scene.mesh.triangle_count() as u32)
+            .filter(|&t| takes_part[scene.mesh.object_of(t) as usize])
             .count() as u64;
         // The triangles themselves, their clusters, and room for links: refuse up front what
         // cannot fit.
@@ -70,18 +67,18 @@ impl<'s> HierarchicalSolver<'s> {
         }
         let started = Instant::now();
         let mesh = ElementMesh::new(scene, &takes_part);
-        let tri_rho: Vec<DVec3> = (0..scene.mesh.triangles.len())
+        let tri_rho: Vec<DVec3> = (0..scene.mesh.triangle_count())
             .map(|t| {
-                let o = &scene.objects[scene.mesh.triangle_object[t] as usize];
+                let o = &scene.objects[scene.mesh.object_of(t as u32) as usize];
                 scene.materials[o.material as usize]
                     .material
                     .diffuse_albedo()
                     .as_dvec3()
             })
             .collect();
-        let tri_emission: Vec<DVec3> = (0..scene.mesh.triangles.len())
+        let tri_emission: Vec<DVec3> = (0..scene.mesh.triangle_count())
             .map(|t| {
-                scene.objects[scene.mesh.triangle_object[t] as usize]
+                scene.objects[scene.mesh.object_of(t as u32) as usize]
                     .emission
                     .as_dvec3()
                     * PI
@@ -197,8 +194,10 @@ impl<'s> HierarchicalSolver<'s> {
                     }
                     Kind::Surface(n) => {
                         let node = &self.mesh.nodes[n as usize];
-                        let normal = self.scene.mesh.geometric_normals
-                            [node.scene_triangle as usize]
+                        let normal = self
+                            .scene
+                            .mesh
+                            .geometric_normal(node.scene_triangle)
                             .as_dvec3();
                         for (s, d) in sum.iter_mut().zip(&self.dirs) {
                             *s += f64::from(node.area) * normal.dot(*d).max(0.0);

@@ -47,7 +47,11 @@ impl HierarchicalSolver<'_> {
     /// shading normals.
     pub(super) fn surface_cone(&self, n: u32) -> (DVec3, f64) {
         let node = &self.mesh.nodes[n as usize];
-        let g = self.scene.mesh.geometric_normals[node.scene_triangle as usize].as_dvec3();
+        let g = self
+            .scene
+            .mesh
+            .geometric_normal(node.scene_triangle)
+            .as_dvec3();
         let spread = node
             .vertices
             .iter()

@@ -88,7 +88,7 @@ impl HierarchicalSolver<'_> {
                     + normals[1] * w[1] as f32
                     + normals[2] * w[2] as f32)
                     .try_normalize()
-                    .unwrap_or(self.scene.mesh.geometric_normals[node.scene_triangle as usize]);
+                    .unwrap_or(self.scene.mesh.geometric_normal(node.scene_triangle));
                 let at = self
                     .scene
                     .mesh

@@ -148,7 +148,10 @@ impl HierarchicalSolver<'_> {
     /// Surface node `n`'s projected area toward unit direction `u`, scene units squared.
     pub(super) fn surface_projected(&self, n: u32, u: DVec3) -> f64 {
         let t = self.mesh.nodes[n as usize].scene_triangle as usize;
-        let cos = self.scene.mesh.geometric_normals[t]
+        let cos = self
+            .scene
+            .mesh
+            .geometric_normal(t as u32)
             .as_dvec3()
             .dot(u)
             .max(0.0);

@@ -229,8 +229,10 @@ impl HierarchicalSolver<'_> {
                 }
                 Kind::Surface(n) => {
                     // The triangle's power toward each direction: exitance x area x cos.
-                    let normal = self.scene.mesh.geometric_normals
-                        [self.mesh.nodes[n as usize].scene_triangle as usize]
+                    let normal = self
+                        .scene
+                        .mesh
+                        .geometric_normal(self.mesh.nodes[n as usize].scene_triangle)
                         .as_dvec3();
                     for (j, d) in self.dirs.iter().enumerate() {
                         let c = normal.dot(*d);

@@ -59,7 +59,7 @@ impl Part {
                 let t = solver.mesh.nodes[n as usize].scene_triangle as usize;
                 Self::flat(
                     solver.mesh.corners(n),
-                    solver.scene.mesh.geometric_normals[t].as_dvec3(),
+                    solver.scene.mesh.geometric_normal(t as u32).as_dvec3(),
                 )
             }
         }
@@ -151,8 +151,10 @@ impl HierarchicalSolver<'_> {
     /// Surface node `q` as a source of point form factors (its corners, prepared) and its scene
     /// triangle's unit normal.
     fn source_polygon(&self, q: u32) -> (form_factor::SourceTriangle, DVec3) {
-        let ns = self.scene.mesh.geometric_normals
-            [self.mesh.nodes[q as usize].scene_triangle as usize]
+        let ns = self
+            .scene
+            .mesh
+            .geometric_normal(self.mesh.nodes[q as usize].scene_triangle)
             .as_dvec3();
         (form_factor::SourceTriangle::new(self.mesh.corners(q)), ns)
     }
@@ -278,8 +280,10 @@ impl HierarchicalSolver<'_> {
             (Kind::Cluster(c), Kind::Surface(q)) => {
                 // Flux density at the cluster per unit source exitance: A cos / (pi l^2).
                 near_cluster = near;
-                let nq = self.scene.mesh.geometric_normals
-                    [self.mesh.nodes[q as usize].scene_triangle as usize]
+                let nq = self
+                    .scene
+                    .mesh
+                    .geometric_normal(self.mesh.nodes[q as usize].scene_triangle)
                     .as_dvec3();
                 let d = er.center - es.center;
                 let cos = (nq.dot(d) / d2.sqrt().max(f64::MIN_POSITIVE)).max(0.0);

@@ -50,12 +50,12 @@ impl<'s> ProgressiveSolver<'s> {
         // of area (the largest triangle whose longest edge is `size`), at least one per `size`
         // along its longest edge (a sliver is cut across), and at least one: refuse up front
         // what cannot fit rather than refine until memory runs out.
-        let part: Vec<(f64, f64)> = (0..scene.mesh.triangles.len() as u32)
-            .filter(|&t| takes_part[scene.mesh.triangle_object[t as usize] as usize])
+        let part: Vec<(f64, f64)> = (0..scene.mesh.triangle_count() as u32)
+            .filter(|&t| takes_part[scene.mesh.object_of(t) as usize])
             .map(|t| {
                 let [a, b, c] = scene.mesh.corners(t);
                 let longest = (b - a).length().max((c - b).length()).max((a - c).length());
-                (f64::from(scene.mesh.areas[t as usize]), f64::from(longest))
+                (f64::from(scene.mesh.area(t)), f64::from(longest))
             })
             .collect();
         let part_area: f64 = part.iter().map(|p| p.0).sum();
@@ -107,19 +107,16 @@ impl<'s> ProgressiveSolver<'s> {
         }
         // Bisection leaves of longest edge at most L have an area of L^2 / 8 or more: refuse
         // up front a mesh that would not fit instead of refining until the allocator gives up.
-        let elements: f64 = scene
-            .mesh
-            .triangle_object
-            .iter()
-            .zip(&scene.mesh.areas)
-            .filter(|&(&o, _)| takes_part[o as usize])
-            .map(|(_, &a)| (8.0 * f64::from(a) / f64::from(element_size).powi(2)).max(1.0))
+        let elements: f64 = (0..scene.mesh.triangle_count() as u32)
+            .filter(|&t| takes_part[scene.mesh.object_of(t) as usize])
+            .map(|t| {
+                (8.0 * f64::from(scene.mesh.area(t)) / f64::from(element_size).powi(2)).max(1.0)
+            })
             .sum();
         let patches: f64 = scene
             .mesh
-            .areas
-            .iter()
-            .map(|&a| (8.0 * f64::from(a) / f64::from(patch_size).powi(2)).max(1.0))
+            .areas()
+            .map(|a| (8.0 * f64::from(a) / f64::from(patch_size).powi(2)).max(1.0))
             .sum();
         let bytes = elements * BYTES_PER_ELEMENT
             + (patches * elements * 2.0).min(options.cache_bytes as f64);
@@ -234,7 +231,7 @@ impl<'s> ProgressiveSolver<'s> {
 
     fn object_of_patch(&self, p: usize) -> u32 {
         let node = &self.mesh.nodes[self.mesh.patches[p] as usize];
-        self.scene.mesh.triangle_object[node.scene_triangle as usize]
+        self.scene.mesh.object_of(node.scene_triangle)
     }
 
     fn patch_emission(&self, p: usize) -> DVec3 {

@@ -38,7 +38,11 @@ impl ProgressiveSolver<'_> {
             self.mesh.corners(self.mesh.patches[p]),
             node.scene_triangle,
         );
-        let ns = self.scene.mesh.geometric_normals[shooter.triangle as usize].as_dvec3();
+        let ns = self
+            .scene
+            .mesh
+            .geometric_normal(shooter.triangle)
+            .as_dvec3();
         let hulls = self.patch_hulls(p, vertices);
         // A vertex's own shaft test costs about what one shadow ray does, and where its
         // patch's hull was tested and found blocked it rarely clears more: it pays only for

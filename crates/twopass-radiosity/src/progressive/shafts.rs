@@ -37,7 +37,7 @@ impl ProgressiveSolver<'_> {
             let tri = self.mesh.nodes[node as usize].scene_triangle;
             (
                 self.mesh.corners(node),
-                self.scene.mesh.geometric_normals[tri as usize],
+                self.scene.mesh.geometric_normal(tri),
             )
         };
         let shooter = patch(p);

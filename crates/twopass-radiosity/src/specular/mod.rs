@@ -78,7 +78,7 @@ pub fn decide(scene: &Scene) -> (bool, String) {
         let mut cdf = Vec::with_capacity(tris.len());
         let mut acc = 0.0f64;
         for t in tris.clone() {
-            acc += f64::from(scene.mesh.areas[t as usize]);
+            acc += f64::from(scene.mesh.area(t));
             cdf.push(acc);
         }
         let k = f64::from(per_object).sqrt().ceil() as u32;
@@ -313,7 +313,7 @@ impl Specular {
             pairing.swap(i, j);
         }
         let corner_b = corners.map(|c| scene.mesh.barycentric(tri, c));
-        let normal = scene.mesh.geometric_normals[tri as usize].as_dvec3();
+        let normal = scene.mesh.geometric_normal(tri).as_dvec3();
         // Power per ray before the cosine over the density: B A / n.
         let per_ray = radiosity * area / f64::from(n);
         let results: Vec<(Option<Deposit>, u64)> = (0..n)

@@ -11,7 +11,9 @@ use obvhs::{
 use super::binary::build_coincident;
 use super::bvh::{self, Bvh8};
 use super::collapse::collapse;
+use super::placed::Placed;
 use super::quad::TriangleQuad;
+use crate::mesh::Mesh;
 
 /// An 8-wide BVH over the scene's triangles (a binary tree built by obvhs's PLOC builder,
 /// collapsed into 8-wide nodes with leaves of up to four triangles) with the queries every
@@ -20,6 +22,8 @@ pub struct Accel {
     /// The tree: its nodes, and one quad per leaf (the leaf's triangles, at most four, in its
     /// first lanes) right after the node that leads to it.
     pub(super) bvh: Bvh8,
+    /// The placed copies of stored objects, with their own trees; `None` without copies.
+    pub(super) placed: Option<Box<Placed>>,
     build_time: Duration,
 }
 
@@ -39,6 +43,17 @@ impl Accel {
     /// guarantees; an empty list gives an accelerator that hits nothing.
     pub fn build(positions: &[Vec3], triangles: &[[u32; 3]]) -> Self {
         Self::build_with(positions, triangles, BvhBuildParams::medium_build())
+    }
+
+    /// Builds the BVH over a scene's mesh: one tree over the stored triangles, and for the
+    /// placed copies of objects ([`Mesh::repeats`]) one tree per source, shared by its copies,
+    /// under a tree over the copies. Hits name mesh-wide triangle indices.
+    pub fn build_mesh(mesh: &Mesh) -> Self {
+        let start = Instant::now();
+        let mut accel = Self::build(&mesh.positions, &mesh.triangles);
+        accel.placed = Placed::build(mesh);
+        accel.build_time = start.elapsed();
+        accel
     }
 
     /// Builds the BVH with explicit obvhs build parameters. Those of the binary tree apply
@@ -99,6 +114,7 @@ impl Accel {
         };
         Self {
             bvh,
+            placed: None,
             build_time: start.elapsed(),
         }
     }
@@ -108,19 +124,20 @@ impl Accel {
         self.build_time
     }
 
-    /// Number of BVH nodes (8-wide).
+    /// Number of BVH nodes (8-wide), the copies' shared trees included.
     pub fn node_count(&self) -> usize {
-        self.bvh.nodes
+        self.bvh.nodes + self.placed.as_ref().map_or(0, |p| p.sizes().0)
     }
 
     /// Number of triangle quads (up to four triangles each; a leaf's, or several leaves' of
-    /// one node).
+    /// one node), the copies' shared trees included.
     pub fn quad_count(&self) -> usize {
-        self.bvh.quads
+        self.bvh.quads + self.placed.as_ref().map_or(0, |p| p.sizes().1)
     }
 
-    /// Memory of the tree (its nodes and triangle quads), bytes.
+    /// Memory of the trees (nodes and triangle quads; the copies' shared trees and the tree
+    /// over them), bytes.
     pub fn bytes(&self) -> usize {
-        self.bvh.bytes()
+        self.bvh.bytes() + self.placed.as_ref().map_or(0, |p| p.sizes().2)
     }
 }

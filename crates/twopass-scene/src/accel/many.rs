@@ -41,7 +41,10 @@ impl Accel {
     /// When `hits` and `rays` differ in length.
     pub fn closest_many(&self, rays: &[Ray], hits: &mut [Option<TriangleHit>]) {
         assert_eq!(rays.len(), hits.len(), "one answer per ray");
-        if self.coherent(rays) {
+        if self.placed.is_some() {
+            // Copies are walked ray by ray: their trees are entered per ray.
+            self.closest_each(rays, hits);
+        } else if self.coherent(rays) {
             self.closest_packets(rays, hits);
         } else if self.bvh.bytes() > INTERLEAVE_MIN_BYTES {
             self.closest_interleaved(rays, hits);
@@ -207,7 +210,7 @@ impl Accel {
     /// When `blocked` and `rays` differ in length.
     pub fn any_hit_many(&self, rays: &[Ray], blocked: &mut [bool]) {
         assert_eq!(rays.len(), blocked.len(), "one answer per ray");
-        if self.interleaves(rays) {
+        if self.placed.is_none() && self.interleaves(rays) {
             self.any_hit_interleaved(rays, blocked);
         } else {
             for (b, r) in blocked.iter_mut().zip(rays) {

@@ -10,7 +10,7 @@
 //! triangles per test), [`collapse`](mod@collapse) (the 8-wide tree from obvhs's binary one),
 //! [`bvh`] (the 8-wide tree: its nodes, the node test, its layout and the walks), [`arena`]
 //! (the tree's memory in 32-byte blocks, in huge pages), [`binary`] (binary trees over
-//! coincident boxes), [`prefetch`](mod@prefetch),
+//! coincident boxes), [`placed`] (the trees of instanced copies), [`prefetch`](mod@prefetch),
 //! [`shaft`] (shaft culling).
 
 mod arena;
@@ -20,6 +20,7 @@ mod bvh;
 mod collapse;
 mod hit;
 mod many;
+mod placed;
 mod prefetch;
 mod quad;
 mod query;
@@ -33,7 +34,7 @@ pub use binary::build_coincident;
 pub use build::Accel;
 pub use hit::TriangleHit;
 pub use many::{COHERENT_ANGLE, COHERENT_ORIGINS, INTERLEAVE_MIN_BYTES};
-pub(crate) use ray::SHADOW_EPSILON;
 pub use ray::{Ray, SurfacePoint};
+pub(crate) use ray::{SHADOW_EPSILON, gamma};
 pub use shaft::SHAFT_TOLERANCE;
 pub(crate) use triangle::triangle_normal;

@@ -28,7 +28,11 @@ impl Accel {
                 false
             },
         );
-        best.map(|b| self.hit(b, t_max))
+        let mut best = best.map(|b| self.hit(b, t_max));
+        if let Some(placed) = &self.placed {
+            placed.closest(origin, direction, t_max, &mut best);
+        }
+        best
     }
 
     /// Tests lanes `lanes` of quad `p` against `ray` (up to [`search_bound`]) and keeps in
@@ -92,7 +96,10 @@ impl Accel {
                 hit
             },
         );
-        hit
+        hit || self
+            .placed
+            .as_ref()
+            .is_some_and(|p| p.any_hit(origin, direction, t_max))
     }
 
     /// Whether every segment from `apex` to a point of triangle `base` is certainly
@@ -109,7 +116,15 @@ impl Accel {
         !self.bvh.any_leaf(
             |node| shaft.overlap(node),
             |p, lanes| shaft.may_block(self.bvh.arena.quad(p as u32), lanes),
-        )
+        ) && self.placed.as_ref().is_none_or(|p| {
+            p.all_clear(&[apex, base[0], base[1], base[2]], |tree, m| {
+                tree.shaft_clear(
+                    m.transform_point3(apex),
+                    apex_normal.map(|n| plane_normal(m, n)),
+                    base.map(|q| m.transform_point3(q)),
+                )
+            })
+        })
     }
 
     /// Whether every segment between a point of triangle `a` and a point of triangle `b`
@@ -127,7 +142,16 @@ impl Accel {
         !self.bvh.any_leaf(
             |node| shaft.overlap(node),
             |p, lanes| shaft.may_block(self.bvh.arena.quad(p as u32), lanes),
-        )
+        ) && self.placed.as_ref().is_none_or(|p| {
+            p.all_clear(&[a[0], a[1], a[2], b[0], b[1], b[2]], |tree, m| {
+                tree.shaft_clear_between(
+                    a.map(|q| m.transform_point3(q)),
+                    plane_normal(m, na),
+                    b.map(|q| m.transform_point3(q)),
+                    plane_normal(m, nb),
+                )
+            })
+        })
     }
 
     /// Reference answer by testing every triangle, O(n): the oracle for BVH tests.
@@ -155,4 +179,12 @@ impl Accel {
         }
         best
     }
+}
+
+/// A plane's unit normal `n` after the affine map `m` (the inverse transpose of its linear
+/// part), so that points in front of the plane stay in front of its image.
+fn plane_normal(m: &glam::Affine3A, n: Vec3) -> Vec3 {
+    (m.matrix3.inverse().transpose() * Vec3A::from(n))
+        .normalize_or_zero()
+        .into()
 }

@@ -1,18 +1,21 @@
 //! Assembling the scene: every part meshed (spheres from the scene's size), transformed and
 //! checked, degenerate triangles dropped, the accelerator built over the result.
 
-use glam::Vec3;
+use std::collections::HashMap;
+
+use glam::{Affine3A, Mat4, Vec3};
 use twopass_brdf::Rgb;
 
 use super::coincident::{Coincident, Seen, corner_key};
 use super::loader::{
-    Geometry, Loader, MAX_COORDINATE, MAX_EMITTED_POWER, MAX_TRIANGLES, PlacedPart,
-    SPHERE_TOLERANCE, in_range,
+    Geometry, Loader, MAX_COORDINATE, MAX_EMITTED_POWER, MAX_PLACED_TRIANGLES, MAX_TRIANGLES,
+    PlacedPart, SPHERE_TOLERANCE, in_range,
 };
 use crate::accel::triangle_normal;
 use crate::camera::Camera;
 use crate::error::{SceneError, Warning};
 use crate::input::printable;
+use crate::mesh::StoredSpans;
 use crate::scene::{Bounds, Mesh, Object, Scene};
 use crate::shape::{self, ShapeMesh};
 use crate::transform::Transform;
@@ -46,6 +49,13 @@ impl Loader {
                         bounds = bounds.grow(p.transform.point(*q));
                     }
                 }
+                Geometry::Copy { of } => {
+                    if let Geometry::Mesh(m) = &parts[*of].part.geometry {
+                        for q in &m.positions {
+                            bounds = bounds.grow(p.transform.point(*q));
+                        }
+                    }
+                }
                 Geometry::Sphere { center, radius, .. } => {
                     for corner in 0..8 {
                         let s = Vec3::new(
@@ -77,7 +87,7 @@ impl Loader {
             parts
                 .iter()
                 .map(|p| match &p.part.geometry {
-                    Geometry::Mesh(_) => None,
+                    Geometry::Mesh(_) | Geometry::Copy { .. } => None,
                     Geometry::Sphere {
                         radius,
                         subdivisions,
@@ -91,14 +101,33 @@ impl Loader {
                     }
                 })
                 .collect();
+        let count =
+            |p: &PlacedPart, level: &Option<u32>, copies: bool| match (&p.part.geometry, level) {
+                (Geometry::Mesh(m), _) => m.triangles.len() as u64,
+                (Geometry::Copy { of }, _) if copies => match &parts[*of].part.geometry {
+                    Geometry::Mesh(m) => m.triangles.len() as u64,
+                    _ => 0,
+                },
+                (_, Some(l)) => 20u64 << (2 * l),
+                (_, None) => 0,
+            };
+        let placed: u64 = parts
+            .iter()
+            .zip(&levels)
+            .map(|(p, l)| count(p, l, true))
+            .sum();
+        if placed > MAX_PLACED_TRIANGLES {
+            return Err(SceneError::Input {
+                path: self.path.clone(),
+                problem: format!(
+                    "the scene would place {placed} triangles (instanced copies counted), more than the {MAX_PLACED_TRIANGLES} loaded at most (place fewer copies)"
+                ),
+            });
+        }
         let triangles: u64 = parts
             .iter()
             .zip(&levels)
-            .map(|(p, level)| match (&p.part.geometry, level) {
-                (Geometry::Mesh(m), _) => m.triangles.len() as u64,
-                (_, Some(l)) => 20u64 << (2 * l),
-                (_, None) => 0,
-            })
+            .map(|(p, l)| count(p, l, false))
             .sum();
         if triangles > MAX_TRIANGLES {
             return Err(SceneError::Input {
@@ -112,9 +141,60 @@ impl Loader {
         let mut objects = Vec::with_capacity(parts.len());
         let mut coincident = Coincident::default();
         let mut kept = Vec::with_capacity(parts.len());
-        for (PlacedPart { part, transform }, level) in parts.into_iter().zip(levels) {
+        // The parts later parts copy (glTF meshes several nodes show): their shapes, the spans
+        // of what they stored (when they stored every triangle) and their transforms.
+        let mut copied: Vec<Option<Source>> = parts.iter().map(|_| None::<Source>).collect();
+        for p in &parts {
+            if let Geometry::Copy { of } = p.part.geometry {
+                copied[of] = Some(Source::default());
+            }
+        }
+        // Each source's placements so far, by matrix: a copy in the same place as another adds
+        // no surface.
+        let mut placements: HashMap<(usize, [u32; 16]), usize> = HashMap::new();
+        for (index, (PlacedPart { part, transform }, level)) in
+            parts.into_iter().zip(levels).enumerate()
+        {
+            coincident.begin(&part.name, part.line);
             let local = match part.geometry {
                 Geometry::Mesh(m) => m,
+                Geometry::Copy { of } => {
+                    let source = copied[of]
+                        .as_ref()
+                        .expect("a copy's source comes before it");
+                    let key = |m: &Mat4| m.to_cols_array().map(f32::to_bits);
+                    let here = (of, key(&transform.matrix));
+                    if let Some(&earlier) = placements.get(&here) {
+                        let triangles = source.spans.as_ref().map_or_else(
+                            || source.shape.triangles.len(),
+                            |s| (s.triangles.end - s.triangles.start) as usize,
+                        );
+                        coincident.whole_copy(earlier, triangles);
+                        kept.push(false);
+                        continue;
+                    }
+                    placements.insert(here, index);
+                    if let Some(spans) = &source.spans {
+                        let to_world =
+                            transform.matrix.as_dmat4() * source.matrix.as_dmat4().inverse();
+                        let to_world = Affine3A::from_mat4(to_world.as_mat4());
+                        self.push_copy(
+                            &mut mesh,
+                            &mut objects,
+                            spans,
+                            to_world,
+                            part.name,
+                            part.line,
+                            part.material,
+                            part.emission,
+                        )?;
+                        kept.push(true);
+                        continue;
+                    }
+                    // The source lost triangles to earlier objects' copies: what it stored is
+                    // not its whole mesh, so this placement stores its own.
+                    source.shape.clone()
+                }
                 Geometry::Sphere { center, radius, .. } => {
                     shape::sphere(center, radius, level.unwrap_or(0)).map_err(|p| {
                         SceneError::Shape {
@@ -126,7 +206,12 @@ impl Loader {
                     })?
                 }
             };
-            coincident.begin(&part.name, part.line);
+            let shape = copied[index].is_some().then(|| local.clone());
+            let (before, normals, texcoords) = (
+                mesh.triangles.len() as u32,
+                mesh.normals.len() as u32,
+                mesh.texcoords.len() as u32,
+            );
             let object = self.push(
                 &mut mesh,
                 &mut objects,
@@ -138,8 +223,28 @@ impl Loader {
                 part.material,
                 part.emission,
             )?;
+            if let (Some(shape), Some(source)) = (shape, copied[index].as_mut()) {
+                placements.insert(
+                    (index, transform.matrix.to_cols_array().map(f32::to_bits)),
+                    index,
+                );
+                // Stored whole (no triangle went to an earlier object's copy): its copies
+                // repeat what it stored.
+                source.spans = objects
+                    .last()
+                    .filter(|_| object && !coincident.part_had_copies())
+                    .map(|o| StoredSpans {
+                        triangles: before..o.triangles.end,
+                        vertices: o.vertices.clone(),
+                        normals: normals..mesh.normals.len() as u32,
+                        texcoords: texcoords..mesh.texcoords.len() as u32,
+                    });
+                source.shape = shape;
+                source.matrix = transform.matrix;
+            }
             kept.push(object);
         }
+        drop(copied);
         if let Some(w) = coincident.warning(self.path.clone()) {
             self.warnings.push(w);
         }
@@ -171,6 +276,72 @@ impl Loader {
         scene.textures = self.textures;
         scene.sky = self.sky;
         Ok((scene, self.warnings, kept))
+    }
+
+    /// Appends a placed copy of a stored object (`source`, moved by `to_world` from its
+    /// world place) as an object of its own, checking where its vertices land and what it
+    /// emits as [`push`](Self::push) does.
+    #[allow(clippy::too_many_arguments)]
+    fn push_copy(
+        &mut self,
+        mesh: &mut Mesh,
+        objects: &mut Vec<Object>,
+        source: &StoredSpans,
+        to_world: Affine3A,
+        name: String,
+        line: Option<usize>,
+        material: u32,
+        emission: Rgb,
+    ) -> Result<(), SceneError> {
+        let triangles = mesh.push_repeat(source, to_world, objects.len() as u32);
+        let vertices = mesh.repeats.last().map_or(0..0, |r| r.vertices.clone());
+        for (index, v) in vertices.clone().enumerate() {
+            let q = mesh.position(v);
+            if !q.is_finite() || !q.to_array().into_iter().all(in_range) {
+                return Err(SceneError::Range {
+                    path: self.path.clone(),
+                    line,
+                    object: name,
+                    problem: format!(
+                        "vertex {index} lands at {q} in the world, outside the supported range of +-{MAX_COORDINATE:e} scene units"
+                    ),
+                });
+            }
+        }
+        if emission.max_element() > 0.0 {
+            let area: f64 = triangles.clone().map(|t| f64::from(mesh.area(t))).sum();
+            self.check_power(emission, area, line, &name)?;
+        }
+        objects.push(Object {
+            name: printable(&name),
+            material,
+            emission,
+            triangles,
+            vertices,
+        });
+        Ok(())
+    }
+
+    /// Refuses an object whose emitted power, pi * L_e * `area`, leaves the range f32 holds.
+    fn check_power(
+        &self,
+        emission: Rgb,
+        area: f64,
+        line: Option<usize>,
+        name: &str,
+    ) -> Result<(), SceneError> {
+        let power = f64::from(emission.max_element()) * std::f64::consts::PI * area;
+        if power.is_nan() || power > MAX_EMITTED_POWER {
+            return Err(SceneError::Range {
+                path: self.path.clone(),
+                line,
+                object: name.to_owned(),
+                problem: format!(
+                    "emitted power pi * L_e * area = {power:e} W (scene units) exceeds the {MAX_EMITTED_POWER:e} W the renderers represent; lower the emission or the scene's scale"
+                ),
+            });
+        }
+        Ok(())
     }
 
     /// Appends one object: transforms it, checks every number, drops degenerate triangles and
@@ -351,17 +522,7 @@ impl Loader {
                 .iter()
                 .map(|&a| f64::from(a))
                 .sum();
-            let power = f64::from(emission.max_element()) * std::f64::consts::PI * area;
-            if power.is_nan() || power > MAX_EMITTED_POWER {
-                return Err(SceneError::Range {
-                    path: self.path.clone(),
-                    line,
-                    object: name,
-                    problem: format!(
-                        "emitted power pi * L_e * area = {power:e} W (scene units) exceeds the {MAX_EMITTED_POWER:e} W the renderers represent; lower the emission or the scene's scale"
-                    ),
-                });
-            }
+            self.check_power(emission, area, line, &name)?;
         }
         objects.push(Object {
             name: printable(&name),
@@ -372,4 +533,13 @@ impl Loader {
         });
         Ok(true)
     }
+}
+
+/// A part that later parts copy: its shape (for a copy that must store its own), what it
+/// stored when it stored every triangle, and its transform.
+#[derive(Default)]
+struct Source {
+    shape: ShapeMesh,
+    spans: Option<StoredSpans>,
+    matrix: Mat4,
 }

@@ -91,6 +91,20 @@ impl Coincident {
         self.in_part
     }
 
+    /// Counts the current part, a placed copy of an instanced mesh with `triangles`
+    /// triangles, as removed: part `original` already placed the same mesh in the same place.
+    pub(super) fn whole_copy(&mut self, original: usize, triangles: usize) {
+        let part = self.parts.len() - 1;
+        self.dropped += triangles;
+        self.objects += 1;
+        self.removed += 1;
+        if self.first.is_none() {
+            let (name, line) = self.parts[part].clone();
+            let (other, other_line) = self.parts[original].clone();
+            self.first = Some(((name, line, 0), (other, other_line, 0)));
+        }
+    }
+
     /// Counts the current part as removed: every triangle it kept was a copy.
     pub(super) fn remove_part(&mut self) {
         self.removed += 1;

@@ -31,6 +31,10 @@ pub const MAX_COORDINATE: f32 = 1e12;
 /// level, 20 * 4^level): 50 million hold about 5 GB with the BVH.
 pub const MAX_TRIANGLES: u64 = 50_000_000;
 
+/// Most triangles of a scene counting every placed copy of an instanced mesh (copies are not
+/// stored, but each is a surface of its own to the passes, which keep data per triangle).
+pub const MAX_PLACED_TRIANGLES: u64 = 1_000_000_000;
+
 /// Largest emitted power of one object per channel, pi * L_e * area (W in scene units). Sums
 /// over emitters and the estimators' intermediate products need headroom below f32's 3.4e38,
 /// so a brighter object is refused at load rather than rendered as infinities dropped to black.
@@ -39,6 +43,11 @@ pub const MAX_EMITTED_POWER: f64 = 1e34;
 /// What an object becomes before meshing: spheres wait for the scene's size.
 pub(super) enum Geometry {
     Mesh(ShapeMesh),
+    /// Another placement of the mesh of part `of` (an earlier part, a `Mesh`): a glTF mesh
+    /// that several nodes show. Stored once and placed again ([`crate::Repeat`]).
+    Copy {
+        of: usize,
+    },
     Sphere {
         center: Vec3,
         radius: f32,
@@ -129,6 +138,13 @@ pub(super) fn framing_camera(path: &Path, parts: &[PlacedPart]) -> Result<Camera
                 .positions
                 .iter()
                 .fold(b, |b, q| b.grow(p.transform.point(*q))),
+            Geometry::Copy { of } => match &parts[*of].part.geometry {
+                Geometry::Mesh(m) => m
+                    .positions
+                    .iter()
+                    .fold(b, |b, q| b.grow(p.transform.point(*q))),
+                _ => b,
+            },
             Geometry::Sphere { .. } => b,
         });
     let fov_y = 40f32.to_radians();

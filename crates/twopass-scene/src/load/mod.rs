@@ -24,4 +24,6 @@ const TEST_FLOOR: &str = "version = 1\n\
 
 pub use entry::{load, load_toml, load_toml_with, load_with};
 pub use gltf::SMOOTH_ROUGHNESS;
-pub use loader::{MAX_COORDINATE, MAX_EMITTED_POWER, MAX_TRIANGLES, SPHERE_TOLERANCE};
+pub use loader::{
+    MAX_COORDINATE, MAX_EMITTED_POWER, MAX_PLACED_TRIANGLES, MAX_TRIANGLES, SPHERE_TOLERANCE,
+};

@@ -131,7 +131,7 @@ fn radiosity_scale(args: &RadiosityArgs, ctx: &Context) -> Result<(), CliError> 
         let p = solver.progress();
         let peak = mib(peak_memory());
         let growth = |now: f64, before: f64, prev: &ScaleRow| {
-            (now / before).ln() / (scene.mesh.triangles.len() as f64 / prev.triangles as f64).ln()
+            (now / before).ln() / (scene.mesh.triangle_count() as f64 / prev.triangles as f64).ln()
         };
         let time_growth = rows.last().map(|r| growth(seconds, r.seconds, r));
         let memory_growth = rows
@@ -139,7 +139,7 @@ fn radiosity_scale(args: &RadiosityArgs, ctx: &Context) -> Result<(), CliError> 
             .and_then(|r| Some(growth(peak?, r.peak_memory_mib?, r)));
         rows.push(ScaleRow {
             requested: n,
-            triangles: scene.mesh.triangles.len(),
+            triangles: scene.mesh.triangle_count(),
             solver: p.method.name(),
             finish: format!("{finish:?}"),
             elements: p.elements,

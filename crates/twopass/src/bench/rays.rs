@@ -195,12 +195,12 @@ fn export(
 ) -> Result<(), CliError> {
     use crate::output::write_atomic;
     let mesh = &scene.mesh;
-    let positions = mesh.positions.iter().flat_map(|p| p.to_array());
+    let positions = mesh.positions().flat_map(|p| p.to_array());
     write_atomic(
         &dir.join("positions.f32"),
         &le_bytes(positions, f32::to_le_bytes),
     )?;
-    let triangles = mesh.triangles.iter().flatten().copied();
+    let triangles = mesh.triangles().flatten();
     write_atomic(
         &dir.join("triangles.u32"),
         &le_bytes(triangles, u32::to_le_bytes),
@@ -239,8 +239,8 @@ fn export(
     }
     let manifest = serde_json::json!({
         "format": "twopass bench rays export 1",
-        "triangles": mesh.triangles.len(),
-        "vertices": mesh.positions.len(),
+        "triangles": mesh.triangle_count(),
+        "vertices": mesh.vertex_count(),
         "files": {
             "positions.f32": "vertex positions, x y z, f32 little-endian",
             "triangles.u32": "vertex indices, 3 per triangle, u32 little-endian",
@@ -304,7 +304,7 @@ pub fn run(args: &RaysArgs, ctx: &Context) -> Result<(), CliError> {
     let progress = ctx.progress(13, "bench rays");
     let mut builds: Vec<f64> = (0..5)
         .map(|_| {
-            let a = Accel::build(&scene.mesh.positions, &scene.mesh.triangles);
+            let a = Accel::build_mesh(&scene.mesh);
             a.build_time().as_secs_f64() * 1e3
         })
         .collect();
@@ -338,7 +338,7 @@ pub fn run(args: &RaysArgs, ctx: &Context) -> Result<(), CliError> {
     progress.finish_and_clear();
     let report = RayReport {
         scene: name,
-        triangles: scene.mesh.triangles.len(),
+        triangles: scene.mesh.triangle_count(),
         threads: rayon::current_num_threads(),
         bvh_build_ms: builds[2],
         bvh_nodes: scene.accel().node_count(),

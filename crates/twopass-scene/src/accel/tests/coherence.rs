@@ -14,7 +14,7 @@ fn camera_rays_are_coherent_and_bounces_and_shadow_rays_are_not() {
     // The scene's extent, which the origins' distance is measured against: the root's
     // children's boxes are the exact bounds of the triangles.
     let corners = scene.mesh.triangles.iter().flatten();
-    let points = corners.map(|&i| scene.mesh.positions[i as usize]);
+    let points = corners.map(|&i| scene.mesh.position(i));
     let (lo, hi) = points.fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
         (lo.min(p), hi.max(p))
     });

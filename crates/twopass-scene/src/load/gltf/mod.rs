@@ -6,7 +6,9 @@
 //! in f64). Every triangle primitive of a node's mesh becomes one object, named after the node
 //! (`node N` when unnamed; `name/primitive K` when the mesh has several primitives; `#2`, `#3`
 //! on repeated names), so a mesh that several nodes use (instancing) becomes one object per
-//! use, each with its own copy of the triangles in world space. Each object keeps the
+//! use. Its triangles are read and stored once, at the first node that shows it; every other
+//! node places that copy again by its transform ([`Repeat`](crate::Repeat)), without storing
+//! it (a copy in the same place as another is dropped with a warning). Each object keeps the
 //! primitive's whole vertex list in order, so its vertex `i` is the primitive's vertex `i`
 //! ([`GltfOrigin`](crate::GltfOrigin); triangles the scene drops, of zero area or repeating another exactly, are
 //! not in it). Indexed and non-indexed primitives are read; `NORMAL` gives smooth

@@ -77,8 +77,8 @@ pub(super) fn walk(ld: &mut Loader, file: &GltfFile) -> Result<Walked, SceneErro
         camera: None,
         camera_node: None,
     };
-    // How many nodes of the scene show each mesh, for the instancing note.
-    let mut uses = vec![0usize; doc.meshes().len()];
+    // The part that first placed each (mesh, primitive), `None` for one not read (warned).
+    let mut placed: HashMap<(usize, usize), Option<usize>> = HashMap::new();
     let mut seen = vec![false; doc.nodes().len()];
     let mut stack: Vec<(gltf::Node<'_>, DMat4)> = scene
         .nodes()
@@ -120,7 +120,6 @@ pub(super) fn walk(ld: &mut Loader, file: &GltfFile) -> Result<Walked, SceneErro
         let Some(mesh) = node.mesh() else {
             continue;
         };
-        uses[mesh.index()] += 1;
         let transform =
             Transform::from_matrix(world).map_err(|p| ld.gltf_err(&at, format!("world {p}")))?;
         let several = mesh.primitives().len() > 1;
@@ -161,8 +160,22 @@ pub(super) fn walk(ld: &mut Loader, file: &GltfFile) -> Result<Walked, SceneErro
                     m
                 }
             };
-            let Some(shape) = read_primitive(ld, file, &primitive, &at, set)? else {
-                continue;
+            // A primitive another node already showed is placed again, not read again: its
+            // mesh is stored once ([`crate::Repeat`]).
+            let geometry = match placed.get(&(mesh.index(), primitive.index())) {
+                Some(Some(of)) => Geometry::Copy { of: *of },
+                Some(None) => continue,
+                None => {
+                    let shape = read_primitive(ld, file, &primitive, &at, set)?;
+                    placed.insert(
+                        (mesh.index(), primitive.index()),
+                        shape.as_ref().map(|_| walked.parts.len()),
+                    );
+                    let Some(shape) = shape else {
+                        continue;
+                    };
+                    Geometry::Mesh(shape)
+                }
             };
             ld.use_material(material);
             let base = node
@@ -184,7 +197,7 @@ pub(super) fn walk(ld: &mut Loader, file: &GltfFile) -> Result<Walked, SceneErro
                 part: Part {
                     name,
                     line: None,
-                    geometry: Geometry::Mesh(shape),
+                    geometry,
                     material,
                     emission,
                 },
@@ -197,15 +210,6 @@ pub(super) fn walk(ld: &mut Loader, file: &GltfFile) -> Result<Walked, SceneErro
                 flips: transform.flips,
             });
         }
-    }
-    for mesh in doc.meshes().filter(|m| uses[m.index()] > 1) {
-        ld.gltf_warn(
-            &format!("mesh {}{}", mesh.index(), quoted(mesh.name())),
-            format!(
-                "is shown by {} nodes: loaded as one object per node, each with its own copy of the triangles in world space (instances are not shared in memory)",
-                uses[mesh.index()]
-            ),
-        );
     }
     Ok(walked)
 }

@@ -24,7 +24,11 @@ fn extent(scene: &Scene, name: &str) -> (Vec3, Vec3) {
         .iter()
         .find(|o| o.name == name)
         .unwrap_or_else(|| panic!("no object {name}"));
-    let p = &scene.mesh.positions[o.vertices.start as usize..o.vertices.end as usize];
+    let p = &o
+        .vertices
+        .clone()
+        .map(|v| scene.mesh.position(v))
+        .collect::<Vec<_>>();
     (
         p.iter().copied().fold(Vec3::MAX, Vec3::min),
         p.iter().copied().fold(Vec3::MIN, Vec3::max),
@@ -50,7 +54,7 @@ fn every_room_loads_without_warnings_with_its_objects_and_the_camera_inside() {
         assert_eq!(warnings, 0);
         assert_eq!(scene.objects.len(), objects, "{}", room.name);
         assert_eq!(room.objects, objects, "{}", room.name);
-        assert_eq!(scene.mesh.triangles.len(), room.triangles, "{}", room.name);
+        assert_eq!(scene.mesh.triangle_count(), room.triangles, "{}", room.name);
         let (lo, hi) = room.interior;
         let c = scene.camera.position;
         assert!(
@@ -78,8 +82,8 @@ fn every_room_loads_without_warnings_with_its_objects_and_the_camera_inside() {
         );
         // Without `vn`, every triangle is flat: its shading normal is its geometric one.
         let m = &scene.mesh;
-        let flat = (0..m.triangles.len() as u32).all(|t| {
-            let g = m.geometric_normals[t as usize];
+        let flat = (0..m.triangle_count() as u32).all(|t| {
+            let g = m.geometric_normal(t);
             m.shading_normal(t, [0.6, 0.3, 0.1]).abs_diff_eq(g, 1e-5)
         });
         assert!(flat, "{}: smooth shading normals", room.name);
@@ -95,7 +99,7 @@ fn the_spheres_room_has_the_triangles_asked_for_within_ten_percent() {
         };
         let room = room(RoomKind::Spheres, &settings);
         let (scene, _) = load(&room);
-        let n = scene.mesh.triangles.len() as f64;
+        let n = scene.mesh.triangle_count() as f64;
         assert!(
             (n / triangles as f64 - 1.0).abs() <= 0.10,
             "{n} triangles for {triangles} asked"
@@ -174,7 +178,7 @@ fn the_chrome_room_has_glass_and_mirror_balls_and_thin_rings_resting_on_the_plat
     // 3 glass balls of level 5 (20,480 triangles), 3 chrome and 3 diffuse of level 4 (5,120),
     // 4 rings of 96 x 12 x 2, the walls' 6 x 8 x 8 x 2, the plate's 12, 17 strips of 2.
     let want = 3 * 20_480 + 6 * 5_120 + 4 * 96 * 12 * 2 + 768 + 12 + 34;
-    assert_eq!(scene.mesh.triangles.len(), want);
+    assert_eq!(scene.mesh.triangle_count(), want);
     let material = |name: &str| {
         let o = scene.objects.iter().find(|o| o.name == name).unwrap();
         scene.materials[o.material as usize].name.clone()
@@ -201,7 +205,11 @@ fn the_chrome_room_has_glass_and_mirror_balls_and_thin_rings_resting_on_the_plat
         let (lo, hi) = extent(&scene, ring);
         assert!(((hi - lo).y - 1.47).abs() < 1e-3, "{ring}: {lo} {hi}");
         let o = scene.objects.iter().find(|o| o.name == ring).unwrap();
-        let p = &scene.mesh.positions[o.vertices.start as usize..o.vertices.end as usize];
+        let p = &o
+            .vertices
+            .clone()
+            .map(|v| scene.mesh.position(v))
+            .collect::<Vec<_>>();
         let c = Vec3::new(
             0.5 * (lo.x + hi.x),
             0.5 * (lo.y + hi.y),
@@ -228,7 +236,7 @@ fn every_light_of_every_room_faces_into_the_room() {
             .filter(|o| o.emission.max_element() > 0.0)
         {
             for t in o.triangles.clone() {
-                let n = scene.mesh.geometric_normals[t as usize];
+                let n = scene.mesh.geometric_normal(t);
                 let p = scene.mesh.corners(t)[0];
                 assert!(
                     n.dot(centre - p) > 0.0,

@@ -367,7 +367,7 @@ fn measure_scene(
     Ok(RoomReport {
         room: name.to_owned(),
         scene: scene_path.display().to_string(),
-        triangles: scene.mesh.triangles.len(),
+        triangles: scene.mesh.triangle_count(),
         objects: scene.objects.len(),
         reference: ReferenceReport {
             exr: reference.exr.display().to_string(),

@@ -1,0 +1,386 @@
+//! Instancing: a glTF mesh that several nodes show is stored once and placed again
+//! ([`twopass_scene::Repeat`]). Every consumer must see the same scene as when each node has
+//! its own copy of the mesh: the same triangles, the same ray answers, the same solve.
+
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+use rand::{Rng, SeedableRng};
+use rand_pcg::Pcg64;
+use twopass_radiosity::{Method, Options, Solver};
+use twopass_scene::{DiffuseRadiance, Scene, load};
+use twopass_tests::gltf::{GltfWriter, MaterialSpec, Trs};
+
+/// A closed box from (0, 0, 0) to (1, 1, 1): 8 corners, 12 outward-facing triangles.
+fn unit_box() -> (Vec<[f32; 3]>, Vec<u32>) {
+    let p = (0..8)
+        .map(|i| [(i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32])
+        .collect();
+    #[rustfmt::skip]
+    let idx = vec![
+        0, 2, 1, 1, 2, 3, // z = 0, facing -z
+        4, 5, 6, 5, 7, 6, // z = 1
+        0, 1, 4, 1, 5, 4, // y = 0
+        2, 6, 3, 3, 6, 7, // y = 1
+        0, 4, 2, 2, 4, 6, // x = 0
+        1, 3, 5, 3, 7, 5, // x = 1
+    ];
+    (p, idx)
+}
+
+/// A quaternion (x, y, z, w) of `degrees` about unit `axis`.
+fn turn(axis: Vec3, degrees: f32) -> [f32; 4] {
+    glam::Quat::from_axis_angle(axis.normalize(), degrees.to_radians()).to_array()
+}
+
+/// The placements of the boxes: turned about tilted axes, scaled unevenly, one mirrored.
+fn placements(n: usize) -> Vec<Trs> {
+    (0..n)
+        .map(|i| {
+            let f = i as f32;
+            Trs {
+                t: [
+                    -4.0 + 1.7 * (i % 5) as f32,
+                    // Off the floor: no face of a box lies in the floor's plane.
+                    0.1 + 0.3 * (i % 3) as f32,
+                    -4.0 + 1.9 * (i / 5 % 5) as f32,
+                ],
+                r: turn(Vec3::new(0.3, 1.0, 0.1 * f), 17.0 * f),
+                s: [
+                    0.5 + 0.1 * (i % 4) as f32,
+                    if i % 7 == 3 { -0.8 } else { 0.8 },
+                    0.6 + 0.05 * f,
+                ],
+            }
+        })
+        .collect()
+}
+
+/// A room of grey boxes on a floor under an emissive square: with `shared`, every box node
+/// shows one mesh; without, each has its own mesh of the same data.
+fn boxes_room(dir: &Path, copies: usize, shared: bool) -> PathBuf {
+    let mut w = GltfWriter::new();
+    let grey = w.material(
+        "Grey",
+        MaterialSpec {
+            base: [0.6, 0.6, 0.6],
+            ..MaterialSpec::default()
+        },
+    );
+    let lamp = w.material(
+        "Lamp",
+        MaterialSpec {
+            base: [0.0, 0.0, 0.0],
+            emissive: [1.0, 1.0, 1.0],
+            strength: Some(20.0),
+            ..MaterialSpec::default()
+        },
+    );
+    let floor = [
+        [-6.0, 0.0, -6.0],
+        [-6.0, 0.0, 6.0],
+        [6.0, 0.0, 6.0],
+        [6.0, 0.0, -6.0],
+    ];
+    let floor = w.mesh(
+        "Floor",
+        &floor,
+        None,
+        None,
+        None,
+        &[0, 1, 2, 0, 2, 3],
+        Some(grey),
+    );
+    let light = [
+        [-1.0, 6.0, -1.0],
+        [1.0, 6.0, -1.0],
+        [1.0, 6.0, 1.0],
+        [-1.0, 6.0, 1.0],
+    ];
+    let light = w.mesh(
+        "Light",
+        &light,
+        None,
+        None,
+        None,
+        &[0, 1, 2, 0, 2, 3],
+        Some(lamp),
+    );
+    let (p, idx) = unit_box();
+    let mut roots = vec![
+        w.node("Floor", Some(floor), None, Trs::default(), vec![]),
+        w.node("Light", Some(light), None, Trs::default(), vec![]),
+    ];
+    let shared_box = w.mesh("Box", &p, None, None, None, &idx, Some(grey));
+    for (i, trs) in placements(copies).into_iter().enumerate() {
+        let mesh = if shared {
+            shared_box
+        } else {
+            w.mesh(&format!("Box{i}"), &p, None, None, None, &idx, Some(grey))
+        };
+        roots.push(w.node(&format!("Box {i}"), Some(mesh), None, trs, vec![]));
+    }
+    let camera = w.camera(0.9, Some(1.0));
+    roots.push(w.node(
+        "Eye",
+        None,
+        Some(camera),
+        Trs {
+            t: [0.0, 4.0, 12.0],
+            r: turn(Vec3::X, -15.0),
+            ..Trs::default()
+        },
+        vec![],
+    ));
+    let path = dir.join(if shared { "shared.glb" } else { "copied.glb" });
+    std::fs::write(&path, w.glb(roots)).unwrap();
+    path
+}
+
+fn pair(copies: usize) -> (tempfile::TempDir, Scene, Scene) {
+    let dir = tempfile::tempdir().unwrap();
+    let (shared, w1) = load(boxes_room(dir.path(), copies, true)).unwrap();
+    let (copied, w2) = load(boxes_room(dir.path(), copies, false)).unwrap();
+    assert!(w1.is_empty() && w2.is_empty(), "{w1:?} {w2:?}");
+    (dir, shared, copied)
+}
+
+fn close(a: Vec3, b: Vec3, scale: f32) -> bool {
+    (a - b).abs().max_element() <= 1e-5 * scale
+}
+
+#[test]
+fn placed_copies_are_the_triangles_of_copied_meshes() {
+    let (_dir, shared, copied) = pair(20);
+    let (s, c) = (&shared.mesh, &copied.mesh);
+    // 2 + 2 floor and light triangles, one stored box of 12.
+    assert_eq!(s.stored_triangle_count(), 16);
+    assert_eq!(s.repeats().len(), 19);
+    assert_eq!(c.stored_triangle_count(), 4 + 20 * 12);
+    assert_eq!(s.triangle_count(), c.triangle_count());
+    assert_eq!(s.vertex_count(), c.vertex_count());
+    assert_eq!(shared.objects, copied.objects);
+    for t in 0..s.triangle_count() as u32 {
+        assert_eq!(s.triangle(t), c.triangle(t), "triangle {t}");
+        assert_eq!(s.object_of(t), c.object_of(t));
+        for (a, b) in s.corners(t).iter().zip(c.corners(t)) {
+            assert!(close(*a, b, 10.0), "triangle {t}: {a} vs {b}");
+        }
+        assert!(close(s.geometric_normal(t), c.geometric_normal(t), 1.0));
+        let b = [0.2, 0.3, 0.5];
+        assert!(close(s.shading_normal(t, b), c.shading_normal(t, b), 1.0));
+        assert!(
+            (s.area(t) - c.area(t)).abs() <= 1e-5 * c.area(t),
+            "area of {t}"
+        );
+    }
+    assert!((shared.total_area() - copied.total_area()).abs() < 1e-6 * copied.total_area());
+    // The mirrored box (i % 7 == 3) keeps its faces outward: its normals point away from its
+    // centre, as the copied mesh's do.
+    let mirrored = &shared.objects[2 + 3];
+    let centre = mirrored
+        .vertices
+        .clone()
+        .map(|v| s.position(v))
+        .sum::<Vec3>()
+        / 8.0;
+    for t in mirrored.triangles.clone() {
+        let [a, b, d] = s.corners(t);
+        assert!(s.geometric_normal(t).dot((a + b + d) / 3.0 - centre) > 0.0);
+    }
+}
+
+#[test]
+fn rays_find_the_same_hits_in_placed_and_copied_boxes() {
+    let (_dir, shared, copied) = pair(20);
+    let mut rng = Pcg64::seed_from_u64(7);
+    let (mut box_hits, mut blocked) = (0, 0);
+    for _ in 0..20_000 {
+        let o = Vec3::new(
+            rng.random_range(-6.0..6.0),
+            rng.random_range(0.01..5.9),
+            rng.random_range(-6.0..6.0),
+        );
+        let d = Vec3::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+        );
+        let ray = twopass_scene::Ray::new(o, d);
+        let (a, b) = (shared.intersect(&ray), copied.intersect(&ray));
+        match (a, b) {
+            (None, None) => {}
+            (Some(a), Some(b)) => {
+                box_hits += usize::from(b.object >= 2);
+                // The same surface: each hit within rounding of the other's plane. Along the
+                // ray they may differ more: a ray grazing a face meets it far from its own
+                // rounding (here the copy's ray is carried into the source's space).
+                let n = b.point.normal;
+                let off = (a.point.position - b.point.position).dot(n).abs();
+                assert!(off <= 1e-5 * b.t.max(1.0), "{ray:?}: {a:?} {b:?}");
+                assert_eq!(a.object, b.object, "{ray:?}: {a:?} {b:?}");
+                assert!(close(a.point.normal, n, 1.0));
+            }
+            _ => panic!("{ray:?}: {a:?} against {b:?}"),
+        }
+        let end = o + d * rng.random_range(0.5..8.0);
+        let (sa, sb) = (
+            shared.accel().any_hit(o, end - o, 1.0),
+            copied.accel().any_hit(o, end - o, 1.0),
+        );
+        assert_eq!(sa, sb, "segment {o} -> {end}");
+        blocked += usize::from(sa);
+    }
+    // The rays meet the boxes often enough for the comparison to mean something.
+    assert!(
+        box_hits > 1_000 && blocked > 1_000,
+        "{box_hits} box hits, {blocked} blocked"
+    );
+}
+
+#[test]
+fn rays_leaving_a_placed_copy_do_not_hit_it_again() {
+    let (_dir, shared, _) = pair(20);
+    let mut rng = Pcg64::seed_from_u64(3);
+    let s = &shared.mesh;
+    let mut checked = 0;
+    for t in 16..s.triangle_count() as u32 {
+        for _ in 0..50 {
+            let (u, v): (f32, f32) = (rng.random(), rng.random());
+            let p = s.sample_triangle(t, glam::Vec2::new(u, v));
+            // Straight out and at grazing angles: nothing of its own box is in front.
+            let n = p.normal;
+            let tangent = n.any_orthonormal_vector();
+            for d in [n, (n * 0.02 + tangent).normalize()] {
+                let hit = shared.intersect_from(&p, d);
+                assert!(
+                    hit.is_none_or(
+                        |h| s.object_of(h.point.triangle) != s.object_of(t) || h.t > 1e-3
+                    ),
+                    "triangle {t}: {hit:?}"
+                );
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked > 10_000);
+}
+
+#[test]
+fn a_solve_over_placed_copies_is_the_solve_over_copied_meshes() {
+    let (_dir, shared, copied) = pair(12);
+    for method in [Method::Progressive, Method::Hierarchical] {
+        // Elements of 0.37: no box edge is near a multiple of it, where a rounding of the
+        // copies' corners could cut a face into another number of elements.
+        let options = Options {
+            method,
+            element_size: Some(0.37),
+            ..Options::default()
+        };
+        let solve = |scene: &Scene| {
+            let mut solver = Solver::new(scene, options.clone()).unwrap();
+            solver.run(|_| std::ops::ControlFlow::Continue(()));
+            solver.check_energy().unwrap();
+            (solver.solution(), solver.mesh().leaves().count())
+        };
+        let ((a, leaves_a), (b, leaves_b)) = (solve(&shared), solve(&copied));
+        // Progressive refinement meshes to the element size alone: the same leaves. The
+        // hierarchical solver refines where a link's estimated error passes a threshold, and
+        // rounding tips a few of those decisions (6 of 1,150 leaves here): each changes the
+        // light of the nodes it refines by about the link tolerance.
+        let (same, tolerance) = match method {
+            Method::Progressive => (leaves_a == leaves_b, 1e-4),
+            _ => (leaves_a.abs_diff(leaves_b) * 100 <= leaves_b, 2e-3),
+        };
+        assert!(same, "{method:?}: {leaves_a} leaves against {leaves_b}");
+        let third = [1.0 / 3.0; 3];
+        let (mut sum, mut diff) = (0.0f64, 0.0f64);
+        for t in 0..shared.mesh.triangle_count() as u32 {
+            let (x, y) = (a.radiance(t, third), b.radiance(t, third));
+            let area = f64::from(shared.mesh.area(t));
+            sum += f64::from(y.max_element()) * area;
+            diff += f64::from((x - y).abs().max_element()) * area;
+        }
+        assert!(sum > 0.0);
+        let relative = diff / sum;
+        assert!(
+            relative <= tolerance,
+            "{method:?}: relative difference {relative}"
+        );
+    }
+}
+
+/// 100 placed copies of a 10k-triangle mesh: the mesh is stored once, and the scene's mesh and
+/// trees take a small multiple of one copy's, not 100.
+#[test]
+fn a_hundred_placed_copies_are_not_a_hundred_copies_in_memory() {
+    let dir = tempfile::tempdir().unwrap();
+    // A 50 x 100 grid of quads, bent into a half cylinder: 10,000 triangles.
+    let (nu, nv) = (50usize, 100usize);
+    let mut p = Vec::new();
+    for j in 0..=nv {
+        for i in 0..=nu {
+            let a = std::f32::consts::PI * i as f32 / nu as f32;
+            p.push([a.cos(), a.sin(), j as f32 / nv as f32 * 2.0]);
+        }
+    }
+    let mut idx = Vec::new();
+    for j in 0..nv as u32 {
+        for i in 0..nu as u32 {
+            let (a, b) = (j * (nu as u32 + 1) + i, (j + 1) * (nu as u32 + 1) + i);
+            idx.extend([a, a + 1, b, a + 1, b + 1, b]);
+        }
+    }
+    let write = |copies: usize| {
+        let mut w = GltfWriter::new();
+        let lamp = w.material(
+            "Lamp",
+            MaterialSpec {
+                emissive: [1.0, 1.0, 1.0],
+                strength: Some(1.0),
+                ..MaterialSpec::default()
+            },
+        );
+        let mesh = w.mesh("Half pipe", &p, None, None, None, &idx, Some(lamp));
+        let roots = (0..copies)
+            .map(|i| {
+                let trs = Trs {
+                    t: [3.0 * (i % 10) as f32, 0.0, 3.0 * (i / 10) as f32],
+                    r: turn(Vec3::Y, 7.0 * i as f32),
+                    ..Trs::default()
+                };
+                w.node(&format!("Copy {i}"), Some(mesh), None, trs, vec![])
+            })
+            .collect();
+        let path = dir.path().join(format!("pipes{copies}.glb"));
+        std::fs::write(&path, w.glb(roots)).unwrap();
+        load(&path).unwrap().0
+    };
+    let (one, hundred) = (write(1), write(100));
+    assert_eq!(hundred.mesh.stored_triangle_count(), 10_000);
+    assert_eq!(hundred.mesh.triangle_count(), 1_000_000);
+    let bytes = |s: &Scene| s.mesh.bytes() + s.accel().bytes();
+    let ratio = bytes(&hundred) as f64 / bytes(&one) as f64;
+    // The stored mesh, its tree, the copies' shared tree and 100 placements: about twice one
+    // copy (the shared tree is the stored one's twin), against 100 times for copies.
+    assert!(
+        ratio < 3.0,
+        "100 copies take {ratio:.2} times one copy's bytes"
+    );
+    // Every copy answers rays: one aimed down the axis of each pipe's far end hits that copy.
+    for (i, o) in hundred.objects.iter().enumerate() {
+        let top = o.triangles.start + 2 * (nv as u32 - 1) * nu as u32 + nu as u32;
+        let [a, b, c] = hundred.mesh.corners(top);
+        let target = (a + b + c) / 3.0;
+        let origin = target + Vec3::Y * 5.0;
+        let hit = hundred
+            .intersect(&twopass_scene::Ray::new(origin, target - origin))
+            .unwrap_or_else(|| panic!("copy {i}: no hit"));
+        assert_eq!(hit.object as usize, i);
+    }
+    // The emitters of the copies each have the mesh's area.
+    assert_eq!(hundred.emitters.len(), 100);
+    for e in &hundred.emitters {
+        assert!((e.area - one.emitters[0].area).abs() < 1e-4 * e.area);
+    }
+}
