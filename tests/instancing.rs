@@ -384,3 +384,75 @@ fn a_hundred_placed_copies_are_not_a_hundred_copies_in_memory() {
         assert!((e.area - one.emitters[0].area).abs() < 1e-4 * e.area);
     }
 }
+
+/// A scene file whose objects name one OBJ file: placed again rather than read again, as the
+/// same objects each naming its own copy of the file; a placement repeating another's is
+/// dropped with the coincident-objects warning.
+#[test]
+fn objects_naming_one_mesh_file_place_it_again() {
+    let dir = tempfile::tempdir().unwrap();
+    let (p, idx) = unit_box();
+    let mut obj = String::from("g box\n");
+    for v in &p {
+        obj += &format!("v {} {} {}\n", v[0], v[1], v[2]);
+    }
+    for f in idx.chunks(3) {
+        obj += &format!("f {} {} {}\n", f[0] + 1, f[1] + 1, f[2] + 1);
+    }
+    let header = "version = 1\n[camera]\nposition = [0, 4, 12]\nlook_at = [0, 0, 0]\nfov_y = 50\n\
+                  [[material]]\nname = \"grey\"\ntype = \"lambert\"\ndiffuse = 0.6\n\
+                  [[object]]\nname = \"light\"\nmaterial = \"grey\"\nemission = 5\n\
+                  shape = { type = \"quad\", origin = [-1, 6, -1], edge_u = [0, 0, 2], edge_v = [2, 0, 0] }\n";
+    let scene = |shared: bool, repeat_last: bool| {
+        let mut text = header.to_owned();
+        for (i, trs) in placements(10).iter().enumerate() {
+            let file = if shared {
+                "box.obj".to_owned()
+            } else {
+                format!("box{i}.obj")
+            };
+            std::fs::write(dir.path().join(&file), &obj).unwrap();
+            let q = glam::Quat::from_array(trs.r);
+            let (axis, angle) = q.to_axis_angle();
+            let place = format!(
+                "transform = {{ translate = {:?}, scale = {:?}, rotate = [{{ axis = {:?}, degrees = {} }}] }}\n",
+                trs.t,
+                trs.s,
+                axis.to_array(),
+                angle.to_degrees()
+            );
+            text += &format!(
+                "[[object]]\nname = \"box {i}\"\nmaterial = \"grey\"\nshape = {{ type = \"obj\", file = \"{file}\" }}\n{place}"
+            );
+            if repeat_last && i == 9 {
+                text += &format!(
+                    "[[object]]\nname = \"box again\"\nmaterial = \"grey\"\nshape = {{ type = \"obj\", file = \"{file}\" }}\n{place}"
+                );
+            }
+        }
+        let path = dir.path().join("boxes.toml");
+        std::fs::write(&path, text).unwrap();
+        load(&path).unwrap()
+    };
+    let ((shared, w1), (copied, w2)) = (scene(true, false), scene(false, false));
+    assert!(w1.is_empty() && w2.is_empty(), "{w1:?} {w2:?}");
+    assert_eq!(shared.mesh.stored_triangle_count(), 2 + 12);
+    assert_eq!(shared.mesh.repeats().len(), 9);
+    assert_eq!(copied.mesh.stored_triangle_count(), 2 + 10 * 12);
+    assert_eq!(shared.mesh.triangle_count(), copied.mesh.triangle_count());
+    for t in 0..shared.mesh.triangle_count() as u32 {
+        for (a, b) in shared.mesh.corners(t).iter().zip(copied.mesh.corners(t)) {
+            assert!(close(*a, b, 10.0), "triangle {t}: {a} vs {b}");
+        }
+    }
+    let (again, warnings) = scene(true, true);
+    assert_eq!(again.objects.len(), shared.objects.len());
+    assert_eq!(again.mesh.triangle_count(), shared.mesh.triangle_count());
+    let text: Vec<String> = warnings.iter().map(ToString::to_string).collect();
+    assert!(
+        text.len() == 1
+            && text[0].contains("dropped 12 triangle(s) in 1 object(s)")
+            && text[0].contains("object `box again`"),
+        "{text:?}"
+    );
+}

@@ -6,7 +6,7 @@ use std::hint::black_box;
 use std::path::Path;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use twopass_scene::{Accel, Ray, Scene, load, workload};
+use twopass_scene::{Ray, Scene, load, workload};
 
 const RAYS: usize = 1 << 14;
 
@@ -60,7 +60,7 @@ fn queries(c: &mut Criterion) {
 fn build(c: &mut Criterion) {
     let (_, scene) = scenes().pop().expect("two scenes");
     c.bench_function("build/generated-100k", |b| {
-        b.iter(|| Accel::build_mesh(black_box(&scene.mesh)))
+        b.iter(|| black_box(&scene.mesh).accel())
     });
 }
 

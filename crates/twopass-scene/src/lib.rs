@@ -47,7 +47,7 @@ mod unit;
 pub mod workload;
 
 pub use accel::{
-    Accel, COHERENT_ANGLE, COHERENT_ORIGINS, INTERLEAVE_MIN_BYTES, Ray, SHAFT_TOLERANCE,
+    Accel, COHERENT_ANGLE, COHERENT_ORIGINS, INTERLEAVE_MIN_BYTES, Placement, Ray, SHAFT_TOLERANCE,
     SurfacePoint, TriangleHit, build_coincident,
 };
 pub use camera::{Camera, CameraProblem};

@@ -10,8 +10,7 @@ use std::ops::Range;
 
 use glam::{Affine3A, DVec3, Mat3A, Vec2, Vec3, Vec3A};
 
-use crate::accel::SurfacePoint;
-use crate::accel::gamma;
+use crate::accel::{Accel, Placement, SurfacePoint, transform_error};
 
 /// A placed copy of one stored object: its triangles, vertices, normals and texture
 /// coordinates are the source's, moved by `to_world`, and take the index ranges after the
@@ -77,15 +76,7 @@ impl Repeat {
     /// axis, scene units: added to the point's own error bound so that rays leaving the copy
     /// are offset clear of it.
     pub fn point_error(&self, position: Vec3) -> Vec3 {
-        let abs = |m: Mat3A| Mat3A::from_cols(m.x_axis.abs(), m.y_axis.abs(), m.z_axis.abs());
-        let (a, inv) = (abs(self.to_world.matrix3), abs(self.from_world.matrix3));
-        let p = Vec3A::from(position).abs();
-        // The source point's size, then: the forward transform's rounding (a |x| + |b|), the
-        // world point's own, and a spawned origin's trip back into the source (a times its
-        // rounding there), each within a few ulps of its terms.
-        let local = inv * p + Vec3A::from(self.from_world.translation).abs();
-        let e = 2.0 * (a * local) + Vec3A::from(self.to_world.translation).abs() + p;
-        Vec3::from(e * gamma(8))
+        transform_error(&self.to_world, &self.from_world, position)
     }
 }
 
@@ -415,6 +406,24 @@ impl Mesh {
         let s = u.x.sqrt();
         let (b1, b2) = (s * (1.0 - u.y), s * u.y);
         self.surface_point(t, [1.0 - b1 - b2, b1, b2])
+    }
+
+    /// The accelerator over the mesh: the stored triangles' tree, and the copies' through one
+    /// shared tree per source ([`Accel::build_placed`]).
+    pub fn accel(&self) -> Accel {
+        let placements: Vec<Placement> = self
+            .repeats
+            .iter()
+            .map(|r| Placement {
+                source: r.source_triangle,
+                count: r.triangles.end - r.triangles.start,
+                first: r.triangles.start,
+                to_world: r.to_world,
+                from_world: r.from_world,
+                flips: r.flips,
+            })
+            .collect();
+        Accel::build_placed(&self.positions, &self.triangles, &placements)
     }
 
     /// Copies the whole mesh into plain world-space arrays (positions, triangles), copies of

@@ -200,7 +200,7 @@ impl Scene {
                 }
             })
             .collect();
-        let accel = Accel::build_mesh(&mesh);
+        let accel = mesh.accel();
         Self {
             path,
             unit,

@@ -106,8 +106,15 @@ impl LampInfo {
 #[derive(Serialize)]
 struct Info {
     scene: PathBuf,
+    /// Every triangle the passes see, placed copies of instanced meshes included.
     triangles: usize,
     vertices: usize,
+    /// Triangles stored in memory: the placed copies repeat stored ones.
+    stored_triangles: usize,
+    /// Objects that are placed copies of another's mesh (glTF instancing).
+    placed_copies: usize,
+    /// Memory of the mesh and its trees, bytes.
+    geometry_bytes: usize,
     objects: usize,
     materials_by_type: BTreeMap<String, usize>,
     emitters: Vec<EmitterInfo>,
@@ -135,6 +142,9 @@ pub fn run(args: &InfoArgs, ctx: &Context) -> Result<(), CliError> {
         scene: args.scene.clone(),
         triangles: scene.mesh.triangle_count(),
         vertices: scene.mesh.vertex_count(),
+        stored_triangles: scene.mesh.stored_triangle_count(),
+        placed_copies: scene.mesh.repeats().len(),
+        geometry_bytes: scene.mesh.bytes() + scene.accel().bytes(),
         objects: scene.objects.len(),
         materials_by_type,
         emitters: scene
@@ -179,6 +189,14 @@ pub fn run(args: &InfoArgs, ctx: &Context) -> Result<(), CliError> {
         info.objects,
         info.total_area
     );
+    if info.placed_copies > 0 {
+        outln!(
+            "instances  {} objects are placed copies: {} of the triangles stored, {:.1} MiB of mesh and trees",
+            info.placed_copies,
+            info.stored_triangles,
+            info.geometry_bytes as f64 / (1 << 20) as f64
+        );
+    }
     let kinds: Vec<String> = info
         .materials_by_type
         .iter()

@@ -3,17 +3,18 @@
 
 use std::time::{Duration, Instant};
 
-use glam::{Vec3, Vec3A};
+use glam::{Affine3A, Vec3, Vec3A};
 use obvhs::{
-    BvhBuildParams, aabb::Aabb, bvh2::reinsertion::ReinsertionOptimizer, ploc::PlocBuilder,
+    BvhBuildParams,
+    aabb::Aabb,
+    bvh2::{Bvh2, reinsertion::ReinsertionOptimizer},
+    ploc::PlocBuilder,
 };
 
 use super::binary::build_coincident;
 use super::bvh::{self, Bvh8};
 use super::collapse::collapse;
-use super::placed::Placed;
 use super::quad::TriangleQuad;
-use crate::mesh::Mesh;
 
 /// An 8-wide BVH over the scene's triangles (a binary tree built by obvhs's PLOC builder,
 /// collapsed into 8-wide nodes with leaves of up to four triangles) with the queries every
@@ -24,7 +25,7 @@ pub struct Accel {
     pub(super) bvh: Bvh8,
     /// The placed copies of stored objects, with their own trees; `None` without copies.
     pub(super) placed: Option<Box<Placed>>,
-    build_time: Duration,
+    pub(super) build_time: Duration,
 }
 
 impl std::fmt::Debug for Accel {
@@ -43,17 +44,6 @@ impl Accel {
     /// guarantees; an empty list gives an accelerator that hits nothing.
     pub fn build(positions: &[Vec3], triangles: &[[u32; 3]]) -> Self {
         Self::build_with(positions, triangles, BvhBuildParams::medium_build())
-    }
-
-    /// Builds the BVH over a scene's mesh: one tree over the stored triangles, and for the
-    /// placed copies of objects ([`Mesh::repeats`]) one tree per source, shared by its copies,
-    /// under a tree over the copies. Hits name mesh-wide triangle indices.
-    pub fn build_mesh(mesh: &Mesh) -> Self {
-        let start = Instant::now();
-        let mut accel = Self::build(&mesh.positions, &mesh.triangles);
-        accel.placed = Placed::build(mesh);
-        accel.build_time = start.elapsed();
-        accel
     }
 
     /// Builds the BVH with explicit obvhs build parameters. Those of the binary tree apply
@@ -140,4 +130,24 @@ impl Accel {
     pub fn bytes(&self) -> usize {
         self.bvh.bytes() + self.placed.as_ref().map_or(0, |p| p.sizes().2)
     }
+}
+
+/// The placed copies of a mesh: the shared trees and the tree over the copies.
+pub(super) struct Placed {
+    /// One tree per source run of stored triangles, over the source's triangles (ids from 0).
+    pub(super) trees: Vec<Accel>,
+    pub(super) copies: Vec<Copy>,
+    /// The tree over the copies' bounds; its leaves' slots index `copies` through
+    /// `primitive_indices`.
+    pub(super) top: Bvh2,
+}
+
+/// One copy: its source's tree and how to reach it.
+pub(super) struct Copy {
+    pub(super) tree: u32,
+    /// Mesh-wide index of the copy's first triangle.
+    pub(super) first: u32,
+    pub(super) from_world: Affine3A,
+    pub(super) to_world: Affine3A,
+    pub(super) flips: bool,
 }

@@ -3,35 +3,68 @@
 //! (obvhs) over the copies' world bounds. A ray is carried into a copy's source space, where
 //! `t` is unchanged (the direction is transformed, not renormalised), and its hit back out.
 
+use std::time::Instant;
+
 use glam::{Affine3A, Vec3, Vec3A};
 use obvhs::aabb::Aabb;
-use obvhs::bvh2::Bvh2;
 use obvhs::ploc::{PlocBuilder, PlocSearchDistance, SortPrecision};
 use obvhs::ray::{Ray as TopRay, RayHit};
 
 use super::binary::build_coincident;
-use super::build::Accel;
+use super::build::{Accel, Copy, Placed};
 use super::hit::{TriangleHit, four_ulps_up};
-use crate::mesh::Mesh;
+use super::ray::gamma;
 
-/// The placed copies of a mesh: the shared trees and the tree over the copies.
-pub(super) struct Placed {
-    /// One tree per source run of stored triangles, over the source's triangles (ids from 0).
-    trees: Vec<Accel>,
-    copies: Vec<Copy>,
-    /// The tree over the copies' bounds; its leaves' slots index `copies` through
-    /// `primitive_indices`.
-    top: Bvh2,
+/// One placed copy of a run of stored triangles, as the accelerator needs it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Placement {
+    /// The first of the stored triangles it copies.
+    pub source: u32,
+    /// How many it copies.
+    pub count: u32,
+    /// Index of the copy's first triangle in the whole mesh (hits name `first` + the source
+    /// triangle's place in the run).
+    pub first: u32,
+    /// From the source's world place to the copy's.
+    pub to_world: Affine3A,
+    /// Its inverse.
+    pub from_world: Affine3A,
+    /// Whether `to_world` mirrors (the copy's corners 1 and 2 are the source's 2 and 1).
+    pub flips: bool,
 }
 
-/// One copy: its source's tree and how to reach it.
-struct Copy {
-    tree: u32,
-    /// Mesh-wide index of the copy's first triangle.
-    first: u32,
-    from_world: Affine3A,
-    to_world: Affine3A,
-    flips: bool,
+/// A bound on the rounding a point at `position` (world) of a copy placed by `to_world`
+/// (inverse `from_world`) picks up through a ray query's two transforms (into the source's
+/// space and its hit back out), per axis, scene units.
+pub fn transform_error(to_world: &Affine3A, from_world: &Affine3A, position: Vec3) -> Vec3 {
+    let abs =
+        |m: glam::Mat3A| glam::Mat3A::from_cols(m.x_axis.abs(), m.y_axis.abs(), m.z_axis.abs());
+    let (a, inv) = (abs(to_world.matrix3), abs(from_world.matrix3));
+    let p = Vec3A::from(position).abs();
+    // The source point's size, then: the forward transform's rounding (a |x| + |b|), the
+    // world point's own, and a spawned origin's trip back into the source (a times its
+    // rounding there), each within a few ulps of its terms.
+    let local = inv * p + Vec3A::from(from_world.translation).abs();
+    let e = 2.0 * (a * local) + Vec3A::from(to_world.translation).abs() + p;
+    Vec3::from(e * gamma(8))
+}
+
+impl Accel {
+    /// Builds the BVH over stored triangles and placed copies of runs of them (instancing): one
+    /// tree over the stored triangles, one per copied run, shared by its copies, and a tree
+    /// over the copies. Hits name the stored triangles by their index and a copy's by
+    /// [`Placement::first`] plus its place in the run.
+    pub fn build_placed(
+        positions: &[Vec3],
+        triangles: &[[u32; 3]],
+        placements: &[Placement],
+    ) -> Self {
+        let start = Instant::now();
+        let mut accel = Self::build(positions, triangles);
+        accel.placed = Placed::build(positions, triangles, placements);
+        accel.build_time = start.elapsed();
+        accel
+    }
 }
 
 impl Copy {
@@ -63,9 +96,14 @@ impl Copy {
 }
 
 impl Placed {
-    /// The trees and the top tree for `mesh`'s copies (`None` without copies).
-    pub(super) fn build(mesh: &Mesh) -> Option<Box<Self>> {
-        let repeats = mesh.repeats();
+    /// The trees and the top tree of the copies `placements` of runs of `triangles` (vertex
+    /// indices into `positions`); `None` without copies.
+    pub(super) fn build(
+        positions: &[Vec3],
+        triangles: &[[u32; 3]],
+        placements: &[Placement],
+    ) -> Option<Box<Self>> {
+        let repeats = placements;
         if repeats.is_empty() {
             return None;
         }
@@ -74,14 +112,13 @@ impl Placed {
         let mut copies = Vec::with_capacity(repeats.len());
         let mut boxes = Vec::with_capacity(repeats.len());
         for r in repeats {
-            let len = r.triangles.end - r.triangles.start;
-            let key = (r.source_triangle, len);
+            let len = r.count;
+            let key = (r.source, len);
             let tree = match sources.iter().position(|&s| s == key) {
                 Some(i) => i,
                 None => {
-                    let run = &mesh.triangles
-                        [r.source_triangle as usize..(r.source_triangle + len) as usize];
-                    trees.push(Accel::build(&mesh.positions, run));
+                    let run = &triangles[r.source as usize..(r.source + len) as usize];
+                    trees.push(Accel::build(positions, run));
                     sources.push(key);
                     trees.len() - 1
                 }
@@ -89,19 +126,25 @@ impl Placed {
             // The world box of the source's corners moved by the copy, widened by the
             // transforms' rounding (the hits are found in the source's space).
             let mut b = Aabb::empty();
-            for t in r.source_triangle..r.source_triangle + len {
-                for &v in &mesh.triangles[t as usize] {
-                    b.extend(Vec3A::from(r.point(mesh.positions[v as usize])));
+            for t in r.source..r.source + len {
+                for &v in &triangles[t as usize] {
+                    b.extend(Vec3A::from(
+                        r.to_world.transform_point3(positions[v as usize]),
+                    ));
                 }
             }
-            let pad = r.point_error(Vec3::from(b.min.abs().max(b.max.abs())));
+            let pad = transform_error(
+                &r.to_world,
+                &r.from_world,
+                Vec3::from(b.min.abs().max(b.max.abs())),
+            );
             boxes.push(Aabb {
                 min: b.min - Vec3A::from(pad),
                 max: b.max + Vec3A::from(pad),
             });
             copies.push(Copy {
                 tree: tree as u32,
-                first: r.triangles.start,
+                first: r.first,
                 from_world: r.from_world,
                 to_world: r.to_world,
                 flips: r.flips,

@@ -102,6 +102,7 @@ pub fn load_toml_with(
         texture_ids: HashMap::new(),
         lamps: Vec::new(),
         sky: None,
+        obj_parts: HashMap::new(),
     };
     let mut material_lines = Vec::new();
     for m in &file.materials {
@@ -165,6 +166,7 @@ fn load_bare_obj(path: &Path, policy: &ReadPolicy) -> Result<(Scene, Vec<Warning
         texture_ids: HashMap::new(),
         lamps: Vec::new(),
         sky: None,
+        obj_parts: HashMap::new(),
     };
     let file = obj::load(path, policy)?;
     let materials = match &file.materials {

@@ -83,6 +83,9 @@ pub(super) struct Loader {
     pub(super) lamps: Vec<crate::lamp::Lamp>,
     /// The sky, when the file has one.
     pub(super) sky: Option<crate::sky::Sky>,
+    /// The mesh files objects have read, by path: each group's part, so that another object
+    /// naming the file places those parts again instead of reading and storing it again.
+    pub(super) obj_parts: HashMap<PathBuf, Vec<super::objects::ObjModel>>,
 }
 
 /// For "unknown field `k`" inside a typed table (whose span covers the whole table), the offset

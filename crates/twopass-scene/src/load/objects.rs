@@ -13,6 +13,21 @@ use crate::obj;
 use crate::shape::{self};
 use crate::transform::Transform;
 
+/// One group of a mesh file an object read: the part it became and what its material would
+/// be without the object's own (so that another object placing the file again resolves it
+/// alike).
+#[derive(Debug, Clone)]
+pub(super) struct ObjModel {
+    /// Index of its part in load order.
+    part: usize,
+    /// The group's name.
+    group: String,
+    /// Its MTL material's name, for `material_map`.
+    mtl_name: Option<String>,
+    /// Its MTL material's id and emission, when the library loaded.
+    mtl: Option<(u32, Rgb)>,
+}
+
 impl Loader {
     pub(super) fn shape_err(&self, line: usize, object: &str, problem: String) -> SceneError {
         SceneError::Shape {
@@ -150,6 +165,36 @@ impl Loader {
                     object: name.to_owned(),
                     source: Box::new(e),
                 };
+                // A mesh file an earlier object read is placed again, not read again: each of
+                // its groups becomes a copy of that object's part ([`crate::Repeat`]).
+                if let Some(models) = self.obj_parts.get(&obj_path).cloned() {
+                    let single = models.len() == 1;
+                    for m in models {
+                        let (material, mtl_emission) = match (&o.material, m.mtl_name.as_ref().and_then(|n| o.material_map.get(n))) {
+                            (Some(over), _) => (lookup(self, over)?, Rgb::ZERO),
+                            (None, Some(mapped)) => (lookup(self, mapped)?, Rgb::ZERO),
+                            (None, None) => match m.mtl {
+                                Some((id, e)) => (self.use_material(id), e),
+                                None => return Err(self.shape_err(line, name, format!(
+                                    "OBJ group `{}` in {} has no material of its own; give the object a `material`",
+                                    m.group,
+                                    obj_path.display()
+                                ))),
+                            },
+                        };
+                        parts.push(PlacedPart {
+                            part: Part {
+                                name: if single { name.to_owned() } else { format!("{name}/{}", m.group) },
+                                line: Some(line),
+                                geometry: Geometry::Copy { of: m.part },
+                                material,
+                                emission: emission.unwrap_or(mtl_emission),
+                            },
+                            transform,
+                        });
+                    }
+                    return Ok(());
+                }
                 let loaded = obj::load(&obj_path, &self.policy).map_err(in_object)?;
                 let needs_mtl = (o.material.is_none()
                     && (!loaded.mtllibs.is_empty() || loaded.models.iter().any(|m| m.material.is_some())))
@@ -176,8 +221,15 @@ impl Loader {
                     (Err(_), false) => Vec::new(),
                 };
                 let single = loaded.models.len() == 1;
+                let mut models = Vec::with_capacity(loaded.models.len());
                 for m in loaded.models {
                     let mtl_name = m.material.and_then(|i| loaded.materials.as_ref().ok()?.get(i)).map(|x| x.name.clone());
+                    models.push(ObjModel {
+                        part: parts.len(),
+                        group: m.name.clone(),
+                        mtl_name: mtl_name.clone(),
+                        mtl: m.material.and_then(|i| mtl.get(i)).copied(),
+                    });
                     let (material, mtl_emission) = match (&o.material, mtl_name.as_ref().and_then(|n| o.material_map.get(n))) {
                         (Some(over), _) => (lookup(self, over)?, Rgb::ZERO),
                         (None, Some(mapped)) => (lookup(self, mapped)?, Rgb::ZERO),
@@ -210,6 +262,7 @@ impl Loader {
                         transform,
                     });
                 }
+                self.obj_parts.insert(obj_path, models);
                 return Ok(());
             }
         }

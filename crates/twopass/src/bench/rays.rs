@@ -304,7 +304,7 @@ pub fn run(args: &RaysArgs, ctx: &Context) -> Result<(), CliError> {
     let progress = ctx.progress(13, "bench rays");
     let mut builds: Vec<f64> = (0..5)
         .map(|_| {
-            let a = Accel::build_mesh(&scene.mesh);
+            let a = scene.mesh.accel();
             a.build_time().as_secs_f64() * 1e3
         })
         .collect();

@@ -96,6 +96,7 @@ pub(super) fn load_gltf(
         texture_ids: HashMap::new(),
         lamps: Vec::new(),
         sky: None,
+        obj_parts: HashMap::new(),
     };
     let file = read::read(path, policy, &mut ld.warnings)?;
     let walked = walk::walk(&mut ld, &file)?;
