@@ -2,140 +2,13 @@
 //! ([`twopass_scene::Repeat`]). Every consumer must see the same scene as when each node has
 //! its own copy of the mesh: the same triangles, the same ray answers, the same solve.
 
-use std::path::{Path, PathBuf};
-
 use glam::Vec3;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 use twopass_radiosity::{Method, Options, Solver};
 use twopass_scene::{DiffuseRadiance, Scene, load};
 use twopass_tests::gltf::{GltfWriter, MaterialSpec, Trs};
-
-/// A closed box from (0, 0, 0) to (1, 1, 1): 8 corners, 12 outward-facing triangles.
-fn unit_box() -> (Vec<[f32; 3]>, Vec<u32>) {
-    let p = (0..8)
-        .map(|i| [(i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32])
-        .collect();
-    #[rustfmt::skip]
-    let idx = vec![
-        0, 2, 1, 1, 2, 3, // z = 0, facing -z
-        4, 5, 6, 5, 7, 6, // z = 1
-        0, 1, 4, 1, 5, 4, // y = 0
-        2, 6, 3, 3, 6, 7, // y = 1
-        0, 4, 2, 2, 4, 6, // x = 0
-        1, 3, 5, 3, 7, 5, // x = 1
-    ];
-    (p, idx)
-}
-
-/// A quaternion (x, y, z, w) of `degrees` about unit `axis`.
-fn turn(axis: Vec3, degrees: f32) -> [f32; 4] {
-    glam::Quat::from_axis_angle(axis.normalize(), degrees.to_radians()).to_array()
-}
-
-/// The placements of the boxes: turned about tilted axes, scaled unevenly, one mirrored.
-fn placements(n: usize) -> Vec<Trs> {
-    (0..n)
-        .map(|i| {
-            let f = i as f32;
-            Trs {
-                t: [
-                    -4.0 + 1.7 * (i % 5) as f32,
-                    // Off the floor: no face of a box lies in the floor's plane.
-                    0.1 + 0.3 * (i % 3) as f32,
-                    -4.0 + 1.9 * (i / 5 % 5) as f32,
-                ],
-                r: turn(Vec3::new(0.3, 1.0, 0.1 * f), 17.0 * f),
-                s: [
-                    0.5 + 0.1 * (i % 4) as f32,
-                    if i % 7 == 3 { -0.8 } else { 0.8 },
-                    0.6 + 0.05 * f,
-                ],
-            }
-        })
-        .collect()
-}
-
-/// A room of grey boxes on a floor under an emissive square: with `shared`, every box node
-/// shows one mesh; without, each has its own mesh of the same data.
-fn boxes_room(dir: &Path, copies: usize, shared: bool) -> PathBuf {
-    let mut w = GltfWriter::new();
-    let grey = w.material(
-        "Grey",
-        MaterialSpec {
-            base: [0.6, 0.6, 0.6],
-            ..MaterialSpec::default()
-        },
-    );
-    let lamp = w.material(
-        "Lamp",
-        MaterialSpec {
-            base: [0.0, 0.0, 0.0],
-            emissive: [1.0, 1.0, 1.0],
-            strength: Some(20.0),
-            ..MaterialSpec::default()
-        },
-    );
-    let floor = [
-        [-6.0, 0.0, -6.0],
-        [-6.0, 0.0, 6.0],
-        [6.0, 0.0, 6.0],
-        [6.0, 0.0, -6.0],
-    ];
-    let floor = w.mesh(
-        "Floor",
-        &floor,
-        None,
-        None,
-        None,
-        &[0, 1, 2, 0, 2, 3],
-        Some(grey),
-    );
-    let light = [
-        [-1.0, 6.0, -1.0],
-        [1.0, 6.0, -1.0],
-        [1.0, 6.0, 1.0],
-        [-1.0, 6.0, 1.0],
-    ];
-    let light = w.mesh(
-        "Light",
-        &light,
-        None,
-        None,
-        None,
-        &[0, 1, 2, 0, 2, 3],
-        Some(lamp),
-    );
-    let (p, idx) = unit_box();
-    let mut roots = vec![
-        w.node("Floor", Some(floor), None, Trs::default(), vec![]),
-        w.node("Light", Some(light), None, Trs::default(), vec![]),
-    ];
-    let shared_box = w.mesh("Box", &p, None, None, None, &idx, Some(grey));
-    for (i, trs) in placements(copies).into_iter().enumerate() {
-        let mesh = if shared {
-            shared_box
-        } else {
-            w.mesh(&format!("Box{i}"), &p, None, None, None, &idx, Some(grey))
-        };
-        roots.push(w.node(&format!("Box {i}"), Some(mesh), None, trs, vec![]));
-    }
-    let camera = w.camera(0.9, Some(1.0));
-    roots.push(w.node(
-        "Eye",
-        None,
-        Some(camera),
-        Trs {
-            t: [0.0, 4.0, 12.0],
-            r: turn(Vec3::X, -15.0),
-            ..Trs::default()
-        },
-        vec![],
-    ));
-    let path = dir.join(if shared { "shared.glb" } else { "copied.glb" });
-    std::fs::write(&path, w.glb(roots)).unwrap();
-    path
-}
+use twopass_tests::instancing::{boxes_room, placements, turn, unit_box};
 
 fn pair(copies: usize) -> (tempfile::TempDir, Scene, Scene) {
     let dir = tempfile::tempdir().unwrap();
@@ -346,7 +219,7 @@ fn a_hundred_placed_copies_are_not_a_hundred_copies_in_memory() {
             .map(|i| {
                 let trs = Trs {
                     t: [3.0 * (i % 10) as f32, 0.0, 3.0 * (i / 10) as f32],
-                    r: turn(Vec3::Y, 7.0 * i as f32),
+                    r: turn([0.0, 1.0, 0.0], 7.0 * i as f32),
                     ..Trs::default()
                 };
                 w.node(&format!("Copy {i}"), Some(mesh), None, trs, vec![])

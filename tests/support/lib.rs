@@ -5,6 +5,7 @@
 use std::path::Path;
 
 pub mod gltf;
+pub mod instancing;
 
 use exr::meta::attribute::{AttributeValue, Text};
 use exr::meta::header::LayerAttributes;
