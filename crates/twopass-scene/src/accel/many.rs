@@ -42,8 +42,7 @@ impl Accel {
     pub fn closest_many(&self, rays: &[Ray], hits: &mut [Option<TriangleHit>]) {
         assert_eq!(rays.len(), hits.len(), "one answer per ray");
         if self.placed.is_some() {
-            // Copies are walked ray by ray: their trees are entered per ray.
-            self.closest_each(rays, hits);
+            self.closest_each_placed(rays, hits);
         } else if self.coherent(rays) {
             self.closest_packets(rays, hits);
         } else if self.bvh.bytes() > INTERLEAVE_MIN_BYTES {
@@ -51,6 +50,15 @@ impl Accel {
         } else {
             self.closest_each(rays, hits);
         }
+    }
+
+    /// [`Accel::closest_each`] in a scene with placed copies, which are walked ray by ray
+    /// (their trees are entered per ray); kept out of line so that the walks of a scene
+    /// without copies stay as they are.
+    #[cold]
+    #[inline(never)]
+    fn closest_each_placed(&self, rays: &[Ray], hits: &mut [Option<TriangleHit>]) {
+        self.closest_each(rays, hits);
     }
 
     /// [`Accel::closest`] for each of `rays` in turn.

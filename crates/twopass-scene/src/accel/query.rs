@@ -28,11 +28,11 @@ impl Accel {
                 false
             },
         );
-        let mut best = best.map(|b| self.hit(b, t_max));
-        if let Some(placed) = &self.placed {
-            placed.closest(origin, direction, t_max, &mut best);
+        let best = best.map(|b| self.hit(b, t_max));
+        match &self.placed {
+            None => best,
+            Some(placed) => placed.closest(origin, direction, t_max, best),
         }
-        best
     }
 
     /// Tests lanes `lanes` of quad `p` against `ray` (up to [`search_bound`]) and keeps in
@@ -63,6 +63,7 @@ impl Accel {
     }
 
     /// The hit `best` at `t`.
+    #[inline(always)]
     pub(super) fn hit(&self, best: Nearest, t: f32) -> TriangleHit {
         let quad = self.bvh.arena.quad(best.quad);
         // The quad's coordinates as plain arrays: `Vec4`'s index by a variable lane is a
@@ -73,7 +74,11 @@ impl Accel {
             triangle: best.id,
             t,
             barycentric: best.barycentric,
-            corners: [0, 1, 2].map(|i| Vec3::new(v[0][i][lane], v[1][i][lane], v[2][i][lane])),
+            corners: [
+                Vec3::new(v[0][0][lane], v[1][0][lane], v[2][0][lane]),
+                Vec3::new(v[0][1][lane], v[1][1][lane], v[2][1][lane]),
+                Vec3::new(v[0][2][lane], v[1][2][lane], v[2][2][lane]),
+            ],
         }
     }
 
