@@ -25,10 +25,18 @@ What is converted, and how:
   lights; `directional` as `directional` with the same
   irradiance. `power` becomes intensity as twopass reads it (I = power / 4 pi, spots too).
 - sky: `kind = "uniform"` as a `constant` emitter of the same radiance. The daylight sky is
-  refused: Mitsuba's `sunsky` is Hosek-Wilkie's model, not Preetham's. Portals only steer
-  twopass's sampling and are ignored.
+  converted only from a tabulation of twopass's own model written beside the scene file
+  (Mitsuba's `sunsky` is Hosek-Wilkie's model, not Preetham's, so a converted sky would be
+  another light): `<stem>.sky.exr`, the dome's radiance in Mitsuba's `envmap` layout (pixel
+  centre (u, v) is the direction (sin t sin p, cos t, -sin t cos p), t = pi v, p = 2 pi u,
+  world +y up), becomes an `envmap`; `<stem>.sun.json` (`direction` toward the sun,
+  `one_minus_cos` of the disc's angular radius, `radiance` per channel) becomes a `disk` area
+  emitter of that radiance far along the sun's direction, subtending exactly the sun's solid
+  angle. This compares how the two engines render a given sky, not the sky models. Without
+  the tabulation the daylight sky is refused. Portals only steer twopass's sampling and are
+  ignored.
 
-Object `transform`s, textures and the daylight sky are refused for the same reason.
+Object `transform`s and textures are refused for the same reason.
 """
 
 import math
@@ -158,11 +166,50 @@ def scene_dict(mi, scene_file, width, height):
         d[f"lamp_{i:03d}"] = _lamp(mi, lamp, i)
     if "sky" in s:
         sky = s["sky"]
-        if sky["kind"] != "uniform":
+        if sky["kind"] == "daylight":
+            d.update(_tabulated_daylight(mi, scene_file))
+        elif sky["kind"] != "uniform":
             raise SystemExit(f"[sky]: kind {sky['kind']!r} is not converted to Mitsuba")
-        radiance = np.asarray(_rgb(sky["radiance"])["value"]) * float(sky.get("scale", 1.0))
-        d["sky"] = {"type": "constant", "radiance": _rgb(list(radiance))}
+        else:
+            radiance = np.asarray(_rgb(sky["radiance"])["value"]) * float(sky.get("scale", 1.0))
+            d["sky"] = {"type": "constant", "radiance": _rgb(list(radiance))}
     return d
+
+
+def _tabulated_daylight(mi, scene_file):
+    """The dome as an `envmap` and the sun as a far `disk` emitter, from the tabulation beside
+    `scene_file` (see the module's notes)."""
+    stem = os.path.splitext(scene_file)[0]
+    dome, sun_file = stem + ".sky.exr", stem + ".sun.json"
+    if not (os.path.isfile(dome) and os.path.isfile(sun_file)):
+        raise SystemExit(
+            f"[sky]: a daylight sky is converted only from its tabulation ({dome} and "
+            f"{sun_file}, written from twopass's model): Mitsuba's sunsky is another model"
+        )
+    import json
+
+    with open(sun_file) as f:
+        sun = json.load(f)
+    out = {"sky": {"type": "envmap", "filename": dome}}
+    if sun is not None:
+        direction = np.asarray(sun["direction"], np.float64)
+        direction /= np.linalg.norm(direction)
+        # A disc of radius D tan(a) at distance D subtends 2 pi (1 - cos a), exactly the
+        # sun's solid angle; far enough that its distance varies by nothing across the scene.
+        cos_a = 1.0 - float(sun["one_minus_cos"])
+        distance = 1.0e3
+        radius = distance * math.sqrt(1.0 - cos_a * cos_a) / cos_a
+        centre = direction * distance
+        up = [0.0, 0.0, 1.0] if abs(direction[1]) > 0.9 else [0.0, 1.0, 0.0]
+        to_world = mi.ScalarTransform4f().look_at(
+            origin=[float(c) for c in centre], target=[float(c) for c in centre - direction], up=up
+        ) @ mi.ScalarTransform4f().scale([radius, radius, 1.0])
+        out["sun"] = {
+            "type": "disk",
+            "to_world": to_world,
+            "emitter": {"type": "area", "radiance": _rgb(sun["radiance"])},
+        }
+    return out
 
 
 def _lamp(mi, lamp, index):
