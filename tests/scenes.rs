@@ -192,7 +192,7 @@ fn quad_and_polygon_shapes() {
     assert!((object_area(&s, 0) - 6.0).abs() < 1e-5);
     assert!(
         s.mesh
-            .geometric_normal((0) as u32)
+            .geometric_normal(0)
             .abs_diff_eq(Vec3::Y, 1e-6),
         "edge_u x edge_v = x x -z = +y"
     );
@@ -271,7 +271,7 @@ fn transforms_place_and_orient_objects() {
     // The normal +z turns into +x.
     assert!(
         s.mesh
-            .geometric_normal((0) as u32)
+            .geometric_normal(0)
             .abs_diff_eq(Vec3::X, 1e-6)
     );
     // A mirroring transform keeps the box's faces pointing out.

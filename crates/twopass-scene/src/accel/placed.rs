@@ -44,8 +44,8 @@ pub fn transform_error(to_world: &Affine3A, from_world: &Affine3A, position: Vec
     // The source point's size, then: the forward transform's rounding (a |x| + |b|), the
     // world point's own, and a spawned origin's trip back into the source (a times its
     // rounding there), each within a few ulps of its terms.
-    let local = inv * p + Vec3A::from(from_world.translation).abs();
-    let e = 2.0 * (a * local) + Vec3A::from(to_world.translation).abs() + p;
+    let local = inv * p + from_world.translation.abs();
+    let e = 2.0 * (a * local) + to_world.translation.abs() + p;
     Vec3::from(e * gamma(8))
 }
 
