@@ -191,9 +191,7 @@ fn quad_and_polygon_shapes() {
     );
     assert!((object_area(&s, 0) - 6.0).abs() < 1e-5);
     assert!(
-        s.mesh
-            .geometric_normal(0)
-            .abs_diff_eq(Vec3::Y, 1e-6),
+        s.mesh.geometric_normal(0).abs_diff_eq(Vec3::Y, 1e-6),
         "edge_u x edge_v = x x -z = +y"
     );
     // Concave pentagon: 16 minus the notch triangle (4, 4), (2, 1), (0, 4) of area 6.
@@ -269,11 +267,7 @@ fn transforms_place_and_orient_objects() {
         "{quad:?}"
     );
     // The normal +z turns into +x.
-    assert!(
-        s.mesh
-            .geometric_normal(0)
-            .abs_diff_eq(Vec3::X, 1e-6)
-    );
+    assert!(s.mesh.geometric_normal(0).abs_diff_eq(Vec3::X, 1e-6));
     // A mirroring transform keeps the box's faces pointing out.
     for t in s.objects[1].triangles.clone() {
         let p = s.mesh.position(s.mesh.triangle(t)[0]);

@@ -111,31 +111,38 @@ impl Loader {
                 (_, Some(l)) => 20u64 << (2 * l),
                 (_, None) => 0,
             };
-        let placed: u64 = parts
-            .iter()
-            .zip(&levels)
-            .map(|(p, l)| count(p, l, true))
-            .sum();
-        if placed > MAX_PLACED_TRIANGLES {
-            return Err(SceneError::Input {
-                path: self.path.clone(),
-                problem: format!(
-                    "the scene would place {placed} triangles (instanced copies counted), more than the {MAX_PLACED_TRIANGLES} loaded at most (place fewer copies)"
-                ),
-            });
-        }
-        let triangles: u64 = parts
-            .iter()
-            .zip(&levels)
-            .map(|(p, l)| count(p, l, false))
-            .sum();
-        if triangles > MAX_TRIANGLES {
-            return Err(SceneError::Input {
-                path: self.path.clone(),
-                problem: format!(
-                    "the scene would have {triangles} triangles, more than the {MAX_TRIANGLES} loaded at most (give fewer spheres or lower their `subdivisions`)"
-                ),
-            });
+        // Stored triangles bound the memory; placed ones (copies counted) the passes' work.
+        let limits = [
+            (
+                true,
+                MAX_PLACED_TRIANGLES,
+                "place",
+                "(instanced copies counted)",
+                "place fewer copies",
+            ),
+            (
+                false,
+                MAX_TRIANGLES,
+                "have",
+                "",
+                "give fewer spheres or lower their `subdivisions`",
+            ),
+        ];
+        for (copies, limit, verb, counted, advice) in limits {
+            let n: u64 = parts
+                .iter()
+                .zip(&levels)
+                .map(|(p, l)| count(p, l, copies))
+                .sum();
+            if n > limit {
+                return Err(SceneError::Input {
+                    path: self.path.clone(),
+                    problem: format!(
+                        "the scene would {verb} {n} triangles{}{counted}, more than the {limit} loaded at most ({advice})",
+                        if counted.is_empty() { "" } else { " " }
+                    ),
+                });
+            }
         }
         let mut mesh = Mesh::default();
         let mut objects = Vec::with_capacity(parts.len());
@@ -207,11 +214,7 @@ impl Loader {
                 }
             };
             let shape = copied[index].is_some().then(|| local.clone());
-            let (before, normals, texcoords) = (
-                mesh.triangles.len() as u32,
-                mesh.normals.len() as u32,
-                mesh.texcoords.len() as u32,
-            );
+            let (normals, texcoords) = (mesh.normals.len() as u32, mesh.texcoords.len() as u32);
             let object = self.push(
                 &mut mesh,
                 &mut objects,
@@ -234,7 +237,7 @@ impl Loader {
                     .last()
                     .filter(|_| object && !coincident.part_had_copies())
                     .map(|o| StoredSpans {
-                        triangles: before..o.triangles.end,
+                        triangles: o.triangles.clone(),
                         vertices: o.vertices.clone(),
                         normals: normals..mesh.normals.len() as u32,
                         texcoords: texcoords..mesh.texcoords.len() as u32,
@@ -244,6 +247,7 @@ impl Loader {
             }
             kept.push(object);
         }
+        // The sources' shapes are not needed once every copy is placed.
         drop(copied);
         if let Some(w) = coincident.warning(self.path.clone()) {
             self.warnings.push(w);
