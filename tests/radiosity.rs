@@ -904,8 +904,8 @@ fn a_light_against_a_wall_creates_no_power_at_any_gap() {
                         at(glam::Vec3::new(x, y, (gap / 2.0) as f32), glam::Vec3::NEG_Z) / 25.0;
                 }
             }
-            // Measured: 12 % to 18 % below the closed form (the light the coarse elements
-            // around the light's edge spread into the room and lose), never above it.
+            // Below the closed form (the light the coarse elements around the light's edge
+            // spread into the room), never above it.
             assert!(
                 (0.8 * expected..1.02 * expected).contains(&f64::from(under)),
                 "{what}: {under} against {expected}"
@@ -919,9 +919,9 @@ fn a_light_against_a_wall_creates_no_power_at_any_gap() {
     }
 }
 
-/// What a solve loses is caught where it does not conserve: the hierarchical solver at a
-/// gap of 1e-3 books a tenth of the light as escaped from a closed cube, from which nothing
-/// can escape, so the residual report's rays (none of which leave) find all of it lost; in the
+/// What a solve loses is caught where it does not conserve: what the hierarchical solver at a
+/// gap of 1e-3 books as escaped from a closed cube, from which nothing can escape, the
+/// residual report's rays (none of which leave) find lost, all of it; in the
 /// Cornell box, open at the front, what the solvers book as escaped is what rays find leaving,
 /// within the rays' sampling error.
 #[test]
@@ -939,8 +939,9 @@ fn the_residual_report_finds_the_light_a_solve_loses() {
         (lost - escaped).abs() <= 3.0 * error + 1e-9,
         "{lost} against {escaped} +- {error}"
     );
-    // Measured: 10.1 %.
-    assert!(lost > 0.05, "{lost}");
+    // What little it still loses there is found, well above the rays' error. Measured:
+    // 0.42 % +- 0.01 % (10.1 % before the near-field average, see the test below).
+    assert!(lost > 10.0 * error, "{lost} +- {error}");
     let (scene, _) = load(scene_path("cornell-box.toml")).unwrap();
     for method in [Method::Progressive, Method::Hierarchical] {
         let mut solver = solved(&scene, method);
@@ -1090,5 +1091,31 @@ fn the_generated_rooms_create_no_power() {
         // objects and the light create 1.3 %, the spheres room's 0.4 %; the others none.
         assert!(created < 0.02, "{}: created {created}", room.name);
         assert_eq!(solver.check_energy(), Ok(()), "{}", room.name);
+    }
+}
+
+/// Issue 43, finding 3, the light's energy: a light 1e-2 to 1e-4 of the room in front of a
+/// wall, facing it, keeps its light in both solvers: what the residual report's rays find lost
+/// from the closed cube stays within 2 % (the report warns from 2.5 %). The hierarchical
+/// solver used to lose 10.1 % at 1e-3 and 6.0 % at 1e-4: seven points cannot average the form
+/// factor over a receiver that a source a hair's breadth away covers in part (its footprint's
+/// edge is a step the gap wide), and the bound on leaves whose links summed above one kept
+/// the undershoots of their neighbours; the average is now integrated adaptively along the
+/// footprint's outline. Measured (lost, hierarchical / progressive): 1e-2 1.4 % / 0.8 %,
+/// 1e-3 0.4 % / 1.7 %, 1e-4 1.1 % / 0.0 %.
+#[test]
+fn a_light_against_a_wall_keeps_its_light_at_every_gap_the_rays_resolve() {
+    for gap in [1e-2, 1e-3, 1e-4] {
+        let scene = light_facing_a_wall(gap);
+        for method in [Method::Progressive, Method::Hierarchical] {
+            let mut solver = solved(&scene, method);
+            let r = solver.residuals(100);
+            let (lost, error) = (r.energy_lost.unwrap(), r.energy_lost_error.unwrap());
+            eprintln!("{method:?} at gap {gap:e}: lost {lost} +- {error}");
+            assert!(
+                lost.abs() < 0.02 + 3.0 * error,
+                "{method:?} at gap {gap:e}: lost {lost} +- {error}"
+            );
+        }
     }
 }

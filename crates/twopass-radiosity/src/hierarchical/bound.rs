@@ -30,6 +30,14 @@ const BOUND_TRIGGER: f64 = 0.01;
 const SUM_TOLERANCE: f64 = 0.25;
 use crate::cluster::Kind;
 
+/// A leaf's own links summing to at least this see its whole hemisphere (the form factor of a
+/// piece of wall wholly under a light a hair's breadth in front of it is one to within the
+/// gap's share of its size).
+const WHOLE: f64 = 0.999;
+
+/// How far above one such a leaf's own and its ancestors' links may sum together.
+const WHOLE_TOLERANCE: f64 = 0.02;
+
 impl HierarchicalSolver<'_> {
     /// Each leaf's share of its exitance that its links send (`send_weight`), so that none
     /// sends more than it has (see the module's comment). Links from clusters are far-field
@@ -72,7 +80,15 @@ impl HierarchicalSolver<'_> {
             .zip(&above)
             .map(|(&own, &up)| {
                 let w_own = if own > most { most / own } else { 1.0 };
-                let left = (most - own * w_own).max(0.0);
+                // A leaf whose own links already see its whole hemisphere (they sum to one, as
+                // a wall's piece under a light a hair's breadth away does) has nothing left
+                // for its ancestors' coarser links, which see around what it sees.
+                let budget = if own >= WHOLE {
+                    1.0 + WHOLE_TOLERANCE
+                } else {
+                    most
+                };
+                let left = (budget - own * w_own).max(0.0);
                 let w_up = if up > left { left / up } else { 1.0 };
                 [w_own, w_up]
             })

@@ -16,7 +16,9 @@
 //! - surface to surface: the exact differential-area-to-polygon form factor (Lambert's contour
 //!   integral) at the receiver's three corners, so irradiance varies linearly over an element
 //!   and the leaves get per-vertex values; its error estimate is the spread of the form factor
-//!   over the corners and the centroid;
+//!   over the corners and the centroid; the light the receiver gets is the form factor's area
+//!   average, by a seven-point rule, or integrated adaptively along the source's outline where
+//!   the source faces the receiver across a gap narrower than the receiver (`transport`);
 //! - with a cluster at either end: the far-field estimate between the ends' centres (Sillion
 //!   1994), a cluster sending and intercepting by its projected area and radiant intensity
 //!   toward the other end: exact (sums of area x normal) where every surface inside faces that
