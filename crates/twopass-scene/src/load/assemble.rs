@@ -302,14 +302,7 @@ impl Loader {
         for (index, v) in vertices.clone().enumerate() {
             let q = mesh.position(v);
             if !q.is_finite() || !q.to_array().into_iter().all(in_range) {
-                return Err(SceneError::Range {
-                    path: self.path.clone(),
-                    line,
-                    object: name,
-                    problem: format!(
-                        "vertex {index} lands at {q} in the world, outside the supported range of +-{MAX_COORDINATE:e} scene units"
-                    ),
-                });
+                return Err(self.outside(line, name, index, q));
             }
         }
         if emission.max_element() > 0.0 {
@@ -324,6 +317,18 @@ impl Loader {
             vertices,
         });
         Ok(())
+    }
+
+    /// The error for vertex `index` of object `name` landing at `q`, outside the range.
+    fn outside(&self, line: Option<usize>, name: String, index: usize, q: Vec3) -> SceneError {
+        SceneError::Range {
+            path: self.path.clone(),
+            line,
+            object: name,
+            problem: format!(
+                "vertex {index} lands at {q} in the world, outside the supported range of +-{MAX_COORDINATE:e} scene units"
+            ),
+        }
     }
 
     /// Refuses an object whose emitted power, pi * L_e * `area`, leaves the range f32 holds.
@@ -384,14 +389,7 @@ impl Loader {
                 });
             }
             if !q.to_array().into_iter().all(in_range) {
-                return Err(SceneError::Range {
-                    path: self.path.clone(),
-                    line,
-                    object: name,
-                    problem: format!(
-                        "vertex {index} lands at {q} in the world, outside the supported range of +-{MAX_COORDINATE:e} scene units"
-                    ),
-                });
+                return Err(self.outside(line, name, index, q));
             }
             mesh.positions.push(q);
         }
