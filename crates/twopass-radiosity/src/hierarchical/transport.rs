@@ -111,13 +111,17 @@ fn facing_closely(
 /// The three edges of a source triangle, for distances to its outline.
 struct SourceEdges {
     edges: [(DVec3, DVec3); 3],
+    /// The source's radius about its centroid, scene units.
+    radius: f64,
 }
 
 impl SourceEdges {
     fn of(source: &form_factor::SourceTriangle) -> Self {
         let c = source.corners;
+        let centre = (c[0] + c[1] + c[2]) / 3.0;
         Self {
             edges: [(c[0], c[1]), (c[1], c[2]), (c[2], c[0])],
+            radius: c.iter().map(|p| (*p - centre).length()).fold(0.0, f64::max),
         }
     }
 
@@ -173,7 +177,12 @@ fn adaptive_average(
     let split = parts.iter().sum::<f64>() / 4.0;
     let centre = (c[0] + c[1] + c[2]) / 3.0;
     let radius = c.iter().map(|p| (*p - centre).length()).fold(0.0, f64::max);
-    if (split - whole).abs() <= ADAPT_TOLERANCE && radius < edges.distance(centre) {
+    // A piece's error weighs in the receiver's average by its area, 4^-depth; about 2^depth
+    // pieces lie along the outline at a depth, so each may err by 2^depth / 3 of the
+    // tolerance. A piece near the source is also smaller than half the source, so that a
+    // small source's footprint cannot fall between its points.
+    let allowed = ADAPT_TOLERANCE * f64::from(1u32 << depth) / 3.0;
+    if (split - whole).abs() <= allowed && radius < edges.distance(centre).max(0.5 * edges.radius) {
         return split;
     }
     pieces
