@@ -13,6 +13,25 @@ use twopass_trace::{
 use super::common::repo_scene;
 use crate::on_threads;
 
+/// `render_budgeted` with a fresh progress; `None` for a budget of another size than the
+/// camera's.
+fn budgeted(
+    scene: &twopass_scene::Scene,
+    camera: &twopass_scene::Camera,
+    integrator: &dyn Integrator,
+    settings: &RenderSettings,
+    budget: &SampleBudget,
+) -> Option<twopass_trace::RenderOutput> {
+    render_budgeted(
+        scene,
+        camera,
+        integrator,
+        settings,
+        budget,
+        &RenderProgress::new(),
+    )
+}
+
 #[test]
 fn a_pixel_given_n_samples_gets_the_uniform_estimate_at_n() {
     // The diffuse box: no delta surface, so no light tracing pass adds to the camera samples.
@@ -48,15 +67,8 @@ fn a_pixel_given_n_samples_gets_the_uniform_estimate_at_n() {
     let zero = Image::from_fn(12, 12, |_, _| twopass_brdf::Rgb::ZERO);
     // Any budget will do for the identity; the pattern one comes from the pilots' API.
     let budget = SampleBudget::from_pilots(&a, &zero, 4).unwrap();
-    let out = render_budgeted(
-        &scene,
-        &camera,
-        &reference,
-        &settings(4),
-        &budget,
-        &RenderProgress::new(),
-    )
-    .expect("the budget has the camera's size");
+    let out = budgeted(&scene, &camera, &reference, &settings(4), &budget)
+        .expect("the budget has the camera's size");
     assert_eq!(out.stats.samples, budget.total());
     let image = out.layers.composite();
     let mut checked = 0;
@@ -78,17 +90,7 @@ fn a_pixel_given_n_samples_gets_the_uniform_estimate_at_n() {
     );
     // A budget of another size is refused, not rendered.
     let small = SampleBudget::uniform(6, 6, 4);
-    assert!(
-        render_budgeted(
-            &scene,
-            &camera,
-            &reference,
-            &settings(4),
-            &small,
-            &RenderProgress::new()
-        )
-        .is_none()
-    );
+    assert!(budgeted(&scene, &camera, &reference, &settings(4), &small).is_none());
 }
 
 #[test]
@@ -185,15 +187,7 @@ fn a_budgeted_render_with_light_tracing_is_the_same_on_one_and_two_threads() {
     assert!(hi > lo, "the spheres' pilots disagree unevenly: {lo}..{hi}");
     let on = |threads| {
         on_threads(threads, || {
-            render_budgeted(
-                &scene,
-                &camera,
-                &reference,
-                &settings,
-                &budget,
-                &RenderProgress::new(),
-            )
-            .unwrap()
+            budgeted(&scene, &camera, &reference, &settings, &budget).unwrap()
         })
     };
     let (one, two) = (on(1), on(2));
@@ -219,17 +213,10 @@ fn runs_that_continue_a_sequence_are_together_the_single_run_of_all_their_sample
     let run = |n: u32, first: u32| {
         let budget = SampleBudget::uniform(10, 10, n).continuing(first);
         assert_eq!(budget.first(), Some(first));
-        render_budgeted(
-            &scene,
-            &camera,
-            &reference,
-            &settings,
-            &budget,
-            &RenderProgress::new(),
-        )
-        .unwrap()
-        .layers
-        .composite()
+        budgeted(&scene, &camera, &reference, &settings, &budget)
+            .unwrap()
+            .layers
+            .composite()
     };
     let (a, b, all) = (run(3, 0), run(5, 3), run(8, 0));
     for (i, ((a, b), all)) in a

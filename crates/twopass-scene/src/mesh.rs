@@ -149,27 +149,34 @@ impl Mesh {
     /// The copy triangle `t` belongs to, with its source triangle; `None` for a stored one.
     #[inline]
     pub fn repeat_of(&self, t: u32) -> Option<(&Repeat, u32)> {
-        if (t as usize) < self.triangles.len() {
-            return None;
-        }
-        let r = &self.repeats[self.repeats.partition_point(|r| r.triangles.start <= t) - 1];
-        Some((r, r.source_triangle + (t - r.triangles.start)))
+        self.locate(t, self.triangles.len(), |r| {
+            (&r.triangles, r.source_triangle)
+        })
     }
 
     fn repeat_of_vertex(&self, v: u32) -> Option<(&Repeat, u32)> {
-        if (v as usize) < self.positions.len() {
-            return None;
-        }
-        let r = &self.repeats[self.repeats.partition_point(|r| r.vertices.start <= v) - 1];
-        Some((r, r.source_vertex + (v - r.vertices.start)))
+        self.locate(v, self.positions.len(), |r| (&r.vertices, r.source_vertex))
     }
 
     fn repeat_of_normal(&self, n: u32) -> Option<(&Repeat, u32)> {
-        if (n as usize) < self.normals.len() {
+        self.locate(n, self.normals.len(), |r| (&r.normals, r.source_normal))
+    }
+
+    /// The copy whose range (`span` gives it, with its source's first stored index) holds
+    /// mesh-wide index `i`, and the stored index `i` repeats; `None` for one of the `stored`.
+    #[inline]
+    fn locate(
+        &self,
+        i: u32,
+        stored: usize,
+        span: impl Fn(&Repeat) -> (&Range<u32>, u32),
+    ) -> Option<(&Repeat, u32)> {
+        if (i as usize) < stored {
             return None;
         }
-        let r = &self.repeats[self.repeats.partition_point(|r| r.normals.start <= n) - 1];
-        Some((r, r.source_normal + (n - r.normals.start)))
+        let r = &self.repeats[self.repeats.partition_point(|r| span(r).0.start <= i) - 1];
+        let (range, source) = span(r);
+        Some((r, source + (i - range.start)))
     }
 
     /// Vertex indices of triangle `t`, counter-clockwise seen from the front.
@@ -268,11 +275,12 @@ impl Mesh {
 
     /// Texture coordinate `k` (an OBJ's `vt`, v up, as written).
     pub fn texcoord(&self, k: u32) -> Vec2 {
-        if (k as usize) < self.texcoords.len() {
-            return self.texcoords[k as usize];
-        }
-        let r = &self.repeats[self.repeats.partition_point(|r| r.texcoords.start <= k) - 1];
-        self.texcoords[(r.source_texcoord + (k - r.texcoords.start)) as usize]
+        let s = self
+            .locate(k, self.texcoords.len(), |r| {
+                (&r.texcoords, r.source_texcoord)
+            })
+            .map_or(k, |(_, s)| s);
+        self.texcoords[s as usize]
     }
 
     /// The texture coordinates of triangle `t`'s corners, or `None`.

@@ -191,34 +191,44 @@ impl HierarchicalSolver<'_> {
     /// receiving normals; plus the centroid and its normal.
     pub(super) fn receiving_points(&self, n: u32) -> ([DVec3; 7], [DVec3; 7]) {
         let node = &self.mesh.nodes[n as usize];
-        let p = self.mesh.corners(n);
-        let c = (p[0] + p[1] + p[2]) / 3.0;
         let normals = node
             .vertices
             .map(|v| self.mesh.vertices[v as usize].normal.as_dvec3());
-        let blend = |a: DVec3, b: DVec3| (a + b).try_normalize().unwrap_or(a);
-        let nc = blend(normals[0] + normals[1], normals[2]);
-        let inset = |q: DVec3| q + (c - q) * CORNER_INSET;
-        let mid = |i: usize, j: usize| inset((p[i] + p[j]) * 0.5);
-        (
-            [
-                inset(p[0]),
-                inset(p[1]),
-                inset(p[2]),
-                c,
-                mid(0, 1),
-                mid(1, 2),
-                mid(2, 0),
-            ],
-            [
-                normals[0],
-                normals[1],
-                normals[2],
-                nc,
-                blend(normals[0], normals[1]),
-                blend(normals[1], normals[2]),
-                blend(normals[2], normals[0]),
-            ],
-        )
+        seven_points(self.mesh.corners(n), normals, CORNER_INSET)
     }
+}
+
+/// The seven points of a triangle with corners `p` and corner normals `normals` that the
+/// seven-point rule reads (corners, centroid, edge midpoints; corners and midpoints moved
+/// `inset` of the way toward the centroid) and their normals (blended, unit).
+pub(super) fn seven_points(
+    p: [DVec3; 3],
+    normals: [DVec3; 3],
+    inset: f64,
+) -> ([DVec3; 7], [DVec3; 7]) {
+    let c = (p[0] + p[1] + p[2]) / 3.0;
+    let blend = |a: DVec3, b: DVec3| (a + b).try_normalize().unwrap_or(a);
+    let nc = blend(normals[0] + normals[1], normals[2]);
+    let inset = |q: DVec3| q + (c - q) * inset;
+    let mid = |i: usize, j: usize| inset((p[i] + p[j]) * 0.5);
+    (
+        [
+            inset(p[0]),
+            inset(p[1]),
+            inset(p[2]),
+            c,
+            mid(0, 1),
+            mid(1, 2),
+            mid(2, 0),
+        ],
+        [
+            normals[0],
+            normals[1],
+            normals[2],
+            nc,
+            blend(normals[0], normals[1]),
+            blend(normals[1], normals[2]),
+            blend(normals[2], normals[0]),
+        ],
+    )
 }

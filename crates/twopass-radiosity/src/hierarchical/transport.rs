@@ -60,26 +60,7 @@ fn piece_average(
     c: [DVec3; 3],
     nc: [DVec3; 3],
 ) -> f64 {
-    let centre = (c[0] + c[1] + c[2]) / 3.0;
-    let blend = |a: DVec3, b: DVec3| (a + b).try_normalize().unwrap_or(a);
-    let x = [
-        c[0],
-        c[1],
-        c[2],
-        centre,
-        (c[0] + c[1]) * 0.5,
-        (c[1] + c[2]) * 0.5,
-        (c[2] + c[0]) * 0.5,
-    ];
-    let n = [
-        nc[0],
-        nc[1],
-        nc[2],
-        blend(nc[0] + nc[1], nc[2]),
-        blend(nc[0], nc[1]),
-        blend(nc[1], nc[2]),
-        blend(nc[2], nc[0]),
-    ];
+    let (x, n) = super::geometry::seven_points(c, nc, 0.0);
     let mut f = [0.0; 7];
     source.form_factors_into(&x, &n, Some(ns), &mut f);
     seven_point_average(&f)
