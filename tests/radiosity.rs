@@ -1094,24 +1094,36 @@ fn the_generated_rooms_create_no_power() {
     }
 }
 
-/// Issue 43, finding 3, the light's energy: a light 1e-2 to 1e-4 of the room in front of a
-/// wall, facing it, keeps its light in both solvers: what the residual report's rays find lost
-/// from the closed cube stays within 2 % (the report warns from 2.5 %). The hierarchical
-/// solver used to lose 10.1 % at 1e-3 and 6.0 % at 1e-4: seven points cannot average the form
-/// factor over a receiver that a source a hair's breadth away covers in part (its footprint's
-/// edge is a step the gap wide), and the bound on leaves whose links summed above one kept
-/// the undershoots of their neighbours; the average is now integrated adaptively along the
-/// footprint's outline. Measured (lost, hierarchical / progressive): 1e-2 1.4 % / 0.8 %,
-/// 1e-3 0.4 % / 1.7 %, 1e-4 0.6 % / 0.0 %.
+/// Issue 43, finding 3, the light's energy: a light 1e-2 to 1e-6 of the room in front of a
+/// wall, facing it, keeps its light: what the residual report's rays find lost from the closed
+/// cube stays within 2 % (the report warns from 2.5 %). The hierarchical solver used to lose
+/// 10.1 % at 1e-3 and 6.0 % at 1e-4: seven points cannot average the form factor over a
+/// receiver that a source a hair's breadth away covers in part (its footprint's edge is a step
+/// the gap wide), and the bound on leaves whose links summed above one kept the undershoots of
+/// their neighbours; the average is now integrated adaptively along the footprint's outline.
+/// At 1e-6 the rays themselves used to pass through the wall (the f32 bound on a hit's
+/// distance grows with the wall's size), so 39 % of the light left the closed cube; they are
+/// decided in f64 there now. Progressive refinement's bound still loses a tenth of the light at
+/// 1e-6 (the report warns); its rays must find the cube closed. Measured (lost, hierarchical /
+/// progressive): 1e-2 1.4 % / 0.7 %, 1e-3 0.4 % / 1.7 %, 1e-4 0.6 % / 0.0 %, 1e-5 0.6 % /
+/// -1.8 %, 1e-6 0.7 % / 10.4 %.
 #[test]
 fn a_light_against_a_wall_keeps_its_light_at_every_gap_the_rays_resolve() {
-    for gap in [1e-2, 1e-3, 1e-4] {
+    for gap in [1e-2, 1e-3, 1e-4, 1e-5, 1e-6] {
         let scene = light_facing_a_wall(gap);
         for method in [Method::Progressive, Method::Hierarchical] {
             let mut solver = solved(&scene, method);
             let r = solver.residuals(100);
             let (lost, error) = (r.energy_lost.unwrap(), r.energy_lost_error.unwrap());
             eprintln!("{method:?} at gap {gap:e}: lost {lost} +- {error}");
+            if gap < 1e-5 && method == Method::Progressive {
+                // No ray leaves the closed cube (a negative loss is light the rays let out).
+                assert!(
+                    lost > -3.0 * error,
+                    "{method:?} at gap {gap:e}: lost {lost} +- {error}"
+                );
+                continue;
+            }
             assert!(
                 lost.abs() < 0.02 + 3.0 * error,
                 "{method:?} at gap {gap:e}: lost {lost} +- {error}"

@@ -9,7 +9,7 @@ use wide::f32x8;
 use super::arena::{Arena, Block32};
 use super::prefetch::prefetch;
 use super::ray::gamma;
-use super::triangle::ShearedRay;
+use super::triangle::{ShearedRay, near_t};
 
 /// Blocks of one [`TriangleQuad`] (160 bytes: three cache lines wherever it starts on a block).
 pub(super) const QUAD_BLOCKS: usize = 5;
@@ -146,6 +146,9 @@ pub(super) struct Hits<L> {
     pub(super) e: [L; 3],
     pub(super) inv_det: L,
     pub(super) mask: u32,
+    /// Lanes whose `t` the f32 bound cannot tell from 0, for the caller to decide in f64
+    /// ([`super::triangle::near_t`]); not in `mask`.
+    pub(super) near: u32,
 }
 
 /// The hits of one ray against a [`TriangleQuad`]'s four triangles ([`QuadRay::intersect`]).
@@ -209,6 +212,7 @@ fn solve<L: Lanes>(px: [L; 3], py: [L; 3], pz: [L; 3], sz: L, bound: L, lanes: u
             e,
             inv_det: zero,
             mask: 0,
+            near: 0,
         };
     }
     let det = e[0] + e[1] + e[2];
@@ -221,10 +225,13 @@ fn solve<L: Lanes>(px: [L; 3], py: [L; 3], pz: [L; 3], sz: L, bound: L, lanes: u
     let mut mask = lanes & !L::bits(miss);
     let inv_det = L::splat(1.0) / det;
     let t = t_scaled * inv_det;
+    let mut near = 0;
     if mask != 0 {
         // Conservative bound: reject hits whose t cannot be told from 0; t > delta_t and
-        // t < bound, both false for NaN.
+        // t < bound, both false for NaN. Lanes ahead of the origin but within the bound are
+        // left to f64 ([`super::triangle::near_t`]).
         let delta_t = t_error(px, py, pz, e, inv_det);
+        near = mask & L::bits(t.le(delta_t));
         mask &= L::bits(t.gt(delta_t) & t.lt(bound));
     }
     Hits {
@@ -232,6 +239,7 @@ fn solve<L: Lanes>(px: [L; 3], py: [L; 3], pz: [L; 3], sz: L, bound: L, lanes: u
         e,
         inv_det,
         mask,
+        near,
     }
 }
 
@@ -306,7 +314,18 @@ impl QuadRay {
         let pz = [vz[0] - oz, vz[1] - oz, vz[2] - oz];
         let px = [0, 1, 2].map(|i| (vx[i] - ox) + sx * pz[i]);
         let py = [0, 1, 2].map(|i| (vy[i] - oy) + sy * pz[i]);
-        solve(px, py, pz, sz, Vec4::splat(t_max), lanes)
+        let mut hits = solve(px, py, pz, sz, Vec4::splat(t_max), lanes);
+        while hits.near != 0 {
+            let l = hits.near.trailing_zeros() as usize;
+            hits.near &= hits.near - 1;
+            let v = [vx, vy, vz].map(|a| a.map(|c| c.to_array()[l]));
+            let o = [ox, oy, oz].map(|o| o.x);
+            if let Some(t) = near_t(o, [sx.x, sy.x, sz.x], v, t_max) {
+                hits.t = hits.t.with_lane(l, t);
+                hits.mask |= 1 << l;
+            }
+        }
+        hits
     }
 }
 
@@ -356,7 +375,18 @@ impl RayLanes {
         let pz = [0, 1, 2].map(|i| v(kz, i) - oz);
         let px = [0, 1, 2].map(|i| (v(kx, i) - ox) + sx * pz[i]);
         let py = [0, 1, 2].map(|i| (v(ky, i) - oy) + sy * pz[i]);
-        solve(px, py, pz, sz, bound, lanes)
+        let mut hits = solve(px, py, pz, sz, bound, lanes);
+        while hits.near != 0 {
+            let l = hits.near.trailing_zeros() as usize;
+            hits.near &= hits.near - 1;
+            let v = [kx, ky, kz].map(|a| quad.v[a].map(|c| c.to_array()[tri]));
+            let lane = |x: [f32x8; 3]| x.map(|x| x.lane(l));
+            if let Some(t) = near_t(lane(self.origin), lane(self.shear), v, bound.lane(l)) {
+                hits.t = hits.t.with_lane(l, t);
+                hits.mask |= 1 << l;
+            }
+        }
+        hits
     }
 }
 
@@ -475,5 +505,67 @@ mod tests {
         // exactly zero), and many hits in all.
         assert!(on_edge > 1000, "{on_edge} hits on an edge");
         assert!(hits > 10_000, "{hits} hits");
+    }
+
+    /// Hits a millionth of a wall's size from the ray's origin, which the f32 bound cannot
+    /// tell from it and f64 decides (`near_t`), are the same bits in the one-triangle, the
+    /// four-triangle and the eight-ray tests: eight oblique rays from 1e-6 of a unit square's
+    /// size above it, every one a hit, at 1e-4, 1 and 1e5 units.
+    #[test]
+    fn hits_decided_in_f64_agree_in_every_test() {
+        use crate::accel::triangle::AxisTriangle;
+        let mut r = Pcg64Mcg::seed_from_u64(7);
+        for scale in [1e-4f32, 1.0, 1e5] {
+            let c = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]
+                .map(|[x, y]| Vec3A::new(x, y, 0.0) * scale);
+            let tris = [[c[0], c[1], c[2]], [c[0], c[2], c[3]]];
+            let quad = TriangleQuad::new(&tris, &[0, 1]);
+            for _ in 0..100 {
+                let rays: [(Vec3, Vec3); 8] = std::array::from_fn(|_| {
+                    let o = Vec3::new(
+                        0.1 + 0.8 * r.random::<f32>(),
+                        0.1 + 0.8 * r.random::<f32>(),
+                        1e-6,
+                    ) * scale;
+                    // Oblique, x the dominant axis: the shear then carries the square's
+                    // whole size into the f32 bound.
+                    let d = Vec3::new(
+                        0.6 + 0.3 * r.random::<f32>(),
+                        0.4 * (r.random::<f32>() - 0.5),
+                        -0.5,
+                    );
+                    (o, d)
+                });
+                let sheared = rays.map(|(o, d)| ShearedRay::new(o, d));
+                let one: [QuadRay; 8] = sheared.map(|s| QuadRay::new(&s));
+                let in_lanes = RayLanes::new(&one).expect("one axis permutation");
+                for (tri, corners) in tris.iter().enumerate() {
+                    let lanes = in_lanes.intersect(&quad, tri, 0xff, f32x8::splat(f32::INFINITY));
+                    for (i, ray) in one.iter().enumerate() {
+                        let h = ray.intersect(&quad, 1 << tri, f32::INFINITY);
+                        let scalar =
+                            sheared[i].intersect(&AxisTriangle::new(*corners), f32::INFINITY);
+                        assert_eq!(h.mask != 0, lanes.mask & (1 << i) != 0);
+                        assert_eq!(h.mask != 0, scalar.is_some());
+                        if let Some((t, b)) = scalar {
+                            assert_eq!(t.to_bits(), h.t_of(tri).to_bits());
+                            assert_eq!(t.to_bits(), lanes.t_of(i).to_bits());
+                            assert_eq!(b.map(f32::to_bits), lanes.barycentric(i).map(f32::to_bits));
+                        }
+                    }
+                }
+                // Each ray hits one of the two triangles (or both, on their shared edge).
+                for (i, ray) in one.iter().enumerate() {
+                    let h = ray.intersect(&quad, 0b11, f32::INFINITY);
+                    assert!(h.mask != 0, "ray {i}: {:?} missed at {scale}", rays[i]);
+                    let expected = 1e-6 * scale / 0.5;
+                    let t = h.t_of(h.nearest(&quad.ids));
+                    assert!(
+                        (t - expected).abs() < 0.05 * expected,
+                        "{t} against {expected}"
+                    );
+                }
+            }
+        }
     }
 }

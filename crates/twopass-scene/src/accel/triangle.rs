@@ -120,12 +120,80 @@ impl ShearedRay {
         let max_e = e.abs().max_element();
         let delta_t =
             3.0 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) * inv_det.abs();
-        if t <= delta_t || t >= t_max || t.is_nan() {
+        let b = e * inv_det;
+        if t <= delta_t {
+            // Ahead of the origin, but within the f32 bound of it: decided in f64.
+            let v = [kx, ky, kz].map(|a| tri.axes[a].to_array());
+            let t = self.near_t(v, t_max)?;
+            return Some((t, [b.x, b.y, b.z]));
+        }
+        if t >= t_max || t.is_nan() {
             return None;
         }
-        let b = e * inv_det;
         Some((t, [b.x, b.y, b.z]))
     }
+
+    /// [`near_t`] for this ray and the triangle whose permuted coordinates are `v[axis]
+    /// [vertex]`.
+    pub(super) fn near_t(&self, v: [[f32; 3]; 3], t_max: f32) -> Option<f32> {
+        near_t(self.origin.map(|o| o.x), self.shear.map(|s| s.x), v, t_max)
+    }
+}
+
+/// A hit the f32 test finds ahead of the ray's origin but cannot tell from `t = 0` (`t`
+/// within its error bound), decided again in f64: `t` when the ray meets the triangle's plane farther than a surface point's own
+/// rounding from its origin, and before `t_max`.
+///
+/// The f32 bound grows with the triangle's size, not with the gap: a 1 x 1 wall cannot be
+/// told from a ray's origin within about 3e-6 along the ray, so the light a panel 1e-6 from
+/// it shoots into it passed through. In f64 the distance is exact to about 1e-15 of the
+/// coordinates; a hit nearer than twice a surface point's error bound (`gamma(7)` of its
+/// coordinates, [`super::SurfacePoint::on_triangle`]) stays refused, since a point spawned on
+/// a neighbouring surface may lie that far behind it. The edge decisions are the f32 test's,
+/// so watertightness is unchanged.
+///
+/// `origin` and `shear` are the sheared ray's in the permuted axes (the shear `(sx, sy, sz)`
+/// defines the direction `(-sx, -sy, 1) / sz`), `v[axis][vertex]` the triangle in the same
+/// axes.
+#[cold]
+#[inline(never)]
+pub(super) fn near_t(
+    origin: [f32; 3],
+    shear: [f32; 3],
+    v: [[f32; 3]; 3],
+    t_max: f32,
+) -> Option<f32> {
+    let p = [0, 1, 2].map(|i| {
+        DVec3::new(
+            f64::from(v[0][i]) - f64::from(origin[0]),
+            f64::from(v[1][i]) - f64::from(origin[1]),
+            f64::from(v[2][i]) - f64::from(origin[2]),
+        )
+    });
+    let d = DVec3::new(-f64::from(shear[0]), -f64::from(shear[1]), 1.0);
+    let (a, b) = (p[1] - p[0], p[2] - p[0]);
+    let n = a.cross(b);
+    let (num, den) = (n.dot(p[0]), n.dot(d));
+    // s: the advance along the dominant axis, of the sign of the ray's direction on it, so
+    // that |s| is a lower bound of the distance along the ray and t = s * sz.
+    let s = num / den;
+    let t = s * f64::from(shear[2]);
+    if !(t.is_finite() && t > 0.0) {
+        return None;
+    }
+    // A generous bound on the f64 rounding of the differences, the cross product and the
+    // dot products (a few units in the last place of each term's magnitude).
+    let scale = a.abs().element_sum() * b.abs().element_sum();
+    let error =
+        16.0 * f64::EPSILON * scale * (p[0].abs().element_sum() + s.abs() * d.abs().element_sum())
+            / den.abs();
+    let reach = origin.iter().fold(0.0f32, |m, o| m.max(o.abs()));
+    let own = 2.0 * f64::from(gamma(7)) * f64::from(reach);
+    if s.abs() - error <= own {
+        return None;
+    }
+    let t = t as f32;
+    (t > 0.0 && t < t_max).then_some(t)
 }
 
 /// Twice the area of a triangle and its unit normal in f64, `None` when degenerate: the cross
