@@ -189,6 +189,23 @@ fn an_image_size_other_than_size_is_a_usage_error() {
     );
 }
 
+/// A `--scene` file that cannot be read is refused before any room is baked (it used to be
+/// found missing after the rooms' minutes of work), naming the file.
+#[test]
+fn a_missing_scene_file_is_refused_before_the_rooms() {
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("missing.toml");
+    let o = cli("bench bakes --rooms terminator --size 32 --reference-spp 16 --out")
+        .arg(dir.path().join("out"))
+        .words("--scene")
+        .arg(&missing)
+        .run();
+    common::assert_exit(&o, 1);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("missing.toml"), "{err}");
+    assert!(!dir.path().join("out").join("terminator").exists());
+}
+
 #[test]
 fn an_unknown_room_is_a_usage_error_naming_the_rooms() {
     let dir = tempfile::tempdir().unwrap();

@@ -115,6 +115,11 @@ pub fn run(args: &BakesArgs, ctx: &Context) -> Result<(), CliError> {
         .clone()
         .or_else(|| ctx.output.clone())
         .unwrap_or_else(|| PathBuf::from("bench-bakes"));
+    // The scene files are loaded first, so that one that cannot be read is refused before
+    // the rooms' minutes of work, not after them.
+    for path in &args.scene {
+        ctx.load_scene(path)?;
+    }
     crate::output::create_dir(&out)?;
     let kinds = if args.rooms.is_empty() && args.scene.is_empty() {
         RoomKind::ALL.to_vec()
