@@ -37,6 +37,7 @@
 
 mod albedo;
 mod ambient;
+mod close;
 pub mod cluster;
 pub mod element;
 mod error;
@@ -55,6 +56,7 @@ pub mod specular;
 mod specular_receivers;
 pub mod triangle_rule;
 
+pub use close::{CloseLight, close_lights};
 pub use error::SolveError;
 pub use form_factor::VisibilityRays;
 pub use hierarchical::HierarchicalSolver;

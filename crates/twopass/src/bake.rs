@@ -329,6 +329,7 @@ pub fn run(args: &BakeArgs, ctx: &Context) -> Result<(), CliError> {
     let residuals_time = residuals_started.elapsed();
     if !ctx.quiet {
         crate::solve::warn_energy(&args.scene, &residuals, solver.method());
+        crate::solve::warn_close_lights(&args.scene, &scene, solution.mesh());
     }
     // The final gather over the solution, ending where the time budget (less the reserve for
     // the files) does.

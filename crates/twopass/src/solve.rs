@@ -297,6 +297,30 @@ pub fn warn_energy(
     }
 }
 
+/// Warns of each light that faces a surface closer than that surface's elements
+/// ([`twopass_radiosity::close_lights`]): energy is kept, but the elements its outline
+/// crosses send the light trapped under it out beside it.
+pub fn warn_close_lights(
+    path: &std::path::Path,
+    scene: &twopass_scene::Scene,
+    mesh: &twopass_radiosity::element::ElementMesh,
+) {
+    for c in twopass_radiosity::close_lights(scene, mesh) {
+        errln!(
+            "warning: {}: light `{}` faces `{}` {:.3e} away over {:.0} % of its area, closer \
+             than that surface's elements ({:.3e}): the elements its outline crosses send the \
+             light trapped under it out beside it, so the surfaces around it come out too \
+             bright (`render --method reference` shows them without the element mesh)",
+            path.display(),
+            c.light,
+            c.facing,
+            c.gap,
+            100.0 * c.share,
+            c.element,
+        );
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use clap::Parser;
