@@ -174,6 +174,9 @@ pub fn radiosity(
                     path: path.to_owned(),
                     source,
                 })?;
+            if !ctx.quiet {
+                crate::solve::warn_close_lights(path, scene, solver.mesh());
+            }
             Ok((Radiosity::Solution(Box::new(solver.solution())), "solve"))
         }
     }
