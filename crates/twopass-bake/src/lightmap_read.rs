@@ -195,17 +195,24 @@ pub fn read_lightmap_glb(glb: &Path, scene: &Scene) -> Result<LightmapRadiance, 
     };
     let tolerance = (1e-4 * size).max(1e-6) as f32;
     // The atlas's size, from the embedded lightmap PNG's header.
-    let png = doc
-        .images()
-        .next()
-        .and_then(|image| match image.source() {
-            ::gltf::image::Source::View { view, .. } => {
-                let start = view.offset();
-                blob.and_then(|b| b.get(start..start + view.length()))
+    // The image's JSON, not `Image::source`, which panics on a buffer view without a
+    // mimeType (`twopass_scene::gltf_image_problem`).
+    let png = match doc.as_json().images.first() {
+        Some(image) => {
+            if let Some(problem) = twopass_scene::gltf_image_problem(image) {
+                return Err(invalid(glb, format!("its lightmap image {problem}")));
             }
-            ::gltf::image::Source::Uri { .. } => None,
-        })
-        .ok_or_else(|| invalid(glb, "no embedded lightmap image".to_owned()))?;
+            image
+                .buffer_view
+                .and_then(|v| doc.views().nth(v.value()))
+                .and_then(|view| {
+                    let start = view.offset();
+                    blob.and_then(|b| b.get(start..start.checked_add(view.length())?))
+                })
+        }
+        None => None,
+    }
+    .ok_or_else(|| invalid(glb, "no embedded lightmap image".to_owned()))?;
     let (width, height) = png_size(png)
         .ok_or_else(|| invalid(glb, "the embedded lightmap image is not a PNG".to_owned()))?;
     let mut meshes = doc.meshes();

@@ -60,7 +60,7 @@ pub use input::{
 pub use lamp::{LUMINOUS_EFFICACY, Lamp, LampKind, LampLight, MAX_LAMP_INTENSITY, spot_falloff};
 pub use load::{
     MAX_COORDINATE, MAX_EMITTED_POWER, MAX_PLACED_TRIANGLES, MAX_TRIANGLES, SMOOTH_ROUGHNESS,
-    SPHERE_TOLERANCE, load, load_toml, load_toml_with, load_with,
+    SPHERE_TOLERANCE, gltf_image_problem, load, load_toml, load_toml_with, load_with,
 };
 pub use mesh::Repeat;
 pub use radiance::{DiffuseRadiance, RadianceEstimate, RadianceEstimator};

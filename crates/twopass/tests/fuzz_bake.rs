@@ -330,3 +330,30 @@ fn a_lightmap_glb_with_float_indices_is_refused() {
         "{err}"
     );
 }
+
+/// Found by the long run of `mutated_bake_files_read_or_fail_cleanly`: a lightmap `.glb`
+/// whose image lost its mimeType (glTF requires one with a buffer view) made the gltf crate's
+/// `Image::source` panic; it is refused, naming the file and the image's problem.
+#[test]
+fn a_lightmap_glb_whose_image_has_no_mime_type_is_refused() {
+    let (_keep, dir) = baked_set();
+    let (scene, _) = twopass_scene::load(repo("scenes/cornell-box.toml")).unwrap();
+    let glb = dir.join("cornell-box.lightmap.glb");
+    let mut bytes = std::fs::read(&glb).unwrap();
+    let from = &b"\"mimeType\""[..];
+    let at = bytes
+        .windows(from.len())
+        .position(|w| w == from)
+        .expect("the lightmap image has a mimeType");
+    // Renamed, the JSON chunk's length unchanged.
+    bytes[at + 8] = b'X';
+    std::fs::write(&glb, &bytes).unwrap();
+    let err = twopass_bake::read_lightmap_glb(&glb, &scene)
+        .expect_err("refused")
+        .to_string();
+    assert!(
+        err.starts_with(&glb.display().to_string())
+            && err.contains("its lightmap image has a bufferView but no mimeType"),
+        "{err}"
+    );
+}

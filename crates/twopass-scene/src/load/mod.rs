@@ -23,7 +23,7 @@ const TEST_FLOOR: &str = "version = 1\n\
     shape = { type = \"quad\", origin = [-1, 0, 1], edge_u = [2, 0, 0], edge_v = [0, 0, -2] }\n";
 
 pub use entry::{load, load_toml, load_toml_with, load_with};
-pub use gltf::SMOOTH_ROUGHNESS;
+pub use gltf::{SMOOTH_ROUGHNESS, gltf_image_problem};
 pub use loader::{
     MAX_COORDINATE, MAX_EMITTED_POWER, MAX_PLACED_TRIANGLES, MAX_TRIANGLES, SPHERE_TOLERANCE,
 };

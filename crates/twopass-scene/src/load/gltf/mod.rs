@@ -78,6 +78,7 @@ use crate::input::{LineIndex, ReadPolicy};
 use crate::scene::Scene;
 
 pub use material::SMOOTH_ROUGHNESS;
+pub use read::image_problem as gltf_image_problem;
 
 /// Loads a glTF 2.0 file (`.gltf` or `.glb`) as a scene in metres.
 pub(super) fn load_gltf(

@@ -72,6 +72,13 @@ pub(super) fn read(
             }
         }
     }
+    // The gltf crate's `Image::source` unwraps a buffer view's mimeType (which glTF requires
+    // with one) and the uri of an image without a buffer view; its validation checks neither.
+    for (i, image) in root.images.iter().enumerate() {
+        if let Some(problem) = image_problem(image) {
+            return Err(err(&format!("image {i}"), problem.to_owned()));
+        }
+    }
     let document =
         gltf::Document::from_json(root).map_err(|e| err("the document", describe(&e)))?;
     drop(bytes);
@@ -253,4 +260,15 @@ pub(super) fn base64(text: &str) -> Result<Vec<u8>, String> {
         return Err("a data URI whose base64 ends in a lone character".to_owned());
     }
     Ok(out)
+}
+
+/// Why the gltf crate would panic reading `image`'s source (`Image::source`), if it would:
+/// a buffer view without the mimeType glTF requires with one, or neither a uri nor a buffer
+/// view.
+pub fn image_problem(image: &gltf::json::Image) -> Option<&'static str> {
+    match (&image.buffer_view, &image.uri, &image.mime_type) {
+        (Some(_), _, None) => Some("has a bufferView but no mimeType (glTF requires one with it)"),
+        (None, None, _) => Some("has neither a uri nor a bufferView"),
+        _ => None,
+    }
 }

@@ -517,3 +517,49 @@ fn khr_lights_punctual_lamps_load_placed_aimed_and_in_watts() {
         assert!((got - want).abs() < 1e-6, "{e:?}");
     }
 }
+
+/// `bytes` (a `.glb`) with `insert` put at the start of its JSON object, the chunk padded
+/// with spaces and both lengths updated.
+fn with_json(bytes: &[u8], insert: &str) -> Vec<u8> {
+    let json_len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let json = std::str::from_utf8(&bytes[20..20 + json_len]).unwrap();
+    let mut json = json.replacen('{', &format!("{{{insert}"), 1);
+    while json.len() % 4 != 0 {
+        json.push(' ');
+    }
+    let mut out = bytes[..12].to_vec();
+    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(json.as_bytes());
+    out.extend_from_slice(&bytes[20 + json_len..]);
+    let total = out.len() as u32;
+    out[8..12].copy_from_slice(&total.to_le_bytes());
+    out
+}
+
+/// Issue 43's long fuzz run: an image with a buffer view but no mimeType (which glTF requires
+/// with one), or with neither a uri nor a buffer view, made the gltf crate's `Image::source`
+/// panic; each is refused naming the image.
+#[test]
+fn an_image_the_gltf_crate_cannot_read_is_an_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let glb = one_triangle(&TRIANGLE, &[0, 1, 2]);
+    for (image, problem) in [
+        (
+            r#"{"bufferView":0}"#,
+            "has a bufferView but no mimeType (glTF requires one with it)",
+        ),
+        (r#"{"name":"x"}"#, "has neither a uri nor a bufferView"),
+    ] {
+        let bytes = with_json(&glb, &format!(r#""images":[{image}],"#));
+        let path = write(dir.path(), "image.glb", &bytes);
+        let err = load(&path).unwrap_err().to_string();
+        assert_eq!(err, format!("{}: image 0: {problem}", path.display()));
+    }
+    // The same document with a mimeType loads.
+    let bytes = with_json(
+        &glb,
+        r#""images":[{"bufferView":0,"mimeType":"image/png"}],"#,
+    );
+    load(&write(dir.path(), "fine.glb", &bytes)).unwrap();
+}
