@@ -561,5 +561,5 @@ fn an_image_the_gltf_crate_cannot_read_is_an_error() {
         &glb,
         r#""images":[{"bufferView":0,"mimeType":"image/png"}],"#,
     );
-    load(&write(dir.path(), "fine.glb", &bytes)).unwrap();
+    load(write(dir.path(), "fine.glb", &bytes)).unwrap();
 }
