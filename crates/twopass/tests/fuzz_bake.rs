@@ -298,35 +298,43 @@ fn mutated_bake_sets_render_or_fail_cleanly() {
     }
 }
 
+/// The error `read_lightmap_glb` gives for the Cornell box's lightmap `.glb` edited by
+/// `edit`, and the path of that `.glb`.
+fn refused_lightmap_glb(edit: impl FnOnce(&mut Vec<u8>)) -> (String, String) {
+    let (_keep, dir) = baked_set();
+    let (scene, _) = twopass_scene::load(repo("scenes/cornell-box.toml")).unwrap();
+    let glb = dir.join("cornell-box.lightmap.glb");
+    let mut bytes = std::fs::read(&glb).unwrap();
+    edit(&mut bytes);
+    std::fs::write(&glb, &bytes).unwrap();
+    let err = twopass_bake::read_lightmap_glb(&glb, &scene)
+        .expect_err("refused")
+        .to_string();
+    (err, glb.display().to_string())
+}
+
 /// Found by the long run of `mutated_bake_files_read_or_fail_cleanly`: a lightmap `.glb`
 /// whose index accessors say floats (component type 5126) made the gltf crate's index reader
 /// panic (`unreachable!`); it is refused, naming the file and the accessor.
 #[test]
 fn a_lightmap_glb_with_float_indices_is_refused() {
-    let (_keep, dir) = baked_set();
-    let (scene, _) = twopass_scene::load(repo("scenes/cornell-box.toml")).unwrap();
-    let glb = dir.join("cornell-box.lightmap.glb");
-    let mut bytes = std::fs::read(&glb).unwrap();
-    // Unsigned int and short component types become float, the JSON chunk's length unchanged.
-    let mut changed = 0;
-    for from in [
-        &b"\"componentType\":5125"[..],
-        &b"\"componentType\":5123"[..],
-    ] {
-        while let Some(at) = bytes.windows(from.len()).position(|w| w == from) {
-            bytes[at + from.len() - 1] = b'6';
-            changed += 1;
+    let (err, glb) = refused_lightmap_glb(|bytes| {
+        // Unsigned int and short component types become float, the JSON chunk's length
+        // unchanged.
+        let mut changed = 0;
+        for from in [
+            &b"\"componentType\":5125"[..],
+            &b"\"componentType\":5123"[..],
+        ] {
+            while let Some(at) = bytes.windows(from.len()).position(|w| w == from) {
+                bytes[at + from.len() - 1] = b'6';
+                changed += 1;
+            }
         }
-    }
-    assert!(changed > 0, "the .glb has integer index accessors");
-    std::fs::write(&glb, &bytes).unwrap();
-    let err = twopass_bake::read_lightmap_glb(&glb, &scene)
-        .expect_err("refused")
-        .to_string();
+        assert!(changed > 0, "the .glb has integer index accessors");
+    });
     assert!(
-        err.starts_with(&glb.display().to_string())
-            && err.contains("indices accessor")
-            && err.contains("F32"),
+        err.starts_with(&glb) && err.contains("indices accessor") && err.contains("F32"),
         "{err}"
     );
 }
@@ -336,23 +344,17 @@ fn a_lightmap_glb_with_float_indices_is_refused() {
 /// `Image::source` panic; it is refused, naming the file and the image's problem.
 #[test]
 fn a_lightmap_glb_whose_image_has_no_mime_type_is_refused() {
-    let (_keep, dir) = baked_set();
-    let (scene, _) = twopass_scene::load(repo("scenes/cornell-box.toml")).unwrap();
-    let glb = dir.join("cornell-box.lightmap.glb");
-    let mut bytes = std::fs::read(&glb).unwrap();
-    let from = &b"\"mimeType\""[..];
-    let at = bytes
-        .windows(from.len())
-        .position(|w| w == from)
-        .expect("the lightmap image has a mimeType");
-    // Renamed, the JSON chunk's length unchanged.
-    bytes[at + 8] = b'X';
-    std::fs::write(&glb, &bytes).unwrap();
-    let err = twopass_bake::read_lightmap_glb(&glb, &scene)
-        .expect_err("refused")
-        .to_string();
+    let (err, glb) = refused_lightmap_glb(|bytes| {
+        let from = &b"\"mimeType\""[..];
+        let at = bytes
+            .windows(from.len())
+            .position(|w| w == from)
+            .expect("the lightmap image has a mimeType");
+        // Renamed, the JSON chunk's length unchanged.
+        bytes[at + 8] = b'X';
+    });
     assert!(
-        err.starts_with(&glb.display().to_string())
+        err.starts_with(&glb)
             && err.contains("its lightmap image has a bufferView but no mimeType"),
         "{err}"
     );
