@@ -7,7 +7,7 @@
 //! default render where the path tracer finds 8e-8. [`close_lights`] finds such lights with
 //! rays, so that a bake can say so.
 
-use twopass_brdf::colour::luminance;
+use glam::Vec2;
 use twopass_brdf::random::{hash, unit_f32};
 use twopass_scene::Scene;
 
@@ -47,28 +47,11 @@ pub struct CloseLight {
 /// closer (along their normal) than the longest edge of the elements of `mesh` there. Points
 /// are drawn over each light's area, the same for the same scene and mesh.
 pub fn close_lights(scene: &Scene, mesh: &ElementMesh) -> Vec<CloseLight> {
-    let lights: Vec<usize> = scene
-        .objects
-        .iter()
-        .enumerate()
-        .filter(|(_, o)| luminance(o.emission) > 0.0 && !o.triangles.is_empty())
-        .map(|(i, _)| i)
-        .collect();
     let points =
-        (POINTS_IN_ALL / lights.len().max(1)).clamp(MIN_POINTS_PER_LIGHT, POINTS_PER_LIGHT);
+        (POINTS_IN_ALL / scene.emitters.len().max(1)).clamp(MIN_POINTS_PER_LIGHT, POINTS_PER_LIGHT);
     let m = &scene.mesh;
     let mut found = Vec::new();
-    for i in lights {
-        let object = &scene.objects[i];
-        let mut cdf = Vec::with_capacity(object.triangles.len());
-        let mut total = 0.0f64;
-        for t in object.triangles.clone() {
-            total += f64::from(m.area(t));
-            cdf.push(total);
-        }
-        if !(total > 0.0 && total.is_finite()) {
-            continue;
-        }
+    for (i, emitter) in scene.emitters.iter().enumerate() {
         let mut close = 0usize;
         let mut gap = f32::INFINITY;
         let mut element = 0.0f32;
@@ -76,11 +59,9 @@ pub fn close_lights(scene: &Scene, mesh: &ElementMesh) -> Vec<CloseLight> {
         for k in 0..points {
             let key = hash(0xc105_e000_0000_0000 ^ (i as u64) << 20 ^ k as u64);
             // Stratified over the light's area: point k in the k-th of `points` equal slices.
-            let u = (k as f64 + f64::from(unit_f32(key))) / points as f64 * total;
-            let t =
-                object.triangles.start + cdf.partition_point(|&c| c < u).min(cdf.len() - 1) as u32;
-            let (r1, r2) = (unit_f32(hash(key ^ 1)).sqrt(), unit_f32(hash(key ^ 2)));
-            let p = m.surface_point(t, [1.0 - r1, r1 * (1.0 - r2), r1 * r2]);
+            let pick = (k as f32 + unit_f32(key)) / points as f32;
+            let u = Vec2::new(unit_f32(hash(key ^ 1)), unit_f32(hash(key ^ 2)));
+            let p = emitter.sample(scene, pick, u);
             let dir = p.normal;
             let Some(hit) = scene
                 .accel()
@@ -111,7 +92,7 @@ pub fn close_lights(scene: &Scene, mesh: &ElementMesh) -> Vec<CloseLight> {
                 .max_by_key(|&(o, n)| (*n, std::cmp::Reverse(*o)))
                 .map(|(&o, _)| o);
             found.push(CloseLight {
-                light: object.name.clone(),
+                light: scene.objects[emitter.object as usize].name.clone(),
                 facing: most.map_or_else(String::new, |o| scene.objects[o as usize].name.clone()),
                 gap,
                 element,

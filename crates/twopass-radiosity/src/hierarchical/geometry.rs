@@ -98,9 +98,7 @@ impl HierarchicalSolver<'_> {
                 }
             }
             Kind::Surface(n) => {
-                let p = self.mesh.corners(n);
-                let center = (p[0] + p[1] + p[2]) / 3.0;
-                let radius = p.iter().map(|q| (*q - center).length()).fold(0.0, f64::max);
+                let (center, radius) = centre_and_radius(self.mesh.corners(n));
                 Ends {
                     center,
                     radius,
@@ -190,12 +188,23 @@ impl HierarchicalSolver<'_> {
     /// receive from just inside their own surface, as in progressive refinement), and their
     /// receiving normals; plus the centroid and its normal.
     pub(super) fn receiving_points(&self, n: u32) -> ([DVec3; 7], [DVec3; 7]) {
-        let node = &self.mesh.nodes[n as usize];
-        let normals = node
-            .vertices
-            .map(|v| self.mesh.vertices[v as usize].normal.as_dvec3());
-        seven_points(self.mesh.corners(n), normals, CORNER_INSET)
+        seven_points(self.mesh.corners(n), self.corner_normals(n), CORNER_INSET)
     }
+
+    /// The unit receiving normals at surface node `n`'s three corners (its vertices').
+    pub(super) fn corner_normals(&self, n: u32) -> [DVec3; 3] {
+        self.mesh.nodes[n as usize]
+            .vertices
+            .map(|v| self.mesh.vertices[v as usize].normal.as_dvec3())
+    }
+}
+
+/// The centroid of the triangle `c` and its radius about it (the farthest corner), scene
+/// units.
+pub(super) fn centre_and_radius(c: [DVec3; 3]) -> (DVec3, f64) {
+    let centre = (c[0] + c[1] + c[2]) / 3.0;
+    let radius = c.iter().map(|p| (*p - centre).length()).fold(0.0, f64::max);
+    (centre, radius)
 }
 
 /// The seven points of a triangle with corners `p` and corner normals `normals` that the

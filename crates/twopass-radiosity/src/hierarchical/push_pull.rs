@@ -129,9 +129,7 @@ impl HierarchicalSolver<'_> {
             (Light::Cluster(here), Kind::Cluster(_)) => Light::Cluster(here.clone()),
             (Light::Cluster(here), Kind::Surface(n)) => {
                 // Each corner gets the cluster's light by its receiving normal.
-                let normals = self.mesh.nodes[n as usize]
-                    .vertices
-                    .map(|v| self.mesh.vertices[v as usize].normal.as_dvec3());
+                let normals = self.corner_normals(n);
                 let at = normals.map(|nk| here.facing(&self.dirs, nk));
                 Light::Surface(std::array::from_fn(|o| {
                     [at[0][o], at[1][o], at[2][o], DVec3::ZERO]

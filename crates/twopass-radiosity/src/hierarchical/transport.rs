@@ -8,6 +8,7 @@ use glam::DVec3;
 use twopass_brdf::random::hash;
 
 use super::directions::Dir;
+use super::geometry::{centre_and_radius, seven_points};
 use super::link::Eval;
 use super::links::RESOLVE_DEPTH;
 use super::state::{HierarchicalSolver, SEPARATION};
@@ -30,10 +31,12 @@ const MAX_RATIO: f64 = 4.0;
 /// ([`adaptive_average`]).
 const ADAPT_GAP: f64 = 0.5;
 
-/// Gaps below this share of the scene's diagonal are not integrated adaptively: the shadow
-/// rays (f32) no longer resolve them, and integrated on some links but not on others the
-/// transport errs with one sign (a light 1e-6 of the room from a wall created a quarter of
-/// its power); there the bound on what leaves send (`bound`) holds the solve.
+/// Gaps below this share of the scene's diagonal are not integrated adaptively: they near what
+/// the shadow rays resolve (a hit farther than twice a surface point's rounding, about 1e-6 of
+/// the coordinates; `twopass_scene`'s `near_t`), and integrated on some links but not on others
+/// where the rays do not resolve them, the transport errs with one sign (with rays that passed
+/// through the wall, a light 1e-6 of the room from it created a quarter of its power); there
+/// the bound on what leaves send (`bound`) holds the solve.
 const MIN_GAP: f64 = 1e-5;
 
 /// Sub-triangles an adaptive average may split at most, per link.
@@ -60,7 +63,7 @@ fn piece_average(
     c: [DVec3; 3],
     nc: [DVec3; 3],
 ) -> f64 {
-    let (x, n) = super::geometry::seven_points(c, nc, 0.0);
+    let (x, n) = seven_points(c, nc, 0.0);
     let mut f = [0.0; 7];
     source.form_factors_into(&x, &n, Some(ns), &mut f);
     seven_point_average(&f)
@@ -79,8 +82,7 @@ fn facing_closely(
     n: DVec3,
     min_gap: f64,
 ) -> bool {
-    let centre = (c[0] + c[1] + c[2]) / 3.0;
-    let radius = c.iter().map(|p| (*p - centre).length()).fold(0.0, f64::max);
+    let (centre, radius) = centre_and_radius(c);
     let gap = source
         .corners
         .iter()
@@ -99,10 +101,9 @@ struct SourceEdges {
 impl SourceEdges {
     fn of(source: &form_factor::SourceTriangle) -> Self {
         let c = source.corners;
-        let centre = (c[0] + c[1] + c[2]) / 3.0;
         Self {
             edges: [(c[0], c[1]), (c[1], c[2]), (c[2], c[0])],
-            radius: c.iter().map(|p| (*p - centre).length()).fold(0.0, f64::max),
+            radius: centre_and_radius(c).1,
         }
     }
 
@@ -156,8 +157,7 @@ fn adaptive_average(
     ];
     let parts = pieces.map(|(p, n)| piece_average(source, ns, p, n));
     let split = parts.iter().sum::<f64>() / 4.0;
-    let centre = (c[0] + c[1] + c[2]) / 3.0;
-    let radius = c.iter().map(|p| (*p - centre).length()).fold(0.0, f64::max);
+    let (centre, radius) = centre_and_radius(c);
     // A piece's error weighs in the receiver's average by its area, 4^-depth; about 2^depth
     // pieces lie along the outline at a depth, so each may err by 2^depth / 3 of the
     // tolerance. A piece near the source is also smaller than half the source, so that a
@@ -215,11 +215,7 @@ impl Part {
     }
 
     fn flat(corners: [DVec3; 3], normal: DVec3) -> Self {
-        let center = (corners[0] + corners[1] + corners[2]) / 3.0;
-        let radius = corners
-            .iter()
-            .map(|p| (*p - center).length())
-            .fold(0.0, f64::max);
+        let (center, radius) = centre_and_radius(corners);
         let area = 0.5
             * (corners[1] - corners[0])
                 .cross(corners[2] - corners[0])
@@ -293,9 +289,7 @@ impl HierarchicalSolver<'_> {
             n[3],
             MIN_GAP * f64::from(self.scene.bounds.diagonal()),
         ) {
-            let normals = self.mesh.nodes[p as usize]
-                .vertices
-                .map(|v| self.mesh.vertices[v as usize].normal.as_dvec3());
+            let normals = self.corner_normals(p);
             let mut budget = ADAPT_BUDGET;
             let edges = SourceEdges::of(&source);
             adaptive_average(

@@ -124,19 +124,13 @@ impl ShearedRay {
         if t <= delta_t {
             // Ahead of the origin, but within the f32 bound of it: decided in f64.
             let v = [kx, ky, kz].map(|a| tri.axes[a].to_array());
-            let t = self.near_t(v, t_max)?;
+            let t = near_t(self.origin.map(|o| o.x), self.shear.map(|s| s.x), v, t_max)?;
             return Some((t, [b.x, b.y, b.z]));
         }
         if t >= t_max || t.is_nan() {
             return None;
         }
         Some((t, [b.x, b.y, b.z]))
-    }
-
-    /// [`near_t`] for this ray and the triangle whose permuted coordinates are `v[axis]
-    /// [vertex]`.
-    pub(super) fn near_t(&self, v: [[f32; 3]; 3], t_max: f32) -> Option<f32> {
-        near_t(self.origin.map(|o| o.x), self.shear.map(|s| s.x), v, t_max)
     }
 }
 

@@ -117,7 +117,7 @@ impl Loader {
                 true,
                 MAX_PLACED_TRIANGLES,
                 "place",
-                "(instanced copies counted)",
+                " (instanced copies counted)",
                 "place fewer copies",
             ),
             (
@@ -138,8 +138,7 @@ impl Loader {
                 return Err(SceneError::Input {
                     path: self.path.clone(),
                     problem: format!(
-                        "the scene would {verb} {n} triangles{}{counted}, more than the {limit} loaded at most ({advice})",
-                        if counted.is_empty() { "" } else { " " }
+                        "the scene would {verb} {n} triangles{counted}, more than the {limit} loaded at most ({advice})"
                     ),
                 });
             }
