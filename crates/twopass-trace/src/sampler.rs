@@ -39,6 +39,10 @@ pub struct Sampler {
     dimension: u32,
     /// The pixel's scramble seed.
     scramble: u32,
+    /// The point's index as the Sobol sets take it: bit-reversed and shuffled by the pixel's
+    /// scramble (`sobol_burley::sample_4d`'s first step, the same for every set of a point,
+    /// so made once).
+    shuffled: u32,
     /// Dimensions `4 * (dimension / 4)` to `+ 3` of the point, computed together.
     set: [f32; 4],
 }
@@ -49,16 +53,19 @@ impl Sampler {
         let h = hash(seed);
         let p = mix64(h ^ pixel.wrapping_mul(0xd6e8_feb8_6659_fd93));
         let h = mix64(p ^ sample.wrapping_mul(0xa076_1d64_78bd_642f));
+        let index = if sample < SOBOL_SAMPLES {
+            sample as u32
+        } else {
+            u32::MAX
+        };
+        let scramble = (p >> 32) as u32;
         Self {
             stream: SplitMix64::new(h),
             key: h,
-            index: if sample < SOBOL_SAMPLES {
-                sample as u32
-            } else {
-                u32::MAX
-            },
+            index,
             dimension: 0,
-            scramble: (p >> 32) as u32,
+            scramble,
+            shuffled: shuffled_index(index, scramble),
             set: [0.0; 4],
         }
     }
@@ -82,12 +89,14 @@ impl Sampler {
                 ^ site.wrapping_mul(0x9e37_79b9_7f4a_7c15)
                 ^ u64::from(j).wrapping_mul(0xd6e8_feb8_6659_fd93),
         );
+        let index = index.map_or(u32::MAX, |i| i as u32);
         Self {
             stream: SplitMix64::new(key),
             key,
-            index: index.map_or(u32::MAX, |i| i as u32),
+            index,
             dimension: 0,
             scramble,
+            shuffled: shuffled_index(index, scramble),
             set: [0.0; 4],
         }
     }
@@ -106,7 +115,7 @@ impl Sampler {
             let d = self.dimension;
             self.dimension += 1;
             if d.is_multiple_of(4) {
-                self.set = sobol_burley::sample_4d(self.index, d / 4, self.scramble);
+                self.set = sobol_set(self.shuffled, d / 4, self.scramble);
             }
             self.set[(d % 4) as usize]
         } else {
@@ -126,6 +135,65 @@ impl Sampler {
     pub fn next_below(&mut self, n: u32) -> u32 {
         (((self.next_u64() >> 32) * u64::from(n)) >> 32) as u32
     }
+}
+
+/// Per set of four dimensions, for the index's high byte (`[0]`) and the next (`[1]`), the
+/// XOR of the direction vectors of each byte value's set bits (bit-reversed, as
+/// `sobol_burley::parts::sobol_int4_rev` forms them): 512 KiB, made on first use.
+type SobolBytes = [[[[u32; 4]; 256]; 2]; sobol_burley::NUM_DIMENSION_SETS_4D as usize];
+
+fn sobol_bytes() -> &'static SobolBytes {
+    static TABLE: std::sync::OnceLock<Box<SobolBytes>> = std::sync::OnceLock::new();
+    TABLE.get_or_init(|| {
+        let mut table: Box<SobolBytes> =
+            vec![[[[0; 4]; 256]; 2]; sobol_burley::NUM_DIMENSION_SETS_4D as usize]
+                .into_boxed_slice()
+                .try_into()
+                .expect("one entry per set");
+        for (set, bytes) in table.iter_mut().enumerate() {
+            for (byte, values) in bytes.iter_mut().enumerate() {
+                for (v, entry) in values.iter_mut().enumerate() {
+                    let index = (v as u32) << (24 - 8 * byte);
+                    *entry = sobol_burley::parts::sobol_int4_rev(index, set as u32).into();
+                }
+            }
+        }
+        table
+    })
+}
+
+/// `sobol_burley::sample_4d`'s shuffled index of point `index` under the pixel's `seed` (0
+/// past the sequence, where it is not used).
+fn shuffled_index(index: u32, seed: u32) -> u32 {
+    use sobol_burley::parts::{hash, owen_scramble_rev};
+    if index == u32::MAX {
+        return 0;
+    }
+    owen_scramble_rev(index.reverse_bits(), hash(seed ^ 0x79c6_8e4a))
+}
+
+/// `sobol_burley::sample_4d(index, set, seed)` from the point's shuffled index
+/// ([`shuffled_index`]): the same four numbers, the index's shuffle not made again per set.
+#[inline]
+fn sobol_set(shuffled: u32, set: u32, seed: u32) -> [f32; 4] {
+    use sobol_burley::parts::{Int4, hash_int4, owen_scramble_int4_rev};
+    // The point is the XOR of the direction vectors of the index's set bits: one table entry
+    // per byte of the 16 bits the sequence uses, instead of a loop over the bits whose trip
+    // count (and branch) changes with every sample.
+    let bytes = &sobol_bytes()[set as usize];
+    let [a, b] = [
+        bytes[0][(shuffled >> 24) as usize],
+        bytes[1][((shuffled >> 16) & 0xff) as usize],
+    ];
+    let sobol = Int4::from(a) ^ Int4::from(b);
+    // The crate's per-set scramble: the seed times an odd constant, the set, and one constant
+    // per lane.
+    let seed: Int4 = [seed.wrapping_mul(0x9c8f_2d3b); 4].into();
+    let sets: Int4 = [set; 4].into();
+    let lanes: Int4 = [0x912f_69ba, 0x174f_18ab, 0x691e_72ca, 0xb40c_c1b8].into();
+    owen_scramble_int4_rev(sobol, hash_int4(seed ^ sets ^ lanes))
+        .reverse_bits()
+        .to_f32_norm()
 }
 
 /// The point of stratum `index` of a `k` x `k` grid over [0, 1)^2, jittered by `u` in [0, 1)^2
@@ -229,6 +297,26 @@ mod tests {
         let mut far = Sampler::new(3, 4, SOBOL_SAMPLES + 1);
         let mut other = Sampler::new(3, 4, SOBOL_SAMPLES + 2);
         assert_ne!(far.next_f32(), other.next_f32());
+    }
+
+    /// The sets made from the cached shuffled index are the crate's own `sample_4d`'s, bit
+    /// for bit.
+    #[test]
+    fn sets_from_the_shuffled_index_are_the_crate_s() {
+        let mut r = SplitMix64::new(17);
+        let cases = [(0u32, 0u32), (1, 7), (255, 0xdead_beef), (65_535, u32::MAX)]
+            .into_iter()
+            .chain((0..500).map(|_| {
+                let bits = r.next_u64();
+                ((bits & 0xffff) as u32, (bits >> 32) as u32)
+            }));
+        for (index, seed) in cases {
+            for set in 0..sobol_burley::NUM_DIMENSION_SETS_4D {
+                let ours = sobol_set(shuffled_index(index, seed), set, seed);
+                let theirs = sobol_burley::sample_4d(index, set, seed);
+                assert_eq!(ours.map(f32::to_bits), theirs.map(f32::to_bits));
+            }
+        }
     }
 
     #[test]
