@@ -118,11 +118,16 @@ impl Camera {
     /// Unit direction through the continuous image position `pixel` (pixels from the top-left
     /// corner; pixel centres at half-integers).
     pub fn direction(&self, pixel: Vec2) -> Vec3 {
-        let tan = (self.fov_y * 0.5).tan();
-        let h = self.height as f32;
-        let sx = (2.0 * pixel.x - self.width as f32) / h * tan;
-        let sy = (h - 2.0 * pixel.y) / h * tan;
-        (self.forward + self.right * sx + self.up * sy).normalize()
+        self.rays().direction(pixel)
+    }
+
+    /// [`Camera::direction`] with what every ray of the camera shares worked out once (the
+    /// field of view's tangent), for a render loop that makes many.
+    pub fn rays(&self) -> CameraRays {
+        CameraRays {
+            camera: *self,
+            tan: (self.fov_y * 0.5).tan(),
+        }
     }
 
     /// The continuous image position where a world direction from the eye lands, or `None`
@@ -140,6 +145,27 @@ impl Camera {
             (sx * h + self.width as f32) * 0.5,
             (h - sy * h) * 0.5,
         ))
+    }
+}
+
+/// A camera's ray directions ([`Camera::rays`]).
+#[derive(Debug, Clone, Copy)]
+pub struct CameraRays {
+    camera: Camera,
+    /// tan(fov_y / 2).
+    tan: f32,
+}
+
+impl CameraRays {
+    /// Unit direction through the continuous image position `pixel` (pixels from the top-left
+    /// corner; pixel centres at half-integers): [`Camera::direction`].
+    #[inline]
+    pub fn direction(&self, pixel: Vec2) -> Vec3 {
+        let c = &self.camera;
+        let h = c.height as f32;
+        let sx = (2.0 * pixel.x - c.width as f32) / h * self.tan;
+        let sy = (h - 2.0 * pixel.y) / h * self.tan;
+        (c.forward + c.right * sx + c.up * sy).normalize()
     }
 }
 

@@ -50,7 +50,7 @@ pub use accel::{
     Accel, COHERENT_ANGLE, COHERENT_ORIGINS, INTERLEAVE_MIN_BYTES, Placement, Ray, SHAFT_TOLERANCE,
     SurfacePoint, TriangleHit, build_coincident,
 };
-pub use camera::{Camera, CameraProblem};
+pub use camera::{Camera, CameraProblem, CameraRays};
 pub use error::{SceneError, Warning};
 pub use gltf_source::{GltfOrigin, GltfSource};
 pub use input::{

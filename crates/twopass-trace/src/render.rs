@@ -11,7 +11,7 @@ use rayon::prelude::*;
 use smart_default::SmartDefault;
 use twopass_brdf::Rgb;
 use twopass_brdf::colour::luminance;
-use twopass_scene::{Camera, Ray, Scene};
+use twopass_scene::{Camera, CameraRays, Ray, Scene};
 
 use crate::budget::SampleBudget;
 use crate::counters::RenderProgress;
@@ -126,6 +126,8 @@ struct TileResult {
 struct Pass<'a> {
     scene: &'a Scene,
     camera: &'a Camera,
+    /// The camera's ray directions, what they share made once.
+    rays: CameraRays,
     integrator: &'a dyn Integrator,
     settings: &'a RenderSettings,
 }
@@ -158,7 +160,7 @@ impl Pass<'_> {
             };
             let offset = if s < k * k { stratum(s, k, u) } else { u };
             let pixel = Vec2::new(x as f32, y as f32) + offset;
-            let ray = Ray::new(self.camera.position, self.camera.direction(pixel));
+            let ray = Ray::new(self.camera.position, self.rays.direction(pixel));
             let mut t = Tally::default();
             let sample = SampleState {
                 sampler: &mut sampler,
@@ -443,6 +445,7 @@ fn render_core(
     let pass = Pass {
         scene,
         camera,
+        rays: camera.rays(),
         integrator,
         settings,
     };
