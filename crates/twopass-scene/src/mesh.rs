@@ -346,11 +346,9 @@ impl Mesh {
                 self.normal_indices[s as usize].map(|i| r.direction(self.normals[i as usize])),
             ),
         };
-        // In SIMD lanes: the same operations in the same order as on `Vec3`, so the same bits.
-        let n = n.map(Vec3A::from);
         let s = n[0] * b[0] + n[1] * b[1] + n[2] * b[2];
         s.try_normalize()
-            .map_or_else(|| self.geometric_normal(t), Vec3::from)
+            .unwrap_or_else(|| self.geometric_normal(t))
     }
 
     /// [`Mesh::shading_normal`] turned to the front side, the side of the geometric normal

@@ -1,7 +1,7 @@
 //! Rays, points on surfaces, and leaving a surface safely: pbrt-v4's floating-point error
 //! bounds and origin offsetting, so no caller of the ray queries carries an epsilon.
 
-use glam::{Vec3, Vec3A};
+use glam::Vec3;
 
 /// `gamma(n)` of Higham / pbrt: a bound on the relative error of n chained f32 operations.
 pub(crate) const fn gamma(n: i32) -> f32 {
@@ -53,12 +53,12 @@ pub struct SurfacePoint {
 impl SurfacePoint {
     /// The point on triangle `(p0, p1, p2)` at barycentrics `(b0, b1, b2)`, with its error bound.
     pub fn on_triangle(p: [Vec3; 3], b: [f32; 3], normal: Vec3, triangle: u32) -> Self {
-        // In SIMD lanes: the same operations in the same order as on `Vec3`, so the same bits.
-        let [a, b, c] = [0, 1, 2].map(|i| Vec3A::from(p[i]) * b[i]);
+        let position = p[0] * b[0] + p[1] * b[1] + p[2] * b[2];
+        let error = ((p[0] * b[0]).abs() + (p[1] * b[1]).abs() + (p[2] * b[2]).abs()) * gamma(7);
         Self {
-            position: (a + b + c).into(),
+            position,
             normal,
-            error: ((a.abs() + b.abs() + c.abs()) * gamma(7)).into(),
+            error,
             triangle,
         }
     }
@@ -67,21 +67,19 @@ impl SurfacePoint {
     /// the normal by the position's error bound, then rounded away, so the ray cannot hit this
     /// surface again (pbrt-v4's `OffsetRayOrigin`).
     pub fn spawn_origin(&self, direction: Vec3) -> Vec3 {
-        // In SIMD lanes: the same operations in the same order as on `Vec3`, so the same bits.
-        let normal = Vec3A::from(self.normal);
-        let d = normal.abs().dot(self.error.into());
-        let mut offset = normal * d;
-        if Vec3A::from(direction).dot(normal) < 0.0 {
+        let d = self.normal.abs().dot(self.error);
+        let mut offset = self.normal * d;
+        if direction.dot(self.normal) < 0.0 {
             offset = -offset;
         }
-        let po = Vec3A::from(self.position) + offset;
+        let po = self.position + offset;
         // Then at least one more float along each axis the offset moves (branch-free, where
         // pbrt steps to the next float per axis): |x| * EPSILON is at least the spacing of
         // floats at x (and the smallest normal float covers x = 0), so the rounded sum lands
         // on or beyond the next float.
-        let up = Vec3A::select(offset.cmpgt(Vec3A::ZERO), Vec3A::ONE, Vec3A::ZERO);
-        let down = Vec3A::select(offset.cmplt(Vec3A::ZERO), Vec3A::ONE, Vec3A::ZERO);
-        (po + (up - down) * (po.abs() * f32::EPSILON + Vec3A::splat(f32::MIN_POSITIVE))).into()
+        let up = Vec3::select(offset.cmpgt(Vec3::ZERO), Vec3::ONE, Vec3::ZERO);
+        let down = Vec3::select(offset.cmplt(Vec3::ZERO), Vec3::ONE, Vec3::ZERO);
+        po + (up - down) * (po.abs() * f32::EPSILON + Vec3::splat(f32::MIN_POSITIVE))
     }
 }
 
