@@ -10,8 +10,9 @@ next-event estimation and MIS with the power heuristic; twopass survives roulett
 max(throughput) capped at 1, Mitsuba caps it at 0.95. Mitsuba's wheel ships Embree 3, which both
 its CPU variants trace rays with; twopass uses its own BVH.
 
-It first checks the conversion: Mitsuba's image at `--check-spp` samples against twopass's
-converged reference image (`--reference`, an EXR): the mean per channel must agree within
+It first checks the conversion: Mitsuba's image at `--check-spp` samples against a converged
+reference image (`--reference`: an EXR, or the `.npz` that `mitsuba_equal_error.py --out DIR
+--references-only` caches in DIR): the mean per channel must agree within
 `--tolerance` (relative), or the script stops before timing anything. It then renders, at the same
 resolution and `--spp`, twopass (`twopass render --method reference --json`, its `render_seconds`:
 the render alone, without parsing the scene, building the BVH or writing the image) and Mitsuba
@@ -69,6 +70,15 @@ def read_exr(path):
         return np.stack([np.asarray(channels[c].pixels, np.float32) for c in "RGB"], axis=-1)
 
 
+def read_reference(path):
+    """The converged reference: an RGB EXR, or the `.npz` that `mitsuba_equal_error.py` caches
+    (the mean of its two halves)."""
+    if path.endswith(".npz"):
+        z = np.load(path)
+        return (0.5 * (z["a"].astype(np.float64) + z["b"])).astype(np.float32)
+    return read_exr(path)
+
+
 def rel_rmse(x, r):
     """The project's error metric: relative RMSE over all pixels and channels."""
     x, r = x.astype(np.float64), r.astype(np.float64)
@@ -111,7 +121,8 @@ def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--twopass", default="target/release/twopass", help="the twopass binary")
     p.add_argument("--scene", default="scenes/cornell-box.toml", help="twopass scene file")
-    p.add_argument("--reference", required=True, help="twopass's converged image (EXR)")
+    p.add_argument("--reference", required=True,
+                   help="a converged image: an EXR, or mitsuba_equal_error.py's cached .npz")
     p.add_argument("--width", type=int, default=256, help="image width (square scenes)")
     p.add_argument("--spp", type=int, default=16, help="samples per pixel of the timed renders")
     p.add_argument("--check-spp", type=int, default=1024, help="spp of Mitsuba's check image")
@@ -124,7 +135,7 @@ def main():
     p.add_argument("--json", help="also write the results here")
     args = p.parse_args()
 
-    ref = read_exr(args.reference)
+    ref = read_reference(args.reference)
     height = ref.shape[0] * args.width // ref.shape[1]
     if ref.shape[1] != args.width:
         raise SystemExit(f"the reference is {ref.shape[1]} pixels wide, not {args.width}")
@@ -222,7 +233,7 @@ def llvm_round(args, threads, height, seed):
 
 
 def llvm_child(spec):
-    ref = read_exr(spec["reference"])
+    ref = read_reference(spec["reference"])
     mts = Mitsuba("llvm_ad_rgb", spec["scene"], spec["width"], spec["height"])
     samples = spec["width"] * spec["height"] * spec["spp"]
     _, first = mts.render(spec["spp"], 0, spec["threads"])
