@@ -156,11 +156,14 @@ fn texel_size_needs_lightmap() {
 fn a_gather_ends_at_the_time_budget_with_every_texel_filled() {
     // A 2 mm lightmap of the box is about 400,000 texels: minutes of gathering. Under a 3 s
     // budget the gather stops where the budget does, the late texels show the solution, and the
-    // manifest counts them.
+    // manifest counts them. The solve before it is kept short (100 mm elements: a quarter of a
+    // second alone, against a second by default), so that the gather has time left for some
+    // texels even when the tests beside it load the machine.
     let out_dir = tempfile::tempdir().unwrap();
     let dir = out_dir.path();
     let out = common::bake_box(dir)
-        .words("--format bake --lightmap --texel-size 2 --time-budget 3 --json")
+        .words("--format bake --lightmap --texel-size 2 --time-budget 3 --element-size 100")
+        .words("--json")
         .run();
     let manifest = common::ok_json(&out);
     let lm = &manifest["lightmap"];
