@@ -167,6 +167,20 @@ impl<L: Lanes> Hits<L> {
     pub(super) fn barycentric(&self, lane: usize) -> [f32; 3] {
         self.e.map(|e| e.lane(lane) * self.inv_det.lane(lane))
     }
+
+    /// Decides the lanes in `near` by `decide(lane)` (the hit's `t` in f64,
+    /// [`super::triangle::near_t`], or `None`): a lane it gives a `t` becomes a hit at it.
+    #[inline(always)]
+    fn decide_near(&mut self, mut decide: impl FnMut(usize) -> Option<f32>) {
+        while self.near != 0 {
+            let l = self.near.trailing_zeros() as usize;
+            self.near &= self.near - 1;
+            if let Some(t) = decide(l) {
+                self.t = self.t.with_lane(l, t);
+                self.mask |= 1 << l;
+            }
+        }
+    }
 }
 
 /// The watertight test's steps after the shear, lane by lane (Woop et al. 2013, as in
@@ -315,16 +329,10 @@ impl QuadRay {
         let px = [0, 1, 2].map(|i| (vx[i] - ox) + sx * pz[i]);
         let py = [0, 1, 2].map(|i| (vy[i] - oy) + sy * pz[i]);
         let mut hits = solve(px, py, pz, sz, Vec4::splat(t_max), lanes);
-        while hits.near != 0 {
-            let l = hits.near.trailing_zeros() as usize;
-            hits.near &= hits.near - 1;
+        hits.decide_near(|l| {
             let v = [vx, vy, vz].map(|a| a.map(|c| c.to_array()[l]));
-            let o = [ox, oy, oz].map(|o| o.x);
-            if let Some(t) = near_t(o, [sx.x, sy.x, sz.x], v, t_max) {
-                hits.t = hits.t.with_lane(l, t);
-                hits.mask |= 1 << l;
-            }
-        }
+            near_t([ox.x, oy.x, oz.x], [sx.x, sy.x, sz.x], v, t_max)
+        });
         hits
     }
 }
@@ -376,16 +384,11 @@ impl RayLanes {
         let px = [0, 1, 2].map(|i| (v(kx, i) - ox) + sx * pz[i]);
         let py = [0, 1, 2].map(|i| (v(ky, i) - oy) + sy * pz[i]);
         let mut hits = solve(px, py, pz, sz, bound, lanes);
-        while hits.near != 0 {
-            let l = hits.near.trailing_zeros() as usize;
-            hits.near &= hits.near - 1;
+        hits.decide_near(|l| {
             let v = [kx, ky, kz].map(|a| quad.v[a].map(|c| c.to_array()[tri]));
             let lane = |x: [f32x8; 3]| x.map(|x| x.lane(l));
-            if let Some(t) = near_t(lane(self.origin), lane(self.shear), v, bound.lane(l)) {
-                hits.t = hits.t.with_lane(l, t);
-                hits.mask |= 1 << l;
-            }
-        }
+            near_t(lane(self.origin), lane(self.shear), v, bound.lane(l))
+        });
         hits
     }
 }

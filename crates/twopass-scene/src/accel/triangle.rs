@@ -120,23 +120,24 @@ impl ShearedRay {
         let max_e = e.abs().max_element();
         let delta_t =
             3.0 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) * inv_det.abs();
-        let b = e * inv_det;
-        if t <= delta_t {
+        let t = if t <= delta_t {
             // Ahead of the origin, but within the f32 bound of it: decided in f64.
             let v = [kx, ky, kz].map(|a| tri.axes[a].to_array());
-            let t = near_t(self.origin.map(|o| o.x), self.shear.map(|s| s.x), v, t_max)?;
-            return Some((t, [b.x, b.y, b.z]));
-        }
-        if t >= t_max || t.is_nan() {
+            near_t(self.origin.map(|o| o.x), self.shear.map(|s| s.x), v, t_max)?
+        } else if t < t_max {
+            t
+        } else {
+            // Beyond `t_max`, or NaN.
             return None;
-        }
+        };
+        let b = e * inv_det;
         Some((t, [b.x, b.y, b.z]))
     }
 }
 
 /// A hit the f32 test finds ahead of the ray's origin but cannot tell from `t = 0` (`t`
-/// within its error bound), decided again in f64: `t` when the ray meets the triangle's plane farther than a surface point's own
-/// rounding from its origin, and before `t_max`.
+/// within its error bound), decided again in f64: `t` when the ray meets the triangle's plane
+/// farther than a surface point's own rounding from its origin, and before `t_max`.
 ///
 /// The f32 bound grows with the triangle's size, not with the gap: a 1 x 1 wall cannot be
 /// told from a ray's origin within about 3e-6 along the ray, so the light a panel 1e-6 from
