@@ -340,11 +340,19 @@ impl Mesh {
 
     /// The interpolated unit shading normal of triangle `t` at barycentrics `b`.
     pub fn shading_normal(&self, t: u32, b: [f32; 3]) -> Vec3 {
-        let n = match self.repeat_of(t) {
-            None => self.normal_indices[t as usize].map(|i| self.normals[i as usize]),
-            Some((r, s)) => r.order(
-                self.normal_indices[s as usize].map(|i| r.direction(self.normals[i as usize])),
-            ),
+        let repeat = self.repeat_of(t);
+        let s = repeat.map_or(t, |(_, s)| s) as usize;
+        // A flat triangle's three stored normals are its geometric normal (unit), so the
+        // interpolation would only round it: every hit of a flat scene takes this path.
+        if self.flat.get(s).copied().unwrap_or(false) {
+            let g = self.geometric_normals[s];
+            return repeat.map_or(g, |(r, _)| r.direction(g));
+        }
+        let n = match repeat {
+            None => self.normal_indices[s].map(|i| self.normals[i as usize]),
+            Some((r, _)) => {
+                r.order(self.normal_indices[s].map(|i| r.direction(self.normals[i as usize])))
+            }
         };
         let s = n[0] * b[0] + n[1] * b[1] + n[2] * b[2];
         s.try_normalize()
@@ -354,6 +362,9 @@ impl Mesh {
     /// [`Mesh::shading_normal`] turned to the front side, the side of the geometric normal
     /// (unit): the normal a surface point is shaded with.
     pub fn front_shading_normal(&self, t: u32, b: [f32; 3]) -> Vec3 {
+        if self.is_flat(t) {
+            return self.geometric_normal(t);
+        }
         let n = self.shading_normal(t, b);
         if n.dot(self.geometric_normal(t)) < 0.0 {
             -n
