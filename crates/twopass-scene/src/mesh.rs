@@ -341,18 +341,17 @@ impl Mesh {
     /// The interpolated unit shading normal of triangle `t` at barycentrics `b`.
     pub fn shading_normal(&self, t: u32, b: [f32; 3]) -> Vec3 {
         let repeat = self.repeat_of(t);
-        let s = repeat.map_or(t, |(_, s)| s) as usize;
+        let stored = repeat.map_or(t, |(_, s)| s) as usize;
         // A flat triangle's three stored normals are its geometric normal (unit), so the
         // interpolation would only round it: every hit of a flat scene takes this path.
-        if self.flat.get(s).copied().unwrap_or(false) {
-            let g = self.geometric_normals[s];
+        if self.flat.get(stored).copied().unwrap_or(false) {
+            let g = self.geometric_normals[stored];
             return repeat.map_or(g, |(r, _)| r.direction(g));
         }
+        let corners = self.normal_indices[stored];
         let n = match repeat {
-            None => self.normal_indices[s].map(|i| self.normals[i as usize]),
-            Some((r, _)) => {
-                r.order(self.normal_indices[s].map(|i| r.direction(self.normals[i as usize])))
-            }
+            None => corners.map(|i| self.normals[i as usize]),
+            Some((r, _)) => r.order(corners.map(|i| r.direction(self.normals[i as usize]))),
         };
         let s = n[0] * b[0] + n[1] * b[1] + n[2] * b[2];
         s.try_normalize()
