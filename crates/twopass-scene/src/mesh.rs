@@ -323,8 +323,12 @@ impl Mesh {
     /// Whether triangle `t`'s shading normal is its own flat normal because its input gave
     /// none (an OBJ group without `vn`, a glTF primitive without `NORMAL`, a flat shape).
     pub fn is_flat(&self, t: u32) -> bool {
-        let s = self.repeat_of(t).map_or(t, |(_, s)| s);
-        self.flat.get(s as usize).copied().unwrap_or(false)
+        self.stored_is_flat(self.repeat_of(t).map_or(t, |(_, s)| s) as usize)
+    }
+
+    /// [`Mesh::is_flat`] of stored triangle `s` (a copy's source).
+    fn stored_is_flat(&self, s: usize) -> bool {
+        self.flat.get(s).copied().unwrap_or(false)
     }
 
     /// The three corner positions of triangle `t`.
@@ -344,7 +348,7 @@ impl Mesh {
         let stored = repeat.map_or(t, |(_, s)| s) as usize;
         // A flat triangle's three stored normals are its geometric normal (unit), so the
         // interpolation would only round it: every hit of a flat scene takes this path.
-        if self.flat.get(stored).copied().unwrap_or(false) {
+        if self.stored_is_flat(stored) {
             let g = self.geometric_normals[stored];
             return repeat.map_or(g, |(r, _)| r.direction(g));
         }
@@ -361,9 +365,6 @@ impl Mesh {
     /// [`Mesh::shading_normal`] turned to the front side, the side of the geometric normal
     /// (unit): the normal a surface point is shaded with.
     pub fn front_shading_normal(&self, t: u32, b: [f32; 3]) -> Vec3 {
-        if self.is_flat(t) {
-            return self.geometric_normal(t);
-        }
         let n = self.shading_normal(t, b);
         if n.dot(self.geometric_normal(t)) < 0.0 {
             -n
