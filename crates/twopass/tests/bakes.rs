@@ -206,6 +206,21 @@ fn a_missing_scene_file_is_refused_before_the_rooms() {
     assert!(!dir.path().join("out").join("terminator").exists());
 }
 
+/// `--rooms`'s help is written by hand: it must name every room the bench knows.
+#[test]
+fn the_help_names_every_room() {
+    let o = cli("bench bakes --help").run();
+    common::assert_exit(&o, 0);
+    let help = String::from_utf8_lossy(&o.stdout);
+    for kind in twopass_scene::workload::RoomKind::ALL {
+        assert!(
+            help.contains(kind.name()),
+            "{} missing from:\n{help}",
+            kind.name()
+        );
+    }
+}
+
 #[test]
 fn an_unknown_room_is_a_usage_error_naming_the_rooms() {
     let dir = tempfile::tempdir().unwrap();
@@ -216,7 +231,8 @@ fn an_unknown_room_is_a_usage_error_naming_the_rooms() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
         err.contains(
-            "no room `kitchen`; the rooms are spheres, grazing, near-light, two-lights, terminator"
+            "no room `kitchen`; the rooms are spheres, grazing, near-light, two-lights, terminator, \
+             chrome"
         ),
         "{err}"
     );

@@ -37,7 +37,7 @@ use crate::error::CliError;
 #[derive(Debug, Args)]
 pub struct BakesArgs {
     /// Rooms to measure, comma separated: spheres, grazing, near-light, two-lights,
-    /// terminator [default: all].
+    /// terminator, chrome [default: all].
     #[arg(long, value_delimiter = ',', value_parser = parse_room)]
     pub rooms: Vec<RoomKind>,
     /// Scene files (.toml or .obj) to measure as well, each at its own camera's resolution,
