@@ -10,6 +10,20 @@
 //! single point stays uniform over the unit cube, so each estimate stays unbiased; neighbouring
 //! pixels stay independent, and the error at a given sample count falls (measured in
 //! docs/benchmarks.md, "The path tracer against Mitsuba 3").
+//!
+//! **Joint sets, then padded ones.** The numbers come in sets of four dimensions. The first
+//! [`JOINT_SETS`] sets (the camera and a path's first vertices) are Sobol dimensions 0 to 15 of
+//! the one point, stratified jointly. Every later set is *padded* (Burley's section 4): the
+//! first four Sobol dimensions again, under a seed of its own (an index shuffle and a
+//! scramble), stratified within itself and paired at random with the other sets. The
+//! sequence's higher dimensions, which those sets would otherwise be, have 2D projections of
+//! poor quality at some sample counts (dimensions 16 and 17 put a pixel's first 16 points two
+//! by two into half the cells of a 4 x 4 grid): drawn from them, four generated rooms' error
+//! fell by only 1.6-1.8x from 64 to 256 samples instead of 2x. Where the joint sets end is
+//! measured, not derived: padding every set after the first cost the Cornell box 10-13 % more
+//! squared error at 64 and 256 samples, joint sets up to dimension 15 about 4 %
+//! (docs/benchmarks.md, "The path tracer against Mitsuba 3").
+//!
 //! Past the sequence's 256 dimensions (paths of more than about 36 bounces) or 2^16 samples
 //! of a pixel, and for [`Sampler::next_u64`], the numbers come from SplitMix64 (Steele, Lea &
 //! Flood 2014, [`twopass_brdf::random`], the workspace's one home of random streams) over a
@@ -20,8 +34,12 @@ use twopass_brdf::random::{SplitMix64, hash, mix64};
 
 /// What the sample values are, for records that must say how an image was sampled (the
 /// tradeoff bench's reference cache).
-pub const SAMPLE_SEQUENCE: &str =
-    "Owen-scrambled Sobol per pixel (Burley 2020, sobol_burley 0.5), then SplitMix64";
+pub const SAMPLE_SEQUENCE: &str = "Owen-scrambled Sobol per pixel (Burley 2020, sobol_burley 0.5), \
+     dimensions 0-15 joint, padded sets of four after, then SplitMix64";
+
+/// Sets of four dimensions drawn jointly from one Sobol point (Sobol dimensions 0 to
+/// `4 * JOINT_SETS - 1`); every later set is padded (see the module documentation).
+pub const JOINT_SETS: u32 = 4;
 
 /// Samples per pixel the Sobol sequence covers; further samples of a pixel are independent.
 const SOBOL_SAMPLES: u64 = 1 << 16;
@@ -39,9 +57,8 @@ pub struct Sampler {
     dimension: u32,
     /// The pixel's scramble seed.
     scramble: u32,
-    /// The point's index as the Sobol sets take it: bit-reversed and shuffled by the pixel's
-    /// scramble (`sobol_burley::sample_4d`'s first step, the same for every set of a point,
-    /// so made once).
+    /// The point's index as the joint sets take it: bit-reversed and shuffled by the pixel's
+    /// scramble (`sobol_burley::sample_4d`'s first step, the same for each of them), made once.
     shuffled: u32,
     /// Dimensions `4 * (dimension / 4)` to `+ 3` of the point, computed together.
     set: [f32; 4],
@@ -115,7 +132,12 @@ impl Sampler {
             let d = self.dimension;
             self.dimension += 1;
             if d.is_multiple_of(4) {
-                self.set = sobol_set(self.shuffled, d / 4, self.scramble);
+                let set = d / 4;
+                self.set = if set < JOINT_SETS {
+                    sobol_set(self.shuffled, set, self.scramble)
+                } else {
+                    padded_set(self.index, set, self.scramble)
+                };
             }
             self.set[(d % 4) as usize]
         } else {
@@ -137,33 +159,27 @@ impl Sampler {
     }
 }
 
-/// Per set of four dimensions, for the index's high byte (`[0]`) and the next (`[1]`), the
-/// XOR of the direction vectors of each byte value's set bits (bit-reversed, as
-/// `sobol_burley::parts::sobol_int4_rev` forms them): 512 KiB, made on first use.
-type SobolBytes = [[[[u32; 4]; 256]; 2]; sobol_burley::NUM_DIMENSION_SETS_4D as usize];
+/// Per joint set of four dimensions, for the index's high byte (`[0]`) and the next (`[1]`),
+/// the XOR of the direction vectors of each byte value's set bits (bit-reversed, as
+/// `sobol_burley::parts::sobol_int4_rev` forms them): 32 KiB, made on first use.
+type SobolBytes = [[[[u32; 4]; 256]; 2]; JOINT_SETS as usize];
 
 fn sobol_bytes() -> &'static SobolBytes {
-    static TABLE: std::sync::OnceLock<Box<SobolBytes>> = std::sync::OnceLock::new();
+    static TABLE: std::sync::OnceLock<SobolBytes> = std::sync::OnceLock::new();
     TABLE.get_or_init(|| {
-        let mut table: Box<SobolBytes> =
-            vec![[[[0; 4]; 256]; 2]; sobol_burley::NUM_DIMENSION_SETS_4D as usize]
-                .into_boxed_slice()
-                .try_into()
-                .expect("one entry per set");
-        for (set, bytes) in table.iter_mut().enumerate() {
-            for (byte, values) in bytes.iter_mut().enumerate() {
-                for (v, entry) in values.iter_mut().enumerate() {
+        std::array::from_fn(|set| {
+            std::array::from_fn(|byte| {
+                std::array::from_fn(|v| {
                     let index = (v as u32) << (24 - 8 * byte);
-                    *entry = sobol_burley::parts::sobol_int4_rev(index, set as u32).into();
-                }
-            }
-        }
-        table
+                    sobol_burley::parts::sobol_int4_rev(index, set as u32).into()
+                })
+            })
+        })
     })
 }
 
-/// `sobol_burley::sample_4d`'s shuffled index of point `index` under the pixel's `seed` (0
-/// past the sequence, where it is not used).
+/// `sobol_burley::sample_4d`'s shuffled index of point `index` under `seed` (the pixel's, or a
+/// padded set's; 0 past the sequence, where it is not used).
 fn shuffled_index(index: u32, seed: u32) -> u32 {
     use sobol_burley::parts::{hash, owen_scramble_rev};
     if index == u32::MAX {
@@ -172,8 +188,8 @@ fn shuffled_index(index: u32, seed: u32) -> u32 {
     owen_scramble_rev(index.reverse_bits(), hash(seed ^ 0x79c6_8e4a))
 }
 
-/// `sobol_burley::sample_4d(index, set, seed)` from the point's shuffled index
-/// ([`shuffled_index`]): the same four numbers, the index's shuffle not made again per set.
+/// `sobol_burley::sample_4d(index, set, seed)` (`set` below [`JOINT_SETS`]) from the point's
+/// index shuffled under `seed` ([`shuffled_index`]): the same four numbers.
 #[inline]
 fn sobol_set(shuffled: u32, set: u32, seed: u32) -> [f32; 4] {
     use sobol_burley::parts::{Int4, hash_int4, owen_scramble_int4_rev};
@@ -194,6 +210,20 @@ fn sobol_set(shuffled: u32, set: u32, seed: u32) -> [f32; 4] {
     owen_scramble_int4_rev(sobol, hash_int4(seed ^ sets ^ lanes))
         .reverse_bits()
         .to_f32_norm()
+}
+
+/// The seed of padded set `set` ([`JOINT_SETS`] or more) of a pixel of scramble `scramble`.
+#[inline]
+fn padded_seed(scramble: u32, set: u32) -> u32 {
+    (mix64((u64::from(scramble) << 32) | u64::from(set)) >> 32) as u32
+}
+
+/// Set `set` ([`JOINT_SETS`] or more) of point `index`, padded: `sobol_burley::sample_4d(index, 0, seed)`
+/// under the set's own seed ([`padded_seed`]), its index shuffle and scramble its own.
+#[inline]
+fn padded_set(index: u32, set: u32, scramble: u32) -> [f32; 4] {
+    let seed = padded_seed(scramble, set);
+    sobol_set(shuffled_index(index, seed), 0, seed)
 }
 
 /// The point of stratum `index` of a `k` x `k` grid over [0, 1)^2, jittered by `u` in [0, 1)^2
@@ -267,6 +297,36 @@ mod tests {
         }
     }
 
+    /// Every padded set's first two dimensions are Sobol dimensions 0 and 1 under the set's own
+    /// scramble: a pixel's first 16 samples put one point in each cell of their 4 x 4 grid, in
+    /// every set up to the sequence's last, and each set draws other numbers than the next.
+    /// (The sequence's own dimensions 16 and 17, which the first padded set would otherwise be,
+    /// put their first 16 points two by two into half of the cells.)
+    #[test]
+    fn padded_sets_are_stratified_each_under_its_own_scramble() {
+        for (seed, pixel) in [(0, 0), (7, 12_345), (u64::MAX, 3)] {
+            let points: Vec<Vec<f32>> = (0..16)
+                .map(|s| {
+                    let mut x = Sampler::new(seed, pixel, s);
+                    (0..sobol_burley::NUM_DIMENSIONS)
+                        .map(|_| x.next_f32())
+                        .collect()
+                })
+                .collect();
+            for set in JOINT_SETS..sobol_burley::NUM_DIMENSION_SETS_4D {
+                let d = (4 * set) as usize;
+                let mut cells = [0u32; 16];
+                for p in &points {
+                    cells[(p[d] * 4.0) as usize * 4 + (p[d + 1] * 4.0) as usize] += 1;
+                }
+                assert_eq!(cells, [1; 16], "set {set} of pixel {pixel}");
+                if let Some(next) = points[0].get(d + 4) {
+                    assert_ne!(points[0][d], *next, "sets {set} and next alike");
+                }
+            }
+        }
+    }
+
     /// Neighbouring pixels are scrambled independently: over many pixel pairs, the first
     /// dimension of their sample 0 is uncorrelated (correlation within 4 standard errors).
     #[test]
@@ -299,10 +359,11 @@ mod tests {
         assert_ne!(far.next_f32(), other.next_f32());
     }
 
-    /// The sets made from the cached shuffled index are the crate's own `sample_4d`'s, bit
-    /// for bit.
+    /// A sample's sets are the crate's own `sample_4d`'s, bit for bit: the joint sets
+    /// `sample_4d(index, set, scramble)` (from the index shuffled once), every later set
+    /// `sample_4d(index, 0, seed)` under its padded seed.
     #[test]
-    fn sets_from_the_shuffled_index_are_the_crate_s() {
+    fn sets_are_the_crate_s() {
         let mut r = SplitMix64::new(17);
         let cases = [(0u32, 0u32), (1, 7), (255, 0xdead_beef), (65_535, u32::MAX)]
             .into_iter()
@@ -310,13 +371,31 @@ mod tests {
                 let bits = r.next_u64();
                 ((bits & 0xffff) as u32, (bits >> 32) as u32)
             }));
-        for (index, seed) in cases {
+        let crate_s = |index, set, scramble| {
+            if set < JOINT_SETS {
+                sobol_burley::sample_4d(index, set, scramble)
+            } else {
+                sobol_burley::sample_4d(index, 0, padded_seed(scramble, set))
+            }
+        };
+        for (index, scramble) in cases {
             for set in 0..sobol_burley::NUM_DIMENSION_SETS_4D {
-                let ours = sobol_set(shuffled_index(index, seed), set, seed);
-                let theirs = sobol_burley::sample_4d(index, set, seed);
+                let ours = if set < JOINT_SETS {
+                    sobol_set(shuffled_index(index, scramble), set, scramble)
+                } else {
+                    padded_set(index, set, scramble)
+                };
+                let theirs = crate_s(index, set, scramble);
                 assert_eq!(ours.map(f32::to_bits), theirs.map(f32::to_bits));
             }
         }
+        // And a sampler hands them out in order.
+        let mut x = Sampler::new(3, 9, 5);
+        let numbers: Vec<u32> = (0..24).map(|_| x.next_f32().to_bits()).collect();
+        let sets: Vec<u32> = (0..6)
+            .flat_map(|set| crate_s(5, set, x.scramble).map(f32::to_bits))
+            .collect();
+        assert_eq!(numbers, sets);
     }
 
     #[test]
