@@ -268,6 +268,25 @@ mod tests {
         assert!((0..1000).all(|_| s.next_below(3) < 3));
     }
 
+    /// The first `dims` numbers of each of the first 16 samples of `pixel` under `seed`.
+    fn first_16(seed: u64, pixel: u64, dims: u32) -> Vec<Vec<f32>> {
+        (0..16)
+            .map(|s| {
+                let mut x = Sampler::new(seed, pixel, s);
+                (0..dims).map(|_| x.next_f32()).collect()
+            })
+            .collect()
+    }
+
+    /// How many of `points` fall in each cell of the 4 x 4 grid over dimensions `d` and `d + 1`.
+    fn grid_4x4(points: &[Vec<f32>], d: usize) -> [u32; 16] {
+        let mut cells = [0u32; 16];
+        for p in points {
+            cells[(p[d] * 4.0) as usize * 4 + (p[d + 1] * 4.0) as usize] += 1;
+        }
+        cells
+    }
+
     /// The first 16 samples of a pixel put exactly one value in each sixteenth of every
     /// dimension, and, in the first two dimensions, one point in each cell of the 4 x 4 grid
     /// (the Sobol points' net properties, which Owen scrambling keeps; later pairs of
@@ -276,12 +295,7 @@ mod tests {
     #[test]
     fn a_pixel_s_samples_fill_every_dimension_and_the_first_pair_evenly() {
         for (seed, pixel) in [(0, 0), (7, 12_345), (u64::MAX, 3)] {
-            let points: Vec<Vec<f32>> = (0..16)
-                .map(|s| {
-                    let mut x = Sampler::new(seed, pixel, s);
-                    (0..64).map(|_| x.next_f32()).collect()
-                })
-                .collect();
+            let points = first_16(seed, pixel, 64);
             for d in 0..64 {
                 let mut cells = [0u32; 16];
                 for p in &points {
@@ -289,11 +303,11 @@ mod tests {
                 }
                 assert_eq!(cells, [1; 16], "dimension {d} of pixel {pixel}");
             }
-            let mut cells = [0u32; 16];
-            for p in &points {
-                cells[(p[0] * 4.0) as usize * 4 + (p[1] * 4.0) as usize] += 1;
-            }
-            assert_eq!(cells, [1; 16], "dimensions 0, 1 of pixel {pixel}");
+            assert_eq!(
+                grid_4x4(&points, 0),
+                [1; 16],
+                "dimensions 0, 1 of pixel {pixel}"
+            );
         }
     }
 
@@ -305,21 +319,10 @@ mod tests {
     #[test]
     fn padded_sets_are_stratified_each_under_its_own_scramble() {
         for (seed, pixel) in [(0, 0), (7, 12_345), (u64::MAX, 3)] {
-            let points: Vec<Vec<f32>> = (0..16)
-                .map(|s| {
-                    let mut x = Sampler::new(seed, pixel, s);
-                    (0..sobol_burley::NUM_DIMENSIONS)
-                        .map(|_| x.next_f32())
-                        .collect()
-                })
-                .collect();
+            let points = first_16(seed, pixel, sobol_burley::NUM_DIMENSIONS);
             for set in JOINT_SETS..sobol_burley::NUM_DIMENSION_SETS_4D {
                 let d = (4 * set) as usize;
-                let mut cells = [0u32; 16];
-                for p in &points {
-                    cells[(p[d] * 4.0) as usize * 4 + (p[d + 1] * 4.0) as usize] += 1;
-                }
-                assert_eq!(cells, [1; 16], "set {set} of pixel {pixel}");
+                assert_eq!(grid_4x4(&points, d), [1; 16], "set {set} of pixel {pixel}");
                 if let Some(next) = points[0].get(d + 4) {
                     assert_ne!(points[0][d], *next, "sets {set} and next alike");
                 }
