@@ -21,7 +21,7 @@
 //! by two into half the cells of a 4 x 4 grid): drawn from them, four generated rooms' error
 //! fell by only 1.6-1.8x from 64 to 256 samples instead of 2x. Where the joint sets end is
 //! measured, not derived: padding every set after the first cost the Cornell box 10-13 % more
-//! squared error at 64 and 256 samples, joint sets up to dimension 15 about 4 %
+//! squared error at 64 and 256 samples, padding from dimension 16 on 4-5 %
 //! (docs/benchmarks.md, "The path tracer against Mitsuba 3").
 //!
 //! Past the sequence's 256 dimensions (paths of more than about 36 bounces) or 2^16 samples
@@ -218,8 +218,9 @@ fn padded_seed(scramble: u32, set: u32) -> u32 {
     (mix64((u64::from(scramble) << 32) | u64::from(set)) >> 32) as u32
 }
 
-/// Set `set` ([`JOINT_SETS`] or more) of point `index`, padded: `sobol_burley::sample_4d(index, 0, seed)`
-/// under the set's own seed ([`padded_seed`]), its index shuffle and scramble its own.
+/// Set `set` ([`JOINT_SETS`] or more) of point `index`, padded:
+/// `sobol_burley::sample_4d(index, 0, seed)` under the set's own seed ([`padded_seed`]), its
+/// index shuffle and scramble its own.
 #[inline]
 fn padded_set(index: u32, set: u32, scramble: u32) -> [f32; 4] {
     let seed = padded_seed(scramble, set);
