@@ -132,12 +132,7 @@ impl Sampler {
             let d = self.dimension;
             self.dimension += 1;
             if d.is_multiple_of(4) {
-                let set = d / 4;
-                self.set = if set < JOINT_SETS {
-                    sobol_set(self.shuffled, set, self.scramble)
-                } else {
-                    padded_set(self.index, set, self.scramble)
-                };
+                self.set = point_set(self.index, self.shuffled, d / 4, self.scramble);
             }
             self.set[(d % 4) as usize]
         } else {
@@ -210,6 +205,17 @@ fn sobol_set(shuffled: u32, set: u32, seed: u32) -> [f32; 4] {
     owen_scramble_int4_rev(sobol, hash_int4(seed ^ sets ^ lanes))
         .reverse_bits()
         .to_f32_norm()
+}
+
+/// Set `set` of point `index` (`shuffled` its index shuffled under the pixel's `scramble`):
+/// a joint set below [`JOINT_SETS`], a padded one from there on.
+#[inline]
+fn point_set(index: u32, shuffled: u32, set: u32, scramble: u32) -> [f32; 4] {
+    if set < JOINT_SETS {
+        sobol_set(shuffled, set, scramble)
+    } else {
+        padded_set(index, set, scramble)
+    }
 }
 
 /// The seed of padded set `set` ([`JOINT_SETS`] or more) of a pixel of scramble `scramble`.
@@ -384,11 +390,7 @@ mod tests {
         };
         for (index, scramble) in cases {
             for set in 0..sobol_burley::NUM_DIMENSION_SETS_4D {
-                let ours = if set < JOINT_SETS {
-                    sobol_set(shuffled_index(index, scramble), set, scramble)
-                } else {
-                    padded_set(index, set, scramble)
-                };
+                let ours = point_set(index, shuffled_index(index, scramble), set, scramble);
                 let theirs = crate_s(index, set, scramble);
                 assert_eq!(ours.map(f32::to_bits), theirs.map(f32::to_bits));
             }
