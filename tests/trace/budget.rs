@@ -193,7 +193,14 @@ fn a_budgeted_render_with_light_tracing_is_the_same_on_one_and_two_threads() {
     let (one, two) = (on(1), on(2));
     assert_eq!(one.layers, two.layers);
     assert_eq!(one.stats.samples, budget.total());
-    assert_eq!(one.stats.light_paths, budget.total());
+    // As many light paths per camera sample as the pilot planned, the same on both.
+    let plan = one
+        .stats
+        .light_plan
+        .expect("the reference plans its light paths");
+    assert_eq!(two.stats.light_plan, Some(plan));
+    let want = (f64::from(plan.paths_per_sample) * budget.total() as f64).ceil() as u64;
+    assert_eq!(one.stats.light_paths, want);
 }
 
 #[test]

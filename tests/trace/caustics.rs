@@ -1,16 +1,16 @@
 //! Light tracing of caustics (twopass_trace::light_tracing) and the reference path tracer that
 //! leaves the caustic paths to it: the light through a flat mirror against the exact
 //! form factor of the mirrored emitter, the two strategies of the reference against each other
-//! on the Cornell spheres (each path counted once: same image in expectation), and the same
-//! image on one and two threads.
+//! on the Cornell spheres (each path counted once: same image in expectation), the same
+//! image on one and two threads, and the light paths a pilot plans for the pass.
 
 use std::f64::consts::PI;
 
 use glam::{DVec3, Vec2};
 use twopass_scene::Scene;
 use twopass_trace::{
-    CausticScope, Caustics, LightTracer, LightTracingSettings, Reference, ReferenceSettings,
-    RenderOutput, RenderProgress, RenderSettings, render,
+    CausticScope, Caustics, LightPaths, LightTracer, LightTracingSettings, Reference,
+    ReferenceSettings, RenderOutput, RenderProgress, RenderSettings, render,
 };
 
 use super::common::{repo_scene, scene};
@@ -39,6 +39,8 @@ fn render_reference(
         scene,
         ReferenceSettings {
             caustics,
+            // One light path per camera sample: the strategies compared, not the plan.
+            light_paths: LightPaths::PerSample(1.0),
             ..ReferenceSettings::default()
         },
     );
@@ -189,4 +191,64 @@ fn light_tracing_gives_the_same_image_on_one_and_two_threads() {
     assert!(one.stats.light_paths > 4096 * 64);
     assert_eq!(one.layers, two.layers);
     assert_eq!(one.stats.shadow_rays, two.stats.shadow_rays);
+}
+
+/// A render of the default reference with light paths `light_paths`, 24 x 24 pixels, 64 spp.
+fn render_planned(scene: &Scene, light_paths: LightPaths) -> RenderOutput {
+    let camera = scene.camera.with_resolution(Some(24), Some(24));
+    let reference = Reference::new(
+        scene,
+        ReferenceSettings {
+            light_paths,
+            ..ReferenceSettings::default()
+        },
+    );
+    let settings = RenderSettings {
+        samples_per_pixel: 64,
+        seed: 9,
+        ..RenderSettings::default()
+    };
+    render(
+        scene,
+        &camera,
+        &reference,
+        &settings,
+        &RenderProgress::new(),
+    )
+}
+
+/// The pilot gives the light tracing pass light paths where the image's noise is: on the
+/// mirror scene, whose receiver only light through the mirror reaches (the camera pass finds
+/// none of it, so all of the noise is the light pass's), more than one per camera sample; on
+/// the Cornell spheres, whose path-traced light is everything but the caustics of the two
+/// spheres, fewer than one.
+#[test]
+fn the_plan_gives_light_paths_where_the_noise_is() {
+    let pick = |s: &Scene| {
+        let out = render_planned(s, LightPaths::Planned);
+        let plan = out.stats.light_plan.expect("planned");
+        let (lo, hi) = twopass_trace::light_plan::PLANNED_RANGE;
+        assert!((lo..=hi).contains(&plan.paths_per_sample), "{plan:?}");
+        assert!(plan.camera_cost > 0.0 && plan.light_cost > 0.0, "{plan:?}");
+        plan.paths_per_sample
+    };
+    let mirror = pick(&mirror_scene());
+    let spheres = pick(&repo_scene("cornell-spheres.toml"));
+    eprintln!("light paths per camera sample: mirror {mirror}, spheres {spheres}");
+    assert!(mirror > 1.0, "mirror scene: {mirror}");
+    assert!(spheres < 1.0, "spheres: {spheres}");
+}
+
+/// A planned render is exactly the render with a fixed number of light paths per camera
+/// sample, the plan's pick: the pilot's samples and paths are its own, not the image's, so the
+/// estimate is the fixed-ratio one, unbiased as the strategies' agreement above shows.
+#[test]
+fn a_planned_render_is_the_fixed_ratio_render_of_its_pick() {
+    let s = repo_scene("cornell-spheres.toml");
+    let planned = render_planned(&s, LightPaths::Planned);
+    let r = planned.stats.light_plan.expect("planned").paths_per_sample;
+    let fixed = render_planned(&s, LightPaths::PerSample(r));
+    assert!(fixed.stats.light_plan.is_none());
+    assert_eq!(planned.stats.light_paths, fixed.stats.light_paths);
+    assert_eq!(planned.layers, fixed.layers);
 }

@@ -2,9 +2,9 @@
 //! paths, and assembled gives the single render's bits, for any number of shares.
 
 use twopass_trace::{
-    Integrator, LayerImages, Reference, ReferenceSettings, RenderProgress, RenderSettings,
-    TileShare, Whitted, WhittedSettings, add_light, light_image, render, render_share,
-    tile_origins,
+    Integrator, LayerImages, LightPaths, Reference, ReferenceSettings, RenderProgress,
+    RenderSettings, TileShare, Whitted, WhittedSettings, add_light, light_image, render,
+    render_share, tile_origins,
 };
 
 use super::common::repo_scene;
@@ -80,15 +80,29 @@ fn shares_assembled_equal_the_single_render_bit_for_bit() {
         tile_size: 7,
         ..Default::default()
     };
-    // The reference traces light paths through the glass sphere (a whole-image pass).
-    let reference = Reference::new(&scene, ReferenceSettings::default());
+    // The reference traces light paths through the glass sphere (a whole-image pass): one
+    // per camera sample, enough for several chunks, and as many as each share's pilot plans
+    // (every share must plan the same).
+    let reference = Reference::new(
+        &scene,
+        ReferenceSettings {
+            light_paths: LightPaths::PerSample(1.0),
+            ..ReferenceSettings::default()
+        },
+    );
     assert!(reference.light_tracer().is_some());
+    let planned = Reference::new(&scene, ReferenceSettings::default());
     let whitted = Whitted::new(
         &scene,
         twopass_trace::whitted::ambient_estimate(&scene),
         WhittedSettings::default(),
     );
-    for integrator in [&reference as &dyn Integrator, &whitted] {
+    // With whether its light pass spans several chunks.
+    for (integrator, chunks) in [
+        (&reference as &dyn Integrator, true),
+        (&planned, false),
+        (&whitted, false),
+    ] {
         let whole = render(
             &scene,
             &camera,
@@ -100,7 +114,7 @@ fn shares_assembled_equal_the_single_render_bit_for_bit() {
         // no light chunk.
         for parts in [1, 3, 4, 10] {
             let (layers, rays, traced) = assembled(&scene, &camera, integrator, &settings, parts);
-            if integrator.light_tracer().is_some() && parts > 1 {
+            if chunks && parts > 1 {
                 assert!(
                     traced > 1,
                     "{parts} parts: the light pass is split ({traced})"

@@ -68,7 +68,7 @@ use twopass_scene::{DiffuseRadiance, Scene};
 use crate::diffuse::DiffuseSource;
 use crate::emitters::Lights;
 use crate::gather::{GatherSettings, Gatherer};
-use crate::light_tracing::{CausticScope, LightTracer, LightTracingSettings};
+use crate::light_tracing::{CausticScope, LightPaths, LightTracer, LightTracingSettings};
 use crate::photons::PhotonSettings;
 use crate::whitted::{Whitted, WhittedSettings};
 
@@ -171,7 +171,7 @@ fn radiosity_based<'a>(
             LightTracer::new(
                 scene,
                 LightTracingSettings {
-                    paths_per_sample: settings.caustic_paths,
+                    paths: LightPaths::PerSample(settings.caustic_paths),
                     max_depth: settings.max_depth,
                     ..LightTracingSettings::new(scope)
                 },

@@ -41,6 +41,7 @@ pub mod film;
 pub mod gather;
 pub mod hybrid;
 pub mod integrator;
+pub mod light_plan;
 pub mod light_tracing;
 pub mod photons;
 pub mod reference;
@@ -59,7 +60,10 @@ pub use render::{
 pub use counters::{RenderProgress, Tally};
 pub use emitters::Lights;
 pub use integrator::{Integrator, SampleState};
-pub use light_tracing::{CausticScope, LightImage, LightTracer, LightTracingSettings, Splat};
+pub use light_plan::LightPlan;
+pub use light_tracing::{
+    CausticScope, LightImage, LightPaths, LightTracer, LightTracingSettings, Splat,
+};
 pub use reference::{Caustics, Reference, ReferenceSettings};
 pub use sampler::Sampler;
 pub use whitted::{Whitted, WhittedSettings};

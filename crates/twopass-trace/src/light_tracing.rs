@@ -47,7 +47,7 @@
 //!
 //! | setting | unit | default | meaning |
 //! | --- | --- | --- | --- |
-//! | `paths_per_sample` | light paths per camera sample | 1 | N = this x spp x pixels |
+//! | `paths` | light paths per camera sample | 1 | N = this x spp x pixels, or planned per render |
 //! | `max_depth` | bounces | 64 | longest light path |
 //! | `roulette_depth` | bounces | 3 | Russian roulette from this bounce on |
 
@@ -77,12 +77,22 @@ pub enum CausticScope {
     FirstDiffuse,
 }
 
+/// How many light paths a render's light tracing pass traces.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum LightPaths {
+    /// This many per camera sample: a render of `spp` samples over `pixels` pixels traces
+    /// `ceil(per_sample * spp * pixels)` paths.
+    PerSample(f32),
+    /// As many per camera sample as a pilot of both passes measures to give the least error
+    /// for the time ([`crate::light_plan`]), decided anew by each render.
+    Planned,
+}
+
 /// Settings of the light tracer.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LightTracingSettings {
-    /// Light paths per camera sample: a render of `spp` samples over `pixels` pixels traces
-    /// `ceil(paths_per_sample * spp * pixels)` paths.
-    pub paths_per_sample: f32,
+    /// How many light paths a render traces.
+    pub paths: LightPaths,
     /// Which paths count.
     pub scope: CausticScope,
     /// Longest light path, in bounces.
@@ -97,7 +107,7 @@ impl LightTracingSettings {
     /// the third.
     pub fn new(scope: CausticScope) -> Self {
         Self {
-            paths_per_sample: 1.0,
+            paths: LightPaths::PerSample(1.0),
             scope,
             max_depth: 64,
             roulette_depth: 3,
@@ -213,17 +223,15 @@ impl LightTracer {
         self.settings
     }
 
-    /// Light paths a render of `spp` samples per pixel at `camera`'s size traces.
-    pub fn paths_for(&self, camera: &Camera, spp: u32) -> u64 {
-        self.paths_for_samples(
-            u64::from(spp.max(1)) * u64::from(camera.width) * u64::from(camera.height),
-        )
-    }
-
-    /// Light paths a render of `samples` camera samples in all traces.
-    pub fn paths_for_samples(&self, samples: u64) -> u64 {
-        let n = f64::from(self.settings.paths_per_sample) * samples as f64;
-        n.ceil().max(0.0) as u64
+    /// Light paths a render of `samples` camera samples in all traces at `per_sample` light
+    /// paths per camera sample (its [`LightPaths::PerSample`], or what a plan picked).
+    pub fn paths_for_samples(samples: u64, per_sample: f32) -> u64 {
+        let n = f64::from(per_sample) * samples as f64;
+        if n.is_finite() {
+            n.ceil().max(0.0) as u64
+        } else {
+            0
+        }
     }
 
     /// Traces `paths` light paths with streams keyed by `seed` and returns each pixel's mean

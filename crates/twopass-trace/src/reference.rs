@@ -13,8 +13,8 @@
 //! | --- | --- | --- | --- |
 //! | `max_depth` | vertices | 64 | longest path (camera hit = 1) |
 //! | `roulette_depth` | vertices | 3 | Russian roulette from this path length on |
-//!
 //! | `caustics` | | `LightTracing` | who counts the caustic paths (below) |
+//! | `light_paths` | light paths per camera sample | planned | how many the light tracing pass traces |
 //!
 //! Emitters and lamps are chosen for next-event estimation in proportion to their mean emitted
 //! power. A lamp (a delta light) is found by next-event estimation alone, without an MIS
@@ -28,9 +28,11 @@
 //! light the noise of the caustic under a glass sphere dominates the image's for thousands of
 //! samples. With [`Caustics::LightTracing`] (the default) the path tracer leaves exactly those
 //! paths to a light tracing pass ([`crate::light_tracing`], scope
-//! [`crate::light_tracing::CausticScope::All`], one light path per camera sample), which the
-//! render loop adds to the image: each path is counted once, by the strategy that finds it
-//! easily. A scene without a delta surface has no such path and renders exactly as with
+//! [`crate::light_tracing::CausticScope::All`]), which the render loop adds to the image: each
+//! path is counted once, by the strategy that finds it easily. How many light paths that pass
+//! traces per camera sample a pilot of both passes decides per render
+//! ([`crate::light_plan`]): where the caustics are a small part of the image's noise, a few
+//! light paths find them for a fraction of the time one per camera sample takes. A scene without a delta surface has no such path and renders exactly as with
 //! [`Caustics::PathTracing`].
 
 use glam::Vec3;
@@ -42,12 +44,12 @@ use crate::counters::Tally;
 use crate::emitters::{EmitterChoice, Light};
 use crate::film::{Layer, Radiance};
 use crate::integrator::{Integrator, SampleState, Shading, lamp_light};
-use crate::light_tracing::{CausticScope, LightTracer, LightTracingSettings};
+use crate::light_tracing::{CausticScope, LightPaths, LightTracer, LightTracingSettings};
 use crate::sampler::Sampler;
 use crate::sky::{sky_light_pdf, sky_mis};
 
 /// Path length settings of the reference path tracer.
-#[derive(SmartDefault, Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(SmartDefault, Debug, Clone, Copy, PartialEq)]
 pub struct ReferenceSettings {
     /// Longest path, in surface vertices (the camera hit is vertex 1).
     #[default(64)]
@@ -59,6 +61,11 @@ pub struct ReferenceSettings {
     /// Which strategy counts the caustic paths E (D|G) ... S+ L.
     #[default(Caustics::LightTracing)]
     pub caustics: Caustics,
+    /// With [`Caustics::LightTracing`], how many light paths the pass traces: by default as
+    /// many per camera sample as a pilot measures to cost the least for the error
+    /// ([`crate::light_plan`]).
+    #[default(LightPaths::Planned)]
+    pub light_paths: LightPaths,
 }
 
 /// Which strategy counts the paths that see a diffuse or glossy surface first and reach the
@@ -134,6 +141,7 @@ impl Reference {
                 LightTracingSettings {
                     max_depth: settings.max_depth,
                     roulette_depth: settings.roulette_depth,
+                    paths: settings.light_paths,
                     ..LightTracingSettings::new(CausticScope::All)
                 },
             ),

@@ -18,7 +18,8 @@ use crate::counters::RenderProgress;
 use crate::counters::Tally;
 use crate::film::{LayerImages, Radiance};
 use crate::integrator::{Integrator, SampleState};
-use crate::light_tracing::{Splat, add_splats, finish_splats, light_chunks};
+use crate::light_plan::LightPlan;
+use crate::light_tracing::{LightTracer, Splat, add_splats, finish_splats, light_chunks};
 use crate::sampler::{Sampler, stratum};
 
 /// Sampling settings of a render.
@@ -90,6 +91,9 @@ pub struct RenderStats {
     pub shadow_rays: u64,
     /// Light paths of the integrator's light tracing pass (0 without one).
     pub light_paths: u64,
+    /// What the pilot measured when the pass's light paths were planned
+    /// ([`crate::LightPaths::Planned`]).
+    pub light_plan: Option<LightPlan>,
     /// Wall-clock time of the render.
     pub elapsed: Duration,
 }
@@ -123,9 +127,9 @@ struct TileResult {
 }
 
 /// What every pixel estimate of one render shares.
-struct Pass<'a> {
-    scene: &'a Scene,
-    camera: &'a Camera,
+pub(crate) struct Pass<'a> {
+    pub(crate) scene: &'a Scene,
+    pub(crate) camera: &'a Camera,
     /// The camera's ray directions, what they share made once.
     rays: CameraRays,
     integrator: &'a dyn Integrator,
@@ -133,6 +137,33 @@ struct Pass<'a> {
 }
 
 impl Pass<'_> {
+    /// Camera sample `s` of pixel (`x`, `y`) under `seed`: in stratum `s` of a `k` x `k` grid
+    /// over the pixel when `s < k * k`, anywhere in it otherwise. Its rays go to `tally`.
+    pub(crate) fn sample(
+        &self,
+        seed: u64,
+        (x, y): (u32, u32),
+        s: u32,
+        k: u32,
+        tally: &mut Tally,
+    ) -> Radiance {
+        let index = u64::from(y) * u64::from(self.camera.width) + u64::from(x);
+        let mut sampler = Sampler::new(seed, index, u64::from(s));
+        let u = if self.settings.jitter {
+            sampler.next_2d()
+        } else {
+            Vec2::splat(0.5)
+        };
+        let offset = if s < k * k { stratum(s, k, u) } else { u };
+        let pixel = Vec2::new(x as f32, y as f32) + offset;
+        let ray = Ray::new(self.camera.position, self.rays.direction(pixel));
+        let sample = SampleState {
+            sampler: &mut sampler,
+            tally,
+        };
+        self.integrator.radiance(self.scene, &ray, sample)
+    }
+
     /// The mean of `n` camera samples of pixel (`x`, `y`) (stratified on the largest square
     /// grid that fits, the rest uniform), and the contrast of their luminances. Non-finite
     /// samples are counted in `non_finite` and left out.
@@ -144,7 +175,6 @@ impl Pass<'_> {
         tally: &mut Tally,
         non_finite: &mut u64,
     ) -> (Radiance, f32) {
-        let index = u64::from(y) * u64::from(self.camera.width) + u64::from(x);
         // A run that continues a sequence places its samples by the sampler's own points.
         let k = if first.is_some() { 0 } else { n.isqrt() };
         let first = first.unwrap_or(0);
@@ -152,22 +182,7 @@ impl Pass<'_> {
         let mut finite = 0u32;
         let (mut lo, mut hi) = (f32::INFINITY, 0.0f32);
         for s in first..first.saturating_add(n) {
-            let mut sampler = Sampler::new(self.settings.seed, index, u64::from(s));
-            let u = if self.settings.jitter {
-                sampler.next_2d()
-            } else {
-                Vec2::splat(0.5)
-            };
-            let offset = if s < k * k { stratum(s, k, u) } else { u };
-            let pixel = Vec2::new(x as f32, y as f32) + offset;
-            let ray = Ray::new(self.camera.position, self.rays.direction(pixel));
-            let mut t = Tally::default();
-            let sample = SampleState {
-                sampler: &mut sampler,
-                tally: &mut t,
-            };
-            let l = self.integrator.radiance(self.scene, &ray, sample);
-            tally.add(t);
+            let l = self.sample(self.settings.seed, (x, y), s, k, tally);
             if l.is_finite() {
                 sum += l;
                 finite += 1;
@@ -511,11 +526,20 @@ fn render_core(
         ),
         _ => settings.seed,
     };
+    let mut light_plan = None;
     if let Some(tracer) = light {
-        let paths = match budget {
-            Some(b) => tracer.paths_for_samples(b.total()),
-            None => tracer.paths_for(camera, spp),
+        let samples = match budget {
+            Some(b) => b.total(),
+            None => u64::from(spp) * pixels,
         };
+        let (per_sample, plan) = crate::light_plan::per_sample(
+            &pass,
+            tracer,
+            settings.seed,
+            samples as f64 / pixels as f64,
+        );
+        light_plan = plan;
+        let paths = LightTracer::paths_for_samples(samples, per_sample);
         if let Some(share) = share {
             let chunks = light_chunks(paths);
             let (i, n) = (u64::from(share.light.0), u64::from(share.light.1.max(1)));
@@ -552,6 +576,7 @@ fn render_core(
             rays: tally.rays,
             shadow_rays: tally.shadow_rays,
             light_paths,
+            light_plan,
             elapsed: start.elapsed(),
         },
     };

@@ -134,6 +134,8 @@ fn add_stats(t: &mut RenderStats, s: &RenderStats) {
     t.rays += s.rays;
     t.shadow_rays += s.shadow_rays;
     t.light_paths += s.light_paths;
+    // The plan of the render added last: the budgeted render's, after its pilots'.
+    t.light_plan = s.light_plan.or(t.light_plan);
     t.elapsed += s.elapsed;
 }
 
@@ -187,6 +189,7 @@ mod tests {
                 rays: samples,
                 shadow_rays: 2 * samples,
                 light_paths: 0,
+                light_plan: None,
                 elapsed: Duration::from_millis(samples),
             },
         }

@@ -477,6 +477,7 @@ mod tests {
             rays: 0,
             shadow_rays: 0,
             light_paths: 0,
+            light_plan: None,
             elapsed: Duration::ZERO,
         }
     }

@@ -143,6 +143,11 @@ struct Summary {
     shadow_rays: u64,
     mrays_per_s: f64,
     non_finite_samples: u64,
+    /// Light paths of the light tracing pass (0 without one).
+    light_paths: u64,
+    /// What the pilot measured when it planned the light paths (the path tracer's caustics).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    light_plan: Option<LightPlanSummary>,
     /// Mean of the final image over pixels, per channel, W/(m^2 sr).
     mean: [f32; 3],
     /// The multi-layer EXR; none when `--output` names a PNG file.
@@ -155,6 +160,21 @@ struct Summary {
     /// How the samples were spread by noise (a render without `--spp`).
     #[serde(skip_serializing_if = "Option::is_none")]
     allocation: Option<crate::allocation::Allocation>,
+}
+
+/// [`twopass_trace::LightPlan`] for the JSON summary.
+#[derive(Debug, Serialize)]
+struct LightPlanSummary {
+    /// Light paths per camera sample the pilot picked.
+    paths_per_sample: f32,
+    /// Summed relative variance of one camera sample per pixel over the image.
+    camera_variance: f64,
+    /// Summed relative variance of one light path's contribution over the image.
+    light_variance: f64,
+    /// Rays per camera sample.
+    camera_rays: f64,
+    /// Rays per light path.
+    light_rays: f64,
 }
 
 /// Renders the scene and writes the EXR (and PNG).
@@ -381,6 +401,14 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
         shadow_rays: s.shadow_rays,
         mrays_per_s: s.rays_per_second() / 1e6,
         non_finite_samples: s.non_finite,
+        light_paths: s.light_paths,
+        light_plan: s.light_plan.map(|p| LightPlanSummary {
+            paths_per_sample: p.paths_per_sample,
+            camera_variance: p.camera_variance,
+            light_variance: p.light_variance,
+            camera_rays: p.camera_cost,
+            light_rays: p.light_cost,
+        }),
         mean: mean.to_array(),
         exr,
         png,
@@ -423,6 +451,18 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
             summary.mrays_per_s,
             summary.non_finite_samples
         );
+        if let Some(p) = &summary.light_plan {
+            outln!(
+                "light tracing: {} paths for the caustics, {:.3} per camera sample as a pilot planned \
+                 (relative variance {:.3e} per camera sample, {:.3e} per light path; {:.2} and {:.2} rays)",
+                summary.light_paths,
+                p.paths_per_sample,
+                p.camera_variance,
+                p.light_variance,
+                p.camera_rays,
+                p.light_rays
+            );
+        }
         if let Some(p) = &summary.exr {
             outln!("wrote {}", p.display());
         }
