@@ -106,7 +106,7 @@ pub(crate) fn plan(pass: &Pass<'_>, tracer: &LightTracer, seed: u64, spp: f64) -
     let seed = mix64(seed ^ PILOT_SEED_MIX);
 
     // Camera pilot: each grid point's mean and per-channel sample variance, row by row.
-    let rows: Vec<(Vec<(DVec3, DVec3)>, Tally)> = (0..gh)
+    let rows: Vec<(Vec<Moments>, Tally)> = (0..gh)
         .into_par_iter()
         .map(|gy| {
             let mut tally = Tally::default();
@@ -181,12 +181,16 @@ pub(crate) fn plan(pass: &Pass<'_>, tracer: &LightTracer, seed: u64, spp: f64) -
             grid[c].0 + cell_light[c] / area
         })
         .collect();
-    // The weight's pixel value is the median of the 3 x 3 grid points around: a pilot pixel
-    // whose few samples hit a rare bright path would otherwise weigh its own noise down by
-    // its own value, and the sum would miss exactly the noise that dominates.
+    // The weight's pixel value is robust to the pilot's own noise: a grid point whose few
+    // samples hit a rare bright path would weigh that noise down by the value it gave, and
+    // the sum would miss exactly the noise that dominates. So it is the larger of the median
+    // of its own samples (high where most of them see something bright: an edge, a highlight)
+    // and the median of the 3 x 3 grid points' means around it (high in a bright region).
     let weights: Vec<DVec3> = (0..grid.len())
         .map(|c| {
-            let m = neighbourhood_median(&value, gw as usize, gh as usize, c);
+            let around = neighbourhood_median(&value, gw as usize, gh as usize, c);
+            let own = grid[c].2 + (value[c] - grid[c].0);
+            let m = around.max(own);
             DVec3::ONE / (m * m + REL_EPSILON)
         })
         .collect();
@@ -195,7 +199,7 @@ pub(crate) fn plan(pass: &Pass<'_>, tracer: &LightTracer, seed: u64, spp: f64) -
     let camera_variance = grid
         .iter()
         .zip(&weights)
-        .map(|((_, var), w)| (*var * *w).element_sum())
+        .map(|((_, var, _), w)| (*var * *w).element_sum())
         .sum::<f64>()
         * scale;
     let light_variance = first
@@ -272,16 +276,20 @@ fn neighbourhood_median(values: &[DVec3], w: usize, h: usize, i: usize) -> DVec3
     )
 }
 
-/// The mean and the per-channel sample variance of [`PILOT_SAMPLES`] camera samples of pixel
-/// `xy` (their totals over the layers); non-finite samples left out.
-fn moments(pass: &Pass<'_>, seed: u64, xy: (u32, u32), tally: &mut Tally) -> (DVec3, DVec3) {
+/// Per channel, the mean, sample variance and median of a pilot pixel's camera samples.
+type Moments = (DVec3, DVec3, DVec3);
+
+/// The [`Moments`] of [`PILOT_SAMPLES`] camera samples of pixel `xy` (their totals over the
+/// layers); non-finite samples left out.
+fn moments(pass: &Pass<'_>, seed: u64, xy: (u32, u32), tally: &mut Tally) -> Moments {
     let k = PILOT_SAMPLES.isqrt();
     let values: Vec<DVec3> = (0..PILOT_SAMPLES)
         .map(|s| pass.sample(seed, xy, s, k, tally).total().as_dvec3())
         .filter(|v| v.is_finite())
         .collect();
     if values.len() < 2 {
-        return (values.first().copied().unwrap_or(DVec3::ZERO), DVec3::ZERO);
+        let v = values.first().copied().unwrap_or(DVec3::ZERO);
+        return (v, DVec3::ZERO, v);
     }
     let n = values.len() as f64;
     let mean = values.iter().sum::<DVec3>() / n;
@@ -290,7 +298,17 @@ fn moments(pass: &Pass<'_>, seed: u64, xy: (u32, u32), tally: &mut Tally) -> (DV
         .map(|v| (*v - mean) * (*v - mean))
         .sum::<DVec3>()
         / (n - 1.0);
-    (mean, var)
+    let median = DVec3::from_array(std::array::from_fn(|c| {
+        let mut x: Vec<f64> = values.iter().map(|v| v[c]).collect();
+        x.sort_by(f64::total_cmp);
+        let h = x.len() / 2;
+        if x.len().is_multiple_of(2) {
+            0.5 * (x[h - 1] + x[h])
+        } else {
+            x[h]
+        }
+    }));
+    (mean, var, median)
 }
 
 #[cfg(test)]

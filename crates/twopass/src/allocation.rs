@@ -134,8 +134,8 @@ fn add_stats(t: &mut RenderStats, s: &RenderStats) {
     t.rays += s.rays;
     t.shadow_rays += s.shadow_rays;
     t.light_paths += s.light_paths;
-    // The plan of the render added last: the budgeted render's, after its pilots'.
-    t.light_plan = s.light_plan.or(t.light_plan);
+    // A render's own plan over its pilots' (which plan for their fewer samples).
+    t.light_plan = t.light_plan.or(s.light_plan);
     t.elapsed += s.elapsed;
 }
 
