@@ -241,6 +241,7 @@ fn render_methods(
             scene,
             solved.map(|s| s.0 as &dyn twopass_scene::DiffuseRadiance),
             WhittedSettings::default(),
+            twopass_trace::ReferenceSettings::default(),
         );
         let settings = render_settings(
             if method == RenderMethod::Reference {

@@ -322,6 +322,7 @@ pub fn integrator<'a>(
     scene: &'a Scene,
     solution: Option<&'a dyn DiffuseRadiance>,
     whitted: WhittedSettings,
+    reference: ReferenceSettings,
 ) -> Box<dyn Integrator + 'a> {
     let solution = || solution.expect("radiosity-based methods get a solution");
     match method {
@@ -337,7 +338,7 @@ pub fn integrator<'a>(
         RenderMethod::HybridDirect => {
             Box::new(hybrid(scene, solution(), DirectLight::PerPixel, whitted))
         }
-        RenderMethod::Reference => Box::new(Reference::new(scene, ReferenceSettings::default())),
+        RenderMethod::Reference => Box::new(Reference::new(scene, reference)),
     }
 }
 

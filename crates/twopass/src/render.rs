@@ -16,7 +16,7 @@ use serde::Serialize;
 use twopass_composite::RenderMetadata;
 use twopass_composite::tonemap::ToneMap;
 use twopass_composite::write::{write_exr_render, write_exr_render_rgba, write_png_tonemapped};
-use twopass_trace::WhittedSettings;
+use twopass_trace::{LightPaths, ReferenceSettings, WhittedSettings};
 
 use crate::args::checked;
 use crate::context::Context;
@@ -98,6 +98,13 @@ pub struct RenderArgs {
     /// samples per pixel: 256 rays per pixel].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=i64::from(crate::preset::MAX_GATHER_RAYS)))]
     pub gather_rays: Option<u32>,
+    /// Light paths per camera sample of the path tracer's (`reference`) light tracing pass,
+    /// which finds the caustics it leaves to light paths (light through mirrors and glass onto
+    /// what the camera sees): more than 0, at most 16 [default: as many as a pilot of both
+    /// passes measures to give the least error for the time; the render's report says how
+    /// many].
+    #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = parse_light_paths)]
+    pub light_paths: Option<f32>,
     /// Also write a tone-mapped PNG beside the EXR.
     #[arg(long)]
     pub png: bool,
@@ -295,16 +302,29 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
         None
     };
     let radiosity_seconds = started.elapsed().as_secs_f64();
+    let reference_settings = ReferenceSettings {
+        light_paths: args
+            .light_paths
+            .map_or(LightPaths::Planned, LightPaths::PerSample),
+        ..ReferenceSettings::default()
+    };
     let mut integrator = integrator(
         method,
         &scene,
         solution.as_ref().map(|s| s.0.as_dyn()),
         knobs.whitted(),
+        reference_settings,
     );
     let render_plan = match goal {
         Some(goal) => {
             let reference = (explicit.is_none() && method != RenderMethod::Reference).then(|| {
-                crate::pipeline::integrator(RenderMethod::Reference, &scene, None, knobs.whitted())
+                crate::pipeline::integrator(
+                    RenderMethod::Reference,
+                    &scene,
+                    None,
+                    knobs.whitted(),
+                    reference_settings,
+                )
             });
             let mut candidates = vec![(method, integrator.as_ref(), radiosity_seconds)];
             if let Some(r) = &reference {
@@ -451,8 +471,8 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
             summary.mrays_per_s,
             summary.non_finite_samples
         );
-        if let Some(p) = &summary.light_plan {
-            outln!(
+        match &summary.light_plan {
+            Some(p) => outln!(
                 "light tracing: {} paths for the caustics, {:.3} per camera sample as a pilot planned \
                  (relative variance {:.3e} per camera sample, {:.3e} per light path; {:.2} and {:.2} rays)",
                 summary.light_paths,
@@ -461,7 +481,14 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
                 p.light_variance,
                 p.camera_rays,
                 p.light_rays
-            );
+            ),
+            None if summary.light_paths > 0 => {
+                outln!(
+                    "light tracing: {} paths for the caustics",
+                    summary.light_paths
+                )
+            }
+            None => {}
         }
         if let Some(p) = &summary.exr {
             outln!("wrote {}", p.display());
@@ -582,6 +609,17 @@ fn parse_target_error(s: &str) -> Result<f64, String> {
         s,
         |x: &f64| *x > 0.0 && *x < 1.0,
         "must be a fraction in (0, 1), e.g. 0.02 for 2 %",
+    )
+}
+
+/// Light paths per camera sample: more than 0 (no light paths would leave the caustics out),
+/// at most the most a pilot picks.
+fn parse_light_paths(s: &str) -> Result<f32, String> {
+    let most = twopass_trace::light_plan::PLANNED_RANGE.1;
+    checked(
+        s,
+        |x: &f32| *x > 0.0 && *x <= most,
+        &format!("must be more than 0 and at most {most} light paths per camera sample"),
     )
 }
 

@@ -115,6 +115,38 @@ fn render_refuses_what_makes_no_sense() {
     let missing = render("--method radiosity --bake /nonexistent/x.bake --width 8");
     assert_eq!(missing.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&missing.stderr).contains("/nonexistent/x.bake"));
+    // No light paths would leave the caustics out; more than a plan picks is refused too.
+    for bad in ["0", "-1", "17", "nan", "inf"] {
+        let out = render(&format!("--method reference --width 8 --light-paths {bad}"));
+        assert_eq!(out.status.code(), Some(2), "--light-paths {bad}");
+        assert!(String::from_utf8_lossy(&out.stderr).contains("--light-paths"));
+    }
+}
+
+/// The path tracer's light tracing pass takes `--light-paths` per camera sample, or as many as
+/// its pilot plans (within the plan's range), and the summary says which.
+#[test]
+fn the_path_tracer_s_light_paths_are_planned_or_given() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = repo("scenes/cornell-spheres.toml");
+    let run = |extra: &str| {
+        let out = cli("render")
+            .arg(&scene)
+            .words("--method reference --width 16 --spp 4 --json")
+            .words(extra)
+            .output(dir.path())
+            .run();
+        common::ok_json(&out)
+    };
+    let samples = 16.0 * 16.0 * 4.0;
+    let given = run("--light-paths 0.5");
+    assert_eq!(given["light_paths"], 512);
+    assert!(given.get("light_plan").is_none());
+    let planned = run("");
+    let r = planned["light_plan"]["paths_per_sample"].as_f64().unwrap();
+    assert!((1.0 / 64.0..=16.0).contains(&r), "{r}");
+    let paths = planned["light_paths"].as_f64().unwrap();
+    assert_eq!(paths, (r as f32 as f64 * samples).ceil(), "{planned}");
 }
 
 /// Runs a small Whitted render of the Cornell box with `--output out` and `extra` arguments.

@@ -106,6 +106,7 @@ pub fn run(args: &RenderBenchArgs, ctx: &Context) -> Result<(), CliError> {
             &scene,
             Some(&solution as &dyn twopass_scene::DiffuseRadiance),
             w,
+            twopass_trace::ReferenceSettings::default(),
         )
     })
     .collect();

@@ -100,6 +100,7 @@ pub(super) fn measure_runs(
             scene,
             solve.map(|s| &s.1.solution as &dyn twopass_scene::DiffuseRadiance),
             run.render.whitted(),
+            twopass_trace::ReferenceSettings::default(),
         );
         let settings = run.render.settings(ctx.seed);
         reset_peak_memory();

@@ -131,11 +131,15 @@ pub fn key(
         seed,
         max_depth: settings.max_depth,
         roulette_depth: settings.roulette_depth,
-        caustics: match settings.caustics {
-            twopass_trace::Caustics::PathTracing => "path tracing",
-            twopass_trace::Caustics::LightTracing => "light tracing",
-        }
-        .to_owned(),
+        caustics: match (settings.caustics, settings.light_paths) {
+            (twopass_trace::Caustics::PathTracing, _) => "path tracing".to_owned(),
+            (twopass_trace::Caustics::LightTracing, twopass_trace::LightPaths::Planned) => {
+                "light tracing, light paths planned by a pilot".to_owned()
+            }
+            (twopass_trace::Caustics::LightTracing, twopass_trace::LightPaths::PerSample(r)) => {
+                format!("light tracing, {r} light paths per camera sample")
+            }
+        },
         sampler: twopass_trace::sampler::SAMPLE_SEQUENCE.to_owned(),
         version: env!("CARGO_PKG_VERSION").to_owned(),
     }
