@@ -23,24 +23,40 @@
 //! - `S_L`: as many light paths as the camera pilot has samples (at least one chunk of the
 //!   pass), the per-pixel variance of one path's contribution (its second moment less the
 //!   square of its mean) summed over the image.
-//! - `r`, the weight's pixel value: the camera pilot's mean at the grid point nearest the
-//!   pixel, plus the light pilot's mean over that grid point's cell.
+//! - `r`, the weight's pixel value, for the pixels of a grid point's cell: the larger of the
+//!   median of that point's camera samples and the median of the 3 x 3 grid points' means
+//!   around it, plus the light pilot's mean over the cell. A point's own mean would weigh a
+//!   rare bright sample down by the value it gave, and miss the noise that dominates.
 //! - `c_cam`, `c_L`: rays (closest-hit and shadow) per sample and per path, counted, not timed,
 //!   so that the plan, and the image, are the same on any thread count and in every process
 //!   of a split render.
 //!
 //! The pilot's own samples and paths take streams apart from the render's and are not part of
-//! the image: the counts that depend on them stay independent of the estimate, which stays
-//! unbiased. The pick is clamped to [`PLANNED_RANGE`]: a pilot that saw no caustic still
-//! leaves the pass its floor.
+//! the image (nor of its ray counts): the counts that depend on them stay independent of the
+//! estimate, which stays unbiased. The pick is clamped to [`PLANNED_RANGE`]: a pilot that saw
+//! no caustic still leaves the pass its floor.
+//!
+//! **Limits.** `S_cam` is the variance of independent samples; a pixel's stratified samples do
+//! better, more so the more of them there are, so the plan leans to fewer light paths than the
+//! best (on the path tracer the plans measured are within a factor of 1.4 of the best fixed
+//! ratio swept: docs/benchmarks.md, "The caustic pass's light paths"). An integrator whose noise
+//! falls much faster than one over its samples (the gathered hybrid, whose gather rays are
+//! stratified over a pixel's samples) is far from that model and keeps a fixed ratio.
 
 use glam::DVec3;
 use rayon::prelude::*;
 use twopass_brdf::random::mix64;
 
+use twopass_scene::{Camera, Scene};
+
 use crate::counters::{RenderProgress, Tally};
+use crate::film::Radiance;
 use crate::light_tracing::{LightPaths, LightTracer, light_chunks};
-use crate::render::Pass;
+
+/// The render's camera sample: `(seed, pixel, sample index, k, tally)` gives sample `s` of the
+/// pixel under `seed`, in stratum `s` of a `k` x `k` grid over it, its rays counted in `tally`.
+pub(crate) type CameraSample<'a> =
+    &'a (dyn Fn(u64, (u32, u32), u32, u32, &mut Tally) -> Radiance + Sync);
 
 /// Light paths per camera sample a plan picks at least and at most.
 pub const PLANNED_RANGE: (f32, f32) = (1.0 / 64.0, 16.0);
@@ -69,11 +85,12 @@ pub struct LightPlan {
     pub light_cost: f64,
 }
 
-/// The light paths per camera sample of `tracer`'s pass in a render of `pass` whose camera
-/// pass takes `spp` samples per pixel on average: its [`LightPaths::PerSample`], or the plan's
-/// pick ([`plan`]) with [`LightPaths::Planned`].
+/// The light paths per camera sample of `tracer`'s pass in a render of `scene` through
+/// `camera` whose camera pass (`sample`) takes `spp` samples per pixel on average: its
+/// [`LightPaths::PerSample`], or the plan's pick ([`plan`]) with [`LightPaths::Planned`].
 pub(crate) fn per_sample(
-    pass: &Pass<'_>,
+    (scene, camera): (&Scene, &Camera),
+    sample: CameraSample<'_>,
     tracer: &LightTracer,
     seed: u64,
     spp: f64,
@@ -81,7 +98,7 @@ pub(crate) fn per_sample(
     match tracer.settings().paths {
         LightPaths::PerSample(r) => (r, None),
         LightPaths::Planned => {
-            let p = plan(pass, tracer, seed, spp);
+            let p = plan((scene, camera), sample, tracer, seed, spp);
             (p.paths_per_sample, Some(p))
         }
     }
@@ -96,10 +113,15 @@ fn grid_step(width: u32, height: u32, spp: f64) -> u32 {
     step.min(most) as u32
 }
 
-/// Measures both passes of a render of `pass` (see the module documentation) and picks the
-/// light paths per camera sample that give the least error for the time.
-pub(crate) fn plan(pass: &Pass<'_>, tracer: &LightTracer, seed: u64, spp: f64) -> LightPlan {
-    let camera = pass.camera;
+/// Measures both passes of a render (see the module documentation) and picks the light paths
+/// per camera sample that give the least error for the time.
+pub(crate) fn plan(
+    (scene, camera): (&Scene, &Camera),
+    sample: CameraSample<'_>,
+    tracer: &LightTracer,
+    seed: u64,
+    spp: f64,
+) -> LightPlan {
     let (width, height) = (camera.width, camera.height);
     let step = grid_step(width, height, spp);
     let (gw, gh) = (width.div_ceil(step), height.div_ceil(step));
@@ -116,7 +138,7 @@ pub(crate) fn plan(pass: &Pass<'_>, tracer: &LightTracer, seed: u64, spp: f64) -
                         (gx * step + step / 2).min(width - 1),
                         (gy * step + step / 2).min(height - 1),
                     );
-                    moments(pass, seed, xy, &mut tally)
+                    moments(sample, seed, xy, &mut tally)
                 })
                 .collect();
             (row, tally)
@@ -132,7 +154,7 @@ pub(crate) fn plan(pass: &Pass<'_>, tracer: &LightTracer, seed: u64, spp: f64) -
     // Light pilot: each pixel's first and second moments of one path's contribution.
     let paths = (u64::from(gw) * u64::from(gh) * u64::from(PILOT_SAMPLES)).max(4096);
     let (splats, light_tally) = tracer.trace_share(
-        pass.scene,
+        scene,
         camera,
         paths,
         seed,
@@ -231,8 +253,8 @@ pub(crate) fn plan(pass: &Pass<'_>, tracer: &LightTracer, seed: u64, spp: f64) -
     }
 }
 
-/// `r* = sqrt((S_L / P) c_cam / (S_cam c_L))` within [`PLANNED_RANGE`]; the floor when nothing
-/// was measured (no noise in either pass, or no cost).
+/// `r* = sqrt((S_L / P) c_cam / (S_cam c_L))` within [`PLANNED_RANGE`]: the floor when
+/// neither pass showed noise, the top when only the light pass did.
 fn pick(
     camera_variance: f64,
     light_variance: f64,
@@ -281,10 +303,10 @@ type Moments = (DVec3, DVec3, DVec3);
 
 /// The [`Moments`] of [`PILOT_SAMPLES`] camera samples of pixel `xy` (their totals over the
 /// layers); non-finite samples left out.
-fn moments(pass: &Pass<'_>, seed: u64, xy: (u32, u32), tally: &mut Tally) -> Moments {
+fn moments(sample: CameraSample<'_>, seed: u64, xy: (u32, u32), tally: &mut Tally) -> Moments {
     let k = PILOT_SAMPLES.isqrt();
     let values: Vec<DVec3> = (0..PILOT_SAMPLES)
-        .map(|s| pass.sample(seed, xy, s, k, tally).total().as_dvec3())
+        .map(|s| sample(seed, xy, s, k, tally).total().as_dvec3())
         .filter(|v| v.is_finite())
         .collect();
     if values.len() < 2 {

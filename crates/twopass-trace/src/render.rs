@@ -127,9 +127,9 @@ struct TileResult {
 }
 
 /// What every pixel estimate of one render shares.
-pub(crate) struct Pass<'a> {
-    pub(crate) scene: &'a Scene,
-    pub(crate) camera: &'a Camera,
+struct Pass<'a> {
+    scene: &'a Scene,
+    camera: &'a Camera,
     /// The camera's ray directions, what they share made once.
     rays: CameraRays,
     integrator: &'a dyn Integrator,
@@ -139,14 +139,7 @@ pub(crate) struct Pass<'a> {
 impl Pass<'_> {
     /// Camera sample `s` of pixel (`x`, `y`) under `seed`: in stratum `s` of a `k` x `k` grid
     /// over the pixel when `s < k * k`, anywhere in it otherwise. Its rays go to `tally`.
-    pub(crate) fn sample(
-        &self,
-        seed: u64,
-        (x, y): (u32, u32),
-        s: u32,
-        k: u32,
-        tally: &mut Tally,
-    ) -> Radiance {
+    fn sample(&self, seed: u64, (x, y): (u32, u32), s: u32, k: u32, tally: &mut Tally) -> Radiance {
         let index = u64::from(y) * u64::from(self.camera.width) + u64::from(x);
         let mut sampler = Sampler::new(seed, index, u64::from(s));
         let u = if self.settings.jitter {
@@ -532,8 +525,10 @@ fn render_core(
             Some(b) => b.total(),
             None => u64::from(spp) * pixels,
         };
+        let sample = |seed, xy, s, k, tally: &mut Tally| pass.sample(seed, xy, s, k, tally);
         let (per_sample, plan) = crate::light_plan::per_sample(
-            &pass,
+            (scene, camera),
+            &sample,
             tracer,
             settings.seed,
             samples as f64 / pixels as f64,
