@@ -252,3 +252,35 @@ fn a_planned_render_is_the_fixed_ratio_render_of_its_pick() {
     assert_eq!(planned.stats.light_paths, fixed.stats.light_paths);
     assert_eq!(planned.layers, fixed.layers);
 }
+
+/// The plan stays a number in its range, and the image finite, for emitters from 1e-6 to 1e6
+/// times the Cornell spheres' (the metric's offset makes the weights absolute for a dim scene
+/// and relative for a bright one; neither may overflow or divide by zero).
+#[test]
+fn the_plan_holds_for_emitters_from_1e_minus_6_to_1e6() {
+    let text = std::fs::read_to_string(crate::scene_path("cornell-spheres.toml")).unwrap();
+    assert!(text.contains("emission = [17, 12, 4]"));
+    for scale in [1e-6, 1.0, 1e6] {
+        let scaled = text.replace(
+            "emission = [17, 12, 4]",
+            &format!(
+                "emission = [{}, {}, {}]",
+                17.0 * scale,
+                12.0 * scale,
+                4.0 * scale
+            ),
+        );
+        let out = render_planned(&scene(&scaled), LightPaths::Planned);
+        let plan = out.stats.light_plan.expect("planned");
+        let (lo, hi) = twopass_trace::light_plan::PLANNED_RANGE;
+        assert!((lo..=hi).contains(&plan.paths_per_sample), "{scale}: {plan:?}");
+        assert!(
+            plan.camera_variance.is_finite() && plan.light_variance.is_finite(),
+            "{scale}: {plan:?}"
+        );
+        assert_eq!(out.stats.non_finite, 0, "{scale}");
+        let image = out.layers.composite();
+        assert!(image.pixels().iter().all(|p| p.is_finite()), "{scale}");
+        assert!(image.mean().max_element() > 0.0, "{scale}");
+    }
+}
