@@ -34,16 +34,25 @@ fn render_reference(
     seed: u64,
     caustics: Caustics,
 ) -> RenderOutput {
+    // One light path per camera sample: the strategies compared, not the plan.
+    let settings = ReferenceSettings {
+        caustics,
+        light_paths: LightPaths::PerSample(1.0),
+        ..ReferenceSettings::default()
+    };
+    render_with(scene, settings, size, spp, seed)
+}
+
+/// A render of the reference with `settings`, `size` x `size` pixels, `spp` samples per pixel.
+fn render_with(
+    scene: &Scene,
+    settings: ReferenceSettings,
+    size: u32,
+    spp: u32,
+    seed: u64,
+) -> RenderOutput {
     let camera = scene.camera.with_resolution(Some(size), Some(size));
-    let reference = Reference::new(
-        scene,
-        ReferenceSettings {
-            caustics,
-            // One light path per camera sample: the strategies compared, not the plan.
-            light_paths: LightPaths::PerSample(1.0),
-            ..ReferenceSettings::default()
-        },
-    );
+    let reference = Reference::new(scene, settings);
     let settings = RenderSettings {
         samples_per_pixel: spp,
         seed,
@@ -195,26 +204,11 @@ fn light_tracing_gives_the_same_image_on_one_and_two_threads() {
 
 /// A render of the default reference with light paths `light_paths`, 24 x 24 pixels, 64 spp.
 fn render_planned(scene: &Scene, light_paths: LightPaths) -> RenderOutput {
-    let camera = scene.camera.with_resolution(Some(24), Some(24));
-    let reference = Reference::new(
-        scene,
-        ReferenceSettings {
-            light_paths,
-            ..ReferenceSettings::default()
-        },
-    );
-    let settings = RenderSettings {
-        samples_per_pixel: 64,
-        seed: 9,
-        ..RenderSettings::default()
+    let settings = ReferenceSettings {
+        light_paths,
+        ..ReferenceSettings::default()
     };
-    render(
-        scene,
-        &camera,
-        &reference,
-        &settings,
-        &RenderProgress::new(),
-    )
+    render_with(scene, settings, 24, 64, 9)
 }
 
 /// The pilot gives the light tracing pass light paths where the image's noise is: on the
@@ -273,7 +267,10 @@ fn the_plan_holds_for_emitters_from_1e_minus_6_to_1e6() {
         let out = render_planned(&scene(&scaled), LightPaths::Planned);
         let plan = out.stats.light_plan.expect("planned");
         let (lo, hi) = twopass_trace::light_plan::PLANNED_RANGE;
-        assert!((lo..=hi).contains(&plan.paths_per_sample), "{scale}: {plan:?}");
+        assert!(
+            (lo..=hi).contains(&plan.paths_per_sample),
+            "{scale}: {plan:?}"
+        );
         assert!(
             plan.camera_variance.is_finite() && plan.light_variance.is_finite(),
             "{scale}: {plan:?}"
