@@ -32,7 +32,8 @@
 //! path is counted once, by the strategy that finds it easily. How many light paths that pass
 //! traces per camera sample a pilot of both passes decides per render
 //! ([`crate::light_plan`]): where the caustics are a small part of the image's noise, a few
-//! light paths find them for a fraction of the time one per camera sample takes. A scene without a delta surface has no such path and renders exactly as with
+//! light paths find them for a fraction of the time one per camera sample takes. A scene
+//! without a delta surface has no such path and renders exactly as with
 //! [`Caustics::PathTracing`].
 
 use glam::Vec3;
