@@ -98,11 +98,11 @@ pub struct RenderArgs {
     /// samples per pixel: 256 rays per pixel].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=i64::from(crate::preset::MAX_GATHER_RAYS)))]
     pub gather_rays: Option<u32>,
-    /// Light paths per camera sample of the path tracer's (`reference`) light tracing pass,
-    /// which finds the caustics it leaves to light paths (light through mirrors and glass onto
-    /// what the camera sees): more than 0, at most 16 [default: as many as a pilot of both
-    /// passes measures to give the least error for the time; the render's report says how
-    /// many].
+    /// Light paths per camera sample of the light tracing pass that finds the caustics (light
+    /// through mirrors and glass onto what the camera sees): the path tracer's (`reference`)
+    /// and the hybrids' per-pixel ones; more than 0, at most 16 [default: for the path tracer
+    /// as many as a pilot of both passes measures to give the least error for the time, for
+    /// the hybrids 1; the render's report says how many paths].
     #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = parse_light_paths)]
     pub light_paths: Option<f32>,
     /// Also write a tone-mapped PNG beside the EXR.
@@ -308,11 +308,17 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
             .map_or(LightPaths::Planned, LightPaths::PerSample),
         ..ReferenceSettings::default()
     };
+    let whitted = WhittedSettings {
+        caustic_paths: args
+            .light_paths
+            .unwrap_or(WhittedSettings::default().caustic_paths),
+        ..knobs.whitted()
+    };
     let mut integrator = integrator(
         method,
         &scene,
         solution.as_ref().map(|s| s.0.as_dyn()),
-        knobs.whitted(),
+        whitted,
         reference_settings,
     );
     let render_plan = match goal {
@@ -322,7 +328,7 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
                     RenderMethod::Reference,
                     &scene,
                     None,
-                    knobs.whitted(),
+                    whitted,
                     reference_settings,
                 )
             });

@@ -123,22 +123,30 @@ fn render_refuses_what_makes_no_sense() {
     }
 }
 
-/// The path tracer's light tracing pass takes `--light-paths` per camera sample, or as many as
-/// its pilot plans (within the plan's range), and the summary says which.
+/// The light tracing pass for caustics takes `--light-paths` per camera sample; without it the
+/// path tracer's takes as many as its pilot plans (within the plan's range) and the hybrid's
+/// one per camera sample. The summary says which.
 #[test]
-fn the_path_tracer_s_light_paths_are_planned_or_given() {
+fn light_paths_are_planned_or_given() {
     let dir = tempfile::tempdir().unwrap();
     let scene = repo("scenes/cornell-spheres.toml");
-    let run = |extra: &str| {
+    let run = |method: &str, extra: &str| {
         let out = cli("render")
             .arg(&scene)
-            .words("--method reference --width 16 --spp 4 --json")
+            .words("--width 16 --spp 4 --json --method")
+            .arg(method)
             .words(extra)
+            .words(COARSE)
             .output(dir.path())
             .run();
         common::ok_json(&out)
     };
     let samples = 16.0 * 16.0 * 4.0;
+    let hybrid = run("hybrid", "");
+    assert_eq!(hybrid["light_paths"], 1024);
+    assert!(hybrid.get("light_plan").is_none());
+    assert_eq!(run("hybrid", "--light-paths 0.25")["light_paths"], 256);
+    let run = |extra: &str| run("reference", extra);
     let given = run("--light-paths 0.5");
     assert_eq!(given["light_paths"], 512);
     assert!(given.get("light_plan").is_none());
