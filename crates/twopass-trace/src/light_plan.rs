@@ -75,9 +75,11 @@ const REL_EPSILON: f64 = 0.01;
 pub struct LightPlan {
     /// Light paths per camera sample: the pick, within [`PLANNED_RANGE`].
     pub paths_per_sample: f32,
-    /// `S_cam`: the summed weighted variance of one camera sample per pixel over the image.
+    /// `S_cam`: the variance of one camera sample per pixel, as squared relative error
+    /// (dimensionless), summed over the image's pixels and channels.
     pub camera_variance: f64,
-    /// `S_L`: the summed weighted variance of one light path's contribution over the image.
+    /// `S_L`: the variance of one light path's contribution, as squared relative error
+    /// (dimensionless), summed over the image's pixels and channels.
     pub light_variance: f64,
     /// Rays (closest-hit and shadow) per camera sample.
     pub camera_cost: f64,
