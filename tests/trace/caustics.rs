@@ -247,7 +247,8 @@ fn a_planned_render_is_the_fixed_ratio_render_of_its_pick() {
     assert_eq!(planned.layers, fixed.layers);
 }
 
-/// The plan stays a number in its range, and the image finite, for emitters from 1e-6 to 1e6
+/// The plans (light paths and continuations) stay numbers in their ranges, and the image
+/// finite, for emitters from 1e-6 to 1e6
 /// times the Cornell spheres' (the metric's offset makes the weights absolute for a dim scene
 /// and relative for a bright one; neither may overflow or divide by zero).
 #[test]
@@ -274,6 +275,16 @@ fn the_plan_holds_for_emitters_from_1e_minus_6_to_1e6() {
         assert!(
             plan.camera_variance.is_finite() && plan.light_variance.is_finite(),
             "{scale}: {plan:?}"
+        );
+        // The split plan's pilot weighs its errors by the same metric.
+        let split = out.stats.split_plan.expect("planned");
+        assert!(
+            split.prefix_variance.is_finite() && split.continuation_variance.is_finite(),
+            "{scale}: {split:?}"
+        );
+        assert!(
+            (1..=twopass_trace::split_plan::MAX_SPLITS).contains(&split.splits),
+            "{scale}: {split:?}"
         );
         assert_eq!(out.stats.non_finite, 0, "{scale}");
         let image = out.layers.composite();

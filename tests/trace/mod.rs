@@ -16,4 +16,5 @@ mod optics;
 mod photons;
 mod share;
 mod sky;
+mod splitting;
 mod textured;

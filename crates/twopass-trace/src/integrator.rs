@@ -23,6 +23,10 @@ pub struct SampleState<'a> {
     pub sampler: &'a mut Sampler,
     /// The rays traced for this sample so far.
     pub tally: &'a mut Tally,
+    /// Continuations to trace from the camera path's first diffuse or glossy vertex (path
+    /// splitting, [`crate::split_plan`]): what the render planned or was told for an integrator
+    /// whose [`Integrator::path_splits`] is set, 1 for the others (which ignore it).
+    pub splits: u32,
 }
 
 /// A light transport method: radiance arriving along a camera ray.
@@ -41,6 +45,15 @@ pub trait Integrator: Sync {
     /// The light tracing pass whose per-pixel result the render loop adds to this
     /// integrator's image (the caustics it leaves to light tracing), if any.
     fn light_tracer(&self) -> Option<&crate::light_tracing::LightTracer> {
+        None
+    }
+
+    /// How many continuations this integrator traces from a camera path's first diffuse or
+    /// glossy vertex, if it splits paths: the render loop plans [`PathSplits::Planned`] and
+    /// hands the count to every sample ([`SampleState::splits`]).
+    ///
+    /// [`PathSplits::Planned`]: crate::split_plan::PathSplits::Planned
+    fn path_splits(&self) -> Option<crate::split_plan::PathSplits> {
         None
     }
 }

@@ -48,6 +48,7 @@ pub mod reference;
 pub mod render;
 pub mod sampler;
 pub mod sky;
+pub mod split_plan;
 pub mod whitted;
 
 pub use budget::{BUDGET_FLOOR, BUDGET_SMOOTHING, SampleBudget};
@@ -66,4 +67,5 @@ pub use light_tracing::{
 };
 pub use reference::{Caustics, Reference, ReferenceSettings};
 pub use sampler::Sampler;
+pub use split_plan::{PathSplits, SplitPlan};
 pub use whitted::{Whitted, WhittedSettings};

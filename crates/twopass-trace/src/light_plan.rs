@@ -275,7 +275,7 @@ fn pick(
 
 /// Per channel, the median of `values` (a `w` x `h` grid, row-major) over the 3 x 3 points
 /// around point `i` (fewer at the grid's edges; the upper median of an even count).
-fn neighbourhood_median(values: &[DVec3], w: usize, h: usize, i: usize) -> DVec3 {
+pub(crate) fn neighbourhood_median(values: &[DVec3], w: usize, h: usize, i: usize) -> DVec3 {
     let (x, y) = (i % w, i / w);
     let mut around = [[0.0f64; 9]; 3];
     let mut n = 0;

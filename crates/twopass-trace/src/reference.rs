@@ -15,6 +15,7 @@
 //! | `roulette_depth` | vertices | 3 | Russian roulette from this path length on |
 //! | `caustics` | | `LightTracing` | who counts the caustic paths (below) |
 //! | `light_paths` | light paths per camera sample | planned | how many the light tracing pass traces |
+//! | `splits` | continuations per camera sample | planned | path splitting (below) |
 //!
 //! Emitters and lamps are chosen for next-event estimation in proportion to their mean emitted
 //! power. A lamp (a delta light) is found by next-event estimation alone, without an MIS
@@ -35,6 +36,15 @@
 //! light paths find them for a fraction of the time one per camera sample takes. A scene
 //! without a delta surface has no such path and renders exactly as with
 //! [`Caustics::PathTracing`].
+//!
+//! **Path splitting.** From the camera path's first diffuse or glossy vertex, after its light
+//! sample, the path goes on as `N` continuations, each weighted `1 / N` and drawn from a fork
+//! of the camera sample's sequence ([`Sampler::fork`]), so that a pixel's continuations are
+//! one stratified sequence over all its samples. Russian roulette judges a continuation by the
+//! throughput of the whole path, not its `1 / N` share (which would end nearly every one of
+//! them and weigh the few left up: far more noise, the same mean). `N` comes from the render
+//! ([`crate::SampleState::splits`]): [`ReferenceSettings::splits`] fixed, or planned by a
+//! pilot ([`crate::split_plan`]).
 
 use glam::Vec3;
 use smart_default::SmartDefault;
@@ -48,6 +58,7 @@ use crate::integrator::{Integrator, SampleState, Shading, lamp_light};
 use crate::light_tracing::{CausticScope, LightPaths, LightTracer, LightTracingSettings};
 use crate::sampler::Sampler;
 use crate::sky::{sky_light_pdf, sky_mis};
+use crate::split_plan::PathSplits;
 
 /// Path length settings of the reference path tracer.
 #[derive(SmartDefault, Debug, Clone, Copy, PartialEq)]
@@ -67,6 +78,11 @@ pub struct ReferenceSettings {
     /// ([`crate::light_plan`]).
     #[default(LightPaths::Planned)]
     pub light_paths: LightPaths,
+    /// How many continuations a camera path takes from its first diffuse or glossy vertex:
+    /// by default as many as a pilot measures to cost the least for the error
+    /// ([`crate::split_plan`]).
+    #[default(PathSplits::Planned)]
+    pub splits: PathSplits,
 }
 
 /// Which strategy counts the paths that see a diffuse or glossy surface first and reach the
@@ -268,98 +284,198 @@ impl Integrator for Reference {
         self.light.as_ref()
     }
 
+    fn path_splits(&self) -> Option<PathSplits> {
+        Some(self.settings.splits)
+    }
+
     fn radiance(&self, scene: &Scene, ray: &Ray, sample: SampleState<'_>) -> Radiance {
-        let SampleState { sampler, tally } = sample;
+        let SampleState {
+            sampler,
+            tally,
+            splits,
+        } = sample;
         let mut r = Radiance::ZERO;
-        let mut beta = Rgb::ONE;
-        let mut split: Option<Split> = None;
-        let mut dir = ray.direction;
         tally.rays += 1;
-        let mut hit = scene.intersect(ray);
-        // The previous vertex and how the current direction was sampled (for MIS on emitters).
-        // With its shading normal, on which the sky's light density depends.
-        let mut prev: Option<(SurfacePoint, f32, bool, Vec3)> = None;
-        let mut depth = 1;
-        // Whether the camera's first vertex is a diffuse or glossy one: then a path reaching
-        // the emitter through a delta bounce is the light tracer's.
-        let mut seen_non_delta = false;
+        let hit = scene.intersect(ray);
+        if hit.is_none() {
+            r.add(Layer::Emission, crate::sky::escaped(scene, ray.direction));
+            return r;
+        }
+        let path = Path {
+            beta: Rgb::ONE,
+            share: 1.0,
+            split: None,
+            dir: ray.direction,
+            prev: None,
+            depth: 1,
+            seen_non_delta: false,
+        };
+        let mut walk = Walk {
+            scene,
+            sampler,
+            tally,
+            r: &mut r,
+        };
+        self.walk(&mut walk, hit, path, splits.max(1));
+        r
+    }
+}
+
+/// The state of a path between its vertices.
+#[derive(Debug, Clone, Copy)]
+struct Path {
+    /// Throughput, this continuation's share included.
+    beta: Rgb,
+    /// The continuation's share of its camera sample (1 before any splitting): Russian
+    /// roulette judges `beta / share`, the whole path's throughput.
+    share: f32,
+    /// How the path's contributions split among layers (set at its first scattering event).
+    split: Option<Split>,
+    /// The direction of the ray that reached the current vertex (unit).
+    dir: Vec3,
+    /// The previous vertex, the BRDF density of the current direction (1/sr), whether it was a
+    /// delta bounce, and the vertex's shading normal (for MIS on emitters and the sky).
+    prev: Option<(SurfacePoint, f32, bool, Vec3)>,
+    /// Vertices so far (the camera hit is 1).
+    depth: u32,
+    /// Whether the camera's first vertex is a diffuse or glossy one: then a path reaching the
+    /// emitter through a delta bounce is the light tracer's.
+    seen_non_delta: bool,
+}
+
+/// What a camera sample's walk writes to and draws from.
+struct Walk<'a, 'b> {
+    scene: &'a Scene,
+    sampler: &'b mut Sampler,
+    tally: &'b mut Tally,
+    r: &'b mut Radiance,
+}
+
+/// The fork site of path splitting's continuations ([`Sampler::fork`]), apart from the
+/// gathers'; the split count is mixed in, so that runs of one pixel split differently never
+/// share points.
+const SPLIT_SITE: u64 = 0x7370_6c69_7400_0000;
+
+impl Reference {
+    /// Follows `p` from `hit` to its end, splitting it into `splits` continuations at its
+    /// first diffuse or glossy vertex.
+    fn walk(&self, w: &mut Walk<'_, '_>, mut hit: Option<Hit>, mut p: Path, splits: u32) {
+        let scene = w.scene;
         while let Some(h) = hit {
-            let s = Shading::new(scene, h, dir);
-            if depth == 1 {
-                seen_non_delta = s.material.delta().is_none();
+            let s = Shading::new(scene, h, p.dir);
+            if p.depth == 1 {
+                p.seen_non_delta = s.material.delta().is_none();
             }
 
             if s.emitted.max_element() > 0.0 {
-                let w = match prev {
-                    Some((_, _, true, _)) if seen_non_delta && self.light.is_some() => 0.0,
+                let weight = match p.prev {
+                    Some((_, _, true, _)) if p.seen_non_delta && self.light.is_some() => 0.0,
                     None | Some((_, _, true, _)) => 1.0,
                     Some((from, pdf_bsdf, false, _)) => {
-                        power_heuristic(pdf_bsdf, self.light_pdf(scene, &from, &h, dir))
+                        power_heuristic(pdf_bsdf, self.light_pdf(scene, &from, &h, p.dir))
                     }
                 };
-                deposit(&mut r, split, Layer::Emission, beta * s.emitted * w);
+                deposit(w.r, p.split, Layer::Emission, p.beta * s.emitted * weight);
             }
-            if !s.scatters() || depth >= self.settings.max_depth {
-                break;
+            if !s.scatters() || p.depth >= self.settings.max_depth {
+                return;
             }
-            let m = &s.material;
-            if m.delta().is_none() {
-                let [d, g] = self.next_event(scene, &s, sampler, tally);
-                match split {
+            if s.material.delta().is_none() {
+                let [d, g] = self.next_event(scene, &s, w.sampler, w.tally);
+                match p.split {
                     None => {
-                        r.add(Layer::Diffuse, d);
-                        r.add(Layer::DirectSpecular, g);
+                        w.r.add(Layer::Diffuse, d);
+                        w.r.add(Layer::DirectSpecular, g);
                     }
-                    Some(_) => deposit(&mut r, split, Layer::Diffuse, beta * (d + g)),
+                    Some(_) => deposit(w.r, p.split, Layer::Diffuse, p.beta * (d + g)),
+                }
+                if splits > 1 {
+                    let site = SPLIT_SITE ^ u64::from(splits);
+                    let share = 1.0 / splits as f32;
+                    for j in 0..splits {
+                        let mut fork = w.sampler.fork(site, j, splits);
+                        let mut sub = Walk {
+                            scene,
+                            sampler: &mut fork,
+                            tally: w.tally,
+                            r: w.r,
+                        };
+                        let mut q = Path {
+                            beta: p.beta * share,
+                            share: p.share * share,
+                            ..p
+                        };
+                        if let Some(next) = self.bounce(&mut sub, &h, &s, &mut q) {
+                            self.walk(&mut sub, next, q, 1);
+                        }
+                    }
+                    return;
                 }
             }
+            match self.bounce(w, &h, &s, &mut p) {
+                Some(next) => hit = next,
+                None => return,
+            }
+        }
+    }
 
-            let Some(bs) = m.sample(s.wo, sampler.next_2d()) else {
-                break;
-            };
-            let wi = s.frame.to_world(bs.wi).normalize();
-            // An opaque surface reflects to the side it is seen from, by its geometric normal
-            // too (shading normals must not leak light through the surface).
-            if !s.is_dielectric() && wi.dot(h.point.normal) <= 0.0 {
-                break;
+    /// Samples the BRDF at `h` (shading `s`), takes `p` along the sampled direction (Russian
+    /// roulette from [`ReferenceSettings::roulette_depth`] on) and traces it: the next hit,
+    /// `None` inside when it leaves the scene (the sky's light counted), or `None` when the path
+    /// ends here.
+    fn bounce(
+        &self,
+        w: &mut Walk<'_, '_>,
+        h: &Hit,
+        s: &Shading,
+        p: &mut Path,
+    ) -> Option<Option<Hit>> {
+        let m = &s.material;
+        let bs = m.sample(s.wo, w.sampler.next_2d())?;
+        let wi = s.frame.to_world(bs.wi).normalize();
+        // An opaque surface reflects to the side it is seen from, by its geometric normal
+        // too (shading normals must not leak light through the surface).
+        if !s.is_dielectric() && wi.dot(h.point.normal) <= 0.0 {
+            return None;
+        }
+        if p.split.is_none() {
+            p.split = Some(first_split(m, s, &bs));
+        }
+        p.beta *= bs.weight;
+        if p.depth >= self.settings.roulette_depth {
+            let survive = (p.beta.max_element() / p.share).min(1.0);
+            // A NaN throughput survives and is reported as a non-finite sample.
+            if w.sampler.next_f32() >= survive {
+                return None;
             }
-            if split.is_none() {
-                split = Some(first_split(m, &s, &bs));
-            }
-            beta *= bs.weight;
-            if depth >= self.settings.roulette_depth {
-                let survive = beta.max_element().min(1.0);
-                // A NaN throughput survives and is reported as a non-finite sample.
-                if sampler.next_f32() >= survive {
-                    break;
+            p.beta /= survive;
+        }
+        p.prev = Some((h.point, bs.pdf, bs.kind.is_delta(), h.shading_normal));
+        p.dir = wi;
+        w.tally.rays += 1;
+        let hit = w.scene.intersect_from(&h.point, wi);
+        p.depth += 1;
+        if hit.is_none()
+            && let Some(sky) = &w.scene.sky
+        {
+            // The sky, weighed against its light sample at the previous vertex; reached
+            // through a delta bounce after a diffuse first vertex, the light tracer's (its
+            // paths start at the sky too), as an emitter's light is.
+            let weight = match p.prev {
+                Some((_, _, true, _)) if p.seen_non_delta && self.light.is_some() => 0.0,
+                None | Some((_, _, true, _)) => 1.0,
+                Some((from, pdf_bsdf, false, normal)) => {
+                    power_heuristic(pdf_bsdf, sky_light_pdf(sky, from.position, normal, wi))
                 }
-                beta /= survive;
-            }
-            prev = Some((h.point, bs.pdf, bs.kind.is_delta(), h.shading_normal));
-            dir = wi;
-            tally.rays += 1;
-            hit = scene.intersect_from(&h.point, dir);
-            depth += 1;
-            if hit.is_none()
-                && let Some(sky) = &scene.sky
-            {
-                // The sky, weighed against its light sample at the previous vertex; reached
-                // through a delta bounce after a diffuse first vertex, the light tracer's (its
-                // paths start at the sky too), as an emitter's light is.
-                let w = match prev {
-                    Some((_, _, true, _)) if seen_non_delta && self.light.is_some() => 0.0,
-                    None | Some((_, _, true, _)) => 1.0,
-                    Some((from, pdf_bsdf, false, normal)) => {
-                        power_heuristic(pdf_bsdf, sky_light_pdf(sky, from.position, normal, dir))
-                    }
-                };
-                deposit(&mut r, split, Layer::Emission, beta * sky.radiance(dir) * w);
-            }
+            };
+            deposit(
+                w.r,
+                p.split,
+                Layer::Emission,
+                p.beta * sky.radiance(wi) * weight,
+            );
         }
-        if depth == 1 && hit.is_none() {
-            r.add(Layer::Emission, crate::sky::escaped(scene, dir));
-        }
-        r
+        Some(hit)
     }
 }
 

@@ -21,6 +21,7 @@ use crate::integrator::{Integrator, SampleState};
 use crate::light_plan::LightPlan;
 use crate::light_tracing::{LightTracer, Splat, add_splats, finish_splats, light_chunks};
 use crate::sampler::{Sampler, stratum};
+use crate::split_plan::{PathSplits, SplitPlan};
 
 /// Sampling settings of a render.
 #[derive(SmartDefault, Debug, Clone, Copy, PartialEq)]
@@ -94,6 +95,12 @@ pub struct RenderStats {
     /// What the pilot measured when the pass's light paths were planned
     /// ([`crate::LightPaths::Planned`]).
     pub light_plan: Option<LightPlan>,
+    /// Continuations per camera sample from its first diffuse or glossy vertex (path
+    /// splitting; 1 without).
+    pub splits: u32,
+    /// What the pilot measured when the continuations were planned
+    /// ([`crate::PathSplits::Planned`]).
+    pub split_plan: Option<SplitPlan>,
     /// Wall-clock time of the render.
     pub elapsed: Duration,
 }
@@ -134,12 +141,26 @@ struct Pass<'a> {
     rays: CameraRays,
     integrator: &'a dyn Integrator,
     settings: &'a RenderSettings,
+    /// Continuations per camera sample ([`SampleState::splits`]).
+    splits: u32,
 }
 
 impl Pass<'_> {
     /// Camera sample `s` of pixel (`x`, `y`) under `seed`: in stratum `s` of a `k` x `k` grid
     /// over the pixel when `s < k * k`, anywhere in it otherwise. Its rays go to `tally`.
-    fn sample(&self, seed: u64, (x, y): (u32, u32), s: u32, k: u32, tally: &mut Tally) -> Radiance {
+    fn sample(&self, seed: u64, xy: (u32, u32), s: u32, k: u32, tally: &mut Tally) -> Radiance {
+        self.sample_split(seed, xy, (s, k), self.splits, tally)
+    }
+
+    /// [`Pass::sample`] with `splits` continuations.
+    fn sample_split(
+        &self,
+        seed: u64,
+        (x, y): (u32, u32),
+        (s, k): (u32, u32),
+        splits: u32,
+        tally: &mut Tally,
+    ) -> Radiance {
         let index = u64::from(y) * u64::from(self.camera.width) + u64::from(x);
         let mut sampler = Sampler::new(seed, index, u64::from(s));
         let u = if self.settings.jitter {
@@ -153,6 +174,7 @@ impl Pass<'_> {
         let sample = SampleState {
             sampler: &mut sampler,
             tally,
+            splits,
         };
         self.integrator.radiance(self.scene, &ray, sample)
     }
@@ -450,13 +472,32 @@ fn render_core(
     let passes = 1 + u64::from(adaptive.is_some());
     progress.start(passes * share_pixels + u64::from(light.is_some()) * pixels);
 
-    let pass = Pass {
+    let mut pass = Pass {
         scene,
         camera,
         rays: camera.rays(),
         integrator,
         settings,
+        splits: 1,
     };
+    let mut split_plan = None;
+    match integrator.path_splits() {
+        None => {}
+        Some(PathSplits::Fixed(n)) => pass.splits = n.max(1),
+        Some(PathSplits::Planned) => {
+            let sample = |seed, xy, s, k, splits, tally: &mut Tally| {
+                pass.sample_split(seed, xy, (s, k), splits, tally)
+            };
+            let average = match budget {
+                Some(b) => b.total() as f64 / pixels as f64,
+                None => f64::from(spp),
+            };
+            let plan = crate::split_plan::plan(camera, &sample, settings.seed, average);
+            pass.splits = plan.splits;
+            split_plan = Some(plan);
+        }
+    }
+    let pass = pass;
     let run = |n: &(dyn Fn(u32, u32) -> u32 + Sync)| -> Vec<TileResult> {
         tiles
             .par_iter()
@@ -572,6 +613,8 @@ fn render_core(
             shadow_rays: tally.shadow_rays,
             light_paths,
             light_plan,
+            splits: pass.splits,
+            split_plan,
             elapsed: start.elapsed(),
         },
     };

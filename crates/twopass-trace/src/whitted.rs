@@ -198,7 +198,7 @@ impl Integrator for Whitted<'_> {
     }
 
     fn radiance(&self, scene: &Scene, ray: &Ray, sample: SampleState<'_>) -> Radiance {
-        let SampleState { sampler, tally } = sample;
+        let SampleState { sampler, tally, .. } = sample;
         tally.rays += 1;
         match scene.intersect(ray) {
             None => Radiance::single(Layer::Emission, crate::sky::escaped(scene, ray.direction)),

@@ -136,6 +136,7 @@ fn add_stats(t: &mut RenderStats, s: &RenderStats) {
     t.light_paths += s.light_paths;
     // A render's own plan over its pilots' (which plan for their fewer samples).
     t.light_plan = t.light_plan.or(s.light_plan);
+    t.split_plan = t.split_plan.or(s.split_plan);
     t.elapsed += s.elapsed;
 }
 
@@ -190,6 +191,8 @@ mod tests {
                 shadow_rays: 2 * samples,
                 light_paths: 0,
                 light_plan: None,
+                splits: 1,
+                split_plan: None,
                 elapsed: Duration::from_millis(samples),
             },
         }

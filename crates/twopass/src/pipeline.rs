@@ -479,6 +479,8 @@ mod tests {
             shadow_rays: 0,
             light_paths: 0,
             light_plan: None,
+            splits: 1,
+            split_plan: None,
             elapsed: Duration::ZERO,
         }
     }

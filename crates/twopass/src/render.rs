@@ -12,11 +12,10 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use clap::Args;
-use serde::Serialize;
 use twopass_composite::RenderMetadata;
 use twopass_composite::tonemap::ToneMap;
 use twopass_composite::write::{write_exr_render, write_exr_render_rgba, write_png_tonemapped};
-use twopass_trace::{LightPaths, ReferenceSettings, WhittedSettings};
+use twopass_trace::{LightPaths, PathSplits, ReferenceSettings, WhittedSettings};
 
 use crate::args::checked;
 use crate::context::Context;
@@ -24,8 +23,12 @@ use crate::error::CliError;
 use crate::pipeline::{MAX_DEPTH, RenderMethod, integrator, is_glb, radiosity, to_layers};
 use crate::plan::plan;
 use crate::preset::{PRESET_SETS, RadiosityKnobs, RenderKnobs};
-use crate::render_plan::{Goal, RenderPlan};
+use crate::render_plan::Goal;
 use crate::solve::SolveArgs;
+
+mod summary;
+
+use summary::{LightPlanSummary, SplitPlanSummary, Summary};
 
 /// The gathered hybrid's default element edge is the scene's bounding-box diagonal over this
 /// (radiosity alone and the bakes use diagonal / 24): its gather rays read the solution one
@@ -105,6 +108,12 @@ pub struct RenderArgs {
     /// the hybrids 1; the render's report says how many paths].
     #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = parse_light_paths)]
     pub light_paths: Option<f32>,
+    /// Continuations per camera sample of the path tracer (`reference`) from a camera path's
+    /// first diffuse or glossy vertex (path splitting), 1 to 64; 1 is plain path tracing
+    /// [default: as many as a pilot measures to give the least error for the time, at most
+    /// 16; the render's report says how many].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub splits: Option<u32>,
     /// Also write a tone-mapped PNG beside the EXR.
     #[arg(long)]
     pub png: bool,
@@ -131,57 +140,6 @@ pub struct RenderArgs {
     /// `<stem>-<method>.<I>-of-<N>.part`, default `parts`).
     #[arg(long, value_name = "I/N", value_parser = crate::part::parse_part)]
     pub part: Option<crate::part::PartIndex>,
-}
-
-#[derive(Debug, Serialize)]
-struct Summary {
-    scene: PathBuf,
-    method: RenderMethod,
-    preset: Option<String>,
-    width: u32,
-    height: u32,
-    spp: u32,
-    /// Pixels adaptive anti-aliasing rendered with `spp` (the others with its first pass).
-    refined_pixels: u64,
-    radiosity: Option<&'static str>,
-    radiosity_seconds: f64,
-    render_seconds: f64,
-    rays: u64,
-    shadow_rays: u64,
-    mrays_per_s: f64,
-    non_finite_samples: u64,
-    /// Light paths of the light tracing pass (0 without one).
-    light_paths: u64,
-    /// What the pilot measured when it planned the light paths (the path tracer's caustics).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    light_plan: Option<LightPlanSummary>,
-    /// Mean of the final image over pixels, per channel, W/(m^2 sr).
-    mean: [f32; 3],
-    /// The multi-layer EXR; none when `--output` names a PNG file.
-    exr: Option<PathBuf>,
-    png: Option<PathBuf>,
-    skipped: Vec<String>,
-    /// The planner's measurements and choice (`--target-error`, `--time-budget`).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    plan: Option<RenderPlan>,
-    /// How the samples were spread by noise (a render without `--spp`).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    allocation: Option<crate::allocation::Allocation>,
-}
-
-/// [`twopass_trace::LightPlan`] for the JSON summary.
-#[derive(Debug, Serialize)]
-struct LightPlanSummary {
-    /// Light paths per camera sample the pilot picked.
-    paths_per_sample: f32,
-    /// Summed relative variance of one camera sample per pixel over the image.
-    camera_variance: f64,
-    /// Summed relative variance of one light path's contribution over the image.
-    light_variance: f64,
-    /// Rays per camera sample.
-    camera_rays: f64,
-    /// Rays per light path.
-    light_rays: f64,
 }
 
 /// Renders the scene and writes the EXR (and PNG).
@@ -306,6 +264,7 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
         light_paths: args
             .light_paths
             .map_or(LightPaths::Planned, LightPaths::PerSample),
+        splits: args.splits.map_or(PathSplits::Planned, PathSplits::Fixed),
         ..ReferenceSettings::default()
     };
     let whitted = WhittedSettings {
@@ -428,13 +387,9 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
         mrays_per_s: s.rays_per_second() / 1e6,
         non_finite_samples: s.non_finite,
         light_paths: s.light_paths,
-        light_plan: s.light_plan.map(|p| LightPlanSummary {
-            paths_per_sample: p.paths_per_sample,
-            camera_variance: p.camera_variance,
-            light_variance: p.light_variance,
-            camera_rays: p.camera_cost,
-            light_rays: p.light_cost,
-        }),
+        light_plan: s.light_plan.as_ref().map(LightPlanSummary::from),
+        splits: s.splits,
+        split_plan: s.split_plan.as_ref().map(SplitPlanSummary::from),
         mean: mean.to_array(),
         exr,
         png,
@@ -442,68 +397,7 @@ pub fn run(args: &RenderArgs, ctx: &Context) -> Result<(), CliError> {
         plan: render_plan,
         allocation,
     };
-    crate::output::report(&summary, ctx, || {
-        for s in &summary.skipped {
-            outln!("{s}");
-        }
-        if let Some(p) = &summary.plan {
-            outln!("planned: {} (pilots {:.2} s)", p.reason, p.pilot_seconds);
-        }
-        if let Some(source) = summary.radiosity {
-            outln!(
-                "radiosity from {source} in {:.2} s",
-                summary.radiosity_seconds
-            );
-        }
-        let adaptive = knobs.adaptive.map_or(String::new(), |base| {
-            format!(
-                " (adaptive: {base} spp everywhere, {} pixels refined)",
-                summary.refined_pixels
-            )
-        });
-        let adaptive = summary.allocation.map_or(adaptive, |a| {
-            format!(
-                " on average (by noise: pilots of 2 x {} spp, {}-{} spp per pixel)",
-                a.pilot_spp, a.min_spp, a.max_spp
-            )
-        });
-        outln!(
-            "{} {} x {} at {} spp{adaptive} in {:.2} s ({:.2} Mrays/s, {} non-finite samples dropped)",
-            summary.method.name(),
-            summary.width,
-            summary.height,
-            summary.spp,
-            summary.render_seconds,
-            summary.mrays_per_s,
-            summary.non_finite_samples
-        );
-        match &summary.light_plan {
-            Some(p) => outln!(
-                "light tracing: {} paths for the caustics, {:.3} per camera sample as a pilot planned \
-                 (relative variance {:.3e} per camera sample, {:.3e} per light path; {:.2} and {:.2} rays)",
-                summary.light_paths,
-                p.paths_per_sample,
-                p.camera_variance,
-                p.light_variance,
-                p.camera_rays,
-                p.light_rays
-            ),
-            None if summary.light_paths > 0 => {
-                outln!(
-                    "light tracing: {} paths for the caustics",
-                    summary.light_paths
-                )
-            }
-            None => {}
-        }
-        if let Some(p) = &summary.exr {
-            outln!("wrote {}", p.display());
-        }
-        if let Some(p) = &summary.png {
-            outln!("wrote {}", p.display());
-        }
-        Ok(())
-    })
+    crate::output::report(&summary, ctx, || summary.print(knobs.adaptive))
 }
 
 /// The files `render` writes: the multi-layer EXR and the tone-mapped PNG, each when asked for.

@@ -121,6 +121,40 @@ fn render_refuses_what_makes_no_sense() {
         assert_eq!(out.status.code(), Some(2), "--light-paths {bad}");
         assert!(String::from_utf8_lossy(&out.stderr).contains("--light-paths"));
     }
+    for bad in ["0", "-1", "65", "2.5"] {
+        let out = render(&format!("--method reference --width 8 --splits {bad}"));
+        assert_eq!(out.status.code(), Some(2), "--splits {bad}");
+        assert!(String::from_utf8_lossy(&out.stderr).contains("--splits"));
+    }
+}
+
+/// The path tracer splits its paths as `--splits` says, or as its pilot plans (within the
+/// plan's range); the other methods do not split. The summary says which.
+#[test]
+fn path_splits_are_planned_or_given() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = repo("scenes/cornell-box.toml");
+    let run = |method: &str, extra: &str| {
+        let out = cli("render")
+            .arg(&scene)
+            .words("--width 16 --spp 4 --json --method")
+            .arg(method)
+            .words(extra)
+            .words(COARSE)
+            .output(dir.path())
+            .run();
+        common::ok_json(&out)
+    };
+    let hybrid = run("hybrid", "");
+    assert_eq!(hybrid["splits"], 1);
+    assert!(hybrid.get("split_plan").is_none());
+    let given = run("reference", "--splits 3");
+    assert_eq!(given["splits"], 3);
+    assert!(given.get("split_plan").is_none());
+    let planned = run("reference", "");
+    let n = planned["split_plan"]["splits"].as_u64().unwrap();
+    assert!((1..=4).contains(&n), "{planned}");
+    assert_eq!(planned["splits"], n, "{planned}");
 }
 
 /// The light tracing pass for caustics takes `--light-paths` per camera sample; without it the

@@ -77,6 +77,9 @@ pub struct ReferenceKey {
     pub roulette_depth: u32,
     /// Who counts the caustic paths (`path tracing` or `light tracing`).
     pub caustics: String,
+    /// Continuations per camera sample from its first diffuse or glossy vertex (`planned by a
+    /// pilot`, or the count).
+    pub splits: String,
     /// The sample values' sequence ([`twopass_trace::sampler::SAMPLE_SEQUENCE`]).
     pub sampler: String,
     /// Version of twopass that rendered it.
@@ -139,6 +142,10 @@ pub fn key(
             (twopass_trace::Caustics::LightTracing, twopass_trace::LightPaths::PerSample(r)) => {
                 format!("light tracing, {r} light paths per camera sample")
             }
+        },
+        splits: match settings.splits {
+            twopass_trace::PathSplits::Planned => "planned by a pilot".to_owned(),
+            twopass_trace::PathSplits::Fixed(n) => n.to_string(),
         },
         sampler: twopass_trace::sampler::SAMPLE_SEQUENCE.to_owned(),
         version: env!("CARGO_PKG_VERSION").to_owned(),
