@@ -112,7 +112,7 @@ pub struct RenderArgs {
     /// first diffuse or glossy vertex (path splitting), 1 to 64; 1 is plain path tracing
     /// [default: as many as a pilot measures to give the least error for the time, at most
     /// 16; the render's report says how many].
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=64))]
+    #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = clap::value_parser!(u32).range(1..=64))]
     pub splits: Option<u32>,
     /// Also write a tone-mapped PNG beside the EXR.
     #[arg(long)]
