@@ -9,11 +9,11 @@ use std::f64::consts::PI;
 use glam::{DVec3, Vec2};
 use twopass_scene::Scene;
 use twopass_trace::{
-    CausticScope, Caustics, LightPaths, LightTracer, LightTracingSettings, Reference,
-    ReferenceSettings, RenderOutput, RenderProgress, RenderSettings, render,
+    CausticScope, Caustics, LightPaths, LightTracer, LightTracingSettings, ReferenceSettings,
+    RenderOutput, RenderProgress,
 };
 
-use super::common::{repo_scene, scene};
+use super::common::{render_with, repo_scene, scene};
 use crate::on_threads;
 use crate::specular::{mirror_text, through_mirror};
 
@@ -41,30 +41,6 @@ fn render_reference(
         ..ReferenceSettings::default()
     };
     render_with(scene, settings, size, spp, seed)
-}
-
-/// A render of the reference with `settings`, `size` x `size` pixels, `spp` samples per pixel.
-fn render_with(
-    scene: &Scene,
-    settings: ReferenceSettings,
-    size: u32,
-    spp: u32,
-    seed: u64,
-) -> RenderOutput {
-    let camera = scene.camera.with_resolution(Some(size), Some(size));
-    let reference = Reference::new(scene, settings);
-    let settings = RenderSettings {
-        samples_per_pixel: spp,
-        seed,
-        ..RenderSettings::default()
-    };
-    render(
-        scene,
-        &camera,
-        &reference,
-        &settings,
-        &RenderProgress::new(),
-    )
 }
 
 #[test]

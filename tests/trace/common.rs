@@ -55,3 +55,28 @@ pub fn pixel_means(
     }
     out
 }
+
+/// A render of the reference path tracer with `settings`, `size` x `size` pixels, `spp`
+/// samples per pixel, seed `seed`.
+pub fn render_with(
+    scene: &Scene,
+    settings: twopass_trace::ReferenceSettings,
+    size: u32,
+    spp: u32,
+    seed: u64,
+) -> twopass_trace::RenderOutput {
+    let camera = scene.camera.with_resolution(Some(size), Some(size));
+    let reference = twopass_trace::Reference::new(scene, settings);
+    let settings = twopass_trace::RenderSettings {
+        samples_per_pixel: spp,
+        seed,
+        ..twopass_trace::RenderSettings::default()
+    };
+    twopass_trace::render(
+        scene,
+        &camera,
+        &reference,
+        &settings,
+        &twopass_trace::RenderProgress::new(),
+    )
+}

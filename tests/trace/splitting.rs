@@ -4,35 +4,18 @@
 //! not where they carry no light; a planned render is the fixed render of its pick.
 
 use twopass_scene::Scene;
-use twopass_trace::{
-    PathSplits, Reference, ReferenceSettings, RenderOutput, RenderProgress, RenderSettings, render,
-};
+use twopass_trace::{PathSplits, ReferenceSettings, RenderOutput};
 
-use super::common::{repo_scene, scene};
+use super::common::{render_with, repo_scene, scene};
 use super::furnace::{CUBE, assert_reads_one};
 
 /// The reference with `splits`, `size` x `size` pixels, `spp` samples, seed `seed`.
 fn render_split(scene: &Scene, splits: PathSplits, size: u32, spp: u32, seed: u64) -> RenderOutput {
-    let camera = scene.camera.with_resolution(Some(size), Some(size));
-    let reference = Reference::new(
-        scene,
-        ReferenceSettings {
-            splits,
-            ..ReferenceSettings::default()
-        },
-    );
-    let settings = RenderSettings {
-        samples_per_pixel: spp,
-        seed,
-        ..RenderSettings::default()
+    let settings = ReferenceSettings {
+        splits,
+        ..ReferenceSettings::default()
     };
-    render(
-        scene,
-        &camera,
-        &reference,
-        &settings,
-        &RenderProgress::new(),
-    )
+    render_with(scene, settings, size, spp, seed)
 }
 
 /// Each continuation carries `1 / N` of its camera sample, and Russian roulette judges it by

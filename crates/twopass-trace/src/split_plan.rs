@@ -19,29 +19,32 @@
 //!
 //! **The pilot.** Stratification is much of the gain, so the pilot measures the errors as the
 //! render will have them: at each point of a pixel grid of about [`PILOT_POINTS`] points, two
-//! independent runs of the render's `n` samples per pixel (at most [`PILOT_MOST_SAMPLES`]) with
-//! one continuation each and two with [`PILOT_SPLITS`] (`K`). A pair's squared difference over two is its error at `n`
-//! samples; `V(1) = A + B` and `V(K) = A + B / K` give `A` and `B`. The split runs take the
-//! streams of the unsplit ones, so each shares its prefixes with one of them and the prefix's
-//! noise, the same in both, falls out of the difference (common random numbers). The errors
-//! are weighed as the image metric weighs them, the relative squared error
-//! `sum_c (x - r)^2 / (r^2 + 0.01)`, `r` the larger of the median of the point's four runs and
-//! the median of the 3 x 3 points' means around it (as [`crate::light_plan`]'s weights). The
-//! points' errors are heavy-tailed (a rare bright path in one run), so the points in the
-//! largest [`TRIMMED`] of either error are left out: a few fireflies must not decide the plan.
-//! `N*` from `A` one standard error (over the points) higher and `B` one lower, and from both
-//! the other way, bound the counts the pilot cannot tell apart; the pick is
+//! independent runs of the render's `n` samples per pixel (at most [`PILOT_MOST_SAMPLES`])
+//! with one continuation each and two with [`PILOT_SPLITS`] (`K`). A pair's squared difference
+//! over two is its error at `n` samples; `V(1) = A + B` and `V(K) = A + B / K` give `A` and
+//! `B`. The split runs take the streams of the unsplit ones, so each shares its prefixes with
+//! one of them and the prefix's noise, the same in both, falls out of the difference (common
+//! random numbers). The errors are weighed as the image metric weighs them, the relative
+//! squared error `sum_c (x - r)^2 / (r^2 + 0.01)`, `r` the larger of the median of the point's
+//! four runs and the median of the 3 x 3 points' means around it (as [`crate::light_plan`]'s
+//! weights). The points' errors are heavy-tailed (a rare bright path in one run), so the points
+//! in the largest [`TRIMMED`] of either error are left out: a few fireflies must not decide the
+//! plan. `N*` from `A` one standard error (over the points) higher and `B` one lower, and from
+//! both the other way, bound the counts the pilot cannot tell apart; the pick is
 //! [`UNDECIDED_SPLITS`] within those bounds, the nearer bound outside them. So a scene whose
 //! continuations bring nothing (a plane under a lamp, a room lit through glass only) keeps one,
-//! a closed room splits four ways, and a scene the pilot sees noisily two. `c1` and `c2` are rays
-//! (closest-hit and shadow) per camera sample, counted, not timed, so that the plan, and the
-//! image, are the same on any thread count and in every process of a split render. The pilot's
-//! streams are its own, and its samples are not part of the image (nor of its ray counts).
+//! a scene whose continuations clearly carry the noise (a sunlit yard) splits four ways, and a
+//! scene the pilot sees noisily, two. `c1` and `c2` are rays (closest-hit and shadow) per
+//! camera sample, counted, not timed, so that the plan, and the image, are the same on any
+//! thread count and in every process of a split render. The pilot's streams are its own, and
+//! its samples are not part of the image (nor of its ray counts).
 //!
 //! **Limits.** `A + B / N` is a secant through the two measured counts; stratified, the
 //! continuations lose error faster than `1 / N` up to a few and more slowly after, hence the
-//! cap. The pilot costs about `2 (2 c1 + (K + 1) c2) PILOT_POINTS / (c1 + N c2)` pixels' worth
-//! of the render (1-6 % of a 256 x 256 render).
+//! cap. The estimate of `A` is a small difference of two noisy errors, so on most scenes the
+//! pick is the undecided 2 where a sweep of fixed counts found 4-8 best. The pilot costs
+//! `2 (2 c1 + (K + 1) c2) n` rays at each point: measured, 9-12 % of a 16-spp render that
+//! keeps one continuation, 3 % or less at 64 spp (docs/benchmarks.md, "Path splitting").
 
 use glam::DVec3;
 use rayon::prelude::*;
@@ -90,8 +93,8 @@ const REL_EPSILON: f64 = 0.01;
 pub enum PathSplits {
     /// This many (at least 1; 1 is plain path tracing).
     Fixed(u32),
-    /// As many as a pilot measures to give the least error for the time ([`plan`]), decided
-    /// anew by each render.
+    /// As many as a pilot measures to give the least error for the time (the module
+    /// documentation), decided anew by each render.
     Planned,
 }
 

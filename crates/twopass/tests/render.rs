@@ -128,23 +128,26 @@ fn render_refuses_what_makes_no_sense() {
     }
 }
 
+/// The JSON summary of a 16-pixel-wide, 4-spp render of `scenes/<stem>.toml` with `method` and
+/// `extra` arguments (a coarse solve), written into `dir`.
+fn small_summary(dir: &Path, stem: &str, method: &str, extra: &str) -> serde_json::Value {
+    let out = cli("render")
+        .arg(repo(&format!("scenes/{stem}.toml")))
+        .words("--width 16 --spp 4 --json --method")
+        .arg(method)
+        .words(extra)
+        .words(COARSE)
+        .output(dir)
+        .run();
+    common::ok_json(&out)
+}
+
 /// The path tracer splits its paths as `--splits` says, or as its pilot plans (within the
 /// plan's range); the other methods do not split. The summary says which.
 #[test]
 fn path_splits_are_planned_or_given() {
     let dir = tempfile::tempdir().unwrap();
-    let scene = repo("scenes/cornell-box.toml");
-    let run = |method: &str, extra: &str| {
-        let out = cli("render")
-            .arg(&scene)
-            .words("--width 16 --spp 4 --json --method")
-            .arg(method)
-            .words(extra)
-            .words(COARSE)
-            .output(dir.path())
-            .run();
-        common::ok_json(&out)
-    };
+    let run = |method: &str, extra: &str| small_summary(dir.path(), "cornell-box", method, extra);
     let hybrid = run("hybrid", "");
     assert_eq!(hybrid["splits"], 1);
     assert!(hybrid.get("split_plan").is_none());
@@ -163,18 +166,8 @@ fn path_splits_are_planned_or_given() {
 #[test]
 fn light_paths_are_planned_or_given() {
     let dir = tempfile::tempdir().unwrap();
-    let scene = repo("scenes/cornell-spheres.toml");
-    let run = |method: &str, extra: &str| {
-        let out = cli("render")
-            .arg(&scene)
-            .words("--width 16 --spp 4 --json --method")
-            .arg(method)
-            .words(extra)
-            .words(COARSE)
-            .output(dir.path())
-            .run();
-        common::ok_json(&out)
-    };
+    let run =
+        |method: &str, extra: &str| small_summary(dir.path(), "cornell-spheres", method, extra);
     let samples = 16.0 * 16.0 * 4.0;
     let hybrid = run("hybrid", "");
     assert_eq!(hybrid["light_paths"], 1024);
