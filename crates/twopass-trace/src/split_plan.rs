@@ -103,8 +103,9 @@ pub enum PathSplits {
 pub struct SplitPlan {
     /// Continuations per camera sample: the pick, from 1 to [`MAX_SPLITS`].
     pub splits: u32,
-    /// `A`: the prefix's share of the error at the render's samples per pixel, as squared
-    /// relative error (dimensionless) summed over the image's pixels and channels.
+    /// `A`: the prefix's share of the error at the pilot's samples per pixel, as squared
+    /// relative error (dimensionless) summed over the channels: the mean over the pilot's
+    /// points (those kept, see the module documentation) times the image's pixels.
     pub prefix_variance: f64,
     /// `B`: the continuations' share at one continuation per camera sample, in the same unit.
     pub continuation_variance: f64,

@@ -70,9 +70,9 @@ pub(super) struct LightPlanSummary {
 pub(super) struct SplitPlanSummary {
     /// Continuations per camera sample the pilot picked.
     splits: u32,
-    /// Summed relative variance of the prefix over the image, at the render's samples.
+    /// Relative variance of the prefix over the image, at the pilot's samples per pixel.
     prefix_variance: f64,
-    /// Summed relative variance of the continuations over the image, at one per sample.
+    /// Relative variance of the continuations over the image, at one per camera sample.
     continuation_variance: f64,
     /// Rays per camera sample outside the continuations.
     prefix_rays: f64,
