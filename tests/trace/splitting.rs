@@ -52,8 +52,8 @@ fn noise(a: &RenderOutput, b: &RenderOutput, reference: &twopass_image::Image) -
 /// per camera sample, at equal camera samples, should leave at most a quarter of it plus the
 /// prefix's share; measured 0.31 here and 0.2 on a 256-pixel-wide image at 16 samples (their
 /// points are stratified over the pixel).
-/// Half is the bound, with room for two seeds' noise: continuations that Russian roulette
-/// judged by their 1/4 share alone (three in four ended) left 0.54 on the 256-pixel image.
+/// Half is the bound, with room for two seeds' noise: a Russian roulette that judged each
+/// continuation by its 1/4 share alone (ending three in four) leaves 0.54 on that image.
 #[test]
 fn splitting_cuts_the_noise_of_the_indirect_light() {
     let s = repo_scene("cornell-box.toml");
